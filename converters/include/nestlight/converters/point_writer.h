@@ -1,0 +1,30 @@
+// Writers for `nestlight export` and `nestlight generate`: LAS and PLY.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "nestlight/converters/reader.h"
+
+namespace nestlight {
+
+class PointWriter {
+ public:
+  virtual ~PointWriter() = default;
+  // `batch` follows the layout of the header given at creation.
+  virtual void write(const PointBatch& batch) = 0;
+  // Finishes the file (header counts and bounds); the file appears atomically under its name.
+  virtual void close() = 0;
+};
+
+// `header.layout` says which attributes to write; LAS fields it knows by name (see docs/FORMAT.md)
+// go into the point record, the rest into LAS 1.4 extra bytes. `header.scale`/`offset` set the
+// LAS quantisation (default 0.001 and the first point). `header.crs` is written as a WKT VLR.
+std::unique_ptr<PointWriter> createLasWriter(const std::string& path, const SourceHeader& header);
+// Binary little-endian PLY; `header.rgbBits` == 8 writes uchar colour, else ushort.
+std::unique_ptr<PointWriter> createPlyWriter(const std::string& path, const SourceHeader& header,
+                                             bool ascii = false);
+// Chooses by extension (.las, .ply).
+std::unique_ptr<PointWriter> createWriter(const std::string& path, const SourceHeader& header);
+
+}  // namespace nestlight

@@ -1,0 +1,82 @@
+// Scan readers, as stages (PDAL): open, read the header, stream batches of points, rewind.
+//
+// A reader never drops a point silently. Points it cannot interpret are errors (file and
+// position named); NaN/Inf coordinates pass through so that the builder can count them as
+// rejected; a header that disagrees with the data is an error unless ReadOptions::lenient,
+// in which case the reader keeps every complete record and reports the disagreement in
+// warnings().
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "nestlight/converters/byte_source.h"
+#include "nestlight/octree/attribute.h"
+#include "nestlight/octree/geometry.h"
+
+namespace nestlight {
+
+struct SourceHeader {
+  std::string path;
+  std::string format;  // "las", "ply", "pcd", "xyz"
+  std::optional<uint64_t> declaredPoints;  // what the header claims, if it claims anything
+  std::optional<Box3d> declaredBounds;     // LAS header bounds
+  std::optional<Vec3d> scale;              // the source's quantisation (LAS)
+  std::optional<Vec3d> offset;
+  PointLayout layout;                      // attributes this source provides, in batch order
+  int rgbBits = 0;                         // 8 or 16 when the source has "rgb"; else 0
+  nlohmann::json crs;                      // {"wkt": "..."} and/or {"geotiff": {...}}; null if none
+  nlohmann::json details;                  // format facts (version, point format, encoding, ...)
+};
+
+struct PointBatch {
+  std::vector<double> xyz;     // 3 per point, in the source's world coordinates
+  std::vector<uint8_t> attrs;  // header().layout.stride() bytes per point
+  size_t size() const { return xyz.size() / 3; }
+  void clear() {
+    xyz.clear();
+    attrs.clear();
+  }
+};
+
+struct ReadOptions {
+  // Keep every complete record of a file whose header disagrees with its data, and report the
+  // disagreement as a warning instead of failing.
+  bool lenient = false;
+  // XYZ/PTS/TXT: comma-separated column names, e.g. "x,y,z,r,g,b" or "x,y,z,_,intensity".
+  // Known: x y z r g b (0-255) R G B (0-65535) i|intensity nx ny nz classification _ (skip);
+  // other names become float attributes. Empty: guessed from the first data line.
+  std::string columns;
+};
+
+class PointReader {
+ public:
+  virtual ~PointReader() = default;
+  virtual const SourceHeader& header() const = 0;
+  // Clears `batch` and fills it with up to `maxPoints` points. Returns false when no point was
+  // read because the input is exhausted. Throws nestlight::Error on malformed input.
+  virtual bool read(PointBatch& batch, size_t maxPoints) = 0;
+  // Starts again from the first point.
+  virtual void rewind() = 0;
+  // Header/data disagreements tolerated in lenient mode, and other notes for the metadata.
+  virtual std::vector<std::string> warnings() const { return {}; }
+  // Progress, in bytes of the input.
+  virtual uint64_t bytesConsumed() const = 0;
+  virtual uint64_t bytesTotal() const = 0;
+};
+
+// Chooses the reader from the extension (.las .ply .pcd .xyz .pts .txt .csv); .laz is an error
+// saying that LAZ is not supported yet.
+std::unique_ptr<PointReader> openReader(const std::string& path, const ReadOptions& options = {});
+
+std::unique_ptr<PointReader> openLas(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
+std::unique_ptr<PointReader> openPly(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
+std::unique_ptr<PointReader> openXyz(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
+// PCD goes through PCL, which reads from a path.
+std::unique_ptr<PointReader> openPcd(const std::string& path, const ReadOptions& o = {});
+
+}  // namespace nestlight

@@ -1,0 +1,42 @@
+#include "nestlight/converters/reader.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "nestlight/converters/point_writer.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight {
+
+namespace {
+std::string lowerExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+}  // namespace
+
+std::unique_ptr<PointReader> openReader(const std::string& path, const ReadOptions& options) {
+  const std::string ext = lowerExtension(path);
+  if (ext == ".laz")
+    throw Error(path, "",
+                "LAZ (compressed LAS) is not supported yet; decompress it first, e.g. with "
+                "'laszip -i in.laz -o out.las' or 'pdal translate in.laz out.las'");
+  if (ext == ".las") return openLas(mapFile(path), options);
+  if (ext == ".ply") return openPly(mapFile(path), options);
+  if (ext == ".pcd") return openPcd(path, options);
+  if (ext == ".xyz" || ext == ".pts" || ext == ".txt" || ext == ".csv")
+    return openXyz(mapFile(path), options);
+  throw Error(path, "",
+              "unknown point cloud format '" + ext +
+                  "'; supported: .las .ply .pcd .xyz .pts .txt .csv");
+}
+
+std::unique_ptr<PointWriter> createWriter(const std::string& path, const SourceHeader& header) {
+  const std::string ext = lowerExtension(path);
+  if (ext == ".las") return createLasWriter(path, header);
+  if (ext == ".ply") return createPlyWriter(path, header);
+  throw Error(path, "", "cannot write '" + ext + "'; supported: .las .ply");
+}
+
+}  // namespace nestlight

@@ -1,0 +1,56 @@
+#include "test_support.h"
+
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace nestlight::test {
+
+TempDir::TempDir() {
+  std::random_device rd;
+  auto base = std::filesystem::temp_directory_path();
+  for (;;) {
+    path_ = base / ("nestlight-test-" + std::to_string(::getpid()) + "-" + std::to_string(rd()));
+    if (std::filesystem::create_directory(path_)) break;
+  }
+}
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+std::filesystem::path sharedData() {
+  std::filesystem::path p = NESTLIGHT_SHARED_DATA;
+  return std::filesystem::exists(p) ? p : std::filesystem::path();
+}
+
+int runCli(const std::string& args, std::string* output) {
+  std::string cmd = std::string(NESTLIGHT_BINARY) + " " + args + " 2>&1";
+  FILE* f = ::popen(cmd.c_str(), "r");
+  if (!f) return -1;
+  std::string out;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), f)) > 0) out.append(buf.data(), n);
+  int status = ::pclose(f);
+  if (output) *output = out;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+void writeFile(const std::string& path, const std::string& bytes) {
+  std::ofstream o(path, std::ios::binary);
+  o.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream i(path, std::ios::binary);
+  std::stringstream ss;
+  ss << i.rdbuf();
+  return ss.str();
+}
+
+}  // namespace nestlight::test
