@@ -1,2 +1,40 @@
-// Placeholder until the CLI lands.
-int main() { return 0; }
+// nestlight: explore and light laser scans far larger than memory.
+#include <cstdio>
+#include <exception>
+
+#include "cli.h"
+#include "nestlight/octree/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "nestlight: converts laser scans far larger than memory into a streamable nested octree,\n"
+      "and (in later versions) views and lights them.\n\n"
+      "Typical use:\n"
+      "  nestlight convert scan.las -o scan.octree     build the octree (bounded memory)\n"
+      "  nestlight info scan.octree                     what was built\n"
+      "  nestlight verify scan.octree                   check every byte and point\n"
+      "  nestlight demo                                 generate, convert and verify a scene\n",
+      "nestlight"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "nestlight 0.1.0");
+  int code = 0;
+  nestlight::cli::addConvert(app, code);
+  nestlight::cli::addInfo(app, code);
+  nestlight::cli::addVerify(app, code);
+  nestlight::cli::addExport(app, code);
+  nestlight::cli::addGenerate(app, code);
+  nestlight::cli::addDemo(app, code);
+  nestlight::cli::addBench(app, code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const nestlight::Error& e) {
+    std::fprintf(stderr, "nestlight: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "nestlight: error: %s\n", e.what());
+    return 1;
+  }
+  return code;
+}

@@ -1,0 +1,59 @@
+// The out-of-core nested-octree builder (`nestlight convert`).
+//
+// Phases, as in Potree 2 (Schütz, Ohrhallinger, Wimmer 2020) and DESIGN.md: count points on a
+// coarse grid; distribute them into chunk files, each a node of the octree small enough to
+// index in memory; index each chunk into its subtree; merge the levels above the chunks.
+// The phases exchange only files. Sampling is bottom-up everywhere (a node draws its points from
+// its children's), so each node depends only on the points of its own subtree: the chunked
+// build is byte-identical to an in-memory build, and independent of input order.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nestlight/converters/progress.h"
+#include "nestlight/converters/reader.h"
+#include "nestlight/octree/metadata.h"
+
+namespace nestlight {
+
+enum class Sampling { Poisson, Grid };
+enum class NormalOrientation { Outward, Inward, Up };
+
+struct BuildOptions {
+  std::filesystem::path output;
+  uint64_t memoryBytes = uint64_t(1) << 30;  // --memory: bound on the builder's own memory
+  unsigned threads = 0;                      // 0: all cores
+  Sampling sampling = Sampling::Poisson;
+  Codec codec = Codec::Zstd;
+  double precision = 0;                      // world units; 0: from the inputs (LAS scale) or 1 mm
+  bool dedup = false;                        // merge exact duplicates (position and attributes)
+  bool estimateNormals = false;
+  unsigned normalNeighbours = 16;
+  NormalOrientation normalOrientation = NormalOrientation::Outward;
+  bool overwrite = false;
+  uint32_t maxNodePoints = 20000;            // leaf size and cap on an inner node's sample
+  bool inMemory = false;                     // one chunk: the reference the chunked build must equal
+  ProgressMode progress = ProgressMode::Auto;
+  nlohmann::json commandLine;                // recorded in metadata.build
+};
+
+struct BuildReport {
+  Metadata metadata;
+  double seconds = 0;
+  double pointsPerSecond = 0;
+  uint64_t peakRssBytes = 0;
+  uint64_t chunks = 0;
+  nlohmann::json phases;  // seconds per phase
+};
+
+// Builds the octree of every point of `sources`. Throws nestlight::Error on bad input.
+BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& options);
+
+// Peak resident set size of this process so far, in bytes.
+uint64_t peakRssBytes();
+
+}  // namespace nestlight

@@ -1,0 +1,1046 @@
+// Out-of-core nested-octree builder.
+//
+// Structure after Potree 2 (Schütz, Ohrhallinger, Wimmer, "Fast Out-of-Core Octree Generation for
+// Massive Point Clouds", 2020): counting on a coarse grid, distribution into chunk files, indexing
+// of each chunk, merging of the levels above. The nested octree itself is the one of Instant
+// Points (Wimmer and Scheiblauer 2006), as used by Preiner (seed 004, section 3): each node holds a
+// spatially even subsample of its subtree and passes the rest on to its children.
+//
+// Sampling is bottom-up: a leaf holds all its points; an inner node selects its sample from the
+// union of its children's current samples, which then lose the selected points. A node's content
+// is therefore a function of its subtree's points alone, so that chunking (and the memory budget
+// that decides it) never changes the result, and points are processed in a total order (Morton
+// order of position, then attribute bytes) so that input order never does either.
+#include "nestlight/converters/builder.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_for_each.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <set>
+#include <thread>
+
+#include "nestlight/converters/normals.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/node_key.h"
+#include "nestlight/octree/octree_writer.h"
+
+namespace nestlight {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+uint64_t peakRssBytes() {
+  struct rusage ru {};
+  ::getrusage(RUSAGE_SELF, &ru);
+  return static_cast<uint64_t>(ru.ru_maxrss) * 1024;
+}
+
+namespace {
+
+constexpr size_t kBatchPoints = 1 << 18;
+constexpr uint32_t kGridLevel = 7;  // counting grid: 128^3 cells
+
+double seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
+
+// Exact Morton order of two integer positions without computing 93-bit codes: compare on the
+// axis whose coordinates differ in the highest bit (x before y before z at equal bits).
+inline bool lessMsb(uint32_t a, uint32_t b) { return a < b && a < (a ^ b); }
+inline bool mortonLess(const uint32_t* p, const uint32_t* q) {
+  int axis = 0;
+  uint32_t best = p[0] ^ q[0];
+  for (int a = 1; a < 3; ++a) {
+    uint32_t d = p[a] ^ q[a];
+    if (lessMsb(best, d)) best = d, axis = a;
+  }
+  return p[axis] < q[axis];
+}
+
+struct Chunk {
+  NodeKey key;
+  uint64_t points = 0;
+  fs::path file;
+};
+
+// Per-source mapping of attributes into the octree's layout.
+struct AttributeMap {
+  struct Entry {
+    int src = -1;  // index in the source layout, or -1 when the source lacks the attribute
+    bool copy = false;
+  };
+  std::vector<Entry> entries;
+};
+
+struct SourceState {
+  std::unique_ptr<PointReader> reader;
+  AttributeMap map;
+  bool identity = false;  // the source's layout is the octree's: attributes copy as one block
+  std::optional<Box3d> declared;  // valid declared bounds, if any
+  double tolerance = 0;
+  uint64_t read = 0;
+};
+
+bool validBox(const Box3d& b) {
+  return !b.empty() && std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
+         std::isfinite(b.max.x) && std::isfinite(b.max.y) && std::isfinite(b.max.z);
+}
+
+class Builder {
+  using json = nlohmann::json;
+
+ public:
+  Builder(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& o)
+      : opt_(o), progress_(o.progress) {
+    for (auto& r : sources) {
+      SourceState s;
+      s.reader = std::move(r);
+      sources_.push_back(std::move(s));
+    }
+  }
+
+  BuildReport run() {
+    auto t0 = Clock::now();
+    BuildReport report;
+    unsigned threads = opt_.threads ? opt_.threads : std::max(1u, std::thread::hardware_concurrency());
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    threads_ = threads;
+
+    planLayout();
+    planQuantisation(report);
+    writer_ = std::make_unique<OctreeWriter>(opt_.output, layout_, opt_.codec, opt_.overwrite);
+    tmp_ = opt_.output / (".build-" + std::to_string(::getpid()));
+    fs::create_directories(tmp_);
+    struct Cleanup {
+      fs::path p;
+      ~Cleanup() {
+        std::error_code ec;
+        fs::remove_all(p, ec);
+      }
+    } cleanup{tmp_};
+
+    auto t = Clock::now();
+    countPass();
+    report.phases["count"] = seconds(t);
+    t = Clock::now();
+    distributePass();
+    report.phases["distribute"] = seconds(t);
+    t = Clock::now();
+    splitOversizedChunks();
+    indexChunks();
+    report.phases["index"] = seconds(t);
+    t = Clock::now();
+    mergeTop();
+    report.phases["merge"] = seconds(t);
+
+    finishMetadata();
+    t = Clock::now();
+    writer_->finish(meta_);
+    report.phases["write"] = seconds(t);
+    report.seconds = seconds(t0);
+    report.chunks = chunks_.size();
+    report.pointsPerSecond = report.seconds > 0 ? meta_.accounting.input / report.seconds : 0;
+    report.peakRssBytes = peakRssBytes();
+    report.metadata = meta_;
+    return report;
+  }
+
+ private:
+  // ---- planning -------------------------------------------------------------------------------
+
+  void planLayout() {
+    int rgbBits = 0;
+    bool rgb16 = false;
+    for (auto& s : sources_) {
+      const SourceHeader& h = s.reader->header();
+      for (const Attribute& a : h.layout.attributes()) {
+        int i = layout_.find(a.name);
+        if (i < 0) {
+          layout_.add(a);
+        } else if (!(layout_[i] == a)) {
+          if (layout_[i].components != a.components)
+            throw Error(h.path, "", "attribute '" + a.name + "' has " + std::to_string(a.components) +
+                                        " components here but " + std::to_string(layout_[i].components) +
+                                        " in another input");
+          // Mixed types: widen to double, which holds every integer type up to 32 bits exactly.
+          widened_.insert(a.name);
+        }
+      }
+      if (h.layout.has(attr::kRgb)) {
+        rgbBits = 8;
+        rgb16 = rgb16 || h.rgbBits != 8;
+      }
+    }
+    if (!widened_.empty()) {
+      PointLayout l;
+      for (Attribute a : layout_.attributes()) {
+        if (widened_.count(a.name)) a.type = ScalarType::F64;
+        l.add(a);
+      }
+      layout_ = l;
+    }
+    meta_.rgbSourceBits = rgbBits ? (rgb16 ? 16 : 8) : 0;
+    if (opt_.estimateNormals) {
+      bool allHave = !sources_.empty();
+      for (auto& s : sources_) allHave = allHave && s.reader->header().layout.has(attr::kNormal);
+      if (allHave) {
+        progress_.message("every input has normals; --estimate-normals keeps them");
+      } else {
+        if (!layout_.has(attr::kNormal))
+          layout_.add({std::string(attr::kNormal), ScalarType::F32, 3, "estimated"});
+        estimate_ = true;
+      }
+    }
+    stride_ = layout_.stride();
+    normalIndex_ = layout_.find(attr::kNormal);
+    for (auto& s : sources_) {
+      const PointLayout& sl = s.reader->header().layout;
+      for (size_t i = 0; i < layout_.size(); ++i) {
+        AttributeMap::Entry e;
+        e.src = sl.find(layout_[i].name);
+        e.copy = e.src >= 0 && sl[e.src] == layout_[i];
+        s.map.entries.push_back(e);
+      }
+      s.identity = sl == layout_ && !estimate_;
+    }
+  }
+
+  void planQuantisation(BuildReport& report) {
+    // Precision: the finest scale of the inputs, unless given.
+    double scale = opt_.precision;
+    std::optional<Vec3d> base;
+    for (auto& s : sources_) {
+      const SourceHeader& h = s.reader->header();
+      if (h.offset && !base) base = h.offset;
+      if (opt_.precision <= 0 && h.scale)
+        for (int a = 0; a < 3; ++a)
+          if ((*h.scale)[a] > 0) scale = scale > 0 ? std::min(scale, (*h.scale)[a]) : (*h.scale)[a];
+    }
+    if (!(scale > 0)) scale = 0.001;
+    meta_.scale = scale;
+
+    // Bounds: declared ones where a header gives valid bounds, a reading pass for the rest.
+    Box3d bounds;
+    std::vector<size_t> scan;
+    for (size_t i = 0; i < sources_.size(); ++i) {
+      auto& s = sources_[i];
+      const SourceHeader& h = s.reader->header();
+      if (h.declaredBounds && validBox(*h.declaredBounds)) {
+        s.declared = *h.declaredBounds;
+        double ss = h.scale ? std::max({h.scale->x, h.scale->y, h.scale->z}) : scale;
+        s.tolerance = 0.5 * ss;
+        bounds.extend(*s.declared);
+      } else {
+        scan.push_back(i);
+      }
+    }
+    if (!scan.empty()) {
+      auto t = Clock::now();
+      uint64_t total = 0;
+      for (size_t i : scan) total += sources_[i].reader->bytesTotal();
+      progress_.begin("bounds", total, "bytes");
+      PointBatch batch;
+      for (size_t i : scan) {
+        auto& r = *sources_[i].reader;
+        r.rewind();
+        uint64_t before = 0;
+        while (r.read(batch, kBatchPoints)) {
+          const double* p = batch.xyz.data();
+          for (size_t k = 0, n = batch.size(); k < n; ++k, p += 3)
+            if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))
+              bounds.extend(p[0], p[1], p[2]);
+          progress_.advance(r.bytesConsumed() - before);
+          before = r.bytesConsumed();
+        }
+      }
+      progress_.end();
+      report.phases["bounds"] = seconds(t);
+    }
+    if (bounds.empty()) {
+      meta_.offset = {0, 0, 0};
+      meta_.cubeSize = 1;
+      return;
+    }
+    // The integer grid keeps the input's: offsets step from the first LAS offset in whole scales,
+    // so that LAS integer coordinates map to ours without rounding.
+    Vec3d b = base.value_or(Vec3d{0, 0, 0});
+    double extent = 0;
+    for (int a = 0; a < 3; ++a) {
+      meta_.offset[a] = b[a] + std::floor((bounds.min[a] - b[a]) / scale) * scale;
+      extent = std::max(extent, std::ceil((bounds.max[a] - meta_.offset[a]) / scale) + 1);
+    }
+    if (!(extent < double(uint64_t(1) << 31)))
+      throw Error("", "",
+                  "the scan spans " + std::to_string(extent * scale) + " units, more than 2^31 steps of " +
+                      std::to_string(scale) + "; use a coarser --precision");
+    uint64_t cube = 1;
+    while (cube < extent) cube <<= 1;
+    meta_.cubeSize = static_cast<uint32_t>(cube);
+  }
+
+  // ---- the reading pipeline -------------------------------------------------------------------
+
+  struct Item {
+    size_t source = 0;
+    PointBatch batch;
+    // Output of the parallel stage.
+    std::vector<uint8_t> records;  // 12 + stride bytes each, grouped by chunk
+    std::vector<std::pair<uint32_t, uint32_t>> runs;  // (chunk, count) in record order
+    Accounting acc;
+    Box3d box;
+  };
+
+  // Reads every source, runs `work` on batches in parallel and `collect` in input order.
+  template <class Work, class Collect>
+  void readAll(const std::string& phase, Work work, Collect collect) {
+    uint64_t total = 0;
+    for (auto& s : sources_) total += s.reader->bytesTotal();
+    progress_.begin(phase, total, "bytes");
+    size_t current = 0;
+    uint64_t consumedBefore = 0;
+    for (auto& s : sources_) s.reader->rewind();
+    tbb::parallel_pipeline(
+        threads_ * 2,
+        tbb::make_filter<void, Item*>(tbb::filter_mode::serial_in_order,
+                                      [&](tbb::flow_control& fc) -> Item* {
+                                        while (current < sources_.size()) {
+                                          auto item = std::make_unique<Item>();
+                                          auto& r = *sources_[current].reader;
+                                          if (r.read(item->batch, kBatchPoints)) {
+                                            item->source = current;
+                                            progress_.advance(r.bytesConsumed() - consumedBefore);
+                                            consumedBefore = r.bytesConsumed();
+                                            return item.release();
+                                          }
+                                          ++current;
+                                          consumedBefore = 0;
+                                        }
+                                        fc.stop();
+                                        return nullptr;
+                                      }) &
+            tbb::make_filter<Item*, Item*>(tbb::filter_mode::parallel,
+                                           [&](Item* it) {
+                                             work(*it);
+                                             return it;
+                                           }) &
+            tbb::make_filter<Item*, void>(tbb::filter_mode::serial_in_order, [&](Item* it) {
+              std::unique_ptr<Item> own(it);
+              collect(*it);
+            }));
+    progress_.end();
+  }
+
+  // Quantises point k of the item; false (and counted) when rejected.
+  bool quantise(const SourceState& s, const double* p, uint32_t q[3], Accounting& acc) const {
+    if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
+      acc.rejected[reject::kNonFinite]++;
+      return false;
+    }
+    if (s.declared && !s.declared->contains(p[0], p[1], p[2], s.tolerance)) {
+      acc.rejected[reject::kOutsideBounds]++;
+      return false;
+    }
+    const int64_t maxInt = static_cast<int64_t>(meta_.cubeSize) - 1;
+    for (int a = 0; a < 3; ++a) {
+      int64_t v = std::llround((p[a] - meta_.offset[a]) / meta_.scale);
+      q[a] = static_cast<uint32_t>(std::clamp<int64_t>(v, 0, maxInt));
+    }
+    return true;
+  }
+
+  uint32_t gridCell(const uint32_t q[3]) const {
+    const uint32_t shift = cubeBits() > gridLevel_ ? cubeBits() - gridLevel_ : 0;
+    return ((q[0] >> shift) << (2 * gridLevel_)) | ((q[1] >> shift) << gridLevel_) | (q[2] >> shift);
+  }
+  uint32_t cubeBits() const {
+    uint32_t b = 0;
+    while ((uint64_t(1) << b) < meta_.cubeSize) ++b;
+    return b;
+  }
+
+  // ---- count ----------------------------------------------------------------------------------
+
+  void countPass() {
+    gridLevel_ = std::min(kGridLevel, cubeBits());
+    const size_t cells = size_t(1) << (3 * gridLevel_);
+    std::vector<std::atomic<uint32_t>> counts(cells);
+    readAll(
+        "count",
+        [&](Item& it) {
+          const SourceState& s = sources_[it.source];
+          uint32_t q[3];
+          for (size_t k = 0, n = it.batch.size(); k < n; ++k)
+            if (quantise(s, &it.batch.xyz[3 * k], q, it.acc))
+              counts[gridCell(q)].fetch_add(1, std::memory_order_relaxed);
+        },
+        [](Item&) {});
+
+    // Chunks: top-down, the largest nodes of the counting pyramid that fit the budget.
+    std::vector<std::vector<uint64_t>> pyramid(gridLevel_ + 1);
+    pyramid[gridLevel_].resize(cells);
+    for (size_t i = 0; i < cells; ++i) pyramid[gridLevel_][i] = counts[i].load();
+    for (int l = static_cast<int>(gridLevel_) - 1; l >= 0; --l) {
+      pyramid[l].assign(size_t(1) << (3 * l), 0);
+      const uint32_t n = 1u << (l + 1);
+      for (uint32_t x = 0; x < n; ++x)
+        for (uint32_t y = 0; y < n; ++y)
+          for (uint32_t z = 0; z < n; ++z)
+            pyramid[l][((x >> 1) << (2 * l)) | ((y >> 1) << l) | (z >> 1)] +=
+                pyramid[l + 1][(size_t(x) << (2 * (l + 1))) | (y << (l + 1)) | z];
+    }
+    maxChunkPoints_ = chunkBudget();
+    cellChunk_.assign(cells, -1);
+    std::function<void(NodeKey)> visit = [&](NodeKey k) {
+      uint64_t c = pyramid[k.level][(size_t(k.x) << (2 * k.level)) | (k.y << k.level) | k.z];
+      if (c == 0) return;
+      if (c <= maxChunkPoints_ || k.level == gridLevel_) {
+        int id = static_cast<int>(chunks_.size());
+        chunks_.push_back({k, c, tmp_ / ("chunk-" + k.name() + ".bin")});
+        const uint32_t s = gridLevel_ - k.level, n = 1u << s;
+        for (uint32_t x = 0; x < n; ++x)
+          for (uint32_t y = 0; y < n; ++y)
+            for (uint32_t z = 0; z < n; ++z) {
+              uint32_t gx = (k.x << s) | x, gy = (k.y << s) | y, gz = (k.z << s) | z;
+              cellChunk_[(size_t(gx) << (2 * gridLevel_)) | (gy << gridLevel_) | gz] = id;
+            }
+        return;
+      }
+      for (int i = 0; i < 8; ++i) visit(k.child(i));
+    };
+    visit(NodeKey::root());
+  }
+
+  uint64_t chunkBudget() const {
+    if (opt_.inMemory) return UINT64_MAX;
+    // Indexing holds a chunk's records twice (read and sorted) plus sort keys and index lists.
+    const uint64_t perPoint = 2 * (12 + stride_) + 40 + (estimate_ ? 64 : 0);
+    uint64_t b = opt_.memoryBytes / 2 / threads_ / perPoint;
+    return std::max<uint64_t>(b, uint64_t(opt_.maxNodePoints) * 4);
+  }
+
+  // ---- distribute -----------------------------------------------------------------------------
+
+  void distributePass() {
+    const size_t rec = 12 + stride_;
+    std::vector<std::vector<uint8_t>> buffers(chunks_.size());
+    size_t buffered = 0;
+    const size_t budget = std::max<size_t>(opt_.memoryBytes / 4, 16 << 20);
+    auto flush = [&]() {
+      tbb::parallel_for(size_t(0), buffers.size(), [&](size_t c) {
+        auto& b = buffers[c];
+        if (b.empty()) return;
+        FILE* f = std::fopen(chunks_[c].file.c_str(), "ab");
+        if (!f || std::fwrite(b.data(), 1, b.size(), f) != b.size())
+          throw Error(chunks_[c].file.string(), "", "cannot write chunk file (disk full?)");
+        std::fclose(f);
+        std::vector<uint8_t>().swap(b);
+      });
+      buffered = 0;
+    };
+    for (auto& c : chunks_) c.points = 0;
+    readAll(
+        "distribute",
+        [&](Item& it) {
+          const SourceState& s = sources_[it.source];
+          const SourceHeader& h = s.reader->header();
+          const size_t n = it.batch.size(), srcStride = h.layout.stride();
+          std::vector<uint8_t> recs(n * rec);
+          std::vector<uint32_t> chunkOf(n);
+          size_t kept = 0;
+          it.acc.input = n;
+          for (size_t k = 0; k < n; ++k) {
+            const double* p = &it.batch.xyz[3 * k];
+            uint32_t q[3];
+            if (!quantise(s, p, q, it.acc)) continue;
+            it.box.extend(p[0], p[1], p[2]);
+            uint8_t* r = &recs[kept * rec];
+            std::memcpy(r, q, 12);
+            if (s.identity)
+              std::memcpy(r + 12, it.batch.attrs.data() + k * srcStride, stride_);
+            else
+              mapAttributes(s, h.layout, it.batch.attrs.data() + k * srcStride, r + 12);
+            chunkOf[kept] = static_cast<uint32_t>(cellChunk_[gridCell(q)]);
+            ++kept;
+          }
+          // Group by chunk (counting sort, stable).
+          std::vector<uint32_t> count(chunks_.size() + 1, 0);
+          for (size_t k = 0; k < kept; ++k) count[chunkOf[k] + 1]++;
+          for (size_t c = 0; c < chunks_.size(); ++c) {
+            if (count[c + 1]) it.runs.emplace_back(static_cast<uint32_t>(c), count[c + 1]);
+            count[c + 1] += count[c];
+          }
+          it.records.resize(kept * rec);
+          for (size_t k = 0; k < kept; ++k)
+            std::memcpy(&it.records[size_t(count[chunkOf[k]]++) * rec], &recs[k * rec], rec);
+        },
+        [&](Item& it) {
+          sources_[it.source].read += it.batch.size();
+          accounting_.add(it.acc);
+          meta_.bounds.extend(it.box);
+          size_t at = 0;
+          for (auto& [c, m] : it.runs) {
+            auto& b = buffers[c];
+            b.insert(b.end(), it.records.begin() + at, it.records.begin() + at + size_t(m) * rec);
+            at += size_t(m) * rec;
+            chunks_[c].points += m;
+          }
+          buffered += it.records.size();
+          if (buffered > budget) flush();
+        });
+    flush();
+    std::vector<int32_t>().swap(cellChunk_);
+  }
+
+  void mapAttributes(const SourceState& s, const PointLayout& src, const uint8_t* in, uint8_t* out) const {
+    for (size_t i = 0; i < layout_.size(); ++i) {
+      const Attribute& a = layout_[i];
+      uint8_t* o = out + layout_.offset(i);
+      const auto& e = s.map.entries[i];
+      if (e.copy) {
+        std::memcpy(o, in + src.offset(e.src), a.byteSize());
+      } else if (e.src >= 0) {
+        const Attribute& sa = src[e.src];
+        const size_t w = scalarSize(sa.type), ow = scalarSize(a.type);
+        for (uint32_t c = 0; c < a.components; ++c)
+          storeFromDouble(a.type, loadAsDouble(sa.type, in + src.offset(e.src) + c * w), o + c * ow);
+      } else if (static_cast<int>(i) == normalIndex_ && estimate_) {
+        const float nan = std::nanf("");
+        for (int c = 0; c < 3; ++c) std::memcpy(o + 4 * c, &nan, 4);
+      } else {
+        std::memset(o, 0, a.byteSize());
+      }
+    }
+  }
+
+  // ---- index ----------------------------------------------------------------------------------
+
+  void splitOversizedChunks() {
+    // A counting cell denser than the budget (a dense statue in a city scan, a million duplicates)
+    // is split into its octants, file to file, until it fits or cannot be split further.
+    const size_t rec = 12 + stride_;
+    for (size_t i = 0; i < chunks_.size(); ++i) {
+      Chunk c = chunks_[i];
+      if (c.points <= maxChunkPoints_ || (meta_.cubeSize >> c.key.level) <= 1) continue;
+      const uint32_t half = (meta_.cubeSize >> c.key.level) >> 1;
+      std::vector<FILE*> out(8, nullptr);
+      std::vector<uint64_t> counts(8, 0);
+      FILE* in = std::fopen(c.file.c_str(), "rb");
+      if (!in) throw Error(c.file.string(), "", "cannot read chunk file");
+      std::vector<uint8_t> buf(rec * 65536);
+      size_t got;
+      while ((got = std::fread(buf.data(), rec, 65536, in)) > 0) {
+        for (size_t k = 0; k < got; ++k) {
+          uint32_t q[3];
+          std::memcpy(q, &buf[k * rec], 12);
+          int ci = ((q[0] & half) ? 4 : 0) | ((q[1] & half) ? 2 : 0) | ((q[2] & half) ? 1 : 0);
+          if (!out[ci]) {
+            fs::path p = tmp_ / ("chunk-" + c.key.child(ci).name() + ".bin");
+            out[ci] = std::fopen(p.c_str(), "wb");
+            if (!out[ci]) throw Error(p.string(), "", "cannot create chunk file");
+          }
+          std::fwrite(&buf[k * rec], rec, 1, out[ci]);
+          counts[ci]++;
+        }
+      }
+      std::fclose(in);
+      fs::remove(c.file);
+      bool first = true;
+      for (int ci = 0; ci < 8; ++ci) {
+        if (!out[ci]) continue;
+        std::fclose(out[ci]);
+        Chunk child{c.key.child(ci), counts[ci], tmp_ / ("chunk-" + c.key.child(ci).name() + ".bin")};
+        if (first) {
+          chunks_[i] = child;
+          first = false;
+        } else {
+          chunks_.push_back(child);
+        }
+      }
+      --i;  // re-examine the chunk now at index i
+    }
+  }
+
+  void indexChunks() {
+    uint64_t total = 0;
+    for (auto& c : chunks_) total += c.points;
+    progress_.begin("index", total, "points");
+    std::vector<size_t> order(chunks_.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return chunks_[a].points > chunks_[b].points; });
+    std::atomic<uint64_t> merged{0};
+    tbb::parallel_for_each(order.begin(), order.end(), [&](size_t ci) {
+      Chunk& c = chunks_[ci];
+      PointBuffer pts = loadRecords(c.file);
+      fs::remove(c.file);
+      NL_CHECK(pts.size() == c.points);
+      sortPoints(pts, c.key);
+      if (opt_.dedup) merged += dedup(pts);
+      if (estimate_) estimateMissingNormals(pts);
+      std::vector<uint32_t> set = buildSubtree(pts, c.key, 0, pts.size());
+      saveProvisional(c.key, pts, set);
+      progress_.advance(c.points);
+    });
+    accounting_.duplicatesMerged += merged.load();
+    progress_.end();
+  }
+
+  PointBuffer loadRecords(const fs::path& file) const {
+    const size_t rec = 12 + stride_;
+    PointBuffer pts(stride_);
+    if (!fs::exists(file)) return pts;
+    const size_t n = fs::file_size(file) / rec;
+    pts.pos.resize(n * 3);
+    pts.attrs.resize(n * stride_);
+    FILE* f = std::fopen(file.c_str(), "rb");
+    if (!f) throw Error(file.string(), "", "cannot read temporary file");
+    std::vector<uint8_t> buf(rec * 65536);
+    size_t at = 0, got;
+    while (at < n && (got = std::fread(buf.data(), rec, std::min<size_t>(65536, n - at), f)) > 0) {
+      for (size_t k = 0; k < got; ++k, ++at) {
+        std::memcpy(&pts.pos[3 * at], &buf[k * rec], 12);
+        if (stride_) std::memcpy(&pts.attrs[at * stride_], &buf[k * rec + 12], stride_);
+      }
+    }
+    std::fclose(f);
+    NL_CHECK(at == n);
+    return pts;
+  }
+
+  void saveRecords(const fs::path& file, const PointBuffer& pts, const std::vector<uint32_t>& set) const {
+    const size_t rec = 12 + stride_;
+    std::vector<uint8_t> buf(set.size() * rec);
+    for (size_t k = 0; k < set.size(); ++k) {
+      std::memcpy(&buf[k * rec], &pts.pos[3 * size_t(set[k])], 12);
+      if (stride_) std::memcpy(&buf[k * rec + 12], pts.attrsOf(set[k]), stride_);
+    }
+    FILE* f = std::fopen(file.c_str(), "wb");
+    if (!f || std::fwrite(buf.data(), 1, buf.size(), f) != buf.size())
+      throw Error(file.string(), "", "cannot write temporary file (disk full?)");
+    std::fclose(f);
+  }
+
+  void sortPoints(PointBuffer& pts, const NodeKey& key) const {
+    const size_t n = pts.size();
+    // Coarse Morton keys of the top 21 bits inside the node order almost everything (LSD radix
+    // sort); exact comparison settles runs of equal keys.
+    const uint32_t bits = cubeBits() - key.level;
+    const uint32_t shift = bits > 21 ? bits - 21 : 0;
+    const uint32_t m = mask(bits);
+    std::vector<std::pair<uint64_t, uint32_t>> keys(n), tmp(n);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+      const uint32_t* p = &pts.pos[3 * i];
+      keys[i] = {mortonEncode21((p[0] & m) >> shift, (p[1] & m) >> shift, (p[2] & m) >> shift),
+                 static_cast<uint32_t>(i)};
+    });
+    const uint32_t keyBits = 3 * std::min<uint32_t>(bits, 21);
+    constexpr uint32_t kDigit = 11;
+    std::vector<uint32_t> hist(size_t(1) << kDigit);
+    for (uint32_t s0 = 0; s0 < keyBits; s0 += kDigit) {
+      std::fill(hist.begin(), hist.end(), 0);
+      for (const auto& k : keys) hist[(k.first >> s0) & ((1u << kDigit) - 1)]++;
+      uint32_t sum = 0;
+      for (auto& h : hist) {
+        uint32_t c = h;
+        h = sum;
+        sum += c;
+      }
+      for (const auto& k : keys) tmp[hist[(k.first >> s0) & ((1u << kDigit) - 1)]++] = k;
+      keys.swap(tmp);
+    }
+    std::vector<std::pair<uint64_t, uint32_t>>().swap(tmp);
+    auto exactLess = [&](const std::pair<uint64_t, uint32_t>& a, const std::pair<uint64_t, uint32_t>& b) {
+      const uint32_t* p = &pts.pos[3 * size_t(a.second)];
+      const uint32_t* q = &pts.pos[3 * size_t(b.second)];
+      if (p[0] != q[0] || p[1] != q[1] || p[2] != q[2]) return mortonLess(p, q);
+      return std::memcmp(pts.attrsOf(a.second), pts.attrsOf(b.second), stride_) < 0;
+    };
+    for (size_t i = 0; i < n;) {
+      size_t j = i + 1;
+      while (j < n && keys[j].first == keys[i].first) ++j;
+      if (j - i > 1) std::sort(keys.begin() + i, keys.begin() + j, exactLess);
+      i = j;
+    }
+    PointBuffer sorted(stride_);
+    sorted.pos.resize(n * 3);
+    sorted.attrs.resize(n * stride_);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+      const size_t j = keys[i].second;
+      std::memcpy(&sorted.pos[3 * i], &pts.pos[3 * j], 12);
+      if (stride_) std::memcpy(&sorted.attrs[i * stride_], pts.attrsOf(j), stride_);
+    });
+    pts = std::move(sorted);
+  }
+  static uint32_t mask(uint32_t bits) { return bits >= 32 ? ~0u : ((1u << bits) - 1); }
+
+  // Merges exact duplicates (same position and attributes), adjacent after sorting.
+  uint64_t dedup(PointBuffer& pts) const {
+    const size_t n = pts.size();
+    if (n == 0) return 0;
+    size_t w = 1;
+    for (size_t i = 1; i < n; ++i) {
+      const uint32_t* p = &pts.pos[3 * i];
+      const uint32_t* q = &pts.pos[3 * (w - 1)];
+      if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2] &&
+          std::memcmp(pts.attrsOf(i), pts.attrsOf(w - 1), stride_) == 0)
+        continue;
+      if (w != i) {
+        std::memcpy(&pts.pos[3 * w], p, 12);
+        if (stride_) std::memmove(&pts.attrs[w * stride_], pts.attrsOf(i), stride_);
+      }
+      ++w;
+    }
+    pts.pos.resize(3 * w);
+    pts.attrs.resize(w * stride_);
+    return n - w;
+  }
+
+  void estimateMissingNormals(PointBuffer& pts) const {
+    const size_t n = pts.size();
+    std::vector<float> normals(3 * n, 0.f);
+    // The orientation centre: the middle of the scan's tight bounds, in integer units.
+    double c[3];
+    for (int a = 0; a < 3; ++a)
+      c[a] = ((meta_.bounds.min[a] + meta_.bounds.max[a]) * 0.5 - meta_.offset[a]) / meta_.scale;
+    int orient = opt_.normalOrientation == NormalOrientation::Up       ? 2
+                 : opt_.normalOrientation == NormalOrientation::Inward ? 1
+                                                                       : 0;
+    estimateNormals(pts.pos.data(), n, opt_.normalNeighbours, orient, c, normals.data());
+    const size_t off = layout_.offset(normalIndex_);
+    for (size_t i = 0; i < n; ++i) {
+      float cur[3];
+      std::memcpy(cur, pts.attrs.data() + i * stride_ + off, 12);
+      if (std::isnan(cur[0])) std::memcpy(pts.attrs.data() + i * stride_ + off, &normals[3 * i], 12);
+    }
+  }
+
+  // Returns the node's current sample (indices into pts); writes every node below it.
+  std::vector<uint32_t> buildSubtree(const PointBuffer& pts, const NodeKey& key, size_t b, size_t e) {
+    const uint32_t size = meta_.cubeSize >> key.level;
+    if (e - b <= opt_.maxNodePoints || size <= 1) {
+      std::vector<uint32_t> all(e - b);
+      std::iota(all.begin(), all.end(), static_cast<uint32_t>(b));
+      return all;
+    }
+    const uint32_t half = size >> 1;
+    auto childOf = [&](size_t i) {
+      const uint32_t* p = &pts.pos[3 * i];
+      return ((p[0] & half) ? 4 : 0) | ((p[1] & half) ? 2 : 0) | ((p[2] & half) ? 1 : 0);
+    };
+    // Morton order makes each child's points one contiguous run.
+    std::array<std::vector<uint32_t>, 8> sets;
+    size_t start = b;
+    while (start < e) {
+      int c = childOf(start);
+      size_t end = start + 1;
+      while (end < e && childOf(end) == c) ++end;
+      NL_CHECK_MSG(sets[c].empty(), "points not in Morton order");
+      sets[c] = buildSubtree(pts, key.child(c), start, end);
+      start = end;
+    }
+    return sampleAndWriteChildren(pts, key, sets);
+  }
+
+  // Selects `key`'s sample from its children's current samples and writes the children.
+  std::vector<uint32_t> sampleAndWriteChildren(const PointBuffer& pts, const NodeKey& key,
+                                               std::array<std::vector<uint32_t>, 8>& sets) {
+    std::vector<uint32_t> candidates;
+    for (auto& s : sets) candidates.insert(candidates.end(), s.begin(), s.end());
+    std::vector<char> chosen = sample(pts, key, candidates);
+    std::vector<uint32_t> selected;
+    std::vector<char> isSelected;  // by candidate position
+    size_t at = 0;
+    for (int c = 0; c < 8; ++c) {
+      if (sets[c].empty()) continue;
+      std::vector<uint32_t> rest;
+      for (uint32_t idx : sets[c]) {
+        if (chosen[at++])
+          selected.push_back(idx);
+        else
+          rest.push_back(idx);
+      }
+      writeNode(key.child(c), pts, rest);
+    }
+    return selected;
+  }
+
+  // Spatially even subsample (Poisson disk or grid) with spacing size/128, widened until the
+  // sample fits maxNodePoints: a volume-filling scan (a cube of points) would otherwise put
+  // 128^3 points into one node.
+  std::vector<char> sample(const PointBuffer& pts, const NodeKey& key,
+                           const std::vector<uint32_t>& cand) const {
+    const double size = meta_.cubeSize >> key.level;
+    const uint32_t base[3] = {key.x * (meta_.cubeSize >> key.level), key.y * (meta_.cubeSize >> key.level),
+                              key.z * (meta_.cubeSize >> key.level)};
+    double r = size / 128.0;
+    std::vector<char> chosen(cand.size());
+    for (int attempt = 0;; ++attempt) {
+      const size_t limit = opt_.maxNodePoints;
+      size_t accepted = opt_.sampling == Sampling::Grid ? sampleGrid(pts, cand, base, r, chosen, limit)
+                                                         : samplePoisson(pts, cand, base, r, chosen, limit);
+      if (accepted <= opt_.maxNodePoints || attempt > 60) {
+        NL_CHECK(accepted <= opt_.maxNodePoints);
+        return chosen;
+      }
+      // Surfaces thin out with r^2, volumes with r^3: the square root never overshoots.
+      r *= std::max(1.05, std::sqrt(double(accepted) / opt_.maxNodePoints));
+    }
+  }
+
+  // Open-addressing map from a grid cell to the head of its list of accepted points.
+  struct CellMap {
+    std::vector<uint64_t> keys;
+    std::vector<int32_t> heads;
+    uint64_t mask;
+    int shift;
+    explicit CellMap(size_t n) {
+      size_t cap = 16;
+      int bits = 4;
+      while (cap < 2 * n) cap <<= 1, ++bits;
+      keys.assign(cap, ~0ull);
+      heads.assign(cap, -1);
+      mask = cap - 1;
+      shift = 64 - bits;
+    }
+    // Fibonacci hashing: the top bits of the product are the well-mixed ones.
+    uint64_t home(uint64_t k) const { return (k * 0x9E3779B97F4A7C15ull) >> shift; }
+    int32_t& slot(uint64_t k) {
+      for (uint64_t i = home(k);; i = (i + 1) & mask) {
+        if (keys[i] == k || keys[i] == ~0ull) {
+          keys[i] = k;
+          return heads[i];
+        }
+      }
+    }
+    int32_t find(uint64_t k) const {
+      for (uint64_t i = home(k);; i = (i + 1) & mask) {
+        if (keys[i] == k) return heads[i];
+        if (keys[i] == ~0ull) return -1;
+      }
+    }
+  };
+  static uint64_t cellKey(int64_t x, int64_t y, int64_t z) {
+    return (uint64_t(x + 1) << 42) | (uint64_t(y + 1) << 21) | uint64_t(z + 1);
+  }
+
+  // Both samplers give up once `limit` points are accepted and return an estimate of the total
+  // they would have accepted, so that an over-full attempt costs only part of a pass.
+  size_t samplePoisson(const PointBuffer& pts, const std::vector<uint32_t>& cand, const uint32_t base[3],
+                       double r, std::vector<char>& chosen, size_t limit) const {
+    // Neighbour cells, own cell first: in dense data most candidates are rejected there.
+    static const std::array<std::array<int, 3>, 27> offsets = [] {
+      std::array<std::array<int, 3>, 27> o{};
+      int n = 1;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz)
+            if (dx || dy || dz) o[n++] = {dx, dy, dz};
+      return o;
+    }();
+    CellMap cells(std::min(cand.size(), limit + 1));
+    std::vector<int32_t> next;
+    std::vector<uint32_t> acceptedIdx;
+    const double r2 = r * r, inv = 1.0 / r;
+    // Occupied cells as a dense bitmap: r is at least size/128, so there are at most 129 cells
+    // per axis (plus one on each side for neighbours); most neighbour probes end here.
+    constexpr int64_t kSide = 131;
+    thread_local std::vector<uint64_t> occupied;
+    occupied.assign((kSide * kSide * kSide + 63) / 64, 0);
+    auto bit = [](int64_t x, int64_t y, int64_t z) { return ((x + 1) * kSide + (y + 1)) * kSide + (z + 1); };
+    size_t accepted = 0;
+    for (size_t k = 0; k < cand.size(); ++k) {
+      const uint32_t* p = &pts.pos[3 * size_t(cand[k])];
+      const double x = p[0] - base[0], y = p[1] - base[1], z = p[2] - base[2];
+      const int64_t cx = int64_t(x * inv), cy = int64_t(y * inv), cz = int64_t(z * inv);
+      bool ok = true;
+      for (const auto& d : offsets) {
+        const int64_t b = bit(cx + d[0], cy + d[1], cz + d[2]);
+        if (!(occupied[b >> 6] >> (b & 63) & 1)) continue;
+        for (int32_t j = cells.find(cellKey(cx + d[0], cy + d[1], cz + d[2])); j >= 0; j = next[j]) {
+          const uint32_t* q = &pts.pos[3 * size_t(acceptedIdx[j])];
+          const double ex = double(q[0]) - p[0], ey = double(q[1]) - p[1], ez = double(q[2]) - p[2];
+          if (ex * ex + ey * ey + ez * ez < r2) {
+            ok = false;
+            break;
+          }
+        }
+        if (!ok) break;
+      }
+      chosen[k] = ok;
+      if (!ok) continue;
+      if (++accepted > limit) return accepted * cand.size() / (k + 1);
+      const int64_t b = bit(cx, cy, cz);
+      occupied[b >> 6] |= uint64_t(1) << (b & 63);
+      int32_t& head = cells.slot(cellKey(cx, cy, cz));
+      next.push_back(head);
+      head = static_cast<int32_t>(acceptedIdx.size());
+      acceptedIdx.push_back(cand[k]);
+    }
+    return accepted;
+  }
+
+  size_t sampleGrid(const PointBuffer& pts, const std::vector<uint32_t>& cand, const uint32_t base[3], double r,
+                    std::vector<char>& chosen, size_t limit) const {
+    CellMap cells(std::min(cand.size(), limit + 1));
+    const double inv = 1.0 / r;
+    size_t accepted = 0;
+    for (size_t k = 0; k < cand.size(); ++k) {
+      const uint32_t* p = &pts.pos[3 * size_t(cand[k])];
+      int32_t& head = cells.slot(cellKey(int64_t((p[0] - base[0]) * inv), int64_t((p[1] - base[1]) * inv),
+                                         int64_t((p[2] - base[2]) * inv)));
+      chosen[k] = head < 0;
+      if (head < 0) {
+        head = 0;
+        if (++accepted > limit) return accepted * cand.size() / (k + 1);
+      }
+    }
+    return accepted;
+  }
+
+  void writeNode(const NodeKey& key, const PointBuffer& pts, const std::vector<uint32_t>& set) {
+    PointBuffer local(stride_);
+    local.reserve(set.size());
+    const uint32_t size = meta_.cubeSize >> key.level;
+    const uint32_t base[3] = {key.x * size, key.y * size, key.z * size};
+    for (uint32_t i : set) {
+      const uint32_t* p = &pts.pos[3 * size_t(i)];
+      const uint32_t rel[3] = {p[0] - base[0], p[1] - base[1], p[2] - base[2]};
+      NL_CHECK(rel[0] < size && rel[1] < size && rel[2] < size);
+      local.push(rel, pts.attrsOf(i));
+    }
+    writer_->writeNode(key, local);
+    stored_ += set.size();
+  }
+
+  // ---- merge ----------------------------------------------------------------------------------
+
+  fs::path provisionalFile(const NodeKey& k) const { return tmp_ / ("sample-" + k.name() + ".bin"); }
+
+  void saveProvisional(const NodeKey& key, const PointBuffer& pts, const std::vector<uint32_t>& set) {
+    std::lock_guard<std::mutex> lock(pendingMutex_);
+    saveRecords(provisionalFile(key), pts, set);
+    pending_.insert(key);
+  }
+
+  void mergeTop() {
+    // Nodes above the chunks, deepest first; each level's nodes in parallel.
+    std::map<uint32_t, std::set<NodeKey>> byLevel;
+    for (const NodeKey& k : pending_)
+      for (uint32_t l = 0; l < k.level; ++l) byLevel[l].insert(k.ancestor(l));
+    progress_.begin("merge", byLevel.empty() ? 1 : byLevel.rbegin()->first + 1, "levels");
+    for (auto it = byLevel.rbegin(); it != byLevel.rend(); ++it) {
+      std::vector<NodeKey> nodes(it->second.begin(), it->second.end());
+      tbb::parallel_for_each(nodes.begin(), nodes.end(), [&](const NodeKey& key) {
+        PointBuffer pts(stride_);
+        std::array<std::vector<uint32_t>, 8> sets;
+        for (int c = 0; c < 8; ++c) {
+          fs::path f = provisionalFile(key.child(c));
+          if (!fs::exists(f)) continue;
+          PointBuffer child = loadRecords(f);
+          fs::remove(f);
+          for (size_t i = 0; i < child.size(); ++i) {
+            sets[c].push_back(static_cast<uint32_t>(pts.size()));
+            pts.pushFrom(child, i);
+          }
+        }
+        std::vector<uint32_t> selected = sampleAndWriteChildren(pts, key, sets);
+        saveRecords(provisionalFile(key), pts, selected);
+      });
+      progress_.advance(1);
+    }
+    progress_.end();
+    // The root's current sample is final.
+    fs::path rootFile = provisionalFile(NodeKey::root());
+    PointBuffer root = loadRecords(rootFile);
+    std::vector<uint32_t> all(root.size());
+    std::iota(all.begin(), all.end(), 0u);
+    writeNode(NodeKey::root(), root, all);
+  }
+
+  // ---- metadata -------------------------------------------------------------------------------
+
+  void finishMetadata() {
+    accounting_.kept = stored_.load();
+    NL_CHECK_MSG(accounting_.balanced(),
+                 "point accounting does not balance: input " + std::to_string(accounting_.input) + ", kept " +
+                     std::to_string(accounting_.kept) + ", merged " +
+                     std::to_string(accounting_.duplicatesMerged) + ", rejected " +
+                     std::to_string(accounting_.rejectedTotal()));
+    meta_.generator = "nestlight 0.1.0";
+    meta_.layout = layout_;
+    meta_.points = accounting_.kept;
+    meta_.accounting = accounting_;
+    meta_.spacing = meta_.cubeWorldSize() / 128.0;
+    meta_.hierarchyStep = kHierarchyStep;
+    meta_.normalsEstimated = estimate_;
+    if (estimate_)
+      meta_.normalEstimation = {
+          {"method", "closed-form plane fit (Rohmer et al., section 5)"},
+          {"neighbours", opt_.normalNeighbours},
+          {"orientation", opt_.normalOrientation == NormalOrientation::Up       ? "up"
+                          : opt_.normalOrientation == NormalOrientation::Inward ? "inward"
+                                                                                : "outward"},
+          {"note", "neighbourhoods end at chunk borders; points with no fit have a zero normal"}};
+    for (auto& s : sources_) {
+      const SourceHeader& h = s.reader->header();
+      SourceRecord r;
+      r.path = h.path;
+      r.format = h.format;
+      r.points = s.read;
+      r.declaredPoints = h.declaredPoints;
+      r.warnings = s.reader->warnings();
+      r.details = h.details;
+      if (meta_.crs.is_null() && !h.crs.is_null()) meta_.crs = h.crs;
+      meta_.sources.push_back(std::move(r));
+    }
+    meta_.build = {{"sampling", opt_.sampling == Sampling::Grid ? "grid" : "poisson"},
+                   {"codec", codecName(opt_.codec)},
+                   {"max_node_points", opt_.maxNodePoints},
+                   {"memory_bytes", opt_.memoryBytes},
+                   {"dedup", opt_.dedup},
+                   {"chunks", chunks_.size()},
+                   {"max_chunk_points", maxChunkPoints_ == UINT64_MAX ? json(nullptr) : json(maxChunkPoints_)},
+                   {"command_line", opt_.commandLine}};
+  }
+  BuildOptions opt_;
+  Progress progress_;
+  std::vector<SourceState> sources_;
+  PointLayout layout_;
+  std::set<std::string> widened_;
+  size_t stride_ = 0;
+  int normalIndex_ = -1;
+  bool estimate_ = false;
+  unsigned threads_ = 1;
+  Metadata meta_;
+  Accounting accounting_;
+  std::unique_ptr<OctreeWriter> writer_;
+  fs::path tmp_;
+  uint32_t gridLevel_ = 0;
+  uint64_t maxChunkPoints_ = 0;
+  std::vector<int32_t> cellChunk_;
+  std::vector<Chunk> chunks_;
+  std::mutex pendingMutex_;
+  std::set<NodeKey> pending_;
+  std::atomic<uint64_t> stored_{0};
+};
+
+}  // namespace
+
+BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& options) {
+  Builder b(std::move(sources), options);
+  return b.run();
+}
+
+}  // namespace nestlight

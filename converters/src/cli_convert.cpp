@@ -1,0 +1,174 @@
+// `nestlight convert` and the helpers shared by the sub-commands.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "cli.h"
+#include "nestlight/converters/builder.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::cli {
+
+namespace fs = std::filesystem;
+
+uint64_t parseBytes(const std::string& text) {
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (...) {
+    throw Error("", "", "cannot read '" + text + "' as a size (e.g. 512M, 2G)");
+  }
+  std::string unit = text.substr(used);
+  std::transform(unit.begin(), unit.end(), unit.begin(), ::tolower);
+  double mult = 1;
+  if (unit == "k" || unit == "kb" || unit == "kib") mult = 1024.0;
+  else if (unit == "m" || unit == "mb" || unit == "mib") mult = 1024.0 * 1024;
+  else if (unit == "g" || unit == "gb" || unit == "gib") mult = 1024.0 * 1024 * 1024;
+  else if (!unit.empty() && unit != "b") throw Error("", "", "unknown size unit in '" + text + "'");
+  if (!(v > 0)) throw Error("", "", "size must be positive: '" + text + "'");
+  return static_cast<uint64_t>(v * mult);
+}
+
+std::vector<std::string> expandInputs(const std::vector<std::string>& inputs) {
+  static const std::vector<std::string> exts = {".las", ".laz", ".ply", ".pcd", ".xyz", ".pts", ".txt", ".csv"};
+  std::vector<std::string> out;
+  for (const auto& in : inputs) {
+    if (!fs::exists(in)) throw Error(in, "", "no such file or directory");
+    if (fs::is_directory(in)) {
+      std::vector<std::string> found;
+      for (const auto& e : fs::directory_iterator(in)) {
+        std::string ext = e.path().extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+        if (e.is_regular_file() && std::find(exts.begin(), exts.end(), ext) != exts.end())
+          found.push_back(e.path().string());
+      }
+      if (found.empty()) throw Error(in, "", "directory holds no point cloud files");
+      std::sort(found.begin(), found.end());
+      out.insert(out.end(), found.begin(), found.end());
+    } else {
+      out.push_back(in);
+    }
+  }
+  return out;
+}
+
+std::string humanBytes(double b) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  int u = 0;
+  while (b >= 1024 && u < 4) b /= 1024, ++u;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, u ? "%.1f %s" : "%.0f %s", b, units[u]);
+  return buf;
+}
+
+std::string humanCount(double n) {
+  char buf[32];
+  if (n >= 1e9) std::snprintf(buf, sizeof buf, "%.2f G", n / 1e9);
+  else if (n >= 1e6) std::snprintf(buf, sizeof buf, "%.2f M", n / 1e6);
+  else if (n >= 1e3) std::snprintf(buf, sizeof buf, "%.1f k", n / 1e3);
+  else std::snprintf(buf, sizeof buf, "%.0f", n);
+  return buf;
+}
+
+namespace {
+ProgressMode parseProgress(const std::string& s) {
+  if (s == "terminal") return ProgressMode::Terminal;
+  if (s == "json") return ProgressMode::Json;
+  if (s == "quiet" || s == "none") return ProgressMode::Quiet;
+  return ProgressMode::Auto;
+}
+}  // namespace
+
+void printBuildSummary(const BuildReport& r, const fs::path& out) {
+  const Metadata& m = r.metadata;
+  const Accounting& a = m.accounting;
+  std::printf("built %s\n", out.string().c_str());
+  std::printf("  points    %llu in, %llu kept, %llu duplicates merged, %llu rejected\n",
+              (unsigned long long)a.input, (unsigned long long)a.kept,
+              (unsigned long long)a.duplicatesMerged, (unsigned long long)a.rejectedTotal());
+  for (auto& [why, n] : a.rejected)
+    if (n) std::printf("            rejected %llu: %s\n", (unsigned long long)n, why.c_str());
+  for (auto& s : m.sources)
+    for (auto& w : s.warnings) std::printf("  warning   %s: %s\n", s.path.c_str(), w.c_str());
+  std::printf("  octree    %llu nodes, depth %u, %s payload (%.2f bytes/point, %s)\n",
+              (unsigned long long)m.nodes, m.depth, humanBytes(double(m.payloadBytes)).c_str(),
+              m.points ? double(m.payloadBytes) / m.points : 0.0,
+              m.build.value("codec", std::string("?")).c_str());
+  std::printf("  time      %.2f s, %s points/s, peak RSS %s, %llu chunks\n", r.seconds,
+              humanCount(r.pointsPerSecond).c_str(), humanBytes(double(r.peakRssBytes)).c_str(),
+              (unsigned long long)r.chunks);
+  std::printf("  phases   ");
+  for (auto it = r.phases.begin(); it != r.phases.end(); ++it) std::printf(" %s %.2f s", it.key().c_str(), it.value().get<double>());
+  std::printf("\n");
+}
+
+void addConvert(CLI::App& app, int& exitCode) {
+  auto* cmd = app.add_subcommand("convert", "Build a nested octree from scans, in bounded memory");
+  cmd->footer(
+      "Inputs: LAS 1.0-1.4 (.las), PLY (.ply), PCD (.pcd), text (.xyz .pts .txt .csv); a directory\n"
+      "stands for the point files in it. Every input point is kept, merged as an exact duplicate\n"
+      "(--dedup) or rejected with a reason; `nestlight info` shows the counts.\n"
+      "Normals (--estimate-normals) are fitted to the k nearest neighbours by a closed-form plane\n"
+      "fit and oriented away from the scan's centre (outward: objects and buildings seen from\n"
+      "outside), towards it (inward: interiors) or upwards (up: terrain).");
+  auto inputs = std::make_shared<std::vector<std::string>>();
+  auto opt = std::make_shared<BuildOptions>();
+  auto out = std::make_shared<std::string>();
+  auto memory = std::make_shared<std::string>("1G");
+  auto sampling = std::make_shared<std::string>("poisson");
+  auto codec = std::make_shared<std::string>("zstd");
+  auto orient = std::make_shared<std::string>("outward");
+  auto progress = std::make_shared<std::string>("auto");
+  auto read = std::make_shared<ReadOptions>();
+  cmd->add_option("inputs", *inputs, "Scan files or directories")->required();
+  cmd->add_option("-o,--output", *out, "Output octree folder")->required();
+  cmd->add_option("--memory", *memory, "Memory budget of the builder (e.g. 512M, 4G)")->capture_default_str();
+  cmd->add_option("--threads", opt->threads, "Worker threads (0: all cores)")->capture_default_str();
+  cmd->add_option("--sampling", *sampling, "Node sampling: poisson (even) or grid (faster)")
+      ->check(CLI::IsMember({"poisson", "grid"}))
+      ->capture_default_str();
+  cmd->add_option("--codec", *codec, "Payload codec: zstd, raw or draco")
+      ->check(CLI::IsMember({"zstd", "raw", "draco"}))
+      ->capture_default_str();
+  cmd->add_option("--precision", opt->precision,
+                  "Position precision in world units (default: the inputs' LAS scale, else 0.001)");
+  cmd->add_flag("--dedup", opt->dedup, "Merge exact duplicates (same position and attributes)");
+  cmd->add_flag("--estimate-normals", opt->estimateNormals, "Fit normals where the scan has none");
+  cmd->add_option("--normal-neighbours", opt->normalNeighbours, "k for normal estimation")->capture_default_str();
+  cmd->add_option("--normal-orientation", *orient, "outward, inward or up")
+      ->check(CLI::IsMember({"outward", "inward", "up"}))
+      ->capture_default_str();
+  cmd->add_option("--max-node-points", opt->maxNodePoints, "Points per node at most (leaves and samples)")
+      ->check(CLI::Range(1000u, 1000000u))
+      ->capture_default_str();
+  cmd->add_flag("--overwrite", opt->overwrite, "Replace an existing octree in the output folder");
+  cmd->add_flag("--lenient", read->lenient,
+                "Keep the complete records of files whose header disagrees with their data");
+  cmd->add_option("--columns", read->columns, "Text inputs: column names, e.g. x,y,z,r,g,b");
+  cmd->add_flag("--in-memory", opt->inMemory, "Index everything as one chunk (reference build; needs RAM)");
+  cmd->add_option("--progress", *progress, "auto, terminal, json or quiet")
+      ->check(CLI::IsMember({"auto", "terminal", "json", "quiet"}))
+      ->capture_default_str();
+  cmd->callback([=, &exitCode]() {
+    BuildOptions o = *opt;
+    o.output = *out;
+    o.memoryBytes = parseBytes(*memory);
+    o.sampling = *sampling == "grid" ? Sampling::Grid : Sampling::Poisson;
+    o.codec = *parseCodecName(*codec);
+    o.normalOrientation = *orient == "up" ? NormalOrientation::Up
+                          : *orient == "inward" ? NormalOrientation::Inward
+                                                : NormalOrientation::Outward;
+    o.progress = parseProgress(*progress);
+    std::vector<std::string> files = expandInputs(*inputs);
+    o.commandLine = {{"inputs", files}, {"memory", *memory}, {"sampling", *sampling}, {"codec", *codec}};
+    std::vector<std::unique_ptr<PointReader>> readers;
+    for (const auto& f : files) readers.push_back(openReader(f, *read));
+    BuildReport r = buildOctree(std::move(readers), o);
+    printBuildSummary(r, o.output);
+    exitCode = 0;
+  });
+}
+
+}  // namespace nestlight::cli

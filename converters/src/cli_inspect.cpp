@@ -1,0 +1,76 @@
+// `nestlight info` and `nestlight verify`.
+#include <cstdio>
+
+#include "cli.h"
+#include "nestlight/converters/verify.h"
+#include "nestlight/octree/octree_reader.h"
+
+namespace nestlight::cli {
+
+void addInfo(CLI::App& app, int& exitCode) {
+  auto* cmd = app.add_subcommand("info", "Describe an octree: points, accounting, bounds, attributes");
+  auto dir = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("octree", *dir, "Octree folder")->required();
+  cmd->add_flag("--json", *json, "Print the metadata as JSON");
+  cmd->callback([=, &exitCode]() {
+    OctreeReader r(*dir);
+    const Metadata& m = r.metadata();
+    if (*json) {
+      std::printf("%s\n", m.toJson().dump(2).c_str());
+      exitCode = 0;
+      return;
+    }
+    const Accounting& a = m.accounting;
+    std::printf("octree     %s (format version %d, %s)\n", dir->c_str(), m.version, m.generator.c_str());
+    std::printf("points     %llu stored\n", (unsigned long long)m.points);
+    std::printf("accounting %llu input = %llu kept + %llu duplicates merged + %llu rejected\n",
+                (unsigned long long)a.input, (unsigned long long)a.kept,
+                (unsigned long long)a.duplicatesMerged, (unsigned long long)a.rejectedTotal());
+    for (auto& [why, n] : a.rejected) std::printf("           rejected %llu: %s\n", (unsigned long long)n, why.c_str());
+    if (!m.bounds.empty())
+      std::printf("bounds     [%.4f %.4f %.4f] - [%.4f %.4f %.4f]\n", m.bounds.min.x, m.bounds.min.y,
+                  m.bounds.min.z, m.bounds.max.x, m.bounds.max.y, m.bounds.max.z);
+    std::printf("grid       offset [%.4f %.4f %.4f], scale %g, cube %u steps (%.3f units)\n", m.offset.x,
+                m.offset.y, m.offset.z, m.scale, m.cubeSize, m.cubeWorldSize());
+    std::printf("tree       %llu nodes, depth %u, root spacing %g\n", (unsigned long long)m.nodes, m.depth,
+                m.spacing);
+    std::printf("payload    %s (%.2f bytes/point), hierarchy %s, codec %s\n",
+                humanBytes(double(m.payloadBytes)).c_str(), m.points ? double(m.payloadBytes) / m.points : 0.0,
+                humanBytes(double(m.hierarchyBytes)).c_str(), m.build.value("codec", std::string("?")).c_str());
+    std::printf("attributes");
+    if (m.layout.size() == 0) std::printf(" none");
+    for (const auto& at : m.layout.attributes())
+      std::printf(" %s:%s%s", at.name.c_str(), scalarName(at.type),
+                  at.components > 1 ? ("x" + std::to_string(at.components)).c_str() : "");
+    std::printf("\n");
+    if (m.normalsEstimated) std::printf("normals    estimated (%s)\n", m.normalEstimation.dump().c_str());
+    if (!m.crs.is_null()) std::printf("crs        %s\n", m.crs.contains("wkt") ? "WKT" : "GeoTIFF keys");
+    for (const auto& s : m.sources) {
+      std::printf("source     %s (%s, %llu points)\n", s.path.c_str(), s.format.c_str(), (unsigned long long)s.points);
+      for (const auto& w : s.warnings) std::printf("           warning: %s\n", w.c_str());
+    }
+    exitCode = 0;
+  });
+}
+
+void addVerify(CLI::App& app, int& exitCode) {
+  auto* cmd = app.add_subcommand(
+      "verify", "Check an octree: structure, checksums, point accounting, points inside their nodes");
+  auto dir = std::make_shared<std::string>();
+  cmd->add_option("octree", *dir, "Octree folder")->required();
+  cmd->callback([=, &exitCode]() {
+    VerifyReport r = verifyOctree(*dir);
+    for (const auto& f : r.failures) std::fprintf(stderr, "FAIL %s\n", f.c_str());
+    if (r.ok()) {
+      std::printf("OK %s: %llu nodes, %llu points, %s of payload checked\n", dir->c_str(),
+                  (unsigned long long)r.nodes, (unsigned long long)r.points, humanBytes(double(r.payloadBytes)).c_str());
+      exitCode = 0;
+    } else {
+      std::fprintf(stderr, "verify failed: %zu problem(s) in %s\n", r.failures.size(), dir->c_str());
+      exitCode = 2;
+    }
+  });
+}
+
+}  // namespace nestlight::cli

@@ -1,0 +1,113 @@
+#include "nestlight/converters/verify.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <mutex>
+
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
+
+namespace nestlight {
+
+namespace fs = std::filesystem;
+
+VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
+  VerifyReport rep;
+  std::mutex mutex;
+  auto fail = [&](const std::string& s) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (rep.failures.size() < maxFailures) rep.failures.push_back(s);
+  };
+  std::unique_ptr<OctreeReader> reader;
+  try {
+    reader = std::make_unique<OctreeReader>(dir);
+  } catch (const std::exception& e) {
+    fail(e.what());
+    return rep;
+  }
+  const Metadata& m = reader->metadata();
+  std::error_code ec;
+  auto size = fs::file_size(dir / m.payloadFile, ec);
+  if (ec || size != m.payloadBytes)
+    fail(m.payloadFile + ": size " + std::to_string(ec ? 0 : size) + " differs from metadata's " +
+         std::to_string(m.payloadBytes));
+  size = fs::file_size(dir / m.hierarchyFile, ec);
+  if (ec || size != m.hierarchyBytes)
+    fail(m.hierarchyFile + ": size " + std::to_string(ec ? 0 : size) + " differs from metadata's " +
+         std::to_string(m.hierarchyBytes));
+
+  std::vector<std::pair<NodeKey, HierarchyEntry>> nodes;
+  try {
+    nodes = reader->allNodes();
+  } catch (const std::exception& e) {
+    fail(e.what());
+    return rep;
+  }
+  rep.nodes = nodes.size();
+  if (nodes.size() != m.nodes)
+    fail("hierarchy holds " + std::to_string(nodes.size()) + " nodes, metadata says " + std::to_string(m.nodes));
+
+  // Payload ranges must not overlap and must account for the whole payload file.
+  std::vector<std::pair<uint64_t, uint64_t>> ranges;
+  uint64_t sum = 0;
+  for (auto& [k, e] : nodes) {
+    if (e.type == NodeType::Proxy) fail("node " + k.name() + " remains a proxy after loading its chunk");
+    if (k.level > m.depth) fail("node " + k.name() + " is deeper than metadata's depth");
+    if (e.byteSize) ranges.emplace_back(e.byteOffset, e.byteSize);
+    sum += e.numPoints;
+  }
+  std::sort(ranges.begin(), ranges.end());
+  uint64_t covered = 0, end = 0;
+  for (auto& [o, s] : ranges) {
+    if (o < end) fail("payloads overlap at byte " + std::to_string(o));
+    end = std::max(end, o + s);
+    covered += s;
+  }
+  if (covered != m.payloadBytes)
+    fail("node payloads cover " + std::to_string(covered) + " bytes of " + std::to_string(m.payloadBytes));
+
+  tbb::parallel_for(size_t(0), nodes.size(), [&](size_t i) {
+    const auto& [k, e] = nodes[i];
+    try {
+      PointBuffer pts = reader->readNode(k);
+      if (pts.size() != e.numPoints) {
+        fail("node " + k.name() + " decodes to " + std::to_string(pts.size()) + " points, expected " +
+             std::to_string(e.numPoints));
+        return;
+      }
+      const uint64_t s = m.cubeSize >> k.level;
+      const uint64_t base[3] = {k.x * s, k.y * s, k.z * s};
+      for (size_t p = 0; p < pts.size(); ++p)
+        for (int a = 0; a < 3; ++a) {
+          uint64_t v = pts.pos[3 * p + a];
+          if (v < base[a] || v >= base[a] + s) {
+            fail("node " + k.name() + ": point " + std::to_string(p) + " lies outside the node's cube");
+            return;
+          }
+        }
+      std::lock_guard<std::mutex> lock(mutex);
+      rep.payloadBytes += e.byteSize;
+    } catch (const std::exception& ex) {
+      fail(ex.what());
+    }
+  });
+  rep.points = sum;
+
+  const Accounting& a = m.accounting;
+  if (sum != m.points)
+    fail("nodes hold " + std::to_string(sum) + " points, metadata says " + std::to_string(m.points));
+  if (a.kept != m.points)
+    fail("accounting: kept " + std::to_string(a.kept) + " differs from points stored " + std::to_string(m.points));
+  if (!a.balanced())
+    fail("accounting does not balance: input " + std::to_string(a.input) + " != kept " + std::to_string(a.kept) +
+         " + merged " + std::to_string(a.duplicatesMerged) + " + rejected " + std::to_string(a.rejectedTotal()));
+  uint64_t fromSources = 0;
+  for (auto& s : m.sources) fromSources += s.points;
+  if (!m.sources.empty() && fromSources != a.input)
+    fail("sources report " + std::to_string(fromSources) + " points read, accounting says input " +
+         std::to_string(a.input));
+  return rep;
+}
+
+}  // namespace nestlight

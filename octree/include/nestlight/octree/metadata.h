@@ -1,0 +1,88 @@
+// metadata.json: everything a reader needs before touching the hierarchy. See docs/FORMAT.md.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "nestlight/octree/attribute.h"
+#include "nestlight/octree/codec.h"
+#include "nestlight/octree/geometry.h"
+
+namespace nestlight {
+
+inline constexpr int kFormatVersion = 1;
+
+// Every input point is kept, merged as an exact duplicate, or rejected with a reason:
+// input == kept + duplicatesMerged + sum(rejected).
+struct Accounting {
+  uint64_t input = 0;
+  uint64_t kept = 0;
+  uint64_t duplicatesMerged = 0;
+  std::map<std::string, uint64_t> rejected;  // reason -> count
+
+  uint64_t rejectedTotal() const {
+    uint64_t s = 0;
+    for (auto& [k, v] : rejected) s += v;
+    return s;
+  }
+  bool balanced() const { return input == kept + duplicatesMerged + rejectedTotal(); }
+  void add(const Accounting& o);
+};
+
+// Rejection reasons used by the builder.
+namespace reject {
+inline constexpr const char* kNonFinite = "non_finite_coordinate";
+inline constexpr const char* kOutsideBounds = "outside_declared_bounds";
+}  // namespace reject
+
+struct SourceRecord {
+  std::string path;
+  std::string format;
+  uint64_t points = 0;                     // points read from this source
+  std::optional<uint64_t> declaredPoints;  // what its header claimed
+  std::vector<std::string> warnings;
+  nlohmann::json details;
+};
+
+struct Metadata {
+  int version = kFormatVersion;
+  std::string generator;
+  Box3d bounds;            // tight bounds of the stored points (world units)
+  Vec3d offset;            // world position of integer coordinate 0 (the root cube's min corner)
+  double scale = 0.001;    // world units per integer step, all axes
+  uint32_t cubeSize = 1;   // root cube edge in integer units, a power of two
+  uint32_t depth = 0;      // deepest level that holds points
+  double spacing = 0;      // nominal sample spacing of the root (world units); level l: /2^l
+  uint64_t points = 0;     // points stored
+  uint64_t nodes = 0;
+  PointLayout layout;      // attributes besides position
+  int rgbSourceBits = 0;   // 8 when every source gave 8-bit colour, 16 otherwise, 0 without rgb
+  bool normalsEstimated = false;
+  nlohmann::json normalEstimation;  // parameters when estimated
+  Accounting accounting;
+  nlohmann::json crs;
+  std::vector<SourceRecord> sources;
+  nlohmann::json build;    // parameters and timings of the conversion
+
+  std::string payloadFile = "octree.bin";
+  uint64_t payloadBytes = 0;
+  std::string hierarchyFile = "hierarchy.bin";
+  uint32_t hierarchyStep = 3;
+  uint64_t hierarchyBytes = 0;
+  uint64_t rootChunkSize = 0;
+  uint64_t rootChunkChecksum = 0;
+
+  double cubeWorldSize() const { return cubeSize * scale; }
+  // World bounds of a node's cube.
+  Box3d nodeBounds(uint32_t level, uint32_t x, uint32_t y, uint32_t z) const;
+
+  nlohmann::json toJson() const;
+  // Throws nestlight::Error naming `file` and the field.
+  static Metadata fromJson(const nlohmann::json& j, const std::string& file);
+};
+
+}  // namespace nestlight

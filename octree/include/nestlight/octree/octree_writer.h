@@ -1,0 +1,51 @@
+// Writes an octree folder. Payloads go to octree.bin in one large file; hierarchy.bin and
+// metadata.json are written by finish(). Every file is written under a temporary name and
+// renamed, metadata.json last: a killed conversion leaves no metadata.json, so nothing that
+// `verify` or a reader accepts.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "nestlight/octree/hierarchy.h"
+#include "nestlight/octree/metadata.h"
+#include "nestlight/octree/point_buffer.h"
+
+namespace nestlight {
+
+class OctreeWriter {
+ public:
+  // Creates `dir` (it must not hold an octree unless `overwrite`).
+  OctreeWriter(std::filesystem::path dir, PointLayout layout, Codec codec, bool overwrite);
+  ~OctreeWriter();
+
+  // Encodes and appends one node. `points.pos` holds positions relative to the node's cube min
+  // corner and should be in Morton order. Thread-safe; encoding runs on the calling thread.
+  void writeNode(const NodeKey& key, const PointBuffer& points);
+
+  // Writes the hierarchy and `meta` (payload, hierarchy and node fields are filled here).
+  void finish(Metadata& meta);
+
+  uint64_t bytesWritten() const { return offset_; }
+  size_t nodeCount() const { return nodes_.size(); }
+
+ private:
+  void pruneEmptyLeaves();
+
+  std::filesystem::path dir_;
+  PointLayout layout_;
+  Codec codec_;
+  int fd_ = -1;
+  std::mutex mutex_;
+  uint64_t offset_ = 0;
+  std::vector<NodeRecord> nodes_;
+  bool finished_ = false;
+};
+
+// Writes `bytes` to `path` atomically (temporary file, fsync, rename).
+void writeFileAtomic(const std::filesystem::path& path, const void* bytes, size_t size);
+
+}  // namespace nestlight

@@ -1,0 +1,133 @@
+#include "nestlight/octree/octree_writer.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <algorithm>
+#include <fstream>
+#include <unordered_set>
+
+#include "nestlight/octree/checksum.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight {
+
+namespace fs = std::filesystem;
+
+namespace {
+void writeAll(int fd, const void* data, size_t size, uint64_t offset, const fs::path& path) {
+  const uint8_t* p = static_cast<const uint8_t*>(data);
+  while (size > 0) {
+    ssize_t w = ::pwrite(fd, p, size, static_cast<off_t>(offset));
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      throw Error(path.string(), Error::atByte(offset), std::string("write failed: ") + std::strerror(errno));
+    }
+    p += w;
+    size -= static_cast<size_t>(w);
+    offset += static_cast<uint64_t>(w);
+  }
+}
+}  // namespace
+
+void writeFileAtomic(const fs::path& path, const void* bytes, size_t size) {
+  fs::path tmp = path;
+  tmp += ".tmp";
+  int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw Error(tmp.string(), "", std::string("cannot create: ") + std::strerror(errno));
+  try {
+    writeAll(fd, bytes, size, 0, tmp);
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::fsync(fd);
+  ::close(fd);
+  fs::rename(tmp, path);
+}
+
+OctreeWriter::OctreeWriter(fs::path dir, PointLayout layout, Codec codec, bool overwrite)
+    : dir_(std::move(dir)), layout_(std::move(layout)), codec_(codec) {
+  if (fs::exists(dir_ / "metadata.json") && !overwrite)
+    throw Error(dir_.string(), "", "already holds an octree; pass --overwrite to replace it");
+  fs::create_directories(dir_);
+  // An old octree must stop looking complete before any of its files change.
+  fs::remove(dir_ / "metadata.json");
+  fs::path tmp = dir_ / "octree.bin.tmp";
+  fd_ = ::open(tmp.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw Error(tmp.string(), "", std::string("cannot create: ") + std::strerror(errno));
+}
+
+OctreeWriter::~OctreeWriter() {
+  if (fd_ >= 0) ::close(fd_);
+  if (!finished_) {
+    std::error_code ec;
+    fs::remove(dir_ / "octree.bin.tmp", ec);
+  }
+}
+
+void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points) {
+  NL_CHECK(points.stride == layout_.stride());
+  // An empty node (its points all moved up into its parent) has an empty payload in any codec.
+  std::vector<uint8_t> bytes;
+  if (!points.empty()) bytes = encodePayload(codec_, layout_, points);
+  NodeRecord r;
+  r.key = key;
+  r.codec = codec_;
+  r.numPoints = static_cast<uint32_t>(points.size());
+  r.byteSize = bytes.size();
+  r.checksum = checksum64(bytes.data(), bytes.size());
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    r.byteOffset = offset_;
+    offset_ += bytes.size();
+    nodes_.push_back(r);
+  }
+  // Offsets are reserved under the lock; the write itself runs in parallel.
+  writeAll(fd_, bytes.data(), bytes.size(), r.byteOffset, dir_ / "octree.bin.tmp");
+}
+
+void OctreeWriter::pruneEmptyLeaves() {
+  // Sampling can move every point of a sparse leaf up into its parent; such a node stays only
+  // if it has children. The root always stays.
+  std::vector<NodeRecord> kept;
+  kept.reserve(nodes_.size());
+  std::sort(nodes_.begin(), nodes_.end(),
+            [](const NodeRecord& a, const NodeRecord& b) { return b.key < a.key; });  // deepest first
+  std::unordered_set<NodeKey, NodeKeyHash> keptKeys;
+  for (const auto& n : nodes_) {
+    bool hasChild = false;
+    for (int i = 0; i < 8 && !hasChild; ++i) hasChild = keptKeys.count(n.key.child(i)) > 0;
+    if (n.numPoints == 0 && !hasChild && n.key.level > 0) continue;
+    keptKeys.insert(n.key);
+    kept.push_back(n);
+  }
+  std::reverse(kept.begin(), kept.end());
+  nodes_ = std::move(kept);
+}
+
+void OctreeWriter::finish(Metadata& meta) {
+  NL_CHECK(!finished_);
+  pruneEmptyLeaves();
+  meta.depth = 0;
+  for (const auto& n : nodes_) meta.depth = std::max(meta.depth, n.key.level);
+  HierarchyBlob h = buildHierarchy(nodes_, meta.hierarchyStep);
+  meta.payloadBytes = offset_;
+  meta.nodes = nodes_.size();
+  meta.hierarchyBytes = h.bytes.size();
+  meta.rootChunkSize = h.rootChunkSize;
+  meta.rootChunkChecksum = h.rootChunkChecksum;
+  if (::fsync(fd_) != 0)
+    throw Error((dir_ / "octree.bin.tmp").string(), "", std::string("fsync failed: ") + std::strerror(errno));
+  ::close(fd_);
+  fd_ = -1;
+  fs::rename(dir_ / "octree.bin.tmp", dir_ / meta.payloadFile);
+  writeFileAtomic(dir_ / meta.hierarchyFile, h.bytes.data(), h.bytes.size());
+  std::string text = meta.toJson().dump(2) + "\n";
+  writeFileAtomic(dir_ / "metadata.json", text.data(), text.size());
+  finished_ = true;
+}
+
+}  // namespace nestlight
