@@ -38,26 +38,41 @@ namespace {
 std::optional<ScalarType> scalarFromPcl(uint8_t datatype) {
   switch (datatype) {
     case pcl::PCLPointField::BOOL:  // sizeof(bool) == 1 on every platform PCL supports
-    case pcl::PCLPointField::UINT8: return ScalarType::U8;
-    case pcl::PCLPointField::INT8: return ScalarType::I8;
-    case pcl::PCLPointField::UINT16: return ScalarType::U16;
-    case pcl::PCLPointField::INT16: return ScalarType::I16;
-    case pcl::PCLPointField::UINT32: return ScalarType::U32;
-    case pcl::PCLPointField::INT32: return ScalarType::I32;
-    case pcl::PCLPointField::UINT64: return ScalarType::U64;
-    case pcl::PCLPointField::INT64: return ScalarType::I64;
-    case pcl::PCLPointField::FLOAT32: return ScalarType::F32;
-    case pcl::PCLPointField::FLOAT64: return ScalarType::F64;
-    default: return std::nullopt;
+    case pcl::PCLPointField::UINT8:
+      return ScalarType::U8;
+    case pcl::PCLPointField::INT8:
+      return ScalarType::I8;
+    case pcl::PCLPointField::UINT16:
+      return ScalarType::U16;
+    case pcl::PCLPointField::INT16:
+      return ScalarType::I16;
+    case pcl::PCLPointField::UINT32:
+      return ScalarType::U32;
+    case pcl::PCLPointField::INT32:
+      return ScalarType::I32;
+    case pcl::PCLPointField::UINT64:
+      return ScalarType::U64;
+    case pcl::PCLPointField::INT64:
+      return ScalarType::I64;
+    case pcl::PCLPointField::FLOAT32:
+      return ScalarType::F32;
+    case pcl::PCLPointField::FLOAT64:
+      return ScalarType::F64;
+    default:
+      return std::nullopt;
   }
 }
 
 const char* dataName(int dataType) {
   switch (dataType) {
-    case 0: return "ascii";
-    case 1: return "binary";
-    case 2: return "binary_compressed";
-    default: return "unknown";
+    case 0:
+      return "ascii";
+    case 1:
+      return "binary";
+    case 2:
+      return "binary_compressed";
+    default:
+      return "unknown";
   }
 }
 
@@ -122,16 +137,14 @@ class PcdReader final : public PointReader {
     for (const auto& f : cloud_.fields) fieldNames.push_back(f.name);
     const uint64_t step = cloud_.point_step;
     if (dataType == 1 && fileSize_ < dataIdx_ + total_ * step) {
-      const uint64_t complete = step ? (fileSize_ - std::min<uint64_t>(fileSize_, dataIdx_)) / step
-                                     : 0;
-      const std::string what = "data is truncated: the header declares " +
-                               std::to_string(total_) + " points of " + std::to_string(step) +
-                               " bytes from byte " + std::to_string(dataIdx_) + " (" +
-                               std::to_string(dataIdx_ + total_ * step) + " bytes), the file has " +
-                               std::to_string(fileSize_) + " bytes (" + std::to_string(complete) +
-                               " complete points)";
-      if (!options.lenient)
-        throw Error(path, Error::atByte(dataIdx_ + complete * step), what);
+      const uint64_t complete =
+          step ? (fileSize_ - std::min<uint64_t>(fileSize_, dataIdx_)) / step : 0;
+      const std::string what =
+          "data is truncated: the header declares " + std::to_string(total_) + " points of " +
+          std::to_string(step) + " bytes from byte " + std::to_string(dataIdx_) + " (" +
+          std::to_string(dataIdx_ + total_ * step) + " bytes), the file has " +
+          std::to_string(fileSize_) + " bytes (" + std::to_string(complete) + " complete points)";
+      if (!options.lenient) throw Error(path, Error::atByte(dataIdx_ + complete * step), what);
       warnings_.push_back(path + ": " + what + "; kept the complete points");
       readBinaryPrefix(path, complete);
     } else {
@@ -220,9 +233,9 @@ class PcdReader final : public PointReader {
     auto typeOf = [&](const pcl::PCLPointField& f) {
       auto t = scalarFromPcl(f.datatype);
       if (!t)
-        throw Error(path, "header",
-                    "field '" + f.name + "' has an unknown type (" +
-                        std::to_string(int(f.datatype)) + ")");
+        throw Error(
+            path, "header",
+            "field '" + f.name + "' has an unknown type (" + std::to_string(int(f.datatype)) + ")");
       return *t;
     };
     auto within = [&](const pcl::PCLPointField& f, ScalarType t) {
@@ -233,11 +246,13 @@ class PcdReader final : public PointReader {
     const char* axes[3] = {"x", "y", "z"};
     for (int a = 0; a < 3; ++a) {
       const pcl::PCLPointField* f = field(axes[a]);
-      if (!f) throw Error(path, "header", std::string("no '") + axes[a] + "' field; FIELDS are: " +
-                                              fieldList());
+      if (!f)
+        throw Error(path, "header",
+                    std::string("no '") + axes[a] + "' field; FIELDS are: " + fieldList());
       if (f->count != 1)
-        throw Error(path, "header", std::string("field '") + axes[a] + "' has COUNT " +
-                                        std::to_string(f->count) + "; expected 1");
+        throw Error(path, "header",
+                    std::string("field '") + axes[a] + "' has COUNT " + std::to_string(f->count) +
+                        "; expected 1");
       posType_[a] = typeOf(*f);
       within(*f, posType_[a]);
       posOff_[a] = f->offset;
@@ -259,7 +274,7 @@ class PcdReader final : public PointReader {
       header_.rgbBits = 8;
       packedRgba_ = packed->name == "rgba";
       packedOff_ = packed->offset;
-    } else if (const auto *r = field("r"), *g = field("g"), *b = field("b");
+    } else if (const auto* r = field("r"), *g = field("g"), *b = field("b");
                !packed && r && g && b && r->count == 1 && g->count == 1 && b->count == 1 &&
                r->datatype == pcl::PCLPointField::UINT8 &&
                g->datatype == pcl::PCLPointField::UINT8 &&
@@ -291,8 +306,7 @@ class PcdReader final : public PointReader {
 
     // Everything else keeps its PCD name, type and count. "_" is PCL's padding.
     for (const auto& f : cloud_.fields) {
-      if (f.name == "_" || f.count == 0 ||
-          std::find(used.begin(), used.end(), &f) != used.end())
+      if (f.name == "_" || f.count == 0 || std::find(used.begin(), used.end(), &f) != used.end())
         continue;
       ScalarType t = typeOf(f);
       within(f, t);
@@ -352,16 +366,20 @@ class PcdReader final : public PointReader {
 
   static void apply(const Plan& p, const uint8_t* rec, uint8_t* out) {
     switch (p.kind) {
-      case Plan::Copy: std::memcpy(out + p.dst, rec + p.src[0], p.bytes); return;
+      case Plan::Copy:
+        std::memcpy(out + p.dst, rec + p.src[0], p.bytes);
+        return;
       case Plan::PackedRgb: {
         uint32_t v;
         std::memcpy(&v, rec + p.src[0], 4);
-        const uint16_t c[3] = {uint16_t(((v >> 16) & 0xff) * 257), uint16_t(((v >> 8) & 0xff) * 257),
-                               uint16_t((v & 0xff) * 257)};
+        const uint16_t c[3] = {uint16_t(((v >> 16) & 0xff) * 257),
+                               uint16_t(((v >> 8) & 0xff) * 257), uint16_t((v & 0xff) * 257)};
         std::memcpy(out + p.dst, c, 6);
         return;
       }
-      case Plan::PackedAlpha: out[p.dst] = rec[p.src[0] + 3]; return;
+      case Plan::PackedAlpha:
+        out[p.dst] = rec[p.src[0] + 3];
+        return;
       case Plan::SplitRgb: {
         const uint16_t c[3] = {uint16_t(rec[p.src[0]] * 257), uint16_t(rec[p.src[1]] * 257),
                                uint16_t(rec[p.src[2]] * 257)};

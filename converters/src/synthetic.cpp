@@ -80,11 +80,11 @@ inline uint16_t toU16(double v) {
 // One primitive of the Surfaces scene, in unit coordinates (the scene fills [0,1]^2 x [0,0.3]).
 struct Prim {
   enum Type { Rect, Sphere, Dome, Cylinder } type;
-  std::array<double, 3> c;           // Rect: corner; Sphere/Dome: centre; Cylinder: base centre
-  std::array<double, 3> e1, e2, n;   // Rect: edges and outward normal
+  std::array<double, 3> c;          // Rect: corner; Sphere/Dome: centre; Cylinder: base centre
+  std::array<double, 3> e1, e2, n;  // Rect: edges and outward normal
   double radius = 0, height = 0;
-  std::array<int, 3> albedo;         // 8-bit colour
-  double reflectance;                // intensity scale in [0, 1]
+  std::array<int, 3> albedo;  // 8-bit colour
+  double reflectance;         // intensity scale in [0, 1]
 
   double area() const {
     constexpr double pi = std::numbers::pi;
@@ -96,9 +96,12 @@ struct Prim {
                      cz = a[0] * b[1] - a[1] * b[0];
         return std::sqrt(cx * cx + cy * cy + cz * cz);
       }
-      case Sphere: return 4 * pi * radius * radius;
-      case Dome: return 2 * pi * radius * radius;
-      case Cylinder: return 2 * pi * radius * height;
+      case Sphere:
+        return 4 * pi * radius * radius;
+      case Dome:
+        return 2 * pi * radius * radius;
+      case Cylinder:
+        return 2 * pi * radius * height;
     }
     return 0;
   }
@@ -141,15 +144,22 @@ std::vector<Prim> buildingScene() {
   std::vector<Prim> s;
   // Ground: asphalt grey.
   s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, 0, 0, {96, 98, 92}, 0.25});
-  addBuilding(s, 0.08, 0.08, 0.42, 0.36, 0.22, {178, 92, 68}, {70, 72, 80});   // brick
+  addBuilding(s, 0.08, 0.08, 0.42, 0.36, 0.22, {178, 92, 68}, {70, 72, 80});    // brick
   addBuilding(s, 0.55, 0.10, 0.90, 0.30, 0.30, {205, 200, 188}, {60, 60, 64});  // render
   // A dome (a church's cupola, an observatory) and a ball (a statue base).
   s.push_back({Prim::Dome, {0.70, 0.68, 0}, {}, {}, {}, 0.17, 0, {225, 228, 235}, 0.8});
   s.push_back({Prim::Sphere, {0.25, 0.78, 0.06}, {}, {}, {}, 0.06, 0, {160, 150, 120}, 0.6});
   // A colonnade.
   for (int k = 0; k < 6; ++k)
-    s.push_back({Prim::Cylinder, {0.10 + 0.065 * k, 0.50, 0}, {}, {}, {}, 0.015, 0.20,
-                 {215, 205, 180}, 0.7});
+    s.push_back({Prim::Cylinder,
+                 {0.10 + 0.065 * k, 0.50, 0},
+                 {},
+                 {},
+                 {},
+                 0.015,
+                 0.20,
+                 {215, 205, 180},
+                 0.7});
   return s;
 }
 
@@ -281,7 +291,8 @@ class SyntheticReader final : public PointReader {
     const double x = turns * kTrigSteps;
     const int i = std::min(int(x), int(kTrigSteps) - 1);
     const double d = (x - i) * (2 * std::numbers::pi / kTrigSteps), d2 = d * d;
-    const double cd = 1 - d2 * (0.5 - d2 * (1.0 / 24)), sd = d * (1 - d2 * (1.0 / 6 - d2 * (1.0 / 120)));
+    const double cd = 1 - d2 * (0.5 - d2 * (1.0 / 24)),
+                 sd = d * (1 - d2 * (1.0 / 6 - d2 * (1.0 / 120)));
     c = trig_[2 * i] * cd - trig_[2 * i + 1] * sd;
     s = trig_[2 * i + 1] * cd + trig_[2 * i] * sd;
   }
@@ -295,12 +306,12 @@ class SyntheticReader final : public PointReader {
 
   void generate(uint64_t i, double* xyz, uint8_t* attrs) const {
     PointRng rng(seedKey_, i);
-    double p[3];                   // unit coordinates
-    double n[3] = {0, 0, 1};       // unit normal
-    std::array<int, 3> albedo;     // 8-bit colour before shading
+    double p[3];                // unit coordinates
+    double n[3] = {0, 0, 1};    // unit normal
+    std::array<int, 3> albedo;  // 8-bit colour before shading
     double reflectance = 0.5;
     const double size = spec_.size;
-    double m[3];  // metres relative to the origin
+    double m[3];       // metres relative to the origin
     uint32_t tex = 0;  // random bits for colour and intensity texture
 
     switch (spec_.shape) {
@@ -314,7 +325,8 @@ class SyntheticReader final : public PointReader {
         const Prim& pr = scene_[k];
         switch (pr.type) {
           case Prim::Rect:
-            for (int a = 0; a < 3; ++a) p[a] = pr.c[a] + u * pr.e1[a] + v * pr.e2[a], n[a] = pr.n[a];
+            for (int a = 0; a < 3; ++a)
+              p[a] = pr.c[a] + u * pr.e1[a] + v * pr.e2[a], n[a] = pr.n[a];
             break;
           case Prim::Sphere:
           case Prim::Dome: {
@@ -353,8 +365,7 @@ class SyntheticReader final : public PointReader {
         albedo = {40 + int(180 * p[0]), 40 + int(180 * p[1]), 40 + int(180 * p[2])};
         break;
       }
-      case SyntheticShape::Plane:
-      {
+      case SyntheticShape::Plane: {
         const uint64_t r1 = rng.next();
         tex = uint32_t(rng.next());
         p[0] = PointRng::hi(r1), p[1] = PointRng::lo(r1), p[2] = 0;
@@ -397,8 +408,8 @@ class SyntheticReader final : public PointReader {
     // little per-point texture noise, as a real scan's colour does; compression sees realistic
     // neighbour correlation.
     // Shade in 1/256ths: 0.72 + 0.18 * tri + 0.10 * tri.
-    const int shade8 =
-        184 + ((46 * tri512(p[0] * 7 + p[1] * 3)) >> 9) + ((26 * tri512(p[2] * 11 - p[1] * 5)) >> 9);
+    const int shade8 = 184 + ((46 * tri512(p[0] * 7 + p[1] * 3)) >> 9) +
+                       ((26 * tri512(p[2] * 11 - p[1] * 5)) >> 9);
     if (rgbOff_ >= 0) {
       // Luminance noise -16..15 and per-channel noise -4..3 from the texture bits.
       const int lum = int(tex & 31) - 16;
@@ -411,8 +422,7 @@ class SyntheticReader final : public PointReader {
     }
     if (intensityOff_ >= 0) {
       const double noiseI = double((tex >> 14) & 2047) - 1023.5;
-      const uint16_t it =
-          toU16(65535.0 * reflectance * (0.55 + (0.45 / 256) * shade8) + noiseI);
+      const uint16_t it = toU16(65535.0 * reflectance * (0.55 + (0.45 / 256) * shade8) + noiseI);
       std::memcpy(attrs + intensityOff_, &it, 2);
     }
   }
@@ -451,10 +461,14 @@ std::optional<SyntheticShape> parseSyntheticShape(std::string_view name) {
 
 const char* syntheticShapeName(SyntheticShape shape) {
   switch (shape) {
-    case SyntheticShape::Surfaces: return "surfaces";
-    case SyntheticShape::Cube: return "cube";
-    case SyntheticShape::Duplicates: return "duplicates";
-    case SyntheticShape::Plane: return "plane";
+    case SyntheticShape::Surfaces:
+      return "surfaces";
+    case SyntheticShape::Cube:
+      return "cube";
+    case SyntheticShape::Duplicates:
+      return "duplicates";
+    case SyntheticShape::Plane:
+      return "plane";
   }
   return "?";
 }

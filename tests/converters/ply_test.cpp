@@ -496,7 +496,7 @@ TEST(PlyReader, BadAsciiNumberNamesLineAndToken) {
   EXPECT_NE(e.reason().find("property 'z'"), std::string::npos) << e.what();
 
   // 256 is no uchar; a missing value and an extra one are errors too.
-  for (const std::string& line : {"1 2 3 256 0 0\n1 2 3 4 5 6\n", "1 2 3 4 5\n1 2 3 4 5 6\n",
+  for (const char* line : {"1 2 3 256 0 0\n1 2 3 4 5 6\n", "1 2 3 4 5\n1 2 3 4 5 6\n",
                                   "1 2 3 4 5 6 7\n1 2 3 4 5 6\n"}) {
     std::string bad = ply.substr(0, ply.find("end_header\n") + 11) + line + "1 2 3 4 5 6\n";
     Error b = errorOf([&] { readAll(*openPly(source(bad))); });

@@ -98,8 +98,8 @@ TEST(Synthetic, PointsInsideDeclaredBoundsAndOnTheGrid) {
     Box3d seen;
     for (size_t i = 0; i < all.xyz.size(); i += 3) {
       const double x = all.xyz[i], y = all.xyz[i + 1], z = all.xyz[i + 2];
-      ASSERT_TRUE(box.contains(x, y, z)) << syntheticShapeName(shape) << " " << x << " " << y
-                                         << " " << z;
+      ASSERT_TRUE(box.contains(x, y, z))
+          << syntheticShapeName(shape) << " " << x << " " << y << " " << z;
       seen.extend(x, y, z);
       // On the millimetre grid relative to the origin.
       for (int a = 0; a < 3; ++a) {

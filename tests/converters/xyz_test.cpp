@@ -89,7 +89,10 @@ TEST(XyzReader, GuessesColumnsFromTheirCount) {
       {"1 2 3 400 10 20 30 0 0.6 0.8", {"intensity", "rgb", "normal"}, 8},
   };
   for (const auto& c : cases) {
-    auto r = open(c.line + "\n" + c.line + "\n");
+    std::string text = c.line;
+    text += '\n';
+    text += text;
+    auto r = open(text);
     EXPECT_EQ(names(r->header().layout), c.attrs) << c.line;
     EXPECT_EQ(r->header().rgbBits, c.rgbBits);
     EXPECT_EQ(r->header().details["columnsFrom"], "guessed");
@@ -97,7 +100,9 @@ TEST(XyzReader, GuessesColumnsFromTheirCount) {
     Points p = readAll(*r);
     ASSERT_EQ(p.size(), 2u);
     EXPECT_EQ(p.xyz, (std::vector<double>{1, 2, 3, 1, 2, 3}));
-    if (r->header().layout.has("intensity")) EXPECT_EQ(attrAt<uint16_t>(p, *r, 1, "intensity"), 400);
+    if (r->header().layout.has("intensity")) {
+      EXPECT_EQ(attrAt<uint16_t>(p, *r, 1, "intensity"), 400);
+    }
     if (r->header().layout.has("rgb")) {
       EXPECT_EQ(attrAt<uint16_t>(p, *r, 1, "rgb", 0), 10 * 257);
       EXPECT_EQ(attrAt<uint16_t>(p, *r, 1, "rgb", 2), 30 * 257);
@@ -184,7 +189,8 @@ TEST(XyzReader, PtsCountHeader) {
   EXPECT_NE(r->warnings()[0].find("1 values of column 'i'"), std::string::npos);
 
   // Fewer points than declared: an error naming both counts, or a warning in lenient mode.
-  const std::string fewer = "5" + pts.substr(1);
+  std::string fewer = pts;
+  fewer[0] = '5';
   Error e = errorOf([&] { readAll(*open(fewer)); });
   EXPECT_EQ(e.file(), "scan.xyz");
   EXPECT_NE(e.reason().find("declares 5 points but the file holds 3"), std::string::npos)
@@ -194,7 +200,8 @@ TEST(XyzReader, PtsCountHeader) {
   EXPECT_TRUE(anyContains(l->warnings(), "declares 5 points but the file holds 3"));
 
   // More points than declared: an error at the first extra line.
-  const std::string more = "2" + pts.substr(1);
+  std::string more = pts;
+  more[0] = '2';
   Error m = errorOf([&] { readAll(*open(more)); });
   EXPECT_EQ(m.position(), "line 4");
   auto lm = open(more, "", true);

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Sets up, builds and runs every test: unit tests (Release), the same under ASan+UBSan, and each
+# libFuzzer target briefly. Prints ctest's summary; exits non-zero on any failure.
+#   FUZZ_SECONDS=20 SKIP_SANITIZE=1 scripts/test.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+
+echo "== unit tests (Release)"
+ctest --test-dir build --output-on-failure -j2 --timeout 900
+
+if [ -z "${SKIP_SANITIZE:-}" ]; then
+  echo "== unit tests under ASan+UBSan"
+  BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS="-DNESTLIGHT_SANITIZE=ON -DNESTLIGHT_BENCH=OFF" \
+    scripts/setup.sh
+  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --test-dir build-asan --output-on-failure -j2 --timeout 1800 -E "${ASAN_EXCLUDE:-Slow}"
+fi
+
+if [ -z "${SKIP_FUZZ:-}" ]; then
+  echo "== fuzz targets (${FUZZ_SECONDS:-15} s each)"
+  fuzzers=$(cd tests/fuzz && ls fuzz_*.cpp | sed 's/\.cpp$//' | tr '\n' ' ')
+  BUILD_DIR=build-fuzz TARGETS="$fuzzers" \
+    CMAKE_ARGS="-DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 -DNESTLIGHT_FUZZ=ON -DNESTLIGHT_BENCH=OFF" \
+    scripts/setup.sh
+  for f in build-fuzz/tests/fuzz_*; do
+    [ -x "$f" ] || continue
+    name=$(basename "$f")
+    corpus=$(mktemp -d)
+    tests/fuzz/seed_corpus.sh "$name" "$corpus"
+    echo "-- $name"
+    "$f" -max_total_time="${FUZZ_SECONDS:-15}" -rss_limit_mb=2048 -print_final_stats=0 "$corpus" 2>&1 | tail -n 3
+    rm -rf "$corpus"
+  done
+fi
+echo "== all tests passed"

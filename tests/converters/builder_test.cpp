@@ -1,0 +1,320 @@
+// The out-of-core builder: point accounting, hard cases, chunked == in-memory, order independence.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+
+#include "nestlight/converters/builder.h"
+#include "nestlight/converters/export.h"
+#include "nestlight/converters/point_writer.h"
+#include "nestlight/converters/synthetic.h"
+#include "nestlight/converters/verify.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
+#include "nestlight/octree/octree_writer.h"
+#include "test_support.h"
+
+using namespace nestlight;
+using nestlight::test::TempDir;
+namespace fs = std::filesystem;
+
+namespace {
+
+BuildOptions quietOptions(const fs::path& out) {
+  BuildOptions o;
+  o.output = out;
+  o.progress = ProgressMode::Quiet;
+  o.threads = 2;
+  return o;
+}
+
+BuildReport build(const SyntheticSpec& spec, BuildOptions o) {
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  return buildOctree(std::move(r), o);
+}
+
+// Every stored point as (integer position, attribute bytes), sorted.
+using Record = std::vector<uint8_t>;
+std::vector<Record> storedRecords(const fs::path& dir) {
+  OctreeReader r(dir);
+  std::vector<Record> out;
+  for (auto& [k, e] : r.allNodes()) {
+    PointBuffer p = r.readNode(k);
+    for (size_t i = 0; i < p.size(); ++i) {
+      Record rec(reinterpret_cast<const uint8_t*>(&p.pos[3 * i]), reinterpret_cast<const uint8_t*>(&p.pos[3 * i]) + 12);
+      rec.insert(rec.end(), p.attrsOf(i), p.attrsOf(i) + p.stride);
+      out.push_back(std::move(rec));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// The source's points quantised into the octree's grid, as records.
+std::vector<Record> sourceRecords(PointReader& src, const Metadata& m) {
+  std::vector<Record> out;
+  PointBatch b;
+  src.rewind();
+  const size_t stride = src.header().layout.stride();
+  while (src.read(b, 100000)) {
+    for (size_t i = 0; i < b.size(); ++i) {
+      Record rec(12 + stride);
+      for (int a = 0; a < 3; ++a) {
+        uint32_t q = static_cast<uint32_t>(std::llround((b.xyz[3 * i + a] - m.offset[a]) / m.scale));
+        std::memcpy(&rec[4 * a], &q, 4);
+      }
+      std::memcpy(&rec[12], &b.attrs[i * stride], stride);
+      out.push_back(std::move(rec));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void expectVerified(const fs::path& dir) {
+  VerifyReport v = verifyOctree(dir);
+  for (auto& f : v.failures) ADD_FAILURE() << f;
+  EXPECT_TRUE(v.ok());
+}
+
+}  // namespace
+
+TEST(Builder, EveryPointComesBackExactly) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 300000;
+  spec.normals = true;
+  BuildReport r = build(spec, quietOptions(tmp.path() / "o"));
+  EXPECT_EQ(r.metadata.accounting.input, 300000u);
+  EXPECT_EQ(r.metadata.points, 300000u);
+  expectVerified(tmp.path() / "o");
+  auto src = openSynthetic(spec);
+  EXPECT_EQ(storedRecords(tmp.path() / "o"), sourceRecords(*src, r.metadata));
+}
+
+TEST(Builder, MillionDuplicatesOfOnePoint) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.shape = SyntheticShape::Duplicates;
+  spec.points = 1000000;
+  BuildReport r = build(spec, quietOptions(tmp.path() / "keep"));
+  EXPECT_EQ(r.metadata.points, 1000000u);
+  EXPECT_EQ(r.metadata.accounting.duplicatesMerged, 0u);
+  // Coincident points must not drive subdivision: a handful of nodes, not thousands.
+  EXPECT_LE(r.metadata.nodes, 64u);
+  expectVerified(tmp.path() / "keep");
+
+  BuildOptions o = quietOptions(tmp.path() / "dedup");
+  o.dedup = true;
+  r = build(spec, o);
+  EXPECT_EQ(r.metadata.points, 1u);
+  EXPECT_EQ(r.metadata.accounting.duplicatesMerged, 999999u);
+  EXPECT_TRUE(r.metadata.accounting.balanced());
+  expectVerified(tmp.path() / "dedup");
+}
+
+TEST(Builder, SlowFilledCubeOfFiveMillionPointsKeepsNodesSmall) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.shape = SyntheticShape::Cube;
+  spec.points = 5000000;
+  spec.rgb = false;
+  spec.intensity = false;
+  BuildOptions o = quietOptions(tmp.path() / "o");
+  o.memoryBytes = 256ull << 20;
+  BuildReport r = build(spec, o);
+  EXPECT_EQ(r.metadata.points, 5000000u);
+  OctreeReader reader(tmp.path() / "o");
+  for (auto& [k, e] : reader.allNodes()) EXPECT_LE(e.numPoints, o.maxNodePoints) << k.name();
+  expectVerified(tmp.path() / "o");
+}
+
+TEST(Builder, NationalGridCoordinatesAtMillimetreScale) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 200000;
+  spec.origin = {500000.0, 5000000.0, 100.0};
+  spec.size = 2000.0;
+  spec.precision = 0.001;
+  BuildReport r = build(spec, quietOptions(tmp.path() / "o"));
+  EXPECT_DOUBLE_EQ(r.metadata.scale, 0.001);
+  expectVerified(tmp.path() / "o");
+  // Positions come back to the millimetre: compare world coordinates of every point.
+  auto src = openSynthetic(spec);
+  EXPECT_EQ(storedRecords(tmp.path() / "o"), sourceRecords(*src, r.metadata));
+  ASSERT_EQ(exportOctree(tmp.path() / "o", tmp.file("back.ply")), 200000u);
+  auto back = openReader(tmp.file("back.ply"));
+  PointBatch a, b;
+  src->rewind();
+  std::vector<std::array<double, 3>> pa, pb;
+  while (src->read(a, 50000))
+    for (size_t i = 0; i < a.size(); ++i) pa.push_back({a.xyz[3 * i], a.xyz[3 * i + 1], a.xyz[3 * i + 2]});
+  while (back->read(b, 50000))
+    for (size_t i = 0; i < b.size(); ++i) pb.push_back({b.xyz[3 * i], b.xyz[3 * i + 1], b.xyz[3 * i + 2]});
+  std::sort(pa.begin(), pa.end());
+  std::sort(pb.begin(), pb.end());
+  ASSERT_EQ(pa.size(), pb.size());
+  double worst = 0;
+  for (size_t i = 0; i < pa.size(); ++i)
+    for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(pa[i][k] - pb[i][k]));
+  EXPECT_LT(worst, 0.0005);  // half the declared 1 mm precision
+}
+
+TEST(Builder, ZeroExtentAxisAndSinglePoint) {
+  TempDir tmp;
+  SyntheticSpec plane;
+  plane.shape = SyntheticShape::Plane;
+  plane.points = 100000;
+  BuildReport r = build(plane, quietOptions(tmp.path() / "plane"));
+  EXPECT_EQ(r.metadata.points, 100000u);
+  EXPECT_EQ(r.metadata.bounds.min.z, r.metadata.bounds.max.z);
+  expectVerified(tmp.path() / "plane");
+
+  SyntheticSpec one;
+  one.points = 1;
+  r = build(one, quietOptions(tmp.path() / "one"));
+  EXPECT_EQ(r.metadata.points, 1u);
+  EXPECT_EQ(r.metadata.nodes, 1u);
+  expectVerified(tmp.path() / "one");
+}
+
+TEST(Builder, NonFiniteCoordinatesAreRejectedAndCounted) {
+  TempDir tmp;
+  nestlight::test::writeFile(tmp.file("p.xyz"), "1 2 3\nnan 2 3\n4 inf 6\n7 8 9\n-inf 0 0\n10 11 12\n");
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openReader(tmp.file("p.xyz")));
+  BuildReport rep = buildOctree(std::move(r), quietOptions(tmp.path() / "o"));
+  EXPECT_EQ(rep.metadata.accounting.input, 6u);
+  EXPECT_EQ(rep.metadata.points, 3u);
+  EXPECT_EQ(rep.metadata.accounting.rejected.at(reject::kNonFinite), 3u);
+  expectVerified(tmp.path() / "o");
+}
+
+TEST(Builder, NoPointsAtAll) {
+  TempDir tmp;
+  SyntheticSpec none;
+  none.points = 0;
+  BuildReport r = build(none, quietOptions(tmp.path() / "o"));
+  EXPECT_EQ(r.metadata.points, 0u);
+  expectVerified(tmp.path() / "o");
+}
+
+TEST(Builder, ChunkedBuildEqualsInMemoryBuildByteForByte) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 2000000;
+  spec.seed = 11;
+  BuildOptions small = quietOptions(tmp.path() / "chunked");
+  small.memoryBytes = 24ull << 20;  // far below the input's ~60 MB
+  BuildReport a = build(spec, small);
+  EXPECT_GT(a.chunks, 4u);
+  BuildOptions mem = quietOptions(tmp.path() / "memory");
+  mem.inMemory = true;
+  BuildReport b = build(spec, mem);
+  EXPECT_EQ(b.chunks, 1u);
+  expectVerified(tmp.path() / "chunked");
+  // Payloads are appended in thread-timing order, so compare node by node: same nodes, same
+  // payload bytes (checksums).
+  OctreeReader ra(tmp.path() / "chunked"), rb(tmp.path() / "memory");
+  auto na = ra.allNodes(), nb = rb.allNodes();
+  ASSERT_EQ(na.size(), nb.size());
+  for (size_t i = 0; i < na.size(); ++i) {
+    ASSERT_EQ(na[i].first, nb[i].first);
+    EXPECT_EQ(na[i].second.numPoints, nb[i].second.numPoints) << na[i].first.name();
+    EXPECT_EQ(na[i].second.checksum, nb[i].second.checksum) << na[i].first.name();
+  }
+}
+
+TEST(Builder, ResultIndependentOfInputOrder) {
+  TempDir tmp;
+  SyntheticSpec s1, s2;
+  s1.points = s2.points = 150000;
+  s1.seed = 1;
+  s2.seed = 2;
+  s2.origin = {30, 0, 0};
+  auto run = [&](bool swap, const char* name) {
+    std::vector<std::unique_ptr<PointReader>> r;
+    r.push_back(openSynthetic(swap ? s2 : s1));
+    r.push_back(openSynthetic(swap ? s1 : s2));
+    return buildOctree(std::move(r), quietOptions(tmp.path() / name));
+  };
+  run(false, "ab");
+  run(true, "ba");
+  OctreeReader a(tmp.path() / "ab"), b(tmp.path() / "ba");
+  auto na = a.allNodes(), nb = b.allNodes();
+  ASSERT_EQ(na.size(), nb.size());
+  for (size_t i = 0; i < na.size(); ++i) {
+    ASSERT_EQ(na[i].first, nb[i].first);
+    EXPECT_EQ(na[i].second.checksum, nb[i].second.checksum) << na[i].first.name();
+  }
+}
+
+TEST(Builder, EstimatedNormalsAreUnitAndMarked) {
+  TempDir tmp;
+  SyntheticSpec plane;
+  plane.shape = SyntheticShape::Plane;
+  plane.points = 50000;
+  BuildOptions o = quietOptions(tmp.path() / "o");
+  o.estimateNormals = true;
+  o.normalOrientation = NormalOrientation::Up;
+  BuildReport r = build(plane, o);
+  EXPECT_TRUE(r.metadata.normalsEstimated);
+  OctreeReader reader(tmp.path() / "o");
+  const int ni = reader.metadata().layout.find("normal");
+  ASSERT_GE(ni, 0);
+  const size_t off = reader.metadata().layout.offset(ni);
+  size_t checked = 0;
+  for (auto& [k, e] : reader.allNodes()) {
+    PointBuffer p = reader.readNode(k);
+    for (size_t i = 0; i < p.size(); ++i, ++checked) {
+      float n[3];
+      std::memcpy(n, p.attrsOf(i) + off, 12);
+      // A flat plane: the fit is exact up to float rounding, and "up" orients it to +z.
+      EXPECT_NEAR(n[2], 1.0f, 1e-5f);
+    }
+  }
+  EXPECT_EQ(checked, 50000u);
+}
+
+TEST(Builder, InterruptedWriteLeavesNothingVerifyAccepts) {
+  TempDir tmp;
+  {
+    PointLayout l;
+    OctreeWriter w(tmp.path() / "o", l, Codec::Zstd, false);
+    PointBuffer p(0);
+    uint32_t pos[3] = {0, 0, 0};
+    p.push(pos, nullptr);
+    w.writeNode(NodeKey::root(), p);
+    // Destroyed without finish(): as if the process died.
+  }
+  EXPECT_FALSE(fs::exists(tmp.path() / "o" / "metadata.json"));
+  EXPECT_FALSE(verifyOctree(tmp.path() / "o").ok());
+}
+
+TEST(Builder, DamagedPayloadFailsVerify) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 50000;
+  build(spec, quietOptions(tmp.path() / "o"));
+  {
+    std::fstream f(tmp.path() / "o" / "octree.bin", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(100);
+    char c = 0x5a;
+    f.write(&c, 1);
+  }
+  VerifyReport v = verifyOctree(tmp.path() / "o");
+  ASSERT_FALSE(v.ok());
+  EXPECT_NE(v.failures[0].find("checksum"), std::string::npos) << v.failures[0];
+}
+
+TEST(Builder, RefusesToOverwriteWithoutFlag) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 1000;
+  build(spec, quietOptions(tmp.path() / "o"));
+  EXPECT_THROW(build(spec, quietOptions(tmp.path() / "o")), Error);
+  BuildOptions o = quietOptions(tmp.path() / "o");
+  o.overwrite = true;
+  EXPECT_NO_THROW(build(spec, o));
+}
