@@ -21,7 +21,8 @@ inline constexpr size_t kHeaderSize14 = 375;  // + EVLRs and 64-bit point counts
 inline constexpr size_t kVlrHeaderSize = 54;
 inline constexpr size_t kEvlrHeaderSize = 60;
 inline constexpr size_t kExtraBytesDescriptorSize = 192;
-inline constexpr size_t kWavePacketBytes = 29;  // index u8, offset u64, size u32, location f32, xyz f32x3
+inline constexpr size_t kWavePacketBytes =
+    29;  // index u8, offset u64, size u32, location f32, xyz f32x3
 
 inline constexpr uint16_t kRecordExtraBytes = 4;  // user "LASF_Spec"
 inline constexpr uint16_t kRecordWkt = 2112;      // user "LASF_Projection"
@@ -39,11 +40,21 @@ inline constexpr int kMaxPointFormat = 10;
 inline constexpr size_t kBaseRecordSize[kMaxPointFormat + 1] = {20, 28, 26, 34, 57, 63,
                                                                 30, 36, 38, 59, 67};
 
-constexpr bool isLegacyFormat(int pf) { return pf < 6; }
-constexpr bool hasGps(int pf) { return pf != 0 && pf != 2; }
-constexpr bool hasRgb(int pf) { return pf == 2 || pf == 3 || pf == 5 || pf == 7 || pf == 8 || pf == 10; }
-constexpr bool hasNir(int pf) { return pf == 8 || pf == 10; }
-constexpr bool hasWave(int pf) { return pf == 4 || pf == 5 || pf == 9 || pf == 10; }
+constexpr bool isLegacyFormat(int pf) {
+  return pf < 6;
+}
+constexpr bool hasGps(int pf) {
+  return pf != 0 && pf != 2;
+}
+constexpr bool hasRgb(int pf) {
+  return pf == 2 || pf == 3 || pf == 5 || pf == 7 || pf == 8 || pf == 10;
+}
+constexpr bool hasNir(int pf) {
+  return pf == 8 || pf == 10;
+}
+constexpr bool hasWave(int pf) {
+  return pf == 4 || pf == 5 || pf == 9 || pf == 10;
+}
 
 // Attribute names of the point record fields.
 inline constexpr const char* kIntensity = "intensity";
@@ -78,7 +89,8 @@ inline PointLayout baseLayout(int pf) {
   l.add({kScanDirection, ScalarType::U8, 1, ""});
   l.add({kEdgeOfFlightLine, ScalarType::U8, 1, ""});
   l.add({kClassification, ScalarType::U8, 1, ""});
-  l.add({kClassificationFlags, ScalarType::U8, 1, "bit 0 synthetic, 1 key-point, 2 withheld, 3 overlap"});
+  l.add({kClassificationFlags, ScalarType::U8, 1,
+         "bit 0 synthetic, 1 key-point, 2 withheld, 3 overlap"});
   if (isLegacyFormat(pf)) {
     l.add({kScanAngleRank, ScalarType::I8, 1, "degrees"});
   } else {
@@ -102,25 +114,34 @@ inline PointLayout baseLayout(int pf) {
 
 // Extra Bytes data types 1-10 (spec table 24); 11-30 are the deprecated 2- and 3-element arrays.
 inline std::optional<ScalarType> extraBytesScalar(int dataType) {
-  static constexpr ScalarType kTypes[10] = {ScalarType::U8,  ScalarType::I8,  ScalarType::U16,
-                                            ScalarType::I16, ScalarType::U32, ScalarType::I32,
-                                            ScalarType::U64, ScalarType::I64, ScalarType::F32,
-                                            ScalarType::F64};
+  static constexpr ScalarType kTypes[10] = {
+      ScalarType::U8,  ScalarType::I8,  ScalarType::U16, ScalarType::I16, ScalarType::U32,
+      ScalarType::I32, ScalarType::U64, ScalarType::I64, ScalarType::F32, ScalarType::F64};
   if (dataType < 1 || dataType > 30) return std::nullopt;
   return kTypes[(dataType - 1) % 10];
 }
 inline int extraBytesType(ScalarType t) {
   switch (t) {
-    case ScalarType::U8: return 1;
-    case ScalarType::I8: return 2;
-    case ScalarType::U16: return 3;
-    case ScalarType::I16: return 4;
-    case ScalarType::U32: return 5;
-    case ScalarType::I32: return 6;
-    case ScalarType::U64: return 7;
-    case ScalarType::I64: return 8;
-    case ScalarType::F32: return 9;
-    case ScalarType::F64: return 10;
+    case ScalarType::U8:
+      return 1;
+    case ScalarType::I8:
+      return 2;
+    case ScalarType::U16:
+      return 3;
+    case ScalarType::I16:
+      return 4;
+    case ScalarType::U32:
+      return 5;
+    case ScalarType::I32:
+      return 6;
+    case ScalarType::U64:
+      return 7;
+    case ScalarType::I64:
+      return 8;
+    case ScalarType::F32:
+      return 9;
+    case ScalarType::F64:
+      return 10;
   }
   return 0;
 }

@@ -31,7 +31,8 @@ std::string fixedString(const uint8_t* p, size_t n, bool multiline = false) {
   std::string s;
   for (size_t i = 0; i < n && p[i] != 0; ++i) {
     const char c = static_cast<char>(p[i]);
-    const bool ok = (p[i] >= 0x20 && p[i] < 0x7f) || (multiline && (c == '\n' || c == '\r' || c == '\t'));
+    const bool ok =
+        (p[i] >= 0x20 && p[i] < 0x7f) || (multiline && (c == '\n' || c == '\r' || c == '\t'));
     s.push_back(ok ? c : '?');
   }
   while (!s.empty() && (s.back() == ' ' || s.back() == '\n' || s.back() == '\r')) s.pop_back();
@@ -65,14 +66,14 @@ void decodeRecords(const uint8_t* rec, size_t n, size_t recordLength, const Vec3
     size_t o;
     if constexpr (kLegacy) {
       const uint8_t bits = rec[14], cls = rec[15];
-      out[2] = bits & 7;          // return number
-      out[3] = (bits >> 3) & 7;   // number of returns
-      out[4] = (bits >> 6) & 1;   // scan direction
-      out[5] = bits >> 7;         // edge of flight line
-      out[6] = cls & 31;          // classification
-      out[7] = cls >> 5;          // synthetic, key-point, withheld
-      out[8] = rec[16];           // scan angle rank
-      out[9] = rec[17];           // user data
+      out[2] = bits & 7;                   // return number
+      out[3] = (bits >> 3) & 7;            // number of returns
+      out[4] = (bits >> 6) & 1;            // scan direction
+      out[5] = bits >> 7;                  // edge of flight line
+      out[6] = cls & 31;                   // classification
+      out[7] = cls >> 5;                   // synthetic, key-point, withheld
+      out[8] = rec[16];                    // scan angle rank
+      out[9] = rec[17];                    // user data
       std::memcpy(out + 10, rec + 18, 2);  // point source id
       o = 12;
     } else {
@@ -81,9 +82,9 @@ void decodeRecords(const uint8_t* rec, size_t n, size_t recordLength, const Vec3
       out[3] = returns >> 4;
       out[4] = (flags >> 6) & 1;
       out[5] = flags >> 7;
-      out[6] = rec[16];          // classification
-      out[7] = flags & 15;       // synthetic, key-point, withheld, overlap
-      out[8] = (flags >> 4) & 3; // scanner channel
+      out[6] = rec[16];                    // classification
+      out[7] = flags & 15;                 // synthetic, key-point, withheld, overlap
+      out[8] = (flags >> 4) & 3;           // scanner channel
       std::memcpy(out + 9, rec + 18, 2);   // scan angle
       out[11] = rec[17];                   // user data
       std::memcpy(out + 12, rec + 20, 2);  // point source id
@@ -186,8 +187,7 @@ void LasReader::parse() {
   const int major = d[24], minor = d[25];
   if (major != 1)
     fail(24, "unsupported LAS version " + std::to_string(major) + "." + std::to_string(minor));
-  if (minor > 4)
-    warn("LAS version 1." + std::to_string(minor) + " is newer than 1.4; read as 1.4");
+  if (minor > 4) warn("LAS version 1." + std::to_string(minor) + " is newer than 1.4; read as 1.4");
   const uint16_t headerSize = load<uint16_t>(d + 94);
   if (headerSize < las::kHeaderSize12)
     fail(94, "header size " + std::to_string(headerSize) + " is smaller than the " +
@@ -223,9 +223,9 @@ void LasReader::parse() {
     fail(104, "unknown point data record format " + std::to_string(pointFormat_) +
                   " (LAS 1.4 defines 0-10)");
   if (recordLength_ < las::kBaseRecordSize[pointFormat_])
-    fail(105, "point record length " + std::to_string(recordLength_) +
-                  " is smaller than the " + std::to_string(las::kBaseRecordSize[pointFormat_]) +
-                  " bytes point format " + std::to_string(pointFormat_) + " needs");
+    fail(105, "point record length " + std::to_string(recordLength_) + " is smaller than the " +
+                  std::to_string(las::kBaseRecordSize[pointFormat_]) + " bytes point format " +
+                  std::to_string(pointFormat_) + " needs");
   extraBytes_ = recordLength_ - las::kBaseRecordSize[pointFormat_];
   if (pointStart_ < headerSize)
     fail(96, "offset to point data " + std::to_string(pointStart_) + " lies inside the header (" +
@@ -261,8 +261,8 @@ void LasReader::parse() {
     // Writers of 1.4 files for formats 0-5 often fill only the legacy count.
     if (count64 != 0 || legacyCount == 0) {
       if (legacyCount != 0 && legacyCount != count64)
-        warn("legacy point count " + std::to_string(legacyCount) + " differs from the 64-bit count " +
-             std::to_string(count64) + "; using the latter");
+        warn("legacy point count " + std::to_string(legacyCount) +
+             " differs from the 64-bit count " + std::to_string(count64) + "; using the latter");
       declared = count64;
     }
   }
@@ -371,8 +371,8 @@ void LasReader::readVlrs(uint64_t start, uint32_t count, uint64_t limit) {
            std::to_string(limit) + "; it and the following VLRs are ignored");
       return;
     }
-    handleRecord(fixedString(d + p + 2, 16), load<uint16_t>(d + p + 18), d + p + las::kVlrHeaderSize,
-                 length, p, false);
+    handleRecord(fixedString(d + p + 2, 16), load<uint16_t>(d + p + 18),
+                 d + p + las::kVlrHeaderSize, length, p, false);
     header_.details["vlrs"].push_back({{"user_id", fixedString(d + p + 2, 16)},
                                        {"record_id", load<uint16_t>(d + p + 18)},
                                        {"length", length},
@@ -388,15 +388,17 @@ void LasReader::readEvlrs(uint64_t start, uint32_t count) {
   for (uint32_t i = 0; i < count; ++i) {
     const std::string which =
         "extended variable length record " + std::to_string(i + 1) + " of " + std::to_string(count);
-    if (size - p < las::kEvlrHeaderSize || size - p - las::kEvlrHeaderSize < load<uint64_t>(d + p + 20)) {
-      const std::string what = which + " runs past the end of the file (" + std::to_string(size) + " bytes)";
+    if (size - p < las::kEvlrHeaderSize ||
+        size - p - las::kEvlrHeaderSize < load<uint64_t>(d + p + 20)) {
+      const std::string what =
+          which + " runs past the end of the file (" + std::to_string(size) + " bytes)";
       if (!options_.lenient) fail(p, what);
       warn(Error::atByte(p) + ": " + what + "; it and the following EVLRs are ignored");
       return;
     }
     const uint64_t length = load<uint64_t>(d + p + 20);
-    handleRecord(fixedString(d + p + 2, 16), load<uint16_t>(d + p + 18), d + p + las::kEvlrHeaderSize,
-                 length, p, true);
+    handleRecord(fixedString(d + p + 2, 16), load<uint16_t>(d + p + 18),
+                 d + p + las::kEvlrHeaderSize, length, p, true);
     header_.details["evlrs"].push_back({{"user_id", fixedString(d + p + 2, 16)},
                                         {"record_id", load<uint16_t>(d + p + 18)},
                                         {"length", length},
@@ -475,8 +477,10 @@ void LasReader::buildLayout() {
           }
           return s;
         };
-        if (options & 8) description += std::string(description.empty() ? "" : "; ") + "scale=" + list(e + 112);
-        if (options & 16) description += std::string(description.empty() ? "" : "; ") + "offset=" + list(e + 136);
+        if (options & 8)
+          description += std::string(description.empty() ? "" : "; ") + "scale=" + list(e + 112);
+        if (options & 16)
+          description += std::string(description.empty() ? "" : "; ") + "offset=" + list(e + 136);
       } else {
         warn("Extra Bytes descriptor " + std::to_string(k + 1) + " ('" + a.name +
              "') has the reserved data type " + std::to_string(dataType) +

@@ -50,31 +50,44 @@ struct KnownField {
   ScalarType type;
   uint32_t components;
 };
-constexpr KnownField kKnown[kFieldCount] = {
-    {las::kIntensity, ScalarType::U16, 1},      {las::kReturnNumber, ScalarType::U8, 1},
-    {las::kNumberOfReturns, ScalarType::U8, 1}, {las::kScanDirection, ScalarType::U8, 1},
-    {las::kEdgeOfFlightLine, ScalarType::U8, 1}, {las::kClassification, ScalarType::U8, 1},
-    {las::kClassificationFlags, ScalarType::U8, 1}, {las::kScannerChannel, ScalarType::U8, 1},
-    {las::kScanAngleRank, ScalarType::I8, 1},   {las::kScanAngle, ScalarType::I16, 1},
-    {las::kUserData, ScalarType::U8, 1},        {las::kPointSourceId, ScalarType::U16, 1},
-    {las::kGpsTime, ScalarType::F64, 1},        {las::kRgb, ScalarType::U16, 3},
-    {las::kNir, ScalarType::U16, 1}};
+constexpr KnownField kKnown[kFieldCount] = {{las::kIntensity, ScalarType::U16, 1},
+                                            {las::kReturnNumber, ScalarType::U8, 1},
+                                            {las::kNumberOfReturns, ScalarType::U8, 1},
+                                            {las::kScanDirection, ScalarType::U8, 1},
+                                            {las::kEdgeOfFlightLine, ScalarType::U8, 1},
+                                            {las::kClassification, ScalarType::U8, 1},
+                                            {las::kClassificationFlags, ScalarType::U8, 1},
+                                            {las::kScannerChannel, ScalarType::U8, 1},
+                                            {las::kScanAngleRank, ScalarType::I8, 1},
+                                            {las::kScanAngle, ScalarType::I16, 1},
+                                            {las::kUserData, ScalarType::U8, 1},
+                                            {las::kPointSourceId, ScalarType::U16, 1},
+                                            {las::kGpsTime, ScalarType::F64, 1},
+                                            {las::kRgb, ScalarType::U16, 3},
+                                            {las::kNir, ScalarType::U16, 1}};
 
 bool formatHas(int pf, int f) {
   switch (f) {
     case kFScannerChannel:
-    case kFScanAngle: return !las::isLegacyFormat(pf);
-    case kFScanAngleRank: return las::isLegacyFormat(pf);
-    case kFGpsTime: return las::hasGps(pf);
-    case kFRgb: return las::hasRgb(pf);
-    case kFNir: return las::hasNir(pf);
-    default: return true;
+    case kFScanAngle:
+      return !las::isLegacyFormat(pf);
+    case kFScanAngleRank:
+      return las::isLegacyFormat(pf);
+    case kFGpsTime:
+      return las::hasGps(pf);
+    case kFRgb:
+      return las::hasRgb(pf);
+    case kFNir:
+      return las::hasNir(pf);
+    default:
+      return true;
   }
 }
 
 int knownField(const Attribute& a) {
   for (int f = 0; f < kFieldCount; ++f)
-    if (a.name == kKnown[f].name && a.type == kKnown[f].type && a.components == kKnown[f].components)
+    if (a.name == kKnown[f].name && a.type == kKnown[f].type &&
+        a.components == kKnown[f].components)
       return f;
   return -1;
 }
@@ -121,7 +134,8 @@ T field(const Plan& p, int f, const uint8_t* attrs, T fallback = T()) {
 
 // The values a legacy format (0-5) cannot hold: the file must become LAS 1.4 format 6+.
 bool fitsLegacy(const Plan& p, const uint8_t* a) {
-  return field<uint8_t>(p, kFReturnNumber, a) <= 7 && field<uint8_t>(p, kFNumberOfReturns, a) <= 7 &&
+  return field<uint8_t>(p, kFReturnNumber, a) <= 7 &&
+         field<uint8_t>(p, kFNumberOfReturns, a) <= 7 &&
          field<uint8_t>(p, kFClassification, a) <= 31 &&
          field<uint8_t>(p, kFClassificationFlags, a) <= 7;
 }
@@ -141,12 +155,14 @@ void encodeRecord(const Plan& p, const int32_t q[3], const uint8_t* a, uint8_t* 
   std::memset(r, 0, p.recordLength);
   std::memcpy(r, q, 12);
   store<uint16_t>(r + 12, field<uint16_t>(p, kFIntensity, a));
-  // Return numbers start at 1; a source without them has single returns.
-  const uint8_t ret = field<uint8_t>(p, kFReturnNumber, a, 1);
-  const uint8_t nret = field<uint8_t>(p, kFNumberOfReturns, a, std::max<uint8_t>(ret, 1));
+  // Return numbers start at 1; a source without them has single returns. Formats 0-5 have three
+  // bits for each (write() moved values above 7 to format 6+), formats 6-10 four.
+  const unsigned maxReturn = las::isLegacyFormat(p.pointFormat) ? 7 : 15;
+  const uint8_t ret = bits(kFReturnNumber, maxReturn, 1);
+  const uint8_t nret = bits(kFNumberOfReturns, maxReturn, std::max<uint8_t>(ret, 1));
   size_t o;
   if (las::isLegacyFormat(p.pointFormat)) {
-    r[14] = static_cast<uint8_t>((ret & 7) | (nret & 7) << 3 | bits(kFScanDirection, 1) << 6 |
+    r[14] = static_cast<uint8_t>(ret | nret << 3 | bits(kFScanDirection, 1) << 6 |
                                  bits(kFEdge, 1) << 7);
     r[15] = static_cast<uint8_t>(bits(kFClassification, 31) | bits(kFClassificationFlags, 7) << 5);
     r[16] = static_cast<uint8_t>(field<int8_t>(p, kFScanAngleRank, a));
@@ -154,7 +170,6 @@ void encodeRecord(const Plan& p, const int32_t q[3], const uint8_t* a, uint8_t* 
     store<uint16_t>(r + 18, field<uint16_t>(p, kFPointSourceId, a));
     o = 20;
   } else {
-    if (ret > 15 || nret > 15) bits(ret > 15 ? kFReturnNumber : kFNumberOfReturns, 15);
     r[14] = static_cast<uint8_t>(ret | nret << 4);
     r[15] = static_cast<uint8_t>(bits(kFClassificationFlags, 15) | bits(kFScannerChannel, 3) << 4 |
                                  bits(kFScanDirection, 1) << 6 | bits(kFEdge, 1) << 7);
@@ -228,7 +243,8 @@ class LasWriter final : public PointWriter {
     for (int a = 0; a < 3; ++a) {
       scale_[a] = header.scale ? (*header.scale)[a] : 0.001;
       if (!(std::isfinite(scale_[a]) && scale_[a] > 0))
-        throw Error(path_, "", "LAS scale factor " + std::to_string(scale_[a]) + " is not positive");
+        throw Error(path_, "",
+                    "LAS scale factor " + std::to_string(scale_[a]) + " is not positive");
     }
     if (header.offset) {
       offset_ = *header.offset;
@@ -359,8 +375,9 @@ class LasWriter final : public PointWriter {
     auto add = [&](const char* user, uint16_t id, const char* description, const uint8_t* data,
                    size_t n) {
       if (n > std::numeric_limits<uint16_t>::max())
-        throw Error(path_, "", std::string("VLR '") + description + "' needs " +
-                                   std::to_string(n) + " bytes; LAS allows 65535");
+        throw Error(path_, "",
+                    std::string("VLR '") + description + "' needs " + std::to_string(n) +
+                        " bytes; LAS allows 65535");
       const size_t at = out.size();
       out.resize(at + las::kVlrHeaderSize + n, 0);
       putString(&out[at + 2], 16, user);
@@ -469,7 +486,8 @@ class LasWriter final : public PointWriter {
         las::isLegacyFormat(p.pointFormat) && count_ <= std::numeric_limits<uint32_t>::max();
     if (legacyCounts) {
       store<uint32_t>(&h[107], static_cast<uint32_t>(count_));
-      for (int r = 0; r < 5; ++r) store<uint32_t>(&h[111 + 4 * r], static_cast<uint32_t>(byReturn_[r]));
+      for (int r = 0; r < 5; ++r)
+        store<uint32_t>(&h[111 + 4 * r], static_cast<uint32_t>(byReturn_[r]));
     }
     for (int a = 0; a < 3; ++a) {
       store<double>(&h[131 + 8 * a], scale_[a]);
@@ -489,8 +507,9 @@ class LasWriter final : public PointWriter {
   // Writes the header and VLRs of `p`; records follow.
   void start(std::FILE* f, const std::string& name, const Plan& p) {
     if (p.recordLength > std::numeric_limits<uint16_t>::max())
-      throw Error(path_, "", "a LAS point record would need " + std::to_string(p.recordLength) +
-                                 " bytes; LAS allows 65535");
+      throw Error(path_, "",
+                  "a LAS point record would need " + std::to_string(p.recordLength) +
+                      " bytes; LAS allows 65535");
     const std::vector<uint8_t> h = headerBytes(p);
     writeBytes(f, name, h.data(), h.size());
   }
@@ -504,7 +523,8 @@ class LasWriter final : public PointWriter {
     try {
       start(out, tmp2, next);
       const uint64_t firstRecord = headerBytes(plan_).size();
-      if (std::fflush(file_) != 0 || ::fseeko(file_, static_cast<off_t>(firstRecord), SEEK_SET) != 0)
+      if (std::fflush(file_) != 0 ||
+          ::fseeko(file_, static_cast<off_t>(firstRecord), SEEK_SET) != 0)
         ioError(tmp_, "seek");
       const size_t chunk = 65536;
       std::vector<uint8_t> in(chunk * plan_.recordLength), outBuf(chunk * next.recordLength);
@@ -517,7 +537,8 @@ class LasWriter final : public PointWriter {
           decodeRecord(plan_, r, attrs.data());
           int32_t q[3];
           std::memcpy(q, r, 12);
-          encodeRecord(next, q, attrs.data(), outBuf.data() + i * next.recordLength, path_, done + i);
+          encodeRecord(next, q, attrs.data(), outBuf.data() + i * next.recordLength, path_,
+                       done + i);
         }
         writeBytes(out, tmp2, outBuf.data(), n * next.recordLength);
         done += n;

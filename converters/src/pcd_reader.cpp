@@ -1,4 +1,4 @@
-// PCD (Point Cloud Library) reader, through PCL's own parser.
+// PCD (Point Cloud Library) reader: PCL parses the header and the binary bodies.
 //
 // Sources:
 //  - The PCD file format, PCL documentation:
@@ -14,8 +14,13 @@
 // PCD files come from depth cameras and PCL pipelines and are megabytes to a few GB, not the
 // billion-point scans that LAS/PLY carry; the builder still sees batches.
 //
-// No fuzz target: parsing is PCL's (upstream) code; our code only interprets the field table
-// PCL returns and copies bytes within the bounds of PCL's own buffer.
+// ascii bodies are parsed here, not by PCL: PCL 1.13's ascii parser reads a malformed value, or
+// a line with too few or too many values, as zeros without reporting anything, and a reader must
+// not invent points. The result is the same PCLPointCloud2 record layout PCL would produce.
+//
+// No fuzz target: header and binary parsing are PCL's (upstream) code; our code interprets the
+// field table PCL returns, copies bytes within the bounds of PCL's buffer, and tokenises ascii
+// lines (bounds-checked string_view code). If PCL is ever replaced, the new parser needs one.
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>
@@ -23,6 +28,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -34,6 +40,13 @@
 
 namespace nestlight {
 namespace {
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
+  return s;
+}
 
 std::optional<ScalarType> scalarFromPcl(uint8_t datatype) {
   switch (datatype) {
@@ -107,6 +120,8 @@ class PcdReader final : public PointReader {
     fileSize_ = std::filesystem::file_size(path, ec);
     if (ec) throw Error(path, "", "cannot stat: " + ec.message());
 
+    checkDeclaredSize(path);
+
     pcl::PCDReader reader;
     Eigen::Vector4f origin = Eigen::Vector4f::Zero();
     Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
@@ -131,12 +146,30 @@ class PcdReader final : public PointReader {
     header_.declaredPoints = total_;
     planLayout(path);
 
-    // The body. Binary bodies are checked here first so that a short file gets an exact message
-    // (PCL only says "failed"), and so that lenient mode can keep the complete records.
+    // The header text, for what PCL does not report: the VERSION line as written (PCL infers
+    // 0.6 or 0.7 from the presence of VIEWPOINT) and line numbers for ascii errors.
+    const std::string headerText = readBytes(path, 0, dataIdx_);
+    std::string versionText;
+    for (size_t pos = 0; pos < headerText.size();) {
+      size_t eol = headerText.find('\n', pos);
+      if (eol == std::string::npos) eol = headerText.size();
+      const std::string_view line(headerText.data() + pos, eol - pos);
+      if (line.substr(0, 8) == "VERSION ") versionText = std::string(trim(line.substr(8)));
+      pos = eol + 1;
+    }
+
     std::vector<std::string> fieldNames;
     for (const auto& f : cloud_.fields) fieldNames.push_back(f.name);
     const uint64_t step = cloud_.point_step;
-    if (dataType == 1 && fileSize_ < dataIdx_ + total_ * step) {
+    if (dataType == 0) {
+      // PCL's ascii parser turns a malformed value into 0 and a line with too many or too few
+      // values into zeros, without an error; the body is parsed here instead, strictly, into the
+      // same PCLPointCloud2 record layout that PCL would have produced.
+      const uint64_t firstLine = 1 + std::count(headerText.begin(), headerText.end(), '\n');
+      readAscii(path, firstLine, options.lenient);
+    } else if (dataType == 1 && fileSize_ < dataIdx_ + total_ * step) {
+      // Checked before PCL, which only says "failed", and so that lenient mode can keep the
+      // complete records.
       const uint64_t complete =
           step ? (fileSize_ - std::min<uint64_t>(fileSize_, dataIdx_)) / step : 0;
       const std::string what =
@@ -146,7 +179,9 @@ class PcdReader final : public PointReader {
           std::to_string(fileSize_) + " bytes (" + std::to_string(complete) + " complete points)";
       if (!options.lenient) throw Error(path, Error::atByte(dataIdx_ + complete * step), what);
       warnings_.push_back(path + ": " + what + "; kept the complete points");
-      readBinaryPrefix(path, complete);
+      // Binary PCD is the raw row-major record array that PCL would copy.
+      const std::string bytes = readBytes(path, dataIdx_, complete * step);
+      cloud_.data.assign(bytes.begin(), bytes.end());
     } else {
       if (dataType == 2) checkCompressedSize(path);
       pcl::PCLPointCloud2 full;
@@ -174,7 +209,7 @@ class PcdReader final : public PointReader {
     }
 
     auto& d = header_.details;
-    d["version"] = version == pcl::PCDReader::PCD_V7 ? "0.7" : "0.6";
+    d["version"] = versionText;
     d["data"] = dataName(dataType);
     d["width"] = width;
     d["height"] = height;
@@ -412,18 +447,157 @@ class PcdReader final : public PointReader {
                       std::to_string(fileSize_) + " bytes");
   }
 
-  // Lenient mode on a short binary body: the records that are complete, read directly (binary
-  // PCD is the raw row-major record array PCL would copy).
-  void readBinaryPrefix(const std::string& path, uint64_t complete) {
-    std::ifstream in(path, std::ios::binary);
-    cloud_.data.assign(complete * cloud_.point_step, 0);
-    in.seekg(static_cast<std::streamoff>(dataIdx_));
-    if (!in.read(reinterpret_cast<char*>(cloud_.data.data()),
-                 static_cast<std::streamsize>(cloud_.data.size())))
-      throw Error(path, Error::atByte(dataIdx_), "cannot read the data");
+  // PCL's readHeader allocates (and zero-fills) WIDTH * HEIGHT * point_step bytes before looking
+  // at the body, so a damaged or hostile header could ask for terabytes. The header is scanned
+  // here first: no PCD body holds more than ~100 times its size in points (LZF, which
+  // binary_compressed uses, expands at most ~90x; ascii and binary far less).
+  void checkDeclaredSize(const std::string& path) const {
+    const std::string text = readBytes(path, 0, std::min<uint64_t>(fileSize_, 1 << 20));
+    uint64_t width = 0, height = 1, points = 0, step = 0;
+    std::vector<uint64_t> sizes, counts;
+    size_t pos = 0;
+    while (pos < text.size()) {
+      size_t eol = text.find('\n', pos);
+      if (eol == std::string::npos) eol = text.size();
+      std::string_view line(text.data() + pos, eol - pos);
+      pos = eol + 1;
+      std::vector<uint64_t> values;
+      const size_t sp = line.find(' ');
+      const std::string_view key = line.substr(0, sp);
+      for (size_t i = sp; i != std::string_view::npos && i < line.size();) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+        uint64_t v = 0;
+        auto r = std::from_chars(line.data() + i, line.data() + line.size(), v);
+        if (r.ec != std::errc()) break;
+        values.push_back(v);
+        i = size_t(r.ptr - line.data());
+      }
+      if (key == "WIDTH" && !values.empty()) width = values[0];
+      if (key == "HEIGHT" && !values.empty()) height = values[0];
+      if (key == "POINTS" && !values.empty()) points = values[0];
+      if (key == "SIZE") sizes = values;
+      if (key == "COUNT") counts = values;
+      if (key == "DATA") break;
+    }
+    for (size_t i = 0; i < sizes.size(); ++i)
+      step += std::min<uint64_t>(sizes[i], 8) *
+              (i < counts.size() ? std::min<uint64_t>(counts[i], 1 << 20) : 1);
+    const double declared =
+        double(std::max(points, width * std::min<uint64_t>(height, 1ull << 32))) * double(step);
+    if (declared > 128.0 * double(fileSize_) + double(1 << 20))
+      throw Error(path, "header",
+                  "the header declares " + std::to_string(std::max(points, width * height)) +
+                      " points of " + std::to_string(step) + " bytes, implausible for a file of " +
+                      std::to_string(fileSize_) + " bytes");
   }
 
- private:
+  static std::string readBytes(const std::string& path, uint64_t offset, uint64_t size) {
+    std::ifstream in(path, std::ios::binary);
+    std::string out(size, '\0');
+    in.seekg(static_cast<std::streamoff>(offset));
+    if (!in.read(out.data(), static_cast<std::streamsize>(size)))
+      throw Error(path, Error::atByte(offset), "cannot read " + std::to_string(size) + " bytes");
+    return out;
+  }
+
+  // One ascii value into the record. Integers are parsed as integers (a uint64 label survives),
+  // floats as their own type (a float parses exactly as PCL's would).
+  static bool parseValue(std::string_view tok, ScalarType t, uint8_t* dst) {
+    if (!tok.empty() && tok[0] == '+') tok.remove_prefix(1);
+    const char* b = tok.data();
+    const char* e = b + tok.size();
+    auto whole = [&](std::from_chars_result r) { return r.ec == std::errc() && r.ptr == e; };
+    switch (t) {
+      case ScalarType::F32: {
+        float v;
+        if (!whole(std::from_chars(b, e, v))) return false;
+        std::memcpy(dst, &v, 4);
+        return true;
+      }
+      case ScalarType::F64: {
+        double v;
+        if (!whole(std::from_chars(b, e, v))) return false;
+        std::memcpy(dst, &v, 8);
+        return true;
+      }
+      case ScalarType::U64: {
+        uint64_t v;
+        if (!whole(std::from_chars(b, e, v))) return false;
+        std::memcpy(dst, &v, 8);
+        return true;
+      }
+      default: {
+        int64_t v;
+        if (!whole(std::from_chars(b, e, v))) return false;
+        const double d = double(v);
+        uint8_t tmp[8];
+        storeFromDouble(t, d, tmp);  // clamps; a value out of range is an error instead
+        if (loadAsDouble(t, tmp) != d) return false;
+        std::memcpy(dst, tmp, scalarSize(t));
+        return true;
+      }
+    }
+  }
+
+  void readAscii(const std::string& path, uint64_t firstLine, bool lenient) {
+    const std::string body = readBytes(path, dataIdx_, fileSize_ - std::min(fileSize_, dataIdx_));
+    struct Slot {
+      const pcl::PCLPointField* field;
+      ScalarType type;
+      size_t offset;
+    };
+    std::vector<Slot> slots;  // one per value on a line
+    for (const auto& f : cloud_.fields) {
+      const ScalarType t = *scalarFromPcl(f.datatype);  // checked by planLayout
+      for (uint32_t c = 0; c < f.count; ++c) slots.push_back({&f, t, f.offset + c * scalarSize(t)});
+    }
+    const size_t step = cloud_.point_step;
+    cloud_.data.assign(total_ * step, 0);
+    uint64_t record = 0, line = firstLine;
+    std::vector<std::string_view> tokens;
+    for (size_t pos = 0; pos < body.size(); ++line) {
+      size_t eol = body.find('\n', pos);
+      if (eol == std::string::npos) eol = body.size();
+      const std::string_view text(body.data() + pos, eol - pos);
+      pos = eol + 1;
+      tokens.clear();
+      for (size_t i = 0; i < text.size();) {
+        while (i < text.size() && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r')) ++i;
+        size_t j = i;
+        while (j < text.size() && text[j] != ' ' && text[j] != '\t' && text[j] != '\r') ++j;
+        if (j > i) tokens.emplace_back(text.substr(i, j - i));
+        i = j;
+      }
+      if (tokens.empty()) continue;  // PCL skips empty lines too
+      if (record == total_) {
+        const std::string what =
+            "more data lines than the " + std::to_string(total_) + " points the header declares";
+        if (!lenient) throw Error(path, Error::atLine(line), what);
+        warnings_.push_back(path + ": line " + std::to_string(line) + ": " + what +
+                            "; ignored the rest");
+        break;
+      }
+      if (tokens.size() != slots.size())
+        throw Error(path, Error::atLine(line),
+                    "expected " + std::to_string(slots.size()) + " values, found " +
+                        std::to_string(tokens.size()));
+      uint8_t* rec = cloud_.data.data() + record * step;
+      for (size_t k = 0; k < slots.size(); ++k)
+        if (!parseValue(tokens[k], slots[k].type, rec + slots[k].offset))
+          throw Error(path, Error::atLine(line),
+                      "value '" + std::string(tokens[k]) + "' of field '" + slots[k].field->name +
+                          "' is not a valid " + scalarName(slots[k].type));
+      ++record;
+    }
+    if (record < total_) {
+      const std::string what = "data is truncated: " + std::to_string(record) + " of the " +
+                               std::to_string(total_) + " points the header declares";
+      if (!lenient) throw Error(path, Error::atLine(line), what);
+      warnings_.push_back(path + ": " + what + "; kept them");
+      cloud_.data.resize(record * step);
+    }
+  }
+
   SourceHeader header_;
   pcl::PCLPointCloud2 cloud_;  // the whole cloud; see the note at the top of the file
   std::vector<Plan> plans_;

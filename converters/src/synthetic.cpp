@@ -150,16 +150,11 @@ std::vector<Prim> buildingScene() {
   s.push_back({Prim::Dome, {0.70, 0.68, 0}, {}, {}, {}, 0.17, 0, {225, 228, 235}, 0.8});
   s.push_back({Prim::Sphere, {0.25, 0.78, 0.06}, {}, {}, {}, 0.06, 0, {160, 150, 120}, 0.6});
   // A colonnade.
-  for (int k = 0; k < 6; ++k)
-    s.push_back({Prim::Cylinder,
-                 {0.10 + 0.065 * k, 0.50, 0},
-                 {},
-                 {},
-                 {},
-                 0.015,
-                 0.20,
-                 {215, 205, 180},
-                 0.7});
+  Prim column{Prim::Cylinder, {0, 0.50, 0}, {}, {}, {}, 0.015, 0.20, {215, 205, 180}, 0.7};
+  for (int k = 0; k < 6; ++k) {
+    column.c[0] = 0.10 + 0.065 * k;
+    s.push_back(column);
+  }
   return s;
 }
 

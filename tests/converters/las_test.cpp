@@ -26,16 +26,28 @@ void put(std::string& s, size_t at, T v) {
   std::memcpy(&s[at], &v, sizeof(T));
 }
 
-std::vector<uint8_t> toBytes(const std::string& s) { return {s.begin(), s.end()}; }
+std::vector<uint8_t> toBytes(const std::string& s) {
+  return {s.begin(), s.end()};
+}
 
 // ---- Hand encoding of LAS files -------------------------------------------------------------
 
 constexpr size_t kBase[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
-bool legacy(int pf) { return pf < 6; }
-bool gps(int pf) { return pf != 0 && pf != 2; }
-bool rgb(int pf) { return pf == 2 || pf == 3 || pf == 5 || pf == 7 || pf == 8 || pf == 10; }
-bool nir(int pf) { return pf == 8 || pf == 10; }
-bool wave(int pf) { return pf == 4 || pf == 5 || pf == 9 || pf == 10; }
+bool legacy(int pf) {
+  return pf < 6;
+}
+bool gps(int pf) {
+  return pf != 0 && pf != 2;
+}
+bool rgb(int pf) {
+  return pf == 2 || pf == 3 || pf == 5 || pf == 7 || pf == 8 || pf == 10;
+}
+bool nir(int pf) {
+  return pf == 8 || pf == 10;
+}
+bool wave(int pf) {
+  return pf == 4 || pf == 5 || pf == 9 || pf == 10;
+}
 
 struct RawPoint {
   int32_t X, Y, Z;
@@ -165,7 +177,7 @@ struct LasFile {
     put(s, 96, static_cast<uint32_t>(hs + v.size()));
     put(s, 100, static_cast<uint32_t>(vlrs.size()));
     s[104] = static_cast<char>(pf);
-    const uint16_t rl = recordLength ? recordLength
+    const uint16_t rl = recordLength      ? recordLength
                         : records.empty() ? static_cast<uint16_t>(kBase[pf])
                                           : static_cast<uint16_t>(records[0].size());
     put(s, 105, rl);
@@ -175,7 +187,8 @@ struct LasFile {
     std::string points;
     for (const auto& r : records) points += r;
     if (minor >= 4) {
-      if (!evlrs.empty()) put(s, 235, static_cast<uint64_t>(hs + v.size() + points.size() + trailing.size()));
+      if (!evlrs.empty())
+        put(s, 235, static_cast<uint64_t>(hs + v.size() + points.size() + trailing.size()));
       put(s, 243, static_cast<uint32_t>(evlrs.size()));
       put(s, 247, n);
     }
@@ -190,9 +203,9 @@ LasFile makeFile(int pf, int n) {
   LasFile f;
   f.pf = pf;
   f.minor = pf >= 6 ? 4 : std::min(pf, 3);  // 1.0 ... 1.3 for the legacy formats
-  f.vlrs.push_back(vlr("LASF_Spec", 4,
-                       extraBytesDescriptor("height", 9, 0, 0.01) +
-                           extraBytesDescriptor("pair", 14, 0)));
+  f.vlrs.push_back(
+      vlr("LASF_Spec", 4,
+          extraBytesDescriptor("height", 9, 0, 0.01) + extraBytesDescriptor("pair", 14, 0)));
   for (int i = 0; i < n; ++i) f.records.push_back(encodeRecord(pf, makePoint(pf, i)));
   return f;
 }
@@ -208,7 +221,8 @@ struct AllPoints {
     const int a = layout.find(name);
     EXPECT_GE(a, 0) << name;
     if (a < 0) return NAN;
-    const size_t at = i * layout.stride() + layout.offset(a) + component * scalarSize(layout[a].type);
+    const size_t at =
+        i * layout.stride() + layout.offset(a) + component * scalarSize(layout[a].type);
     return loadAsDouble(layout[a].type, attrs.data() + at);
   }
   // For 64-bit integers, which a double cannot hold exactly.
@@ -254,13 +268,11 @@ struct Expected {
 };
 
 std::vector<Expected> expectedLayout(int pf) {
-  std::vector<Expected> e = {{"intensity", ScalarType::U16, 1},
-                             {"return_number", ScalarType::U8, 1},
-                             {"number_of_returns", ScalarType::U8, 1},
-                             {"scan_direction_flag", ScalarType::U8, 1},
-                             {"edge_of_flight_line", ScalarType::U8, 1},
-                             {"classification", ScalarType::U8, 1},
-                             {"classification_flags", ScalarType::U8, 1}};
+  std::vector<Expected> e = {
+      {"intensity", ScalarType::U16, 1},          {"return_number", ScalarType::U8, 1},
+      {"number_of_returns", ScalarType::U8, 1},   {"scan_direction_flag", ScalarType::U8, 1},
+      {"edge_of_flight_line", ScalarType::U8, 1}, {"classification", ScalarType::U8, 1},
+      {"classification_flags", ScalarType::U8, 1}};
   if (legacy(pf)) {
     e.push_back({"scan_angle_rank", ScalarType::I8, 1});
   } else {
@@ -482,7 +494,8 @@ TEST(LasReader, ExtraBytesDescriptors) {
   LasFile f;
   f.pf = 0;
   f.vlrs.push_back(vlr("LASF_Spec", 4,
-                       extraBytesDescriptor("blob", 0, 5) + extraBytesDescriptor("intensity", 3, 0) +
+                       extraBytesDescriptor("blob", 0, 5) +
+                           extraBytesDescriptor("intensity", 3, 0) +
                            extraBytesDescriptor("vec", 29, 0) + extraBytesDescriptor("", 1, 0)));
   std::string rec = encodeRecord(0, makePoint(0, 1)).substr(0, 20);
   rec += std::string("abcde");
@@ -532,14 +545,21 @@ TEST(LasReader, MalformedHeadersAreErrors) {
       {"signature", [](std::string& s) { s[0] = 'X'; }, "no 'LASF' signature", "byte 0"},
       {"short", [](std::string& s) { s.resize(100); }, "ends inside the LAS header", "byte 100"},
       {"version", [](std::string& s) { s[24] = 2; }, "unsupported LAS version 2.0", "byte 24"},
-      {"header size", [](std::string& s) { put(s, 94, uint16_t(200)); }, "header size 200", "byte 94"},
-      {"point offset", [](std::string& s) { put(s, 96, uint32_t(1 << 30)); }, "beyond the end of the file", "byte 96"},
-      {"point offset in header", [](std::string& s) { put(s, 96, uint32_t(100)); }, "inside the header", "byte 96"},
-      {"vlr length", [](std::string& s) { put(s, 227 + 20, uint16_t(60000)); }, "variable length record 1 of 2 (60000 bytes) runs past the end of the file", "byte 227"},
-      {"record length", [](std::string& s) { put(s, 105, uint16_t(19)); }, "smaller than the 20 bytes point format 0 needs", "byte 105"},
-      {"point format", [](std::string& s) { s[104] = 11; }, "unknown point data record format 11", "byte 104"},
+      {"header size", [](std::string& s) { put(s, 94, uint16_t(200)); }, "header size 200",
+       "byte 94"},
+      {"point offset", [](std::string& s) { put(s, 96, uint32_t(1 << 30)); },
+       "beyond the end of the file", "byte 96"},
+      {"point offset in header", [](std::string& s) { put(s, 96, uint32_t(100)); },
+       "inside the header", "byte 96"},
+      {"vlr length", [](std::string& s) { put(s, 227 + 20, uint16_t(60000)); },
+       "variable length record 1 of 2 (60000 bytes) runs past the end of the file", "byte 227"},
+      {"record length", [](std::string& s) { put(s, 105, uint16_t(19)); },
+       "smaller than the 20 bytes point format 0 needs", "byte 105"},
+      {"point format", [](std::string& s) { s[104] = 11; }, "unknown point data record format 11",
+       "byte 104"},
       {"laz", [](std::string& s) { s[104] = char(0x83); }, "LAZ is not supported yet", "byte 104"},
-      {"laz bit 6", [](std::string& s) { s[104] = char(0x43); }, "LAZ is not supported yet", "byte 104"},
+      {"laz bit 6", [](std::string& s) { s[104] = char(0x43); }, "LAZ is not supported yet",
+       "byte 104"},
   };
   // VLRs that would run past the end of a file without points.
   LasFile empty;
@@ -550,8 +570,9 @@ TEST(LasReader, MalformedHeadersAreErrors) {
     openBytes(noPoints, {}, "bad.las");
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
-    EXPECT_NE(e.reason().find("variable length record 2 of 4000000000 runs past the end of the file"),
-              std::string::npos)
+    EXPECT_NE(
+        e.reason().find("variable length record 2 of 4000000000 runs past the end of the file"),
+        std::string::npos)
         << e.what();
     EXPECT_EQ(e.position(), Error::atByte(227 + 64));
   }
@@ -647,14 +668,15 @@ TEST(LasWriter, RoundTripsEveryPointFormat) {
       ASSERT_GE(j, 0) << attr.name;
       EXPECT_EQ(b.layout[j], attr);
       for (size_t p = 0; p < a.size(); ++p)
-        ASSERT_EQ(0, std::memcmp(&a.attrs[p * a.layout.stride() + a.layout.offset(i)],
-                                 &b.attrs[p * b.layout.stride() + b.layout.offset(j)],
-                                 attr.byteSize()))
+        ASSERT_EQ(
+            0, std::memcmp(&a.attrs[p * a.layout.stride() + a.layout.offset(i)],
+                           &b.attrs[p * b.layout.stride() + b.layout.offset(j)], attr.byteSize()))
             << attr.name << " of point " << p;
     }
     // The header bounds are those of the points.
     Box3d box;
-    for (size_t p = 0; p < b.size(); ++p) box.extend(b.xyz[3 * p], b.xyz[3 * p + 1], b.xyz[3 * p + 2]);
+    for (size_t p = 0; p < b.size(); ++p)
+      box.extend(b.xyz[3 * p], b.xyz[3 * p + 1], b.xyz[3 * p + 2]);
     EXPECT_EQ(*back->header().declaredBounds, box);
   }
 }
@@ -687,8 +709,8 @@ TEST(LasWriter, NationalGridCoordinatesRoundTripExactly) {
     PointBatch in;
     for (const auto& p : mm)
       for (int a = 0; a < 3; ++a)
-        in.xyz.push_back(static_cast<double>(p[a] - static_cast<int64_t>(offset[a]) * 1000) * 0.001 +
-                         offset[a]);
+        in.xyz.push_back(
+            static_cast<double>(p[a] - static_cast<int64_t>(offset[a]) * 1000) * 0.001 + offset[a]);
     const std::string path = dir.file(given ? "grid_offset.las" : "grid.las");
     auto w = createLasWriter(path, h);
     w->write(in);
@@ -858,6 +880,17 @@ TEST(LasWriter, UnrepresentablePointsAreErrorsAndLeaveNoFile) {
   PointBatch b;
   b.xyz = {0, 0, 0, 3.0e6, 0, 0};
   EXPECT_THROW(w->write(b), Error);
+
+  // 16 returns fit no LAS point format: an error, not a value cut to four bits.
+  w = createLasWriter(path, simpleHeader({{"return_number", ScalarType::U8, 1, ""}}));
+  b.xyz = {0, 0, 0};
+  b.attrs = {16};
+  try {
+    w->write(b);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(e.reason().find("return_number 16 does not fit"), std::string::npos) << e.what();
+  }
 }
 
 TEST(LasWriter, CoordinateSystemIsWritten) {
@@ -896,7 +929,8 @@ Summary summarise(PointReader& r) {
 
 void expectBoundsMatchHeader(const PointReader& r, const AllPoints& p) {
   Box3d box;
-  for (size_t i = 0; i < p.size(); ++i) box.extend(p.xyz[3 * i], p.xyz[3 * i + 1], p.xyz[3 * i + 2]);
+  for (size_t i = 0; i < p.size(); ++i)
+    box.extend(p.xyz[3 * i], p.xyz[3 * i + 1], p.xyz[3 * i + 2]);
   const Box3d& d = *r.header().declaredBounds;
   for (int a = 0; a < 3; ++a) {
     EXPECT_NEAR(box.min[a], d.min[a], 1e-6);
@@ -914,7 +948,9 @@ TEST(LasRealData, AutzenPointFormat3) {
   EXPECT_EQ(h.details["generating_software"], "PDAL 1.0.0 (9e8465)");
   EXPECT_EQ(h.rgbBits, 16);
   ASSERT_FALSE(h.crs.is_null());
-  EXPECT_EQ(h.crs["wkt"].get<std::string>().rfind("PROJCS[\"NAD_1983_HARN_Lambert_Conformal_Conic\"", 0), 0u);
+  EXPECT_EQ(
+      h.crs["wkt"].get<std::string>().rfind("PROJCS[\"NAD_1983_HARN_Lambert_Conformal_Conic\"", 0),
+      0u);
   // GeoKeyDirectory: version 1.1.0 with 21 keys, carried verbatim (92 values with padding).
   EXPECT_EQ(h.crs["geotiff"]["keys"].size(), 92u);
   EXPECT_EQ(h.crs["geotiff"]["keys"][3], 21);

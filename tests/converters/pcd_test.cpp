@@ -245,7 +245,76 @@ TEST(PcdReader, TruncatedAsciiIsAnError) {
   std::string s = asciiPcd();
   s.resize(s.rfind("-4 8.125"));  // drop the last line
   writeFile(path, s);
+  try {
+    openPcd(path);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.position(), Error::atLine(14)) << e.what();
+    EXPECT_NE(e.reason().find("truncated"), std::string::npos) << e.what();
+  }
+  ReadOptions o;
+  o.lenient = true;
+  auto r = openPcd(path, o);
+  EXPECT_EQ(r->warnings().size(), 1u);
+  PointBatch b;
+  ASSERT_TRUE(r->read(b, 100));
+  EXPECT_EQ(b.size(), 2u);
+}
+
+// PCL's own ascii parser reads these as zeros without an error; ours names the line.
+TEST(PcdReader, MalformedAsciiValuesAreErrors) {
+  TempDir dir;
+  const std::string head =
+      "VERSION 0.7\nFIELDS x y z label\nSIZE 4 4 4 1\nTYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 2\n"
+      "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n";
+  const std::pair<const char*, const char*> cases[] = {
+      {"1 2 3 4\n4 5 abc 6\n", "'abc' of field 'z'"},
+      {"1 2 3 4\n4 5 6\n", "expected 4 values, found 3"},
+      {"1 2 3 4\n4 5 6 7 8\n", "expected 4 values, found 5"},
+      {"1 2 3 4\n4 5 6 256\n", "'256' of field 'label'"},  // out of range for uint8
+      {"1 2 3 4\n4 5 6 1.5\n", "'1.5' of field 'label'"},
+  };
+  for (const auto& [data, message] : cases) {
+    const std::string path = dir.file("m.pcd");
+    writeFile(path, head + data);
+    try {
+      openPcd(path);
+      ADD_FAILURE() << "no error for " << data;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.position(), Error::atLine(12)) << e.what();
+      EXPECT_NE(e.reason().find(message), std::string::npos) << e.what();
+    }
+  }
+  // Extra lines are a header/data disagreement: an error, or a warning when lenient.
+  const std::string path = dir.file("extra.pcd");
+  writeFile(path, head + "1 2 3 4\n\n4 5 6 7\n8 9 10 11\n");
   EXPECT_THROW(openPcd(path), Error);
+  ReadOptions o;
+  o.lenient = true;
+  auto r = openPcd(path, o);
+  EXPECT_EQ(r->warnings().size(), 1u);
+  PointBatch b;
+  ASSERT_TRUE(r->read(b, 100));
+  ASSERT_EQ(b.size(), 2u);
+  EXPECT_EQ(b.xyz[3], 4.0);
+  EXPECT_EQ(r->header().details["version"], "0.7");
+}
+
+TEST(PcdReader, AsciiDenormalPackedColour) {
+  // r < 0x80 makes the packed float a denormal, which text parsers often reject.
+  TempDir dir;
+  const std::string path = dir.file("d.pcd");
+  char rgb[64];
+  std::snprintf(rgb, sizeof rgb, "%.9g", double(packedFloat(0x00204080u)));
+  writeFile(path, std::string("VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\n"
+                              "COUNT 1 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n0 0 0 ") +
+                      rgb + "\n");
+  auto r = openPcd(path);
+  PointBatch b;
+  ASSERT_TRUE(r->read(b, 10));
+  EXPECT_EQ(attrAt<uint16_t>(b, *r, 0, "rgb", 0), 0x20 * 257);
+  EXPECT_EQ(attrAt<uint16_t>(b, *r, 0, "rgb", 1), 0x40 * 257);
+  EXPECT_EQ(attrAt<uint16_t>(b, *r, 0, "rgb", 2), 0x80 * 257);
 }
 
 TEST(PcdReader, MalformedFilesAreErrors) {
@@ -276,6 +345,18 @@ TEST(PcdReader, MalformedFilesAreErrors) {
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(e.reason().find("'z'"), std::string::npos) << e.what();
+  }
+
+  // A header asking for far more memory than the file could hold: PCL would allocate it.
+  const std::string huge = dir.file("huge.pcd");
+  writeFile(huge,
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2000000000\n"
+            "HEIGHT 1000\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2000000000000\nDATA binary\n1234");
+  try {
+    openPcd(huge);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(e.reason().find("implausible"), std::string::npos) << e.what();
   }
 
   // binary_compressed whose block runs past the end of the file.
