@@ -1,0 +1,171 @@
+// The command line as a user meets it: exit codes, messages that name the file and position,
+// --help, info --json, and the hard input cases end to end.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+
+using nestlight::test::readFile;
+using nestlight::test::runCli;
+using nestlight::test::TempDir;
+using nestlight::test::writeFile;
+namespace fs = std::filesystem;
+
+namespace {
+nlohmann::json infoJson(const std::string& dir) {
+  std::string out;
+  EXPECT_EQ(runCli("info --json " + dir, &out), 0) << out;
+  return nlohmann::json::parse(out);
+}
+}  // namespace
+
+TEST(Cli, HelpForEverySubcommand) {
+  for (const char* c : {"", "convert", "info", "verify", "export", "generate", "demo", "bench convert"}) {
+    std::string out;
+    EXPECT_EQ(runCli(std::string(c) + " --help", &out), 0) << c;
+    EXPECT_NE(out.find("Usage"), std::string::npos) << c << ": " << out;
+  }
+}
+
+TEST(Cli, ConvertInfoVerifyExport) {
+  TempDir t;
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 20000 -o " + t.file("s.las"), &out), 0) << out;
+  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress json", &out), 0) << out;
+  EXPECT_NE(out.find("\"phase\""), std::string::npos);  // JSON progress lines
+  nlohmann::json j = infoJson(t.file("o"));
+  EXPECT_EQ(j["points"], 20000);
+  EXPECT_EQ(j["accounting"]["input"], 20000);
+  EXPECT_EQ(j["accounting"]["kept"], 20000);
+  EXPECT_EQ(j["accounting"]["duplicates_merged"], 0);
+  EXPECT_TRUE(j["accounting"]["rejected"].is_object());
+  EXPECT_EQ(runCli("verify " + t.file("o"), &out), 0) << out;
+  EXPECT_EQ(runCli("export " + t.file("o") + " -o " + t.file("back.las"), &out), 0) << out;
+  EXPECT_NE(out.find("20000 points"), std::string::npos) << out;
+  EXPECT_EQ(runCli("export " + t.file("o") + " --level 0 -o " + t.file("root.ply"), &out), 0) << out;
+}
+
+TEST(Cli, EmptyFileIsAnErrorNamingIt) {
+  TempDir t;
+  writeFile(t.file("empty.las"), "");
+  std::string out;
+  EXPECT_NE(runCli("convert " + t.file("empty.las") + " -o " + t.file("o"), &out), 0);
+  EXPECT_NE(out.find("empty.las"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(t.file("o") + "/metadata.json"));
+  writeFile(t.file("empty.xyz"), "");
+  EXPECT_NE(runCli("convert " + t.file("empty.xyz") + " -o " + t.file("o2"), &out), 0);
+  EXPECT_NE(out.find("empty.xyz"), std::string::npos) << out;
+  // A well-formed file that holds no points converts to an empty octree.
+  writeFile(t.file("none.ply"),
+            "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+            "end_header\n");
+  ASSERT_EQ(runCli("convert " + t.file("none.ply") + " -o " + t.file("o3"), &out), 0) << out;
+  EXPECT_EQ(infoJson(t.file("o3"))["points"], 0);
+  EXPECT_EQ(runCli("verify " + t.file("o3"), &out), 0) << out;
+}
+
+TEST(Cli, TruncatedLasFailsUnlessLenient) {
+  TempDir t;
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 1000 -o " + t.file("s.las"), &out), 0) << out;
+  std::string bytes = readFile(t.file("s.las"));
+  writeFile(t.file("cut.las"), bytes.substr(0, bytes.size() - 100));
+  EXPECT_NE(runCli("convert " + t.file("cut.las") + " -o " + t.file("o"), &out), 0);
+  EXPECT_NE(out.find("cut.las"), std::string::npos) << out;
+  EXPECT_NE(out.find("byte"), std::string::npos) << out;  // the position
+  ASSERT_EQ(runCli("convert --lenient " + t.file("cut.las") + " -o " + t.file("o"), &out), 0) << out;
+  nlohmann::json j = infoJson(t.file("o"));
+  EXPECT_LT(j["points"].get<int>(), 1000);
+  EXPECT_GT(j["points"].get<int>(), 990);
+  EXPECT_FALSE(j["sources"][0]["warnings"].empty());
+}
+
+TEST(Cli, HeaderClaimingFewerPointsWarns) {
+  TempDir t;
+  std::string out;
+  // An ascii PLY that declares 2 vertices but holds 3 lines of data.
+  writeFile(t.file("p.ply"),
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+            "end_header\n1 2 3\n4 5 6\n7 8 9\n");
+  int rc = runCli("convert " + t.file("p.ply") + " -o " + t.file("o"), &out);
+  if (rc == 0) {
+    nlohmann::json j = infoJson(t.file("o"));
+    EXPECT_EQ(j["points"], 2);
+    EXPECT_FALSE(j["sources"][0]["warnings"].empty()) << j.dump();
+  } else {
+    EXPECT_NE(out.find("p.ply"), std::string::npos) << out;
+  }
+}
+
+TEST(Cli, BigEndianPlyWithUnknownPropertiesKeepsThem) {
+  TempDir t;
+  std::string body;
+  auto be32 = [&](const void* v) {
+    const char* c = static_cast<const char*>(v);
+    body += {c[3], c[2], c[1], c[0]};
+  };
+  for (int i = 0; i < 3; ++i) {
+    float x = 1.5f * i, y = 2.0f, z = -1.0f * i;
+    int32_t quality = 1000 + i;
+    be32(&x), be32(&y), be32(&z), be32(&quality);
+  }
+  writeFile(t.file("be.ply"),
+            "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+            "property float z\nproperty int quality\nend_header\n" + body);
+  std::string out;
+  ASSERT_EQ(runCli("convert " + t.file("be.ply") + " -o " + t.file("o"), &out), 0) << out;
+  nlohmann::json j = infoJson(t.file("o"));
+  EXPECT_EQ(j["points"], 3);
+  bool found = false;
+  for (auto& a : j["attributes"]) found = found || (a["name"] == "quality" && a["type"] == "int32");
+  EXPECT_TRUE(found) << j["attributes"].dump();
+  ASSERT_EQ(runCli("export " + t.file("o") + " -o " + t.file("back.ply"), &out), 0) << out;
+  std::string back = readFile(t.file("back.ply"));
+  EXPECT_NE(back.find("property int quality"), std::string::npos);
+}
+
+TEST(Cli, LazIsNotSupportedYet) {
+  TempDir t;
+  writeFile(t.file("x.laz"), "LASF");
+  std::string out;
+  EXPECT_NE(runCli("convert " + t.file("x.laz") + " -o " + t.file("o"), &out), 0);
+  EXPECT_NE(out.find("not supported"), std::string::npos) << out;
+}
+
+TEST(Cli, MemoryFarBelowInputSize) {
+  TempDir t;
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 1500000 -o " + t.file("s.las"), &out), 0) << out;
+  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --memory 16M --progress quiet", &out), 0)
+      << out;
+  nlohmann::json j = infoJson(t.file("o"));
+  EXPECT_EQ(j["points"], 1500000);
+  EXPECT_GT(j["build"]["chunks"].get<int>(), 4);
+  EXPECT_EQ(runCli("verify " + t.file("o"), &out), 0) << out;
+}
+
+TEST(Cli, VerifyFailsOnDamageWithNonZeroExit) {
+  TempDir t;
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 5000 -o " + t.file("s.las"), &out), 0);
+  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress quiet", &out), 0);
+  fs::resize_file(t.file("o") + "/octree.bin", fs::file_size(t.file("o") + "/octree.bin") - 10);
+  EXPECT_NE(runCli("verify " + t.file("o"), &out), 0);
+  EXPECT_NE(out.find("FAIL"), std::string::npos) << out;
+  EXPECT_NE(runCli("verify " + t.file("nothing-here"), &out), 0);
+}
+
+TEST(Cli, DirectoryInputAndUnknownFormat) {
+  TempDir t;
+  fs::create_directory(t.file("in"));
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 1000 --seed 1 -o " + t.file("in/a.las"), &out), 0);
+  ASSERT_EQ(runCli("generate -n 2000 --seed 2 -o " + t.file("in/b.ply"), &out), 0);
+  ASSERT_EQ(runCli("convert " + t.file("in") + " -o " + t.file("o") + " --progress quiet", &out), 0) << out;
+  EXPECT_EQ(infoJson(t.file("o"))["points"], 3000);
+  writeFile(t.file("x.e57"), "?");
+  EXPECT_NE(runCli("convert " + t.file("x.e57") + " -o " + t.file("o2"), &out), 0);
+  EXPECT_NE(out.find("x.e57"), std::string::npos) << out;
+}
