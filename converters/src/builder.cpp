@@ -24,6 +24,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
+#include <deque>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -296,8 +298,10 @@ class Builder {
   struct Item {
     size_t source = 0;
     PointBatch batch;
+    size_t points = 0;             // points read into this batch
     // Output of the parallel stage.
-    std::vector<uint8_t> records;  // 12 + stride bytes each, grouped by chunk
+    std::unique_ptr<uint8_t[]> records;  // 12 + stride bytes each, grouped by chunk
+    size_t recordBytes = 0;
     std::vector<std::pair<uint32_t, uint32_t>> runs;  // (chunk, count) in record order
     Accounting acc;
     Box3d box;
@@ -321,6 +325,7 @@ class Builder {
                                           auto& r = *sources_[current].reader;
                                           if (r.read(item->batch, kBatchPoints)) {
                                             item->source = current;
+                                            item->points = item->batch.size();
                                             progress_.advance(r.bytesConsumed() - consumedBefore);
                                             consumedBefore = r.bytesConsumed();
                                             return item.release();
@@ -338,7 +343,7 @@ class Builder {
                                            }) &
             tbb::make_filter<Item*, void>(tbb::filter_mode::serial_in_order, [&](Item* it) {
               std::unique_ptr<Item> own(it);
-              collect(*it);
+              collect(own);
             }));
     progress_.end();
   }
@@ -355,7 +360,10 @@ class Builder {
     }
     const int64_t maxInt = static_cast<int64_t>(meta_.cubeSize) - 1;
     for (int a = 0; a < 3; ++a) {
-      int64_t v = std::llround((p[a] - meta_.offset[a]) / meta_.scale);
+      // Values below -0.5 round wrongly here, but they are clamped to 0 anyway (declared-bounds
+      // tolerance); this avoids a libm call per coordinate.
+      const double u = (p[a] - meta_.offset[a]) / meta_.scale + 0.5;
+      int64_t v = u < 0 ? 0 : (u >= double(maxInt) ? maxInt : static_cast<int64_t>(u));
       q[a] = static_cast<uint32_t>(std::clamp<int64_t>(v, 0, maxInt));
     }
     return true;
@@ -386,7 +394,7 @@ class Builder {
             if (quantise(s, &it.batch.xyz[3 * k], q, it.acc))
               counts[gridCell(q)].fetch_add(1, std::memory_order_relaxed);
         },
-        [](Item&) {});
+        [](std::unique_ptr<Item>&) {});
 
     // Chunks: top-down, the largest nodes of the counting pyramid that fit the budget.
     std::vector<std::vector<uint64_t>> pyramid(gridLevel_ + 1);
@@ -435,72 +443,132 @@ class Builder {
 
   void distributePass() {
     const size_t rec = 12 + stride_;
-    std::vector<std::vector<uint8_t>> buffers(chunks_.size());
-    size_t buffered = 0;
-    const size_t budget = std::max<size_t>(opt_.memoryBytes / 4, 16 << 20);
-    auto flush = [&]() {
-      tbb::parallel_for(size_t(0), buffers.size(), [&](size_t c) {
-        auto& b = buffers[c];
-        if (b.empty()) return;
-        FILE* f = std::fopen(chunks_[c].file.c_str(), "ab");
-        if (!f || std::fwrite(b.data(), 1, b.size(), f) != b.size())
-          throw Error(chunks_[c].file.string(), "", "cannot write chunk file (disk full?)");
-        std::fclose(f);
-        std::vector<uint8_t>().swap(b);
-      });
-      buffered = 0;
-    };
     for (auto& c : chunks_) c.points = 0;
-    readAll(
-        "distribute",
-        [&](Item& it) {
-          const SourceState& s = sources_[it.source];
-          const SourceHeader& h = s.reader->header();
-          const size_t n = it.batch.size(), srcStride = h.layout.stride();
-          std::vector<uint8_t> recs(n * rec);
-          std::vector<uint32_t> chunkOf(n);
-          size_t kept = 0;
-          it.acc.input = n;
-          for (size_t k = 0; k < n; ++k) {
-            const double* p = &it.batch.xyz[3 * k];
-            uint32_t q[3];
-            if (!quantise(s, p, q, it.acc)) continue;
-            it.box.extend(p[0], p[1], p[2]);
-            uint8_t* r = &recs[kept * rec];
-            std::memcpy(r, q, 12);
-            if (s.identity)
-              std::memcpy(r + 12, it.batch.attrs.data() + k * srcStride, stride_);
-            else
-              mapAttributes(s, h.layout, it.batch.attrs.data() + k * srcStride, r + 12);
-            chunkOf[kept] = static_cast<uint32_t>(cellChunk_[gridCell(q)]);
-            ++kept;
-          }
-          // Group by chunk (counting sort, stable).
-          std::vector<uint32_t> count(chunks_.size() + 1, 0);
-          for (size_t k = 0; k < kept; ++k) count[chunkOf[k] + 1]++;
-          for (size_t c = 0; c < chunks_.size(); ++c) {
-            if (count[c + 1]) it.runs.emplace_back(static_cast<uint32_t>(c), count[c + 1]);
-            count[c + 1] += count[c];
-          }
-          it.records.resize(kept * rec);
-          for (size_t k = 0; k < kept; ++k)
-            std::memcpy(&it.records[size_t(count[chunkOf[k]]++) * rec], &recs[k * rec], rec);
-        },
-        [&](Item& it) {
-          sources_[it.source].read += it.batch.size();
-          accounting_.add(it.acc);
-          meta_.bounds.extend(it.box);
+    // A writer thread appends batches to the chunk files while the pipeline reads on; batches
+    // wait in memory only up to a quarter of the budget.
+    const size_t budget = std::max<size_t>(opt_.memoryBytes / 4, 16 << 20);
+    std::mutex m;
+    std::condition_variable cv;
+    std::deque<std::unique_ptr<Item>> queue;
+    size_t queued = 0;
+    bool done = false;
+    std::exception_ptr writeError;
+    std::thread writer([&] {
+      std::vector<std::unique_ptr<Item>> group;
+      size_t groupBytes = 0;
+      auto writeGroup = [&] {
+        std::vector<std::vector<std::pair<const uint8_t*, size_t>>> perChunk(chunks_.size());
+        for (auto& it : group) {
           size_t at = 0;
-          for (auto& [c, m] : it.runs) {
-            auto& b = buffers[c];
-            b.insert(b.end(), it.records.begin() + at, it.records.begin() + at + size_t(m) * rec);
-            at += size_t(m) * rec;
-            chunks_[c].points += m;
+          for (auto& [c, n] : it->runs) {
+            perChunk[c].emplace_back(it->records.get() + at, size_t(n) * rec);
+            at += size_t(n) * rec;
           }
-          buffered += it.records.size();
-          if (buffered > budget) flush();
-        });
-    flush();
+        }
+        for (size_t c = 0; c < perChunk.size(); ++c) {
+          if (perChunk[c].empty()) continue;
+          FILE* f = std::fopen(chunks_[c].file.c_str(), "ab");
+          bool ok = f != nullptr;
+          for (auto& [p, n] : perChunk[c]) ok = ok && std::fwrite(p, 1, n, f) == n;
+          if (f) ok = std::fclose(f) == 0 && ok;
+          if (!ok) throw Error(chunks_[c].file.string(), "", "cannot write chunk file (disk full?)");
+        }
+        std::lock_guard<std::mutex> lock(m);
+        queued -= groupBytes;
+        group.clear();
+        groupBytes = 0;
+        cv.notify_all();
+      };
+      try {
+        for (;;) {
+          std::unique_ptr<Item> it;
+          {
+            std::unique_lock<std::mutex> lock(m);
+            cv.wait(lock, [&] { return done || !queue.empty(); });
+            if (queue.empty()) break;
+            it = std::move(queue.front());
+            queue.pop_front();
+          }
+          groupBytes += it->recordBytes;
+          group.push_back(std::move(it));
+          if (groupBytes >= budget / 4) writeGroup();
+        }
+        writeGroup();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(m);
+        writeError = std::current_exception();
+        done = true;
+        cv.notify_all();
+      }
+    });
+    auto stopWriter = [&] {
+      {
+        std::lock_guard<std::mutex> lock(m);
+        done = true;
+        cv.notify_all();
+      }
+      writer.join();
+    };
+    try {
+      readAll(
+          "distribute",
+          [&](Item& it) {
+            const SourceState& s = sources_[it.source];
+            const SourceHeader& h = s.reader->header();
+            const size_t n = it.batch.size(), srcStride = h.layout.stride();
+            thread_local std::vector<uint8_t> recs;
+            thread_local std::vector<uint32_t> chunkOf;
+            if (recs.size() < n * rec) recs.resize(n * rec);
+            if (chunkOf.size() < n) chunkOf.resize(n);
+            size_t kept = 0;
+            it.acc.input = n;
+            for (size_t k = 0; k < n; ++k) {
+              const double* p = &it.batch.xyz[3 * k];
+              uint32_t q[3];
+              if (!quantise(s, p, q, it.acc)) continue;
+              it.box.extend(p[0], p[1], p[2]);
+              uint8_t* r = &recs[kept * rec];
+              std::memcpy(r, q, 12);
+              if (s.identity)
+                std::memcpy(r + 12, it.batch.attrs.data() + k * srcStride, stride_);
+              else
+                mapAttributes(s, h.layout, it.batch.attrs.data() + k * srcStride, r + 12);
+              chunkOf[kept] = static_cast<uint32_t>(cellChunk_[gridCell(q)]);
+              ++kept;
+            }
+            // Group by chunk (counting sort, stable).
+            std::vector<uint32_t> count(chunks_.size() + 1, 0);
+            for (size_t k = 0; k < kept; ++k) count[chunkOf[k] + 1]++;
+            for (size_t c = 0; c < chunks_.size(); ++c) {
+              if (count[c + 1]) it.runs.emplace_back(static_cast<uint32_t>(c), count[c + 1]);
+              count[c + 1] += count[c];
+            }
+            it.recordBytes = kept * rec;
+            it.records.reset(new uint8_t[std::max<size_t>(it.recordBytes, 1)]);
+            for (size_t k = 0; k < kept; ++k)
+              std::memcpy(&it.records[size_t(count[chunkOf[k]]++) * rec], &recs[k * rec], rec);
+            PointBatch().xyz.swap(it.batch.xyz);  // the input is no longer needed
+            PointBatch().attrs.swap(it.batch.attrs);
+          },
+          [&](std::unique_ptr<Item>& it) {
+            sources_[it->source].read += it->points;
+            accounting_.add(it->acc);
+            meta_.bounds.extend(it->box);
+            for (auto& [c, n] : it->runs) chunks_[c].points += n;
+            std::unique_lock<std::mutex> lock(m);
+            if (writeError) std::rethrow_exception(writeError);
+            cv.wait(lock, [&] { return queued + it->recordBytes <= budget || queue.empty() || writeError; });
+            if (writeError) std::rethrow_exception(writeError);
+            queued += it->recordBytes;
+            queue.push_back(std::move(it));
+            cv.notify_all();
+          });
+    } catch (...) {
+      stopWriter();
+      throw;
+    }
+    stopWriter();
+    if (writeError) std::rethrow_exception(writeError);
     std::vector<int32_t>().swap(cellChunk_);
   }
 
