@@ -25,7 +25,7 @@
 
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
-#include "text_number.h"
+#include "text_util.h"
 
 namespace nestlight {
 namespace {
@@ -36,9 +36,12 @@ enum class Encoding { Ascii, BinaryLittle, BinaryBig };
 
 const char* encodingName(Encoding e) {
   switch (e) {
-    case Encoding::Ascii: return "ascii";
-    case Encoding::BinaryLittle: return "binary_little_endian";
-    case Encoding::BinaryBig: return "binary_big_endian";
+    case Encoding::Ascii:
+      return "ascii";
+    case Encoding::BinaryLittle:
+      return "binary_little_endian";
+    case Encoding::BinaryBig:
+      return "binary_big_endian";
   }
   return "?";
 }
@@ -84,16 +87,6 @@ struct PlyHeader {
   size_t dataStart = 0;
   uint64_t headerLines = 0;
 };
-
-// Tokens of arbitrary bytes, quoted for a message: fuzzed and binary input must not put control
-// characters or megabytes into an error.
-std::string quote(std::string_view s) {
-  std::string q = "'";
-  for (size_t i = 0; i < s.size() && i < 40; ++i)
-    q += (s[i] >= 0x20 && s[i] < 0x7f) ? s[i] : '?';
-  if (s.size() > 40) q += "...";
-  return q + "'";
-}
 
 std::vector<std::string_view> splitWords(std::string_view line) {
   std::vector<std::string_view> words;
@@ -164,7 +157,7 @@ PlyHeader parseHeader(const ByteSource& src) {
     const std::string_view kw = w[0];
     if (kw == "comment" || kw == "obj_info") {
       std::string_view rest = trim(trim(text).substr(kw.size()));
-      (kw == "comment" ? h.comments : h.objInfo).emplace_back(rest);
+      (kw == "comment" ? h.comments : h.objInfo).push_back(text::validUtf8(rest));
     } else if (kw == "format") {
       if (haveFormat) throw malformed("a second 'format' line");
       if (w.size() != 3) throw malformed("expected 'format <encoding> 1.0'");
@@ -175,28 +168,28 @@ PlyHeader parseHeader(const ByteSource& src) {
       else if (w[1] == "binary_big_endian")
         h.encoding = Encoding::BinaryBig;
       else
-        throw malformed("unknown encoding " + quote(w[1]) +
+        throw malformed("unknown encoding " + text::quote(w[1]) +
                         "; expected ascii, binary_little_endian or binary_big_endian");
       if (w[2] != "1.0" && w[2] != "1")
-        throw malformed("unsupported PLY version " + quote(w[2]) + "; only 1.0 exists");
+        throw malformed("unsupported PLY version " + text::quote(w[2]) + "; only 1.0 exists");
       h.version = std::string(w[2]);
       haveFormat = true;
     } else if (kw == "element") {
       if (w.size() != 3) throw malformed("expected 'element <name> <count>'");
       PlyElement e;
-      e.name = std::string(w[1]);
+      e.name = text::validUtf8(w[1]);
       e.line = line;
       if (!text::parseInteger(w[2].data(), w[2].data() + w[2].size(), e.count))
-        throw malformed("bad element count " + quote(w[2]));
+        throw malformed("bad element count " + text::quote(w[2]));
       for (auto& o : h.elements)
-        if (o.name == e.name) throw malformed("a second element " + quote(e.name));
+        if (o.name == e.name) throw malformed("a second element " + text::quote(e.name));
       h.elements.push_back(std::move(e));
     } else if (kw == "property") {
       if (h.elements.empty()) throw malformed("a property before any element");
       PlyProperty p;
       auto type = [&](std::string_view t) {
         auto s = parseScalarName(t);
-        if (!s) throw malformed("unknown property type " + quote(t));
+        if (!s) throw malformed("unknown property type " + text::quote(t));
         return *s;
       };
       if (w.size() >= 2 && w[1] == "list") {
@@ -204,26 +197,26 @@ PlyHeader parseHeader(const ByteSource& src) {
         p.list = true;
         p.countType = type(w[2]);
         p.countTypeName = std::string(w[2]);
-        if (isFloat(p.countType)) throw malformed("a list count of type " + quote(w[2]));
+        if (isFloat(p.countType)) throw malformed("a list count of type " + text::quote(w[2]));
         p.type = type(w[3]);
         p.typeName = std::string(w[3]);
-        p.name = std::string(w[4]);
+        p.name = text::validUtf8(w[4]);
       } else {
         if (w.size() != 3) throw malformed("expected 'property <type> <name>'");
         p.type = type(w[1]);
         p.typeName = std::string(w[1]);
-        p.name = std::string(w[2]);
+        p.name = text::validUtf8(w[2]);
       }
       auto& props = h.elements.back().properties;
       for (auto& o : props)
         if (o.name == p.name)
-          throw malformed("a second property " + quote(p.name) + " in element " +
-                          quote(h.elements.back().name));
+          throw malformed("a second property " + text::quote(p.name) + " in element " +
+                          text::quote(h.elements.back().name));
       props.push_back(std::move(p));
     } else if (kw == "end_header") {
       ended = true;
     } else {
-      throw malformed("unknown keyword " + quote(kw));
+      throw malformed("unknown keyword " + text::quote(kw));
     }
   }
   if (!ended) throw malformed("no 'end_header' line");
@@ -244,7 +237,8 @@ nlohmann::json crsFromComments(const std::vector<std::string>& comments) {
     std::string_view value;
     for (std::string_view key : {"crs", "srs", "wkt", "spatial_reference", "coordinate_system"}) {
       if (lower.size() > key.size() && lower.compare(0, key.size(), key) == 0 &&
-          (lower[key.size()] == ':' || lower[key.size()] == '=' || text::isBlank(lower[key.size()]))) {
+          (lower[key.size()] == ':' || lower[key.size()] == '=' ||
+           text::isBlank(lower[key.size()]))) {
         value = s.substr(key.size());
         while (!value.empty() && (value[0] == ':' || value[0] == '=' || text::isBlank(value[0])))
           value.remove_prefix(1);
@@ -286,15 +280,24 @@ std::optional<uint64_t> listCount(ScalarType t, const uint8_t* p, bool swap) {
     return static_cast<uint64_t>(v);
   };
   switch (t) {
-    case ScalarType::U8: return get(uint8_t());
-    case ScalarType::I8: return get(int8_t());
-    case ScalarType::U16: return get(uint16_t());
-    case ScalarType::I16: return get(int16_t());
-    case ScalarType::U32: return get(uint32_t());
-    case ScalarType::I32: return get(int32_t());
-    case ScalarType::U64: return get(uint64_t());
-    case ScalarType::I64: return get(int64_t());
-    default: return std::nullopt;
+    case ScalarType::U8:
+      return get(uint8_t());
+    case ScalarType::I8:
+      return get(int8_t());
+    case ScalarType::U16:
+      return get(uint16_t());
+    case ScalarType::I16:
+      return get(int16_t());
+    case ScalarType::U32:
+      return get(uint32_t());
+    case ScalarType::I32:
+      return get(int32_t());
+    case ScalarType::U64:
+      return get(uint64_t());
+    case ScalarType::I64:
+      return get(int64_t());
+    default:
+      return std::nullopt;
   }
 }
 
@@ -319,7 +322,8 @@ bool parseScalar(ScalarType t, const char* b, const char* e, uint8_t* out) {
       std::memcpy(out, &v, 8);
       return true;
     }
-    default: break;
+    default:
+      break;
   }
   int64_t v;
   if (!text::parseInteger(b, e, v)) {
@@ -337,14 +341,23 @@ bool parseScalar(ScalarType t, const char* b, const char* e, uint8_t* out) {
     return true;
   };
   switch (t) {
-    case ScalarType::U8: return put(uint8_t());
-    case ScalarType::I8: return put(int8_t());
-    case ScalarType::U16: return put(uint16_t());
-    case ScalarType::I16: return put(int16_t());
-    case ScalarType::U32: return put(uint32_t());
-    case ScalarType::I32: return put(int32_t());
-    case ScalarType::I64: std::memcpy(out, &v, 8); return true;
-    default: return false;
+    case ScalarType::U8:
+      return put(uint8_t());
+    case ScalarType::I8:
+      return put(int8_t());
+    case ScalarType::U16:
+      return put(uint16_t());
+    case ScalarType::I16:
+      return put(int16_t());
+    case ScalarType::U32:
+      return put(uint32_t());
+    case ScalarType::I32:
+      return put(int32_t());
+    case ScalarType::I64:
+      std::memcpy(out, &v, 8);
+      return true;
+    default:
+      return false;
   }
 }
 
@@ -358,33 +371,43 @@ struct Op {
   ScalarType dstType = ScalarType::U8;  // Convert
   bool swap = false;                    // Convert: the source is in the other byte order
   bool toXyz = false;                   // Convert: the destination is the position
-  uint32_t src = 0;    // byte offset in the (packed) record
+  uint32_t src = 0;                     // byte offset in the (packed) record
   uint32_t dst = 0;    // byte offset in the point's attributes, or in its 24-byte position
   uint32_t count = 0;  // components (bytes, for Copy)
 
   uint32_t srcUnit() const {
     switch (kind) {
       case OpKind::Copy:
-      case OpKind::RgbU8: return 1;
-      case OpKind::Swap2: return 2;
+      case OpKind::RgbU8:
+        return 1;
+      case OpKind::Swap2:
+        return 2;
       case OpKind::Swap4:
-      case OpKind::XyzF32: return 4;
+      case OpKind::XyzF32:
+        return 4;
       case OpKind::Swap8:
-      case OpKind::XyzF64: return 8;
-      case OpKind::Convert: return uint32_t(scalarSize(srcType));
+      case OpKind::XyzF64:
+        return 8;
+      case OpKind::Convert:
+        return uint32_t(scalarSize(srcType));
     }
     return 0;
   }
   uint32_t dstUnit() const {
     switch (kind) {
-      case OpKind::Copy: return 1;
+      case OpKind::Copy:
+        return 1;
       case OpKind::RgbU8:
-      case OpKind::Swap2: return 2;
-      case OpKind::Swap4: return 4;
+      case OpKind::Swap2:
+        return 2;
+      case OpKind::Swap4:
+        return 4;
       case OpKind::Swap8:
       case OpKind::XyzF32:
-      case OpKind::XyzF64: return 8;
-      case OpKind::Convert: return toXyz ? 8 : uint32_t(scalarSize(dstType));
+      case OpKind::XyzF64:
+        return 8;
+      case OpKind::Convert:
+        return toXyz ? 8 : uint32_t(scalarSize(dstType));
     }
     return 0;
   }
@@ -432,11 +455,21 @@ inline void applyOps(const Op* ops, size_t nops, const uint8_t* rec, double* xyz
     const Op& op = ops[k];
     const uint8_t* s = rec + op.src;
     switch (op.kind) {
-      case OpKind::Copy: std::memcpy(attrs + op.dst, s, op.count); break;
-      case OpKind::Swap2: swapCopy<2>(s, attrs + op.dst, op.count); break;
-      case OpKind::Swap4: swapCopy<4>(s, attrs + op.dst, op.count); break;
-      case OpKind::Swap8: swapCopy<8>(s, attrs + op.dst, op.count); break;
-      case OpKind::XyzF64: std::memcpy(xyzBytes + op.dst, s, 8 * size_t(op.count)); break;
+      case OpKind::Copy:
+        std::memcpy(attrs + op.dst, s, op.count);
+        break;
+      case OpKind::Swap2:
+        swapCopy<2>(s, attrs + op.dst, op.count);
+        break;
+      case OpKind::Swap4:
+        swapCopy<4>(s, attrs + op.dst, op.count);
+        break;
+      case OpKind::Swap8:
+        swapCopy<8>(s, attrs + op.dst, op.count);
+        break;
+      case OpKind::XyzF64:
+        std::memcpy(xyzBytes + op.dst, s, 8 * size_t(op.count));
+        break;
       case OpKind::XyzF32:
         for (uint32_t i = 0; i < op.count; ++i) {
           float f;
@@ -450,7 +483,9 @@ inline void applyOps(const Op* ops, size_t nops, const uint8_t* rec, double* xyz
           std::memcpy(attrs + op.dst + 2 * i, &v, 2);
         }
         break;
-      case OpKind::Convert: convert(op, s, xyz, attrs, clamped); break;
+      case OpKind::Convert:
+        convert(op, s, xyz, attrs, clamped);
+        break;
     }
   }
 }
@@ -476,8 +511,7 @@ class PlyReader final : public PointReader {
   std::vector<std::string> warnings() const override {
     auto w = warnings_;
     if (clamped_ > 0)
-      w.push_back(src_->name() + ": " + std::to_string(clamped_) +
-                  " colour values outside [0, 1] were clamped");
+      w.push_back(std::to_string(clamped_) + " colour values outside [0, 1] were clamped");
     return w;
   }
   uint64_t bytesConsumed() const override { return pos_; }
@@ -488,16 +522,22 @@ class PlyReader final : public PointReader {
     line_ = vertexLine_;
     done_ = 0;
     ended_ = false;
+    clamped_ = 0;
     src_->releaseBefore(pos_);
   }
 
+  // The batch is resized, not cleared first: a batch reused at the same size is then written
+  // over without being zero-filled again, which costs as much as the conversion itself.
   bool read(PointBatch& batch, size_t maxPoints) override {
-    batch.clear();
     if (ended_ || done_ >= vertexCount_) {
+      batch.clear();
       finish();
       return false;
     }
-    if (maxPoints == 0) return true;
+    if (maxPoints == 0) {
+      batch.clear();
+      return true;
+    }
     size_t n;
     if (ply_.encoding == Encoding::Ascii)
       n = readAscii(batch, maxPoints);
@@ -544,10 +584,11 @@ class PlyReader final : public PointReader {
       ScalarType t = props[i].type;
       return t == ScalarType::U8 || t == ScalarType::U16 || isFloat(t);
     };
-    const auto rgb = findAll({{"red", "green", "blue"}, {"r", "g", "b"},
-                              {"diffuse_red", "diffuse_green", "diffuse_blue"}},
-                             [&](auto& i) { return colourType(i[0]) && colourType(i[1]) &&
-                                                   colourType(i[2]); });
+    const auto rgb =
+        findAll({{"red", "green", "blue"},
+                 {"r", "g", "b"},
+                 {"diffuse_red", "diffuse_green", "diffuse_blue"}},
+                [&](auto& i) { return colourType(i[0]) && colourType(i[1]) && colourType(i[2]); });
     const auto normal = findAll({{"nx", "ny", "nz"}, {"normal_x", "normal_y", "normal_z"}},
                                 [](auto&) { return true; });
     int intensity = find("intensity");
@@ -601,9 +642,9 @@ class PlyReader final : public PointReader {
         }
       } else if (int c = component(rgb, i); c >= 0) {
         if (rgbAttr < 0)
-          rgbAttr = int(layout.add({std::string(attr::kRgb), ScalarType::U16, 3,
-                                    "PLY " + props[rgb[0]].name + "/" + props[rgb[1]].name + "/" +
-                                        props[rgb[2]].name}));
+          rgbAttr = int(layout.add(
+              {std::string(attr::kRgb), ScalarType::U16, 3,
+               "PLY " + props[rgb[0]].name + "/" + props[rgb[1]].name + "/" + props[rgb[2]].name}));
         op.dst = uint32_t(layout.offset(rgbAttr) + 2 * c);
         if (t == ScalarType::U8)
           op.kind = OpKind::RgbU8;
@@ -639,7 +680,8 @@ class PlyReader final : public PointReader {
     }
     if (rgb[0] >= 0) {
       const bool bytes = props[rgb[0]].type == ScalarType::U8 &&
-                         props[rgb[1]].type == ScalarType::U8 && props[rgb[2]].type == ScalarType::U8;
+                         props[rgb[1]].type == ScalarType::U8 &&
+                         props[rgb[2]].type == ScalarType::U8;
       header_.rgbBits = bytes ? 8 : 16;
     }
     recordBytes_ = packed;
@@ -665,7 +707,9 @@ class PlyReader final : public PointReader {
       nlohmann::json props = nlohmann::json::array();
       for (const auto& p : e.properties) {
         if (p.list)
-          props.push_back({{"name", p.name}, {"list", true}, {"countType", p.countTypeName},
+          props.push_back({{"name", p.name},
+                           {"list", true},
+                           {"countType", p.countTypeName},
                            {"type", p.typeName}});
         else
           props.push_back({{"name", p.name}, {"type", p.typeName}});
@@ -687,14 +731,14 @@ class PlyReader final : public PointReader {
     uint64_t line = ply_.headerLines;
     for (size_t i = 0; i < vertexIndex_; ++i) {
       const PlyElement& e = ply_.elements[i];
-      const uint64_t complete = ply_.encoding == Encoding::Ascii ? skipAscii(e, pos, line)
-                                                                 : skipBinary(e, pos);
+      const uint64_t complete =
+          ply_.encoding == Encoding::Ascii ? skipAscii(e, pos, line) : skipBinary(e, pos);
       if (complete < e.count)
         throw Error(file,
                     ply_.encoding == Encoding::Ascii ? Error::atLine(line) : Error::atByte(pos),
-                    "the file ends inside element '" + e.name + "' before the vertices: " +
-                        std::to_string(complete) + " of " + std::to_string(e.count) +
-                        " records are complete");
+                    "the file ends inside element '" + e.name +
+                        "' before the vertices: " + std::to_string(complete) + " of " +
+                        std::to_string(e.count) + " records are complete");
     }
     vertexStart_ = pos;
     vertexLine_ = line;
@@ -702,7 +746,8 @@ class PlyReader final : public PointReader {
     if (ply_.encoding != Encoding::Ascii && !vertexHasLists_) {
       const uint64_t complete =
           std::min<uint64_t>(vertexCount_, (src_->size() - vertexStart_) / recordBytes_);
-      if (complete < vertexCount_) shortOfVertices(complete, vertexStart_ + complete * recordBytes_);
+      if (complete < vertexCount_)
+        shortOfVertices(complete, vertexStart_ + complete * recordBytes_);
     }
   }
 
@@ -715,10 +760,11 @@ class PlyReader final : public PointReader {
                       " vertices but the file holds only " + std::to_string(complete) +
                       " complete ones (data ends at byte " + std::to_string(at) + ")";
     if (!options_.lenient)
-      throw Error(src_->name(), position, msg + "; the file may be truncated (lenient mode keeps "
-                                                "the complete vertices)");
-    warnings_.push_back(src_->name() + ": " + position + ": " + msg + "; kept " +
-                        std::to_string(complete));
+      throw Error(src_->name(), position,
+                  msg +
+                      "; the file may be truncated (lenient mode keeps "
+                      "the complete vertices)");
+    warnings_.push_back(position + ": " + msg + "; kept " + std::to_string(complete));
     vertexCount_ = complete;
     shortData_ = true;
   }
@@ -744,9 +790,9 @@ class PlyReader final : public PointReader {
       if (size - p < cs) return false;
       const auto n = listCount(prop.countType, d + p, swap_);
       if (!n)
-        throw Error(src_->name(), Error::atByte(p),
-                    "negative list length in property '" + prop.name + "' of element '" + e.name +
-                        "'");
+        throw Error(
+            src_->name(), Error::atByte(p),
+            "negative list length in property '" + prop.name + "' of element '" + e.name + "'");
       p += cs;
       const size_t is = scalarSize(prop.type);
       if (*n > (size - p) / is) return false;
@@ -903,16 +949,16 @@ class PlyReader final : public PointReader {
   [[noreturn]] void badNumber(const char* b, const char* e, const PlyProperty& prop,
                               const std::string& what) const {
     throw Error(src_->name(), Error::atLine(line_),
-                "cannot read " + quote(std::string_view(b, size_t(e - b))) + " as " + what +
+                "cannot read " + text::quote(std::string_view(b, size_t(e - b))) + " as " + what +
                     " (vertex " + std::to_string(done_) + ", property '" + prop.name + "')");
   }
 
   // After the last vertex: what follows should be exactly the elements the header declares.
-  // Disagreements lose no point, so they are warnings.
+  // Disagreements lose no point, so they are warnings. Warnings do not repeat the file's name:
+  // whoever shows them names the reader's file.
   void finish() {
     if (finished_ || shortData_) return;
     finished_ = true;
-    const std::string& file = src_->name();
     size_t pos = pos_;
     uint64_t line = line_;
     const bool ascii = ply_.encoding == Encoding::Ascii;
@@ -921,14 +967,14 @@ class PlyReader final : public PointReader {
         const PlyElement& e = ply_.elements[i];
         const uint64_t complete = ascii ? skipAscii(e, pos, line) : skipBinary(e, pos);
         if (complete < e.count) {
-          warnings_.push_back(file + ": the file ends inside element '" + e.name + "' after " +
+          warnings_.push_back("the file ends inside element '" + e.name + "' after " +
                               std::to_string(complete) + " of " + std::to_string(e.count) +
                               " records (after all the vertices)");
           return;
         }
       }
     } catch (const Error& e) {
-      warnings_.push_back(std::string(e.what()) + " (after all the vertices)");
+      warnings_.push_back(e.position() + ": " + e.reason() + " (after all the vertices)");
       return;
     }
     const char* d = reinterpret_cast<const char*>(src_->data());
@@ -938,12 +984,12 @@ class PlyReader final : public PointReader {
       const uint64_t first = line + 1;
       while (nextDataLine(d, src_->size(), pos, line, text)) ++extra;
       if (extra > 0)
-        warnings_.push_back(file + ": " + Error::atLine(first) + ": " + std::to_string(extra) +
+        warnings_.push_back(Error::atLine(first) + ": " + std::to_string(extra) +
                             " lines follow the last element the header declares; the header "
                             "may declare too few vertices");
     } else if (pos < src_->size()) {
       const size_t extra = src_->size() - pos;
-      std::string msg = file + ": " + Error::atByte(pos) + ": " + std::to_string(extra) +
+      std::string msg = Error::atByte(pos) + ": " + std::to_string(extra) +
                         " bytes follow the last element the header declares";
       if (vertexIndex_ + 1 == ply_.elements.size() && !vertexHasLists_)
         msg += " (room for " + std::to_string(extra / recordBytes_) +

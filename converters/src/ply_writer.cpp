@@ -31,17 +31,27 @@ constexpr size_t kCountWidth = 20;
 
 const char* plyTypeName(ScalarType t) {
   switch (t) {
-    case ScalarType::U8: return "uchar";
-    case ScalarType::I8: return "char";
-    case ScalarType::U16: return "ushort";
-    case ScalarType::I16: return "short";
-    case ScalarType::U32: return "uint";
-    case ScalarType::I32: return "int";
+    case ScalarType::U8:
+      return "uchar";
+    case ScalarType::I8:
+      return "char";
+    case ScalarType::U16:
+      return "ushort";
+    case ScalarType::I16:
+      return "short";
+    case ScalarType::U32:
+      return "uint";
+    case ScalarType::I32:
+      return "int";
     // PLY has no 64-bit integers; these spellings are understood by ply_reader.cpp only.
-    case ScalarType::U64: return "uint64";
-    case ScalarType::I64: return "int64";
-    case ScalarType::F32: return "float";
-    case ScalarType::F64: return "double";
+    case ScalarType::U64:
+      return "uint64";
+    case ScalarType::I64:
+      return "int64";
+    case ScalarType::F32:
+      return "float";
+    case ScalarType::F64:
+      return "double";
   }
   return "?";
 }
@@ -104,15 +114,21 @@ class PlyWriter final : public PointWriter {
         const size_t size = scalarSize(f.type);
         for (uint32_t c = 0; c < f.components; ++c, p += size) {
           switch (f.kind) {
-            case Kind::RgbU8ToU8: raw(ScalarType::U8, p); break;
+            case Kind::RgbU8ToU8:
+              raw(ScalarType::U8, p);
+              break;
             case Kind::RgbU16ToU8: {
               uint16_t v;
               std::memcpy(&v, p, 2);
               value(ScalarType::U8, std::round(v / 257.0));
               break;
             }
-            case Kind::Normal: value(ScalarType::F32, loadAsDouble(f.type, p)); break;
-            case Kind::Raw: raw(f.type, p); break;
+            case Kind::Normal:
+              value(ScalarType::F32, loadAsDouble(f.type, p));
+              break;
+            case Kind::Raw:
+              raw(f.type, p);
+              break;
           }
         }
       }
@@ -233,7 +249,9 @@ class PlyWriter final : public PointWriter {
         r = std::to_chars(s, s + sizeof s, i);
         break;
       }
-      default: r = std::to_chars(s, s + sizeof s, int64_t(loadAsDouble(t, native))); break;
+      default:
+        r = std::to_chars(s, s + sizeof s, int64_t(loadAsDouble(t, native)));
+        break;
     }
     buf_.insert(buf_.end(), s, r.ptr);
     buf_.push_back(' ');

@@ -1,4 +1,4 @@
-// Number tokens of the text readers (PLY ascii, XYZ/PTS/TXT).
+// Text helpers of the readers (PLY, XYZ/PTS/TXT): number tokens, and strings for metadata.
 //
 // std::from_chars is the fast path: it neither allocates nor consults the locale, and in
 // libstdc++ 12 it is fast_float. It leaves out two forms that scan files contain: a leading '+',
@@ -11,10 +11,13 @@
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <string_view>
 
 namespace nestlight::text {
 
-inline bool isBlank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+inline bool isBlank(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
 
 // All of [b, e) as a double: "nan", "inf" and "infinity" (any case) included.
 inline bool parseDouble(const char* b, const char* e, double& v) {
@@ -42,7 +45,7 @@ inline bool parseFloat(const char* b, const char* e, float& v) {
   if (!parseDouble(b, e, d)) return false;
   constexpr float kInf = std::numeric_limits<float>::infinity();
   v = std::fabs(d) > std::numeric_limits<float>::max() ? (d > 0 ? kInf : -kInf)
-                                                        : static_cast<float>(d);
+                                                       : static_cast<float>(d);
   return true;
 }
 
@@ -53,6 +56,50 @@ inline bool parseInteger(const char* b, const char* e, T& v) {
   if (b == e) return false;
   auto r = std::from_chars(b, e, v);
   return r.ptr == e && r.ec == std::errc();
+}
+
+// A token of arbitrary bytes, quoted for a message: binary or fuzzed input must not put control
+// characters or megabytes into an error.
+inline std::string quote(std::string_view s) {
+  std::string q = "'";
+  for (size_t i = 0; i < s.size() && i < 40; ++i) q += (s[i] >= 0x20 && s[i] < 0x7f) ? s[i] : '?';
+  if (s.size() > 40) q += "...";
+  return q + "'";
+}
+
+// `s` as valid UTF-8, invalid bytes replaced by U+FFFD. Comments and names in scan files can hold
+// any bytes (Latin-1 from old tools, or garbage), and nlohmann::json refuses to write a string
+// that is not UTF-8, so whatever goes into the metadata passes through here.
+inline std::string validUtf8(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = uint8_t(s[i]);
+    const size_t len = c < 0x80         ? 1
+                       : (c >> 5) == 6  ? 2
+                       : (c >> 4) == 14 ? 3
+                       : (c >> 3) == 30 ? 4
+                                        : 0;
+    bool ok = len > 0 && len <= s.size() - i;
+    uint32_t cp = len == 1 ? c : len == 2 ? c & 0x1f : len == 3 ? c & 0x0f : c & 0x07;
+    for (size_t k = 1; ok && k < len; ++k) {
+      const auto cc = uint8_t(s[i + k]);
+      ok = (cc & 0xc0) == 0x80;
+      cp = cp << 6 | (cc & 0x3f);
+    }
+    // No overlong forms, surrogates or code points beyond U+10FFFF.
+    static constexpr uint32_t kMin[5] = {0, 0, 0x80, 0x800, 0x10000};
+    if (ok && len > 1) ok = cp >= kMin[len] && !(cp >= 0xd800 && cp <= 0xdfff) && cp <= 0x10ffff;
+    if (ok) {
+      out.append(s.substr(i, len));
+      i += len;
+    } else {
+      out += "\xef\xbf\xbd";
+      ++i;
+    }
+  }
+  return out;
 }
 
 }  // namespace nestlight::text

@@ -13,25 +13,19 @@
 
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
-#include "text_number.h"
+#include "text_util.h"
 
 namespace nestlight {
 namespace {
 
-inline bool isSeparator(char c) { return c == ',' || text::isBlank(c); }
+inline bool isSeparator(char c) {
+  return c == ',' || text::isBlank(c);
+}
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && text::isBlank(s.front())) s.remove_prefix(1);
   while (!s.empty() && text::isBlank(s.back())) s.remove_suffix(1);
   return s;
-}
-
-std::string quote(std::string_view s) {
-  std::string q = "'";
-  for (size_t i = 0; i < s.size() && i < 40; ++i)
-    q += (s[i] >= 0x20 && s[i] < 0x7f) ? s[i] : '?';
-  if (s.size() > 40) q += "...";
-  return q + "'";
 }
 
 std::vector<std::string_view> tokens(std::string_view line) {
@@ -55,10 +49,10 @@ enum class Col : uint8_t { Skip, X, Y, Z, Rgb8, Rgb16, Intensity, Normal, Classi
 
 struct Column {
   Col kind = Col::Skip;
-  uint8_t comp = 0;   // x/y/z, r/g/b, nx/ny/nz
-  uint32_t dst = 0;   // byte offset in the point's attributes
-  std::string name;   // as given, for messages
-  double max = 0;     // integer columns: the largest value kept
+  uint8_t comp = 0;  // x/y/z, r/g/b, nx/ny/nz
+  uint32_t dst = 0;  // byte offset in the point's attributes
+  std::string name;  // as given, for messages
+  double max = 0;    // integer columns: the largest value kept
   uint64_t clamped = 0;
 };
 
@@ -90,7 +84,7 @@ class XyzReader final : public PointReader {
     if (have) {
       auto t = tokens(text);
       if (!t.empty() && !isNumber(t[0])) {
-        details["headerLine"] = std::string(trim(text));
+        details["headerLine"] = text::validUtf8(trim(text));
         have = nextLine(d, pos, line, text);
       }
     }
@@ -102,7 +96,7 @@ class XyzReader final : public PointReader {
       std::string_view spec = options_.columns;
       while (true) {
         size_t comma = spec.find(',');
-        names.emplace_back(trim(spec.substr(0, comma)));
+        names.push_back(text::validUtf8(trim(spec.substr(0, comma))));
         if (comma == std::string_view::npos) break;
         spec.remove_prefix(comma + 1);
       }
@@ -137,8 +131,8 @@ class XyzReader final : public PointReader {
     auto w = warnings_;
     for (const auto& c : columns_)
       if (c.clamped > 0)
-        w.push_back(src_->name() + ": " + std::to_string(c.clamped) + " values of column '" +
-                    c.name + "' were outside 0.." + std::to_string(uint64_t(c.max)) +
+        w.push_back(std::to_string(c.clamped) + " values of column '" + c.name +
+                    "' were outside 0.." + std::to_string(uint64_t(c.max)) +
                     " (or not numbers) and were clamped");
     return w;
   }
@@ -154,8 +148,11 @@ class XyzReader final : public PointReader {
   }
 
   bool read(PointBatch& batch, size_t maxPoints) override {
-    batch.clear();
-    if (ended_) return false;
+    // Resized rather than cleared, so that a reused batch is not zero-filled again.
+    if (ended_) {
+      batch.clear();
+      return false;
+    }
     const char* d = reinterpret_cast<const char*>(src_->data());
     const size_t stride = header_.layout.stride();
     // A point takes at least a digit and a separator per column: a header that claims more, or
@@ -214,8 +211,12 @@ class XyzReader final : public PointReader {
     std::vector<std::string> names;
     int rgbAt = -1;
     switch (t.size()) {
-      case 3: names = {"x", "y", "z"}; break;
-      case 4: names = {"x", "y", "z", "i"}; break;
+      case 3:
+        names = {"x", "y", "z"};
+        break;
+      case 4:
+        names = {"x", "y", "z", "i"};
+        break;
       case 6:
         names = {"x", "y", "z", "r", "g", "b"};
         rgbAt = 3;
@@ -246,7 +247,7 @@ class XyzReader final : public PointReader {
             v != std::floor(v))
           throw Error(src_->name(), Error::atLine(line),
                       "guessed column " + std::to_string(rgbAt + c + 1) +
-                          " to be a 0-255 colour, but it holds " + quote(s) +
+                          " to be a 0-255 colour, but it holds " + text::quote(s) +
                           "; name the columns with --columns (e.g. x,y,z,nx,ny,nz)");
       }
     return names;
@@ -282,7 +283,10 @@ class XyzReader final : public PointReader {
         group(Col::Rgb8, attr::kRgb, ScalarType::U16, name == "r" ? 0 : name == "g" ? 1 : 2, 255);
       } else if (name == "R" || name == "G" || name == "B") {
         ++rgb16;
-        group(Col::Rgb16, attr::kRgb, ScalarType::U16, name == "R" ? 0 : name == "G" ? 1 : 2,
+        group(Col::Rgb16, attr::kRgb, ScalarType::U16,
+              name == "R"   ? 0
+              : name == "G" ? 1
+                            : 2,
               65535);
       } else if (name == "nx" || name == "ny" || name == "nz") {
         ++normals;
@@ -351,20 +355,28 @@ class XyzReader final : public PointReader {
       }
       double v;
       int64_t iv;
-      if (c.kind != Col::X && c.kind != Col::Y && c.kind != Col::Z &&
-          text::parseInteger(tb, p, iv))
+      if (c.kind != Col::X && c.kind != Col::Y && c.kind != Col::Z && text::parseInteger(tb, p, iv))
         v = double(iv);
       else if (!text::parseDouble(tb, p, v))
         badNumber(tb, p, j);
       switch (c.kind) {
         case Col::X:
         case Col::Y:
-        case Col::Z: xyz[c.comp] = v; break;
-        case Col::Rgb8: storeClamped<uint16_t>(c, v, 257, attrs + c.dst); break;
+        case Col::Z:
+          xyz[c.comp] = v;
+          break;
+        case Col::Rgb8:
+          storeClamped<uint16_t>(c, v, 257, attrs + c.dst);
+          break;
         case Col::Rgb16:
-        case Col::Intensity: storeClamped<uint16_t>(c, v, 1, attrs + c.dst); break;
-        case Col::Classification: storeClamped<uint8_t>(c, v, 1, attrs + c.dst); break;
-        default: break;
+        case Col::Intensity:
+          storeClamped<uint16_t>(c, v, 1, attrs + c.dst);
+          break;
+        case Col::Classification:
+          storeClamped<uint8_t>(c, v, 1, attrs + c.dst);
+          break;
+        default:
+          break;
       }
     }
     while (p < e && isSeparator(*p)) ++p;
@@ -380,9 +392,11 @@ class XyzReader final : public PointReader {
     std::string_view more;
     const bool last = !nextLine(reinterpret_cast<const char*>(src_->data()), after, line, more);
     if (last && found < columns_.size() && options_.lenient) {
-      warnings_.push_back(src_->name() + ": " + Error::atLine(line_) + ": dropped the incomplete "
-                          "last line (" + std::to_string(found) + " of " +
-                          std::to_string(columns_.size()) + " values)");
+      warnings_.push_back(Error::atLine(line_) +
+                          ": dropped the incomplete "
+                          "last line (" +
+                          std::to_string(found) + " of " + std::to_string(columns_.size()) +
+                          " values)");
       return false;
     }
     throw Error(src_->name(), Error::atLine(line_),
@@ -393,7 +407,7 @@ class XyzReader final : public PointReader {
 
   [[noreturn]] void badNumber(const char* b, const char* e, size_t column) const {
     throw Error(src_->name(), Error::atLine(line_),
-                "cannot read " + quote(std::string_view(b, size_t(e - b))) +
+                "cannot read " + text::quote(std::string_view(b, size_t(e - b))) +
                     " as a number (column " + std::to_string(column + 1) + ", '" +
                     columns_[column].name + "')");
   }
@@ -402,12 +416,12 @@ class XyzReader final : public PointReader {
   void atEnd() {
     if (!header_.declaredPoints || *header_.declaredPoints == points_) return;
     const std::string msg = "line " + std::to_string(countLine_) + " declares " +
-                            std::to_string(*header_.declaredPoints) + " points but the file holds " +
-                            std::to_string(points_);
+                            std::to_string(*header_.declaredPoints) +
+                            " points but the file holds " + std::to_string(points_);
     if (!options_.lenient)
       throw Error(src_->name(), Error::atLine(line_),
                   msg + " (lenient mode keeps the points that are there)");
-    warnings_.push_back(src_->name() + ": " + msg);
+    warnings_.push_back(msg);
   }
 
   std::shared_ptr<ByteSource> src_;

@@ -123,20 +123,66 @@ std::vector<Column> columnsOf(const PointLayout& layout, const uint8_t* pos, con
   return cols;
 }
 
+// Column modes, chosen per node and column by the encoder.
+enum ColumnMode : uint8_t {
+  kPlanes = 0,    // delta/zig-zag (integers) or bits (floats), w byte planes
+  kRepeated = 1,  // 16-bit values whose two bytes are equal (8-bit colour stored as v * 257):
+                  // one byte plane of the low bytes' deltas
+  kConstant = 2,  // every value the same: the value once
+};
+
+template <typename U>
+U loadU(const Column& c, size_t i) {
+  U v;
+  std::memcpy(&v, c.base + i * c.stride, sizeof(U));
+  return v;
+}
+
+uint8_t chooseMode(const Column& c, size_t n) {
+  bool constant = true, repeated = c.width == 2 && c.delta;
+  for (size_t i = 0; i < n && (constant || repeated); ++i) {
+    if (constant && std::memcmp(c.base + i * c.stride, c.base, c.width) != 0) constant = false;
+    if (repeated) {
+      uint16_t v = loadU<uint16_t>(c, i);
+      repeated = (v >> 8) == (v & 0xff);
+    }
+  }
+  return constant ? kConstant : (repeated ? kRepeated : kPlanes);
+}
+
+size_t modeBytes(uint8_t mode, size_t width, size_t n) {
+  return mode == kConstant ? width : (mode == kRepeated ? n : width * n);
+}
+
 std::vector<uint8_t> encodeZstd(const PointLayout& layout, const PointBuffer& p) {
   const size_t n = p.size();
-  const size_t rawSize = n * (12 + p.stride);
+  const auto cols =
+      columnsOf(layout, reinterpret_cast<const uint8_t*>(p.pos.data()), p.attrs.data(), p.stride);
+  std::vector<uint8_t> modes(cols.size());
+  size_t rawSize = cols.size();
+  for (size_t i = 0; i < cols.size(); ++i) {
+    modes[i] = chooseMode(cols[i], n);
+    rawSize += modeBytes(modes[i], cols[i].width, n);
+  }
   std::vector<uint8_t> streams(rawSize);
-  size_t at = 0;
-  for (const Column& c : columnsOf(layout, reinterpret_cast<const uint8_t*>(p.pos.data()),
-                                   p.attrs.data(), p.stride)) {
-    switch (c.width) {
-      case 1: shuffleColumn<uint8_t>(c, n, &streams[at]); break;
-      case 2: shuffleColumn<uint16_t>(c, n, &streams[at]); break;
-      case 4: shuffleColumn<uint32_t>(c, n, &streams[at]); break;
-      default: shuffleColumn<uint64_t>(c, n, &streams[at]); break;
+  std::memcpy(streams.data(), modes.data(), modes.size());
+  size_t at = modes.size();
+  for (size_t ci = 0; ci < cols.size(); ++ci) {
+    const Column& c = cols[ci];
+    if (modes[ci] == kConstant) {
+      std::memcpy(&streams[at], c.base, c.width);
+    } else if (modes[ci] == kRepeated) {
+      Column low{c.base, c.stride, 1, true};
+      shuffleColumn<uint8_t>(low, n, &streams[at]);
+    } else {
+      switch (c.width) {
+        case 1: shuffleColumn<uint8_t>(c, n, &streams[at]); break;
+        case 2: shuffleColumn<uint16_t>(c, n, &streams[at]); break;
+        case 4: shuffleColumn<uint32_t>(c, n, &streams[at]); break;
+        default: shuffleColumn<uint64_t>(c, n, &streams[at]); break;
+      }
     }
-    at += c.width * n;
+    at += modeBytes(modes[ci], c.width, n);
   }
   std::vector<uint8_t> out(12 + ZSTD_compressBound(rawSize));
   uint32_t hdr[3] = {kZstdMagic, static_cast<uint32_t>(n), static_cast<uint32_t>(rawSize)};
@@ -153,9 +199,18 @@ std::string decodeZstd(const PointLayout& layout, const uint8_t* data, size_t si
   uint32_t hdr[3];
   std::memcpy(hdr, data, 12);
   if (hdr[0] != kZstdMagic) return "zstd payload has a bad magic number";
-  if (hdr[1] != count) return "zstd payload holds " + std::to_string(hdr[1]) + " points, hierarchy says " + std::to_string(count);
-  const size_t rawSize = count * (12 + out.stride);
-  if (hdr[2] != rawSize) return "zstd payload's stream size does not match the layout";
+  if (hdr[1] != count)
+    return "zstd payload holds " + std::to_string(hdr[1]) + " points, hierarchy says " +
+           std::to_string(count);
+  // The streams can be no larger than uncompressed columns plus the mode bytes.
+  const size_t ncols = 3 + [&] {
+    size_t k = 0;
+    for (const auto& a : layout.attributes()) k += a.components;
+    return k;
+  }();
+  const size_t rawSize = hdr[2];
+  if (rawSize > ncols + count * (12 + out.stride) || rawSize < ncols)
+    return "zstd payload's stream size does not match the layout";
   unsigned long long frame = ZSTD_getFrameContentSize(data + 12, size - 12);
   if (frame == ZSTD_CONTENTSIZE_ERROR || frame == ZSTD_CONTENTSIZE_UNKNOWN || frame != rawSize)
     return "zstd frame is damaged or of the wrong size";
@@ -164,18 +219,33 @@ std::string decodeZstd(const PointLayout& layout, const uint8_t* data, size_t si
   if (ZSTD_isError(got) || got != rawSize) return "zstd frame does not decompress";
   out.pos.resize(count * 3);
   out.attrs.resize(count * out.stride);
-  size_t at = 0;
-  for (const Column& c : columnsOf(layout, reinterpret_cast<const uint8_t*>(out.pos.data()),
-                                   out.attrs.data(), out.stride)) {
+  const auto cols = columnsOf(layout, reinterpret_cast<const uint8_t*>(out.pos.data()),
+                              out.attrs.data(), out.stride);
+  size_t at = cols.size();
+  for (size_t ci = 0; ci < cols.size(); ++ci) {
+    const Column& c = cols[ci];
+    const uint8_t mode = streams[ci];
+    if (mode > kConstant || (mode == kRepeated && !(c.width == 2 && c.delta)))
+      return "zstd payload has an unknown column mode";
+    const size_t need = modeBytes(mode, c.width, count);
+    if (at + need > rawSize) return "zstd payload's columns overrun its streams";
     uint8_t* base = const_cast<uint8_t*>(c.base);
-    switch (c.width) {
-      case 1: unshuffleColumn<uint8_t>(&streams[at], count, base, c.stride, c.delta); break;
-      case 2: unshuffleColumn<uint16_t>(&streams[at], count, base, c.stride, c.delta); break;
-      case 4: unshuffleColumn<uint32_t>(&streams[at], count, base, c.stride, c.delta); break;
-      default: unshuffleColumn<uint64_t>(&streams[at], count, base, c.stride, c.delta); break;
+    if (mode == kConstant) {
+      for (size_t i = 0; i < count; ++i) std::memcpy(base + i * c.stride, &streams[at], c.width);
+    } else if (mode == kRepeated) {
+      unshuffleColumn<uint8_t>(&streams[at], count, base, c.stride, true);
+      for (size_t i = 0; i < count; ++i) base[i * c.stride + 1] = base[i * c.stride];
+    } else {
+      switch (c.width) {
+        case 1: unshuffleColumn<uint8_t>(&streams[at], count, base, c.stride, c.delta); break;
+        case 2: unshuffleColumn<uint16_t>(&streams[at], count, base, c.stride, c.delta); break;
+        case 4: unshuffleColumn<uint32_t>(&streams[at], count, base, c.stride, c.delta); break;
+        default: unshuffleColumn<uint64_t>(&streams[at], count, base, c.stride, c.delta); break;
+      }
     }
-    at += c.width * count;
+    at += need;
   }
+  if (at != rawSize) return "zstd payload's streams are longer than its columns";
   return {};
 }
 

@@ -59,7 +59,8 @@ T attrAt(const Points& p, const PointReader& r, size_t point, std::string_view n
   if (idx < 0) return T();
   EXPECT_EQ(scalarSize(l[size_t(idx)].type), sizeof(T)) << name;
   T v;
-  std::memcpy(&v, p.attrs.data() + point * l.stride() + l.offset(size_t(idx)) + component * sizeof(T),
+  std::memcpy(&v,
+              p.attrs.data() + point * l.stride() + l.offset(size_t(idx)) + component * sizeof(T),
               sizeof(T));
   return v;
 }
@@ -130,10 +131,10 @@ TEST(PlyReader, AsciiValuesColourAndUnknownProperties) {
 }
 
 std::string binaryFloatRgb(uint64_t declared, int records, bool withTail = false) {
-  std::string s =
-      "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(declared) +
-      "\nproperty float x\nproperty float y\nproperty float z\n"
-      "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+  std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex " +
+                  std::to_string(declared) +
+                  "\nproperty float x\nproperty float y\nproperty float z\n"
+                  "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
   for (int i = 0; i < records; ++i) {
     put(s, float(i) + 0.5f);
     put(s, float(-i));
@@ -274,7 +275,8 @@ TEST(PlyReader, EveryScalarTypeKeptWithItsName) {
 
 // A mesh whose faces come first: the vertices are found only by walking every face's list.
 std::string facesFirst(bool big) {
-  std::string s = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+  std::string s = std::string("ply\nformat ") +
+                  (big ? "binary_big_endian" : "binary_little_endian") +
                   " 1.0\n"
                   "element face 3\n"
                   "property list uchar int vertex_indices\n"
@@ -497,7 +499,7 @@ TEST(PlyReader, BadAsciiNumberNamesLineAndToken) {
 
   // 256 is no uchar; a missing value and an extra one are errors too.
   for (const char* line : {"1 2 3 256 0 0\n1 2 3 4 5 6\n", "1 2 3 4 5\n1 2 3 4 5 6\n",
-                                  "1 2 3 4 5 6 7\n1 2 3 4 5 6\n"}) {
+                           "1 2 3 4 5 6 7\n1 2 3 4 5 6\n"}) {
     std::string bad = ply.substr(0, ply.find("end_header\n") + 11) + line + "1 2 3 4 5 6\n";
     Error b = errorOf([&] { readAll(*openPly(source(bad))); });
     EXPECT_EQ(b.position(), "line 11") << b.what();
@@ -544,7 +546,8 @@ TEST(PlyReader, ColourNormalIntensityAndAlphaMapping) {
 TEST(PlyReader, CrsFromComment) {
   const std::string tail =
       "element vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
-  auto a = openPly(source("ply\nformat ascii 1.0\ncomment crs: PROJCS[\"CH1903+ / LV95\"]\n" + tail));
+  auto a =
+      openPly(source("ply\nformat ascii 1.0\ncomment crs: PROJCS[\"CH1903+ / LV95\"]\n" + tail));
   EXPECT_EQ(a->header().crs["wkt"], "PROJCS[\"CH1903+ / LV95\"]");
   auto b = openPly(source("ply\nformat ascii 1.0\ncomment srs EPSG:2056\n" + tail));
   EXPECT_EQ(b->header().crs["epsg"], 2056);
@@ -688,7 +691,8 @@ TEST(PlyReader, RealLionWithNormals) {
   Box3d box;
   for (size_t i = 0; i < p.size(); ++i) {
     box.extend(p.xyz[3 * i], p.xyz[3 * i + 1], p.xyz[3 * i + 2]);
-    const float nx = attrAt<float>(p, *r, i, "normal", 0), ny = attrAt<float>(p, *r, i, "normal", 1),
+    const float nx = attrAt<float>(p, *r, i, "normal", 0),
+                ny = attrAt<float>(p, *r, i, "normal", 1),
                 nz = attrAt<float>(p, *r, i, "normal", 2);
     if (std::fabs(std::sqrt(nx * nx + ny * ny + nz * nz) - 1.0f) > 1e-2f) ++notUnit;
     for (int c = 0; c < 3; ++c)
@@ -720,10 +724,30 @@ TEST(PlyReader, RealBunnyAscii) {
   EXPECT_EQ(attrAt<float>(p, *r, 0, "confidence"), 0.850855f);
   EXPECT_EQ(attrAt<float>(p, *r, 0, "intensity"), 0.5f);
   Box3d box;
-  for (size_t i = 0; i < p.size(); ++i) box.extend(p.xyz[3 * i], p.xyz[3 * i + 1], p.xyz[3 * i + 2]);
+  for (size_t i = 0; i < p.size(); ++i)
+    box.extend(p.xyz[3 * i], p.xyz[3 * i + 1], p.xyz[3 * i + 2]);
   EXPECT_TRUE(box.contains(0, 0.1, 0));
-  EXPECT_LT(box.max.x - box.min.x, 0.2);  // a bunny about 15 cm long
+  EXPECT_LT(box.max.x - box.min.x, 0.2);                   // a bunny about 15 cm long
   EXPECT_TRUE(r->warnings().empty()) << r->warnings()[0];  // the 69,451 faces are all there
+}
+
+// Real data: a binary mesh with colour, alpha and normals, whose faces follow the vertices.
+TEST(PlyReader, RealGargoyleBinaryWithFacesAfter) {
+  NL_REQUIRE_SHARED("meshes/gargoyle.ply");
+  auto r = openReader((test::sharedData() / "meshes/gargoyle.ply").string());
+  const SourceHeader& h = r->header();
+  EXPECT_EQ(h.declaredPoints, 25002u);
+  EXPECT_EQ(h.rgbBits, 8);
+  ASSERT_EQ(h.layout.size(), 3u);
+  EXPECT_EQ(h.layout[0], (Attribute{"normal", ScalarType::F32, 3, ""}));
+  EXPECT_EQ(h.layout[1], (Attribute{"rgb", ScalarType::U16, 3, ""}));
+  EXPECT_EQ(h.layout[2], (Attribute{"alpha", ScalarType::U8, 1, ""}));
+  EXPECT_EQ(h.details["elements"][1]["name"], "face");
+  EXPECT_EQ(h.details["elements"][1]["count"], 50000);
+  Points p = readAll(*r, 4096);
+  EXPECT_EQ(p.size(), 25002u);
+  // Walking the 50,000 faces after the vertices ends exactly at the end of the file.
+  EXPECT_TRUE(r->warnings().empty()) << r->warnings()[0];
 }
 
 }  // namespace

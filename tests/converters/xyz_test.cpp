@@ -47,7 +47,8 @@ T attrAt(const Points& p, const PointReader& r, size_t point, std::string_view n
   if (idx < 0) return T();
   EXPECT_EQ(scalarSize(l[size_t(idx)].type), sizeof(T)) << name;
   T v;
-  std::memcpy(&v, p.attrs.data() + point * l.stride() + l.offset(size_t(idx)) + component * sizeof(T),
+  std::memcpy(&v,
+              p.attrs.data() + point * l.stride() + l.offset(size_t(idx)) + component * sizeof(T),
               sizeof(T));
   return v;
 }
@@ -127,9 +128,10 @@ TEST(XyzReader, UnguessableColumnsAskForThem) {
 }
 
 TEST(XyzReader, ExplicitColumns) {
-  auto r = open("10 20 30 skipped 7 65535 0 1000 2 0.5\n"
-                "-1 -2 -3 x 8 1 2 3 255 -0.25\n",
-                "x,y,z,_,intensity,R,G,B,classification,reflectance");
+  auto r = open(
+      "10 20 30 skipped 7 65535 0 1000 2 0.5\n"
+      "-1 -2 -3 x 8 1 2 3 255 -0.25\n",
+      "x,y,z,_,intensity,R,G,B,classification,reflectance");
   const PointLayout& l = r->header().layout;
   EXPECT_EQ(names(l),
             (std::vector<std::string>{"intensity", "rgb", "classification", "reflectance"}));
@@ -161,8 +163,8 @@ TEST(XyzReader, ExplicitColumns) {
 }
 
 TEST(XyzReader, BadColumnSpecs) {
-  for (const char* spec : {"x,y", "x,y,z,x", "x,y,z,r,g", "x,y,z,r,G,B", "x,y,z,nx,ny",
-                           "x,y,z,,i", "x,y,z,rgb", "x,y,z,i,intensity", "x,y,z,r,r,g"}) {
+  for (const char* spec : {"x,y", "x,y,z,x", "x,y,z,r,g", "x,y,z,r,G,B", "x,y,z,nx,ny", "x,y,z,,i",
+                           "x,y,z,rgb", "x,y,z,i,intensity", "x,y,z,r,r,g"}) {
     Error e = errorOf([&] { open("1 2 3 4 5 6\n", spec); });
     EXPECT_EQ(e.file(), "scan.xyz");
     EXPECT_NE(e.reason().find(spec), std::string::npos) << e.what();
@@ -319,8 +321,8 @@ TEST(XyzReader, OpenReaderByExtension) {
 TEST(XyzReader, ManyPointsInBatches) {
   std::string text;
   for (int i = 0; i < 10000; ++i)
-    text += std::to_string(i) + " " + std::to_string(-i - 1) + ".5 " + std::to_string(i % 7) + "e2 " +
-            std::to_string(i % 256) + " 0 255\n";
+    text += std::to_string(i) + " " + std::to_string(-i - 1) + ".5 " + std::to_string(i % 7) +
+            "e2 " + std::to_string(i % 256) + " 0 255\n";
   auto r = open(text);
   Points p = readAll(*r, 333);
   ASSERT_EQ(p.size(), 10000u);
