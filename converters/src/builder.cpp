@@ -707,7 +707,12 @@ class Builder {
     const uint32_t bits = cubeBits() - key.level;
     const uint32_t shift = bits > 21 ? bits - 21 : 0;
     const uint32_t m = mask(bits);
-    std::vector<std::pair<uint64_t, uint32_t>> keys(n), tmp(n);
+    // Uninitialised on purpose: every slot is written before it is read.
+    struct KeyIdx {
+      uint64_t first;
+      uint32_t second;
+    };
+    std::unique_ptr<KeyIdx[]> keys(new KeyIdx[n]), tmp(new KeyIdx[n]);
     tbb::parallel_for(size_t(0), n, [&](size_t i) {
       const uint32_t* p = &pts.pos[3 * i];
       keys[i] = {mortonEncode21((p[0] & m) >> shift, (p[1] & m) >> shift, (p[2] & m) >> shift),
@@ -718,18 +723,18 @@ class Builder {
     std::vector<uint32_t> hist(size_t(1) << kDigit);
     for (uint32_t s0 = 0; s0 < keyBits; s0 += kDigit) {
       std::fill(hist.begin(), hist.end(), 0);
-      for (const auto& k : keys) hist[(k.first >> s0) & ((1u << kDigit) - 1)]++;
+      for (size_t i = 0; i < n; ++i) hist[(keys[i].first >> s0) & ((1u << kDigit) - 1)]++;
       uint32_t sum = 0;
       for (auto& h : hist) {
         uint32_t c = h;
         h = sum;
         sum += c;
       }
-      for (const auto& k : keys) tmp[hist[(k.first >> s0) & ((1u << kDigit) - 1)]++] = k;
+      for (size_t i = 0; i < n; ++i) tmp[hist[(keys[i].first >> s0) & ((1u << kDigit) - 1)]++] = keys[i];
       keys.swap(tmp);
     }
-    std::vector<std::pair<uint64_t, uint32_t>>().swap(tmp);
-    auto exactLess = [&](const std::pair<uint64_t, uint32_t>& a, const std::pair<uint64_t, uint32_t>& b) {
+    tmp.reset();
+    auto exactLess = [&](const KeyIdx& a, const KeyIdx& b) {
       const uint32_t* p = &pts.pos[3 * size_t(a.second)];
       const uint32_t* q = &pts.pos[3 * size_t(b.second)];
       if (p[0] != q[0] || p[1] != q[1] || p[2] != q[2]) return mortonLess(p, q);
@@ -738,7 +743,7 @@ class Builder {
     for (size_t i = 0; i < n;) {
       size_t j = i + 1;
       while (j < n && keys[j].first == keys[i].first) ++j;
-      if (j - i > 1) std::sort(keys.begin() + i, keys.begin() + j, exactLess);
+      if (j - i > 1) std::sort(keys.get() + i, keys.get() + j, exactLess);
       i = j;
     }
     PointBuffer sorted(stride_);
