@@ -264,7 +264,7 @@ class Builder {
           for (size_t k = 0, n = batch.size(); k < n; ++k, p += 3)
             if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))
               bounds.extend(p[0], p[1], p[2]);
-          progress_.advance(r.bytesConsumed() - before);
+          progress_.advance(r.bytesConsumed() - before, batch.size());
           before = r.bytesConsumed();
         }
       }
@@ -326,7 +326,8 @@ class Builder {
                                           if (r.read(item->batch, kBatchPoints)) {
                                             item->source = current;
                                             item->points = item->batch.size();
-                                            progress_.advance(r.bytesConsumed() - consumedBefore);
+                                            progress_.advance(r.bytesConsumed() - consumedBefore,
+                                                              item->points);
                                             consumedBefore = r.bytesConsumed();
                                             return item.release();
                                           }

@@ -15,8 +15,9 @@ class Progress {
   explicit Progress(ProgressMode mode = ProgressMode::Auto);
   // Starts a phase whose work is `total` units of `unit` ("points", "bytes", "nodes").
   void begin(const std::string& phase, uint64_t total, const std::string& unit);
-  // Thread-safe; prints at most a few times a second.
-  void advance(uint64_t units);
+  // Thread-safe; prints at most a few times a second. `points` counts points handled, for the
+  // points/s rate of phases measured in bytes.
+  void advance(uint64_t units, uint64_t points = 0);
   void end();
   // A line outside the progress display (warnings).
   void message(const std::string& text);
@@ -26,7 +27,7 @@ class Progress {
   ProgressMode mode_;
   std::mutex mutex_;
   std::string phase_, unit_;
-  uint64_t total_ = 0, done_ = 0;
+  uint64_t total_ = 0, done_ = 0, points_ = 0;
   std::chrono::steady_clock::time_point start_, last_;
   bool open_ = false;
 };
