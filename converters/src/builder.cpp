@@ -530,8 +530,9 @@ class Builder {
               it.box.extend(p[0], p[1], p[2]);
               uint8_t* r = &recs[kept * rec];
               std::memcpy(r, q, 12);
-              if (s.identity)
-                std::memcpy(r + 12, it.batch.attrs.data() + k * srcStride, stride_);
+              if (s.identity) {
+                if (stride_) std::memcpy(r + 12, it.batch.attrs.data() + k * srcStride, stride_);
+              }
               else
                 mapAttributes(s, h.layout, it.batch.attrs.data() + k * srcStride, r + 12);
               chunkOf[kept] = static_cast<uint32_t>(cellChunk_[gridCell(q)]);
@@ -739,7 +740,7 @@ class Builder {
       const uint32_t* p = &pts.pos[3 * size_t(a.second)];
       const uint32_t* q = &pts.pos[3 * size_t(b.second)];
       if (p[0] != q[0] || p[1] != q[1] || p[2] != q[2]) return mortonLess(p, q);
-      return std::memcmp(pts.attrsOf(a.second), pts.attrsOf(b.second), stride_) < 0;
+      return stride_ && std::memcmp(pts.attrsOf(a.second), pts.attrsOf(b.second), stride_) < 0;
     };
     for (size_t i = 0; i < n;) {
       size_t j = i + 1;
@@ -768,7 +769,7 @@ class Builder {
       const uint32_t* p = &pts.pos[3 * i];
       const uint32_t* q = &pts.pos[3 * (w - 1)];
       if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2] &&
-          std::memcmp(pts.attrsOf(i), pts.attrsOf(w - 1), stride_) == 0)
+          (stride_ == 0 || std::memcmp(pts.attrsOf(i), pts.attrsOf(w - 1), stride_) == 0))
         continue;
       if (w != i) {
         std::memcpy(&pts.pos[3 * w], p, 12);
