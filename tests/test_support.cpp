@@ -53,4 +53,22 @@ std::string readFile(const std::string& path) {
   return ss.str();
 }
 
+Points readAll(PointReader& r, size_t batchSize) {
+  Points p;
+  PointBatch b;
+  while (r.read(b, batchSize)) {
+    EXPECT_GT(b.size(), 0u);
+    EXPECT_EQ(b.attrs.size(), b.size() * r.header().layout.stride());
+    p.xyz.insert(p.xyz.end(), b.xyz.begin(), b.xyz.end());
+    p.attrs.insert(p.attrs.end(), b.attrs.begin(), b.attrs.end());
+  }
+  return p;
+}
+
+bool anyContains(const std::vector<std::string>& v, const std::string& s) {
+  for (auto& x : v)
+    if (x.find(s) != std::string::npos) return true;
+  return false;
+}
+
 }  // namespace nestlight::test

@@ -1,10 +1,17 @@
-// Shared helpers for the unit tests: temporary folders, the shared data folder, running the CLI.
+// Shared helpers for the unit tests: temporary folders, the shared data folder, running the CLI,
+// reading every point of a reader, and catching the nestlight::Error a call throws.
 #pragma once
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <string>
+#include <string_view>
+#include <vector>
+
+#include "nestlight/converters/reader.h"
+#include "nestlight/octree/error.h"
 
 namespace nestlight::test {
 
@@ -28,6 +35,49 @@ int runCli(const std::string& args, std::string* output = nullptr);
 
 void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);
+
+// Every point a reader gave, its batches concatenated.
+struct Points {
+  std::vector<double> xyz;
+  std::vector<uint8_t> attrs;
+  size_t size() const { return xyz.size() / 3; }
+};
+
+// Reads `r` to its end in batches of up to `batchSize`, checking that each batch is non-empty and
+// holds the layout's stride of attribute bytes per point.
+Points readAll(PointReader& r, size_t batchSize = 1000);
+
+// Component `component` of attribute `name` of point `point` of `p`, read from `r`'s layout;
+// fails the test (and gives T()) when the attribute is absent or not of T's size.
+template <typename T>
+T attrAt(const Points& p, const PointReader& r, size_t point, std::string_view name,
+         int component = 0) {
+  const PointLayout& l = r.header().layout;
+  const int idx = l.find(name);
+  EXPECT_GE(idx, 0) << "no attribute " << name;
+  if (idx < 0) return T();
+  EXPECT_EQ(scalarSize(l[size_t(idx)].type), sizeof(T)) << name;
+  T v;
+  std::memcpy(&v,
+              p.attrs.data() + point * l.stride() + l.offset(size_t(idx)) + component * sizeof(T),
+              sizeof(T));
+  return v;
+}
+
+// Runs `f` and returns the nestlight::Error it throws (failing the test if it throws none).
+template <typename F>
+Error errorOf(F f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no nestlight::Error thrown";
+  return Error("none");
+}
+
+// Whether any string of `v` contains `s`.
+bool anyContains(const std::vector<std::string>& v, const std::string& s);
 
 }  // namespace nestlight::test
 

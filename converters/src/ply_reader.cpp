@@ -108,15 +108,12 @@ std::string_view trim(std::string_view s) {
 
 // The next line that holds a non-blank character; `line` counts every line passed.
 bool nextDataLine(const char* d, size_t size, size_t& pos, uint64_t& line, std::string_view& out) {
-  while (pos < size) {
-    const char* b = d + pos;
-    const char* nl = static_cast<const char*>(std::memchr(b, '\n', size - pos));
-    size_t len = nl ? size_t(nl - b) : size - pos;
-    pos += nl ? len + 1 : len;
+  std::string_view l;
+  while (text::takeLine(d, size, pos, l)) {
     ++line;
-    for (size_t i = 0; i < len; ++i)
-      if (!text::isBlank(b[i])) {
-        out = std::string_view(b, len);
+    for (char c : l)
+      if (!text::isBlank(c)) {
+        out = l;
         return true;
       }
   }
@@ -134,13 +131,8 @@ PlyHeader parseHeader(const ByteSource& src) {
   uint64_t line = 0;
   std::string_view text;
   auto nextLine = [&]() {
-    if (pos >= size) return false;
-    const char* b = d + pos;
-    const char* nl = static_cast<const char*>(std::memchr(b, '\n', size - pos));
-    size_t len = nl ? size_t(nl - b) : size - pos;
-    pos += nl ? len + 1 : len;
+    if (!text::takeLine(d, size, pos, text)) return false;
     ++line;
-    text = std::string_view(b, len);
     if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
     return true;
   };

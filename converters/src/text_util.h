@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -19,14 +20,37 @@ inline bool isBlank(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
 }
 
+// The line of [d, d + size) that starts at `pos`, without its '\n', into `out`; moves `pos` to the
+// next line. False when `pos` is at the end.
+inline bool takeLine(const char* d, size_t size, size_t& pos, std::string_view& out) {
+  if (pos >= size) return false;
+  const char* b = d + pos;
+  const char* nl = static_cast<const char*>(std::memchr(b, '\n', size - pos));
+  const size_t len = nl ? size_t(nl - b) : size - pos;
+  pos += nl ? len + 1 : len;
+  out = std::string_view(b, len);
+  return true;
+}
+
+// What fromChars made of a token.
+enum class Parsed { Ok, Malformed, OutOfRange };
+
+// std::from_chars over all of [b, e) after an optional leading '+', which it moves `b` past.
+// OutOfRange: a well-formed token beyond T's range.
+template <typename T>
+inline Parsed fromChars(const char*& b, const char* e, T& v) {
+  if (b != e && *b == '+') ++b;
+  if (b == e) return Parsed::Malformed;
+  auto r = std::from_chars(b, e, v);
+  if (r.ptr != e) return Parsed::Malformed;
+  if (r.ec == std::errc()) return Parsed::Ok;
+  return r.ec == std::errc::result_out_of_range ? Parsed::OutOfRange : Parsed::Malformed;
+}
+
 // All of [b, e) as a double: "nan", "inf" and "infinity" (any case) included.
 inline bool parseDouble(const char* b, const char* e, double& v) {
-  if (b != e && *b == '+') ++b;
-  if (b == e) return false;
-  auto r = std::from_chars(b, e, v);
-  if (r.ptr != e) return false;
-  if (r.ec == std::errc()) return true;
-  if (r.ec != std::errc::result_out_of_range) return false;
+  const Parsed p = fromChars(b, e, v);
+  if (p != Parsed::OutOfRange) return p == Parsed::Ok;
   // Rare: an overflow or underflow, which strtod resolves to ±inf or a (signed) zero. The token
   // is known to be a well-formed number here, so strtod reads all of it.
   std::string s(b, e);
@@ -35,12 +59,8 @@ inline bool parseDouble(const char* b, const char* e, double& v) {
 }
 
 inline bool parseFloat(const char* b, const char* e, float& v) {
-  if (b != e && *b == '+') ++b;
-  if (b == e) return false;
-  auto r = std::from_chars(b, e, v);
-  if (r.ptr != e) return false;
-  if (r.ec == std::errc()) return true;
-  if (r.ec != std::errc::result_out_of_range) return false;
+  const Parsed p = fromChars(b, e, v);
+  if (p != Parsed::OutOfRange) return p == Parsed::Ok;
   double d;
   if (!parseDouble(b, e, d)) return false;
   constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -52,10 +72,7 @@ inline bool parseFloat(const char* b, const char* e, float& v) {
 // An integer token: optional sign, decimal digits, nothing else; false on overflow.
 template <typename T>
 inline bool parseInteger(const char* b, const char* e, T& v) {
-  if (b != e && *b == '+') ++b;
-  if (b == e) return false;
-  auto r = std::from_chars(b, e, v);
-  return r.ptr == e && r.ec == std::errc();
+  return fromChars(b, e, v) == Parsed::Ok;
 }
 
 // A token of arbitrary bytes, quoted for a message: binary or fuzzed input must not put control

@@ -192,16 +192,14 @@ class XyzReader final : public PointReader {
   // The next line with something other than blanks and comments; `line` counts every line.
   bool nextLine(const char* d, size_t& pos, uint64_t& line, std::string_view& out) const {
     const size_t size = src_->size();
-    while (pos < size) {
-      const char* b = d + pos;
-      const char* nl = static_cast<const char*>(std::memchr(b, '\n', size - pos));
-      size_t len = nl ? size_t(nl - b) : size - pos;
-      pos += nl ? len + 1 : len;
+    std::string_view l;
+    while (text::takeLine(d, size, pos, l)) {
       ++line;
       size_t i = 0;
-      while (i < len && text::isBlank(b[i])) ++i;
-      if (i == len || b[i] == '#' || (b[i] == '/' && i + 1 < len && b[i + 1] == '/')) continue;
-      out = std::string_view(b, len);
+      while (i < l.size() && text::isBlank(l[i])) ++i;
+      if (i == l.size() || l[i] == '#' || (l[i] == '/' && i + 1 < l.size() && l[i + 1] == '/'))
+        continue;
+      out = l;
       return true;
     }
     return false;

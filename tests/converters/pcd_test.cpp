@@ -12,6 +12,7 @@
 namespace nestlight {
 namespace {
 
+using test::errorOf;
 using test::TempDir;
 using test::writeFile;
 
@@ -319,60 +320,44 @@ TEST(PcdReader, AsciiDenormalPackedColour) {
 
 TEST(PcdReader, MalformedFilesAreErrors) {
   TempDir dir;
-  try {
-    openPcd(dir.file("missing.pcd"));
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.file(), dir.file("missing.pcd"));
-    EXPECT_NE(e.reason().find("no such file"), std::string::npos);
-  }
+  const Error missing = errorOf([&] { openPcd(dir.file("missing.pcd")); });
+  EXPECT_EQ(missing.file(), dir.file("missing.pcd"));
+  EXPECT_NE(missing.reason().find("no such file"), std::string::npos);
 
   const std::string garbage = dir.file("garbage.pcd");
   writeFile(garbage, "this is not a point cloud\n\x01\x02\x03");
-  try {
-    openPcd(garbage);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.position(), "header");
-  }
-
-  const std::string noZ = dir.file("noz.pcd");
-  writeFile(noZ,
-            "VERSION 0.7\nFIELDS x y intensity\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\n"
-            "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n1 2 3\n");
-  try {
-    openPcd(noZ);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(e.reason().find("'z'"), std::string::npos) << e.what();
-  }
-
-  // A header asking for far more memory than the file could hold: PCL would allocate it.
-  const std::string huge = dir.file("huge.pcd");
-  writeFile(huge,
-            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2000000000\n"
-            "HEIGHT 1000\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2000000000000\nDATA binary\n1234");
-  try {
-    openPcd(huge);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(e.reason().find("implausible"), std::string::npos) << e.what();
-  }
+  EXPECT_EQ(errorOf([&] { openPcd(garbage); }).position(), "header");
 
   // binary_compressed whose block runs past the end of the file.
-  const std::string shortCompressed = dir.file("c.pcd");
-  std::string c =
+  std::string shortCompressed =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 100\nHEIGHT 1\n"
       "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 100\nDATA binary_compressed\n";
   const uint32_t sizes[2] = {500, 1200};
-  c.append(reinterpret_cast<const char*>(sizes), 8);
-  c.append(20, '\0');
-  writeFile(shortCompressed, c);
-  try {
-    openPcd(shortCompressed);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_NE(e.reason().find("truncated"), std::string::npos) << e.what();
+  shortCompressed.append(reinterpret_cast<const char*>(sizes), 8);
+  shortCompressed.append(20, '\0');
+
+  struct Case {
+    const char* name;
+    std::string bytes;
+    const char* reason;
+  } cases[] = {
+      {"noz.pcd",
+       "VERSION 0.7\nFIELDS x y intensity\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\n"
+       "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n1 2 3\n",
+       "'z'"},
+      // A header asking for far more memory than the file could hold: PCL would allocate it.
+      {"huge.pcd",
+       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2000000000\n"
+       "HEIGHT 1000\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2000000000000\nDATA binary\n1234",
+       "implausible"},
+      {"c.pcd", shortCompressed, "truncated"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::string path = dir.file(c.name);
+    writeFile(path, c.bytes);
+    const Error e = errorOf([&] { openPcd(path); });
+    EXPECT_NE(e.reason().find(c.reason), std::string::npos) << e.what();
   }
 }
 

@@ -17,6 +17,11 @@
 namespace nestlight {
 namespace {
 
+using test::anyContains;
+using test::attrAt;
+using test::errorOf;
+using test::Points;
+using test::readAll;
 using test::TempDir;
 
 // Appends `v` in the given byte order.
@@ -30,57 +35,6 @@ void put(std::string& s, T v, bool bigEndian = false) {
 
 std::shared_ptr<ByteSource> source(const std::string& bytes, std::string name = "test.ply") {
   return memorySource(std::move(name), std::vector<uint8_t>(bytes.begin(), bytes.end()));
-}
-
-struct Points {
-  std::vector<double> xyz;
-  std::vector<uint8_t> attrs;
-  size_t size() const { return xyz.size() / 3; }
-};
-
-Points readAll(PointReader& r, size_t batchSize = 1000) {
-  Points p;
-  PointBatch b;
-  while (r.read(b, batchSize)) {
-    EXPECT_GT(b.size(), 0u);
-    EXPECT_EQ(b.attrs.size(), b.size() * r.header().layout.stride());
-    p.xyz.insert(p.xyz.end(), b.xyz.begin(), b.xyz.end());
-    p.attrs.insert(p.attrs.end(), b.attrs.begin(), b.attrs.end());
-  }
-  return p;
-}
-
-template <typename T>
-T attrAt(const Points& p, const PointReader& r, size_t point, std::string_view name,
-         int component = 0) {
-  const PointLayout& l = r.header().layout;
-  const int idx = l.find(name);
-  EXPECT_GE(idx, 0) << "no attribute " << name;
-  if (idx < 0) return T();
-  EXPECT_EQ(scalarSize(l[size_t(idx)].type), sizeof(T)) << name;
-  T v;
-  std::memcpy(&v,
-              p.attrs.data() + point * l.stride() + l.offset(size_t(idx)) + component * sizeof(T),
-              sizeof(T));
-  return v;
-}
-
-// Runs `f` and returns the nestlight::Error it throws (failing the test if it throws none).
-template <typename F>
-Error errorOf(F f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e;
-  }
-  ADD_FAILURE() << "no nestlight::Error thrown";
-  return Error("none");
-}
-
-bool anyContains(const std::vector<std::string>& v, const std::string& s) {
-  for (auto& x : v)
-    if (x.find(s) != std::string::npos) return true;
-  return false;
 }
 
 TEST(PlyReader, AsciiValuesColourAndUnknownProperties) {

@@ -49,23 +49,29 @@ std::vector<Row> rows(PointReader& r, const Metadata& m, const std::vector<std::
   return out;
 }
 
+// Builds an octree at `output` from `sources`, without progress output.
+BuildReport buildQuiet(const std::vector<fs::path>& sources, const fs::path& output) {
+  BuildOptions o;
+  o.output = output;
+  o.progress = ProgressMode::Quiet;
+  std::vector<std::unique_ptr<PointReader>> readers;
+  for (const fs::path& src : sources) readers.push_back(openReader(src.string()));
+  return buildOctree(std::move(readers), o);
+}
+
 void convertVerifyExport(const std::string& rel, const std::string& exportExt, uint64_t expectedPoints) {
   const fs::path src = nestlight::test::sharedData() / rel;
   TempDir tmp;
-  BuildOptions o;
-  o.output = tmp.path() / "o";
-  o.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> readers;
-  readers.push_back(openReader(src.string()));
-  BuildReport r = buildOctree(std::move(readers), o);
+  const fs::path octree = tmp.path() / "o";
+  BuildReport r = buildQuiet({src}, octree);
   EXPECT_EQ(r.metadata.points, expectedPoints);
   EXPECT_TRUE(r.metadata.accounting.balanced());
-  VerifyReport v = verifyOctree(o.output);
+  VerifyReport v = verifyOctree(octree);
   for (auto& f : v.failures) ADD_FAILURE() << f;
   ASSERT_TRUE(v.ok());
 
   const fs::path out = tmp.path() / ("back" + exportExt);
-  ASSERT_EQ(exportOctree(o.output, out), expectedPoints);
+  ASSERT_EQ(exportOctree(octree, out), expectedPoints);
   std::vector<std::string> names;
   for (auto& a : r.metadata.layout.attributes()) names.push_back(a.name);
   auto original = openReader(src.string());
@@ -95,12 +101,8 @@ TEST(RealData, AutzenLas12WithCrs) {
   NL_REQUIRE_SHARED("scans/autzen_trim.las");
   convertVerifyExport("scans/autzen_trim.las", ".las", 110000);
   TempDir tmp;
-  BuildOptions o;
-  o.output = tmp.path() / "o";
-  o.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> readers;
-  readers.push_back(openReader((nestlight::test::sharedData() / "scans/autzen_trim.las").string()));
-  BuildReport r = buildOctree(std::move(readers), o);
+  BuildReport r =
+      buildQuiet({nestlight::test::sharedData() / "scans/autzen_trim.las"}, tmp.path() / "o");
   EXPECT_FALSE(r.metadata.crs.is_null());  // the WKT / GeoTIFF VLRs are carried into the metadata
 }
 TEST(RealData, AutzenLas14Format7) {
@@ -111,25 +113,17 @@ TEST(RealData, KinectPcdSkipsNaN) {
   NL_REQUIRE_SHARED("scans/kinect_indoor.pcd");
   convertVerifyExport("scans/kinect_indoor.pcd", ".ply", 259847);
   TempDir tmp;
-  BuildOptions o;
-  o.output = tmp.path() / "o";
-  o.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> readers;
-  readers.push_back(openReader((nestlight::test::sharedData() / "scans/kinect_indoor.pcd").string()));
-  BuildReport r = buildOctree(std::move(readers), o);
+  BuildReport r =
+      buildQuiet({nestlight::test::sharedData() / "scans/kinect_indoor.pcd"}, tmp.path() / "o");
   EXPECT_EQ(r.metadata.accounting.input, 307200u);
   EXPECT_EQ(r.metadata.accounting.rejected.at(reject::kNonFinite), 307200u - 259847u);
 }
 TEST(RealData, AllScansIntoOneOctree) {
   NL_REQUIRE_SHARED("scans/lion_takanawa.las");
   TempDir tmp;
-  BuildOptions o;
-  o.output = tmp.path() / "o";
-  o.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> readers;
-  readers.push_back(openReader((nestlight::test::sharedData() / "scans/lion_takanawa.las").string()));
-  readers.push_back(openReader((nestlight::test::sharedData() / "scans/lion_takanawa_normals.ply").string()));
-  BuildReport r = buildOctree(std::move(readers), o);
+  BuildReport r = buildQuiet({nestlight::test::sharedData() / "scans/lion_takanawa.las",
+                              nestlight::test::sharedData() / "scans/lion_takanawa_normals.ply"},
+                             tmp.path() / "o");
   EXPECT_EQ(r.metadata.points, 2u * 341989);
-  EXPECT_TRUE(verifyOctree(o.output).ok());
+  EXPECT_TRUE(verifyOctree(tmp.path() / "o").ok());
 }

@@ -13,61 +13,18 @@
 namespace nestlight {
 namespace {
 
+using test::anyContains;
+using test::attrAt;
+using test::errorOf;
+using test::Points;
+using test::readAll;
+
 std::unique_ptr<PointReader> open(const std::string& text, const std::string& columns = "",
                                   bool lenient = false) {
   ReadOptions o;
   o.columns = columns;
   o.lenient = lenient;
   return openXyz(memorySource("scan.xyz", std::vector<uint8_t>(text.begin(), text.end())), o);
-}
-
-struct Points {
-  std::vector<double> xyz;
-  std::vector<uint8_t> attrs;
-  size_t size() const { return xyz.size() / 3; }
-};
-
-Points readAll(PointReader& r, size_t batchSize = 1000) {
-  Points p;
-  PointBatch b;
-  while (r.read(b, batchSize)) {
-    EXPECT_EQ(b.attrs.size(), b.size() * r.header().layout.stride());
-    p.xyz.insert(p.xyz.end(), b.xyz.begin(), b.xyz.end());
-    p.attrs.insert(p.attrs.end(), b.attrs.begin(), b.attrs.end());
-  }
-  return p;
-}
-
-template <typename T>
-T attrAt(const Points& p, const PointReader& r, size_t point, std::string_view name,
-         int component = 0) {
-  const PointLayout& l = r.header().layout;
-  const int idx = l.find(name);
-  EXPECT_GE(idx, 0) << "no attribute " << name;
-  if (idx < 0) return T();
-  EXPECT_EQ(scalarSize(l[size_t(idx)].type), sizeof(T)) << name;
-  T v;
-  std::memcpy(&v,
-              p.attrs.data() + point * l.stride() + l.offset(size_t(idx)) + component * sizeof(T),
-              sizeof(T));
-  return v;
-}
-
-template <typename F>
-Error errorOf(F f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e;
-  }
-  ADD_FAILURE() << "no nestlight::Error thrown";
-  return Error("none");
-}
-
-bool anyContains(const std::vector<std::string>& v, const std::string& s) {
-  for (auto& x : v)
-    if (x.find(s) != std::string::npos) return true;
-  return false;
 }
 
 std::vector<std::string> names(const PointLayout& l) {

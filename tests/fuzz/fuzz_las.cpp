@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "fuzz_common.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
 
@@ -16,12 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       // Metadata must be writable as JSON whatever bytes the strings came from.
       (void)reader->header().crs.dump();
       (void)reader->header().details.dump();
-      nestlight::PointBatch batch;
-      while (reader->read(batch, 4096)) {
-      }
-      reader->rewind();
-      while (reader->read(batch, 7)) {
-      }
+      nestlight::fuzz::readEverything(*reader);
     } catch (const nestlight::Error&) {
     }
   }

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "fuzz_common.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
 
@@ -16,15 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       // Metadata must be writable as JSON whatever bytes the comments and names came from.
       (void)reader->header().crs.dump();
       (void)reader->header().details.dump();
-      const size_t stride = reader->header().layout.stride();
-      nestlight::PointBatch batch;
-      while (reader->read(batch, 4096))
-        if (batch.size() == 0 || batch.size() > 4096 || batch.attrs.size() != batch.size() * stride)
-          __builtin_trap();
-      reader->rewind();
-      while (reader->read(batch, 7)) {
-      }
-      (void)reader->warnings();
+      nestlight::fuzz::readEverything(*reader);
     } catch (const nestlight::Error&) {
     }
   }
