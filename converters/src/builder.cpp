@@ -57,6 +57,7 @@ namespace {
 
 constexpr size_t kBatchPoints = 1 << 18;
 constexpr uint32_t kGridLevel = 7;  // counting grid: 128^3 cells
+constexpr size_t kCountSampleStep = 8;
 
 double seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
 
@@ -300,7 +301,8 @@ class Builder {
   struct Item {
     size_t source = 0;
     PointBatch batch;
-    size_t points = 0;             // points read into this batch
+    size_t points = 0;             // input points this batch stands for
+    size_t weight = 1;             // input points per batch point (sampled counting)
     // Output of the parallel stage.
     std::unique_ptr<uint8_t[]> records;  // 12 + stride bytes each, grouped by chunk
     size_t recordBytes = 0;
@@ -311,7 +313,7 @@ class Builder {
 
   // Reads every source, runs `work` on batches in parallel and `collect` in input order.
   template <class Work, class Collect>
-  void readAll(const std::string& phase, Work work, Collect collect) {
+  void readAll(const std::string& phase, Work work, Collect collect, size_t sampleStep = 1) {
     uint64_t total = 0;
     for (auto& s : sources_) total += s.reader->bytesTotal();
     progress_.begin(phase, total, "bytes");
@@ -325,9 +327,14 @@ class Builder {
                                         while (current < sources_.size()) {
                                           auto item = std::make_unique<Item>();
                                           auto& r = *sources_[current].reader;
-                                          if (r.read(item->batch, kBatchPoints)) {
+                                          const size_t weight =
+                                              sampleStep > 1
+                                                  ? r.readSampled(item->batch, kBatchPoints, sampleStep)
+                                                  : (r.read(item->batch, kBatchPoints) ? 1 : 0);
+                                          if (weight) {
                                             item->source = current;
-                                            item->points = item->batch.size();
+                                            item->weight = weight;
+                                            item->points = item->batch.size() * weight;
                                             progress_.advance(r.bytesConsumed() - consumedBefore,
                                                               item->points);
                                             consumedBefore = r.bytesConsumed();
@@ -397,9 +404,12 @@ class Builder {
           std::vector<uint64_t>& counts = local.local();
           uint32_t q[3];
           for (size_t k = 0, n = it.batch.size(); k < n; ++k)
-            if (quantise(s, &it.batch.xyz[3 * k], q, it.acc)) counts[gridCell(q)]++;
+            if (quantise(s, &it.batch.xyz[3 * k], q, it.acc)) counts[gridCell(q)] += it.weight;
         },
-        [](std::unique_ptr<Item>&) {});
+        [](std::unique_ptr<Item>&) {},
+        // Counts only plan the chunks (a chunk that turns out too large is split later), so a
+        // sample of the points is enough where a reader can skip cheaply.
+        kCountSampleStep);
     std::vector<uint64_t> counts(cells, 0);
     for (const auto& l : local)
       for (size_t i = 0; i < cells; ++i) counts[i] += l[i];

@@ -135,6 +135,24 @@ class LasReader final : public PointReader {
     return true;
   }
 
+  // Fixed-size records: skipping is free, so the counting pass decodes one record in `step`.
+  size_t readSampled(PointBatch& batch, size_t maxPoints, size_t step) override {
+    batch.clear();
+    if (step <= 1) return read(batch, maxPoints) ? 1 : 0;
+    if (next_ >= count_ || maxPoints == 0) return false;
+    const uint64_t left = (count_ - next_ + step - 1) / step;
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(maxPoints, left));
+    const size_t stride = header_.layout.stride();
+    batch.xyz.resize(3 * n);
+    batch.attrs.resize(n * stride);
+    const uint8_t* rec = src_->data() + pointStart_ + next_ * recordLength_;
+    kDecoders[pointFormat_](rec, n, recordLength_ * step, scale_, offset_, batch.xyz.data(),
+                            batch.attrs.data(), stride, extraBytes_);
+    next_ = std::min<uint64_t>(count_, next_ + uint64_t(n) * step);
+    src_->releaseBefore(pointStart_ + next_ * recordLength_);
+    return step;
+  }
+
   void rewind() override {
     next_ = 0;
     src_->releaseBefore(0);

@@ -60,6 +60,12 @@ class PointReader {
   // Clears `batch` and fills it with up to `maxPoints` points. Returns false when no point was
   // read because the input is exhausted. Throws nestlight::Error on malformed input.
   virtual bool read(PointBatch& batch, size_t maxPoints) = 0;
+  // For planning passes that only need a spatial histogram: reads about every `step`-th point.
+  // Returns how many input points each returned point stands for (1 when the reader cannot skip
+  // cheaply and returns every point), or 0 at the end of the input.
+  virtual size_t readSampled(PointBatch& batch, size_t maxPoints, size_t /*step*/) {
+    return read(batch, maxPoints) ? 1 : 0;
+  }
   // Starts again from the first point.
   virtual void rewind() = 0;
   // Header/data disagreements tolerated in lenient mode, and other notes for the metadata.
