@@ -430,7 +430,8 @@ class Builder {
     cellChunk_.assign(cells, -1);
     std::function<void(NodeKey)> visit = [&](NodeKey k) {
       uint64_t c = pyramid[k.level][(size_t(k.x) << (2 * k.level)) | (k.y << k.level) | k.z];
-      if (c == 0) return;
+      // Sampled counts can miss sparse cells, so nodes counted empty become chunks too; a chunk
+      // that receives no points costs nothing later.
       if (c <= maxChunkPoints_ || k.level == gridLevel_) {
         int id = static_cast<int>(chunks_.size());
         chunks_.push_back({k, c, tmp_ / ("chunk-" + k.name() + ".bin")});
@@ -669,6 +670,7 @@ class Builder {
     std::atomic<uint64_t> merged{0};
     tbb::parallel_for_each(order.begin(), order.end(), [&](size_t ci) {
       Chunk& c = chunks_[ci];
+      if (c.points == 0) return;
       PointBuffer pts = loadRecords(c.file);
       fs::remove(c.file);
       NL_CHECK(pts.size() == c.points);

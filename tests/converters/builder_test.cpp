@@ -318,3 +318,33 @@ TEST(Builder, RefusesToOverwriteWithoutFlag) {
   o.overwrite = true;
   EXPECT_NO_THROW(build(spec, o));
 }
+
+TEST(Builder, SampledCountingNeverLosesSparsePoints) {
+  // LAS counting decodes one record in 8; isolated points that the sample misses must still get
+  // a chunk. A dense cluster plus a few far outliers, with a small memory budget.
+  TempDir tmp;
+  SourceHeader h;
+  h.layout.add({"intensity", ScalarType::U16, 1, ""});
+  h.scale = Vec3d{0.001, 0.001, 0.001};
+  h.offset = Vec3d{0, 0, 0};
+  auto w = createLasWriter(tmp.file("s.las"), h);
+  PointBatch b;
+  uint64_t n = 0;
+  for (int i = 0; i < 400000; ++i, ++n) {
+    b.xyz.insert(b.xyz.end(), {10.0 + (i % 631) * 0.003, 10.0 + (i / 631) * 0.003, 5.0 + (i % 7) * 0.001});
+    b.attrs.insert(b.attrs.end(), {uint8_t(i), uint8_t(i >> 8)});
+  }
+  for (int i = 0; i < 37; ++i, ++n) {
+    b.xyz.insert(b.xyz.end(), {100.0 + 13.7 * i, 250.0 - 5.1 * i, 80.0 + i});
+    b.attrs.insert(b.attrs.end(), {7, 7});
+  }
+  w->write(b);
+  w->close();
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openReader(tmp.file("s.las")));
+  BuildOptions o = quietOptions(tmp.path() / "o");
+  o.memoryBytes = 16ull << 20;
+  BuildReport rep = buildOctree(std::move(r), o);
+  EXPECT_EQ(rep.metadata.points, n);
+  expectVerified(tmp.path() / "o");
+}
