@@ -330,14 +330,16 @@ TEST(Builder, SampledCountingNeverLosesSparsePoints) {
   auto w = createLasWriter(tmp.file("s.las"), h);
   PointBatch b;
   uint64_t n = 0;
-  for (int i = 0; i < 400000; ++i, ++n) {
-    b.xyz.insert(b.xyz.end(), {10.0 + (i % 631) * 0.003, 10.0 + (i / 631) * 0.003, 5.0 + (i % 7) * 0.001});
-    b.attrs.insert(b.attrs.end(), {uint8_t(i), uint8_t(i >> 8)});
-  }
-  for (int i = 0; i < 37; ++i, ++n) {
-    b.xyz.insert(b.xyz.end(), {100.0 + 13.7 * i, 250.0 - 5.1 * i, 80.0 + i});
-    b.attrs.insert(b.attrs.end(), {7, 7});
-  }
+  auto add = [&](double x, double y, double z, uint16_t v) {
+    b.xyz.insert(b.xyz.end(), {x, y, z});
+    b.attrs.insert(b.attrs.end(), {uint8_t(v), uint8_t(v >> 8)});
+    ++n;
+  };
+  // Record 0 is in the sample; records 1-7 are not. Put one outlier alone in each of the other
+  // seven octants of the root, so the sampled count sees those octants empty.
+  add(1, 1, 1, 0);
+  for (int c = 1; c < 8; ++c) add(c & 4 ? 500 : 1, c & 2 ? 500 : 1, c & 1 ? 500 : 1, uint16_t(c));
+  for (int i = 0; i < 400000; ++i) add(10.0 + (i % 631) * 0.003, 10.0 + (i / 631) * 0.003, 5.0 + (i % 7) * 0.001, uint16_t(i));
   w->write(b);
   w->close();
   std::vector<std::unique_ptr<PointReader>> r;
