@@ -350,3 +350,23 @@ TEST(Builder, SampledCountingNeverLosesSparsePoints) {
   EXPECT_EQ(rep.metadata.points, n);
   expectVerified(tmp.path() / "o");
 }
+
+TEST(Builder, EveryCodecAndSamplingRoundTrips) {
+  SyntheticSpec spec;
+  spec.points = 120000;
+  spec.normals = true;
+  auto src = openSynthetic(spec);
+  for (Codec codec : {Codec::Raw, Codec::Zstd, Codec::Draco})
+    for (Sampling sampling : {Sampling::Poisson, Sampling::Grid}) {
+      TempDir tmp;
+      BuildOptions o = quietOptions(tmp.path() / "o");
+      o.codec = codec;
+      o.sampling = sampling;
+      BuildReport r = build(spec, o);
+      SCOPED_TRACE(std::string(codecName(codec)) + (sampling == Sampling::Grid ? " grid" : " poisson"));
+      expectVerified(tmp.path() / "o");
+      EXPECT_EQ(storedRecords(tmp.path() / "o"), sourceRecords(*src, r.metadata));
+      OctreeReader reader(tmp.path() / "o");
+      for (auto& [k, e] : reader.allNodes()) EXPECT_LE(e.numPoints, o.maxNodePoints) << k.name();
+    }
+}
