@@ -16,7 +16,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include <tbb/enumerable_thread_specific.h>
+#include <tbb/task_arena.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_for_each.h>
@@ -127,6 +127,7 @@ class Builder {
     planQuantisation(report);
     writer_ = std::make_unique<OctreeWriter>(opt_.output, layout_, opt_.codec, opt_.overwrite);
     tmp_ = opt_.output / (".build-" + std::to_string(::getpid()));
+    fs::remove_all(tmp_);  // left by a killed run that had the same process id
     fs::create_directories(tmp_);
     struct Cleanup {
       fs::path p;
@@ -165,10 +166,22 @@ class Builder {
  private:
   // ---- planning -------------------------------------------------------------------------------
 
+  // Planning visits sources sorted by path, so that the layout and the grid's offset do not
+  // depend on the order the inputs were given in.
+  std::vector<SourceState*> planningOrder() {
+    std::vector<SourceState*> order;
+    for (auto& s : sources_) order.push_back(&s);
+    std::stable_sort(order.begin(), order.end(), [](const SourceState* a, const SourceState* b) {
+      return a->reader->header().path < b->reader->header().path;
+    });
+    return order;
+  }
+
   void planLayout() {
     int rgbBits = 0;
     bool rgb16 = false;
-    for (auto& s : sources_) {
+    for (SourceState* sp : planningOrder()) {
+      SourceState& s = *sp;
       const SourceHeader& h = s.reader->header();
       for (const Attribute& a : h.layout.attributes()) {
         int i = layout_.find(a.name);
@@ -226,8 +239,8 @@ class Builder {
     // Precision: the finest scale of the inputs, unless given.
     double scale = opt_.precision;
     std::optional<Vec3d> base;
-    for (auto& s : sources_) {
-      const SourceHeader& h = s.reader->header();
+    for (SourceState* sp : planningOrder()) {
+      const SourceHeader& h = sp->reader->header();
       if (h.offset && !base) base = h.offset;
       if (opt_.precision <= 0 && h.scale)
         for (int a = 0; a < 3; ++a)
@@ -394,25 +407,25 @@ class Builder {
   void countPass() {
     gridLevel_ = std::min(kGridLevel, cubeBits());
     const size_t cells = size_t(1) << (3 * gridLevel_);
-    // One count array per thread: atomic increments on shared cells cost more than the merge.
-    tbb::enumerable_thread_specific<std::vector<uint64_t>> local(
-        [cells] { return std::vector<uint64_t>(cells, 0); });
+    // One shared grid of relaxed atomics (16 MiB): per-thread grids would grow with the core count
+    // and escape the memory budget, and with sampled counting the increments are few.
+    std::vector<std::atomic<uint64_t>> shared(cells);
     readAll(
         "count",
         [&](Item& it) {
           const SourceState& s = sources_[it.source];
-          std::vector<uint64_t>& counts = local.local();
           uint32_t q[3];
           for (size_t k = 0, n = it.batch.size(); k < n; ++k)
-            if (quantise(s, &it.batch.xyz[3 * k], q, it.acc)) counts[gridCell(q)] += it.weight;
+            if (quantise(s, &it.batch.xyz[3 * k], q, it.acc))
+              shared[gridCell(q)].fetch_add(it.weight, std::memory_order_relaxed);
         },
         [](std::unique_ptr<Item>&) {},
         // Counts only plan the chunks (a chunk that turns out too large is split later), so a
         // sample of the points is enough where a reader can skip cheaply.
         kCountSampleStep);
-    std::vector<uint64_t> counts(cells, 0);
-    for (const auto& l : local)
-      for (size_t i = 0; i < cells; ++i) counts[i] += l[i];
+    std::vector<uint64_t> counts(cells);
+    for (size_t i = 0; i < cells; ++i) counts[i] = shared[i].load(std::memory_order_relaxed);
+    std::vector<std::atomic<uint64_t>>().swap(shared);
 
     // Chunks: top-down, the largest nodes of the counting pyramid that fit the budget.
     std::vector<std::vector<uint64_t>> pyramid(gridLevel_ + 1);
@@ -506,6 +519,7 @@ class Builder {
             if (queue.empty()) break;
             it = std::move(queue.front());
             queue.pop_front();
+            cv.notify_all();  // a producer may wait for the queue to drain
           }
           groupBytes += it->recordBytes;
           group.push_back(std::move(it));
@@ -669,6 +683,16 @@ class Builder {
     std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return chunks_[a].points > chunks_[b].points; });
     std::atomic<uint64_t> merged{0};
     tbb::parallel_for_each(order.begin(), order.end(), [&](size_t ci) {
+      // Isolated: while a chunk's nested parallel sort waits, this thread must not start another
+      // chunk, or more chunks than threads would be in memory at once.
+      tbb::this_task_arena::isolate([&] { indexChunk(ci, merged); });
+    });
+    accounting_.duplicatesMerged += merged.load();
+    progress_.end();
+  }
+
+  void indexChunk(size_t ci, std::atomic<uint64_t>& merged) {
+    {
       Chunk& c = chunks_[ci];
       if (c.points == 0) return;
       PointBuffer pts = loadRecords(c.file);
@@ -678,11 +702,9 @@ class Builder {
       if (opt_.dedup) merged += dedup(pts);
       if (estimate_) estimateMissingNormals(pts);
       std::vector<uint32_t> set = buildSubtree(pts, c.key, 0, pts.size());
-      saveProvisional(c.key, pts, set);
+      saveProvisional(c.key, pts, set, pts.size());
       progress_.advance(c.points);
-    });
-    accounting_.duplicatesMerged += merged.load();
-    progress_.end();
+    }
   }
 
   PointBuffer loadRecords(const fs::path& file) const {
@@ -1030,10 +1052,12 @@ class Builder {
 
   fs::path provisionalFile(const NodeKey& k) const { return tmp_ / ("sample-" + k.name() + ".bin"); }
 
-  void saveProvisional(const NodeKey& key, const PointBuffer& pts, const std::vector<uint32_t>& set) {
-    std::lock_guard<std::mutex> lock(pendingMutex_);
+  void saveProvisional(const NodeKey& key, const PointBuffer& pts, const std::vector<uint32_t>& set,
+                       uint64_t subtreePoints) {
     saveRecords(provisionalFile(key), pts, set);
+    std::lock_guard<std::mutex> lock(pendingMutex_);
     pending_.insert(key);
+    subtreePoints_[key] = subtreePoints;
   }
 
   void mergeTop() {
@@ -1047,9 +1071,14 @@ class Builder {
       tbb::parallel_for_each(nodes.begin(), nodes.end(), [&](const NodeKey& key) {
         PointBuffer pts(stride_);
         std::array<std::vector<uint32_t>, 8> sets;
+        uint64_t total = 0;
         for (int c = 0; c < 8; ++c) {
           fs::path f = provisionalFile(key.child(c));
           if (!fs::exists(f)) continue;
+          {
+            std::lock_guard<std::mutex> lock(pendingMutex_);
+            total += subtreePoints_.at(key.child(c));
+          }
           PointBuffer child = loadRecords(f);
           fs::remove(f);
           for (size_t i = 0; i < child.size(); ++i) {
@@ -1057,8 +1086,17 @@ class Builder {
             pts.pushFrom(child, i);
           }
         }
-        std::vector<uint32_t> selected = sampleAndWriteChildren(pts, key, sets);
-        saveRecords(provisionalFile(key), pts, selected);
+        // Chunks were planned on counts before deduplication (and sampled): a node whose
+        // subtree turns out small is a leaf holding all of it, exactly as an in-memory build
+        // would make it. Its children then hold their whole subtrees too, unwritten.
+        std::vector<uint32_t> selected;
+        if (total <= opt_.maxNodePoints) {
+          selected.resize(pts.size());
+          std::iota(selected.begin(), selected.end(), 0u);
+        } else {
+          selected = sampleAndWriteChildren(pts, key, sets);
+        }
+        saveProvisional(key, pts, selected, total);
       });
       progress_.advance(1);
     }
@@ -1136,6 +1174,7 @@ class Builder {
   std::vector<Chunk> chunks_;
   std::mutex pendingMutex_;
   std::set<NodeKey> pending_;
+  std::map<NodeKey, uint64_t> subtreePoints_;
   std::atomic<uint64_t> stored_{0};
 };
 

@@ -32,6 +32,9 @@ void readAll(int fd, void* dst, size_t size, uint64_t offset, const std::string&
   }
 }
 
+// Proxies are counted as entries too until their chunk is loaded: at most 512 per chunk.
+size_t kMaxProxyOverhead(uint64_t nodes) { return static_cast<size_t>(nodes) + 1024; }
+
 int openOrThrow(const fs::path& p) {
   int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw Error(p.string(), "", std::string("cannot open: ") + std::strerror(errno));
@@ -52,11 +55,18 @@ OctreeReader::OctreeReader(const fs::path& dir) : dir_(dir) {
     throw Error(mp.string(), Error::atByte(e.byte), "invalid JSON");
   }
   meta_ = Metadata::fromJson(j, mp.string());
-  payloadFd_ = openOrThrow(dir / meta_.payloadFile);
-  hierarchyFd_ = openOrThrow(dir / meta_.hierarchyFile);
-  if (meta_.rootChunkSize > 64 * 1024)
-    throw Error(mp.string(), "field 'hierarchy.root_chunk_size'", "larger than 64 KiB");
-  loadChunk(NodeKey::root(), 0, meta_.rootChunkSize, meta_.rootChunkChecksum);
+  try {
+    payloadFd_ = openOrThrow(dir / meta_.payloadFile);
+    hierarchyFd_ = openOrThrow(dir / meta_.hierarchyFile);
+    if (meta_.rootChunkSize > 64 * 1024)
+      throw Error(mp.string(), "field 'hierarchy.root_chunk_size'", "larger than 64 KiB");
+    loadChunk(NodeKey::root(), 0, meta_.rootChunkSize, meta_.rootChunkChecksum);
+  } catch (...) {
+    // The destructor does not run for a half-built object.
+    if (payloadFd_ >= 0) ::close(payloadFd_);
+    if (hierarchyFd_ >= 0) ::close(hierarchyFd_);
+    throw;
+  }
 }
 
 OctreeReader::~OctreeReader() {
@@ -67,8 +77,12 @@ OctreeReader::~OctreeReader() {
 void OctreeReader::loadChunk(const NodeKey& root, uint64_t offset, uint64_t size,
                              uint64_t checksum) {
   const std::string path = (dir_ / meta_.hierarchyFile).string();
-  if (size > 1 << 20 || offset + size > meta_.hierarchyBytes)
+  if (size > 1 << 20 || size > meta_.hierarchyBytes || offset > meta_.hierarchyBytes - size)
     throw Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " out of range");
+  // Each chunk is read once: a damaged file whose proxies point back at loaded chunks would
+  // otherwise expand without end.
+  if (!loadedChunks_.insert(offset).second)
+    throw Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " is referenced twice");
   std::vector<uint8_t> bytes(size);
   readAll(hierarchyFd_, bytes.data(), size, offset, path);
   hierarchyBytesRead_ += size;
@@ -77,6 +91,8 @@ void OctreeReader::loadChunk(const NodeKey& root, uint64_t offset, uint64_t size
   std::vector<std::pair<NodeKey, HierarchyEntry>> entries;
   std::string err = parseHierarchyChunk(bytes.data(), bytes.size(), root, meta_.hierarchyStep, entries);
   if (!err.empty()) throw Error(path, Error::atByte(offset), err);
+  if (entries_.size() + entries.size() > meta_.nodes + kMaxProxyOverhead(meta_.nodes))
+    throw Error(path, Error::atByte(offset), "hierarchy holds more nodes than metadata's " + std::to_string(meta_.nodes));
   for (auto& [k, e] : entries) {
     auto it = entries_.find(k);
     // The chunk's own root entry replaces the proxy that pointed here.
@@ -127,7 +143,8 @@ std::vector<std::pair<NodeKey, HierarchyEntry>> OctreeReader::allNodes() {
 
 std::vector<uint8_t> OctreeReader::readPayload(const HierarchyEntry& e) {
   const std::string path = (dir_ / meta_.payloadFile).string();
-  if (e.byteOffset + e.byteSize > meta_.payloadBytes || e.byteSize > (uint64_t(1) << 32))
+  if (e.byteSize > meta_.payloadBytes || e.byteOffset > meta_.payloadBytes - e.byteSize ||
+      e.byteSize > (uint64_t(1) << 32))
     throw Error(path, Error::atByte(e.byteOffset), "payload range lies outside the file");
   std::vector<uint8_t> bytes(e.byteSize);
   readAll(payloadFd_, bytes.data(), bytes.size(), e.byteOffset, path);
@@ -138,6 +155,8 @@ PointBuffer OctreeReader::readNode(const NodeKey& key) {
   auto e = node(key);
   if (!e) throw Error(dir_.string(), "node " + key.name(), "no such node");
   const std::string path = (dir_ / meta_.payloadFile).string();
+  if (e->numPoints > meta_.points)
+    throw Error(path, "node " + key.name(), "claims more points than the whole octree holds");
   std::vector<uint8_t> bytes = readPayload(*e);
   if (checksum64(bytes.data(), bytes.size()) != e->checksum)
     throw Error(path, Error::atByte(e->byteOffset), "checksum mismatch in node " + key.name());

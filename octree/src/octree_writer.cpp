@@ -70,6 +70,7 @@ OctreeWriter::~OctreeWriter() {
 
 void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points) {
   NL_CHECK(points.stride == layout_.stride());
+  NL_CHECK_MSG(points.size() < (uint64_t(1) << 32), "node " + key.name() + " holds 2^32 points or more");
   // An empty node (its points all moved up into its parent) has an empty payload in any codec.
   std::vector<uint8_t> bytes;
   if (!points.empty()) bytes = encodePayload(codec_, layout_, points);

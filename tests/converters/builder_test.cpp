@@ -370,3 +370,41 @@ TEST(Builder, EveryCodecAndSamplingRoundTrips) {
       for (auto& [k, e] : reader.allNodes()) EXPECT_LE(e.numPoints, o.maxNodePoints) << k.name();
     }
 }
+
+TEST(Builder, ChunkedEqualsInMemoryWhenDedupShrinksASubtree) {
+  // 15,000 distinct points, each six times: planning sees 90,000 and splits the root into
+  // chunks, but after --dedup the whole scan fits one leaf, as the in-memory build makes it.
+  TempDir tmp;
+  SourceHeader h;
+  h.scale = Vec3d{0.001, 0.001, 0.001};
+  h.offset = Vec3d{0, 0, 0};
+  auto w = createLasWriter(tmp.file("d.las"), h);
+  PointBatch b;
+  for (int copy = 0; copy < 6; ++copy)
+    for (int i = 0; i < 15000; ++i) b.xyz.insert(b.xyz.end(), {(i % 123) * 0.5, (i / 123) * 0.5, (i % 7) * 0.25});
+  w->write(b);
+  w->close();
+  auto run = [&](const char* name, bool inMemory) {
+    std::vector<std::unique_ptr<PointReader>> r;
+    r.push_back(openReader(tmp.file("d.las")));
+    BuildOptions o = quietOptions(tmp.path() / name);
+    o.dedup = true;
+    o.memoryBytes = 16ull << 20;
+    o.maxNodePoints = 20000;
+    o.inMemory = inMemory;
+    return buildOctree(std::move(r), o);
+  };
+  BuildReport chunked = run("chunked", false), memory = run("memory", true);
+  EXPECT_GT(chunked.chunks, 1u);
+  EXPECT_EQ(chunked.metadata.points, 15000u);
+  EXPECT_EQ(chunked.metadata.accounting.duplicatesMerged, 75000u);
+  expectVerified(tmp.path() / "chunked");
+  OctreeReader a(tmp.path() / "chunked"), m(tmp.path() / "memory");
+  auto na = a.allNodes(), nm = m.allNodes();
+  ASSERT_EQ(na.size(), nm.size());
+  EXPECT_EQ(na.size(), 1u);  // one leaf: the root
+  for (size_t i = 0; i < na.size(); ++i) {
+    EXPECT_EQ(na[i].first, nm[i].first);
+    EXPECT_EQ(na[i].second.checksum, nm[i].second.checksum);
+  }
+}

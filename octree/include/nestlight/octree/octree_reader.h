@@ -9,6 +9,7 @@
 #include <mutex>
 #include <optional>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "nestlight/octree/hierarchy.h"
@@ -50,6 +51,7 @@ class OctreeReader {
   std::mutex mutex_;
   std::unordered_map<NodeKey, HierarchyEntry, NodeKeyHash> entries_;  // proxies until loaded
   uint64_t hierarchyBytesRead_ = 0;
+  std::unordered_set<uint64_t> loadedChunks_;  // offsets of the hierarchy chunks read
 };
 
 }  // namespace nestlight
