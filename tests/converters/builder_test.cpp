@@ -381,7 +381,7 @@ TEST(Builder, ChunkedEqualsInMemoryWhenDedupShrinksASubtree) {
   auto w = createLasWriter(tmp.file("d.las"), h);
   PointBatch b;
   for (int copy = 0; copy < 6; ++copy)
-    for (int i = 0; i < 15000; ++i) b.xyz.insert(b.xyz.end(), {(i % 123) * 0.5, (i / 123) * 0.5, (i % 7) * 0.25});
+    for (int i = 0; i < 15000; ++i) b.xyz.insert(b.xyz.end(), {(i % 123) * 0.05, (i / 123) * 0.05, (i % 7) * 0.025});
   w->write(b);
   w->close();
   auto run = [&](const char* name, bool inMemory) {
