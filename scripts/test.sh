@@ -11,7 +11,7 @@ ctest --test-dir build --output-on-failure -j2 --timeout 900
 
 if [ -z "${SKIP_SANITIZE:-}" ]; then
   echo "== unit tests under ASan+UBSan"
-  BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS="-DNESTLIGHT_SANITIZE=ON -DNESTLIGHT_BENCH=OFF" \
+  BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS="-DNESTLIGHT_SANITIZE=ON" \
     scripts/setup.sh
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j2 --timeout 1800 -E "${ASAN_EXCLUDE:-Slow}"
@@ -21,7 +21,7 @@ if [ -z "${SKIP_FUZZ:-}" ]; then
   echo "== fuzz targets (${FUZZ_SECONDS:-15} s each)"
   fuzzers=$(cd tests/fuzz && ls fuzz_*.cpp | sed 's/\.cpp$//' | tr '\n' ' ')
   BUILD_DIR=build-fuzz TARGETS="$fuzzers" \
-    CMAKE_ARGS="-DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 -DNESTLIGHT_FUZZ=ON -DNESTLIGHT_BENCH=OFF" \
+    CMAKE_ARGS="-DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 -DNESTLIGHT_FUZZ=ON" \
     scripts/setup.sh
   for f in build-fuzz/tests/fuzz_*; do
     [ -x "$f" ] || continue
