@@ -393,8 +393,7 @@ class Builder {
   }
 
   uint32_t gridCell(const uint32_t q[3]) const {
-    const uint32_t shift = cubeBits() > gridLevel_ ? cubeBits() - gridLevel_ : 0;
-    return ((q[0] >> shift) << (2 * gridLevel_)) | ((q[1] >> shift) << gridLevel_) | (q[2] >> shift);
+    return ((q[0] >> gridShift_) << (2 * gridLevel_)) | ((q[1] >> gridShift_) << gridLevel_) | (q[2] >> gridShift_);
   }
   uint32_t cubeBits() const {
     uint32_t b = 0;
@@ -406,6 +405,7 @@ class Builder {
 
   void countPass() {
     gridLevel_ = std::min(kGridLevel, cubeBits());
+    gridShift_ = cubeBits() - gridLevel_;
     const size_t cells = size_t(1) << (3 * gridLevel_);
     // One shared grid of relaxed atomics (16 MiB): per-thread grids would grow with the core count
     // and escape the memory budget, and with sampled counting the increments are few.
@@ -925,38 +925,45 @@ class Builder {
 
   // Open-addressing map from a grid cell to the head of its list of accepted points.
   struct CellMap {
-    std::vector<uint64_t> keys;
-    std::vector<int32_t> heads;
+    // Key and head side by side: a probe touches one cache line.
+    struct Slot {
+      uint32_t key;
+      int32_t head;
+    };
+    static constexpr uint32_t kEmpty = ~0u;
+    std::vector<Slot> slots;
     uint64_t mask;
     int shift;
     explicit CellMap(size_t n) {
       size_t cap = 16;
       int bits = 4;
       while (cap < 2 * n) cap <<= 1, ++bits;
-      keys.assign(cap, ~0ull);
-      heads.assign(cap, -1);
+      slots.assign(cap, Slot{kEmpty, -1});
       mask = cap - 1;
       shift = 64 - bits;
     }
     // Fibonacci hashing: the top bits of the product are the well-mixed ones.
-    uint64_t home(uint64_t k) const { return (k * 0x9E3779B97F4A7C15ull) >> shift; }
-    int32_t& slot(uint64_t k) {
+    uint64_t home(uint32_t k) const { return (k * 0x9E3779B97F4A7C15ull) >> shift; }
+    int32_t& slot(uint32_t k) {
       for (uint64_t i = home(k);; i = (i + 1) & mask) {
-        if (keys[i] == k || keys[i] == ~0ull) {
-          keys[i] = k;
-          return heads[i];
+        if (slots[i].key == k || slots[i].key == kEmpty) {
+          slots[i].key = k;
+          return slots[i].head;
         }
       }
     }
-    int32_t find(uint64_t k) const {
+    int32_t find(uint32_t k) const {
       for (uint64_t i = home(k);; i = (i + 1) & mask) {
-        if (keys[i] == k) return heads[i];
-        if (keys[i] == ~0ull) return -1;
+        if (slots[i].key == k) return slots[i].head;
+        if (slots[i].key == kEmpty) return -1;
       }
     }
   };
-  static uint64_t cellKey(int64_t x, int64_t y, int64_t z) {
-    return (uint64_t(x + 1) << 42) | (uint64_t(y + 1) << 21) | uint64_t(z + 1);
+  // Cells of the sampling grid: r is at least size/128, so a node spans at most 129 cells per
+  // axis; with one more on each side for neighbour probes a cell's index fits 32 bits.
+  static constexpr int64_t kCellSide = 131;
+  static uint32_t cellKey(int64_t x, int64_t y, int64_t z) {
+    return static_cast<uint32_t>(((x + 1) * kCellSide + (y + 1)) * kCellSide + (z + 1));
   }
 
   // Both samplers give up once `limit` points are accepted and return an estimate of the total
@@ -974,15 +981,18 @@ class Builder {
       return o;
     }();
     CellMap cells(std::min(cand.size(), limit + 1));
-    std::vector<int32_t> next;
-    std::vector<uint32_t> acceptedIdx;
+    // Accepted points as (position, next in cell): the distance tests read them in acceptance
+    // order, near each other, instead of gathering from the chunk's point array.
+    struct Accepted {
+      uint32_t p[3];
+      int32_t next;
+    };
+    thread_local std::vector<Accepted> acc;
+    acc.clear();
     const double r2 = r * r, inv = 1.0 / r;
-    // Occupied cells as a dense bitmap: r is at least size/128, so there are at most 129 cells
-    // per axis (plus one on each side for neighbours); most neighbour probes end here.
-    constexpr int64_t kSide = 131;
+    // Occupied cells as a dense bitmap over the cell keys; most neighbour probes end here.
     thread_local std::vector<uint64_t> occupied;
-    occupied.assign((kSide * kSide * kSide + 63) / 64, 0);
-    auto bit = [](int64_t x, int64_t y, int64_t z) { return ((x + 1) * kSide + (y + 1)) * kSide + (z + 1); };
+    occupied.assign((kCellSide * kCellSide * kCellSide + 63) / 64, 0);
     size_t accepted = 0;
     for (size_t k = 0; k < cand.size(); ++k) {
       const uint32_t* p = &pts.pos[3 * size_t(cand[k])];
@@ -990,10 +1000,10 @@ class Builder {
       const int64_t cx = int64_t(x * inv), cy = int64_t(y * inv), cz = int64_t(z * inv);
       bool ok = true;
       for (const auto& d : offsets) {
-        const int64_t b = bit(cx + d[0], cy + d[1], cz + d[2]);
+        const uint32_t b = cellKey(cx + d[0], cy + d[1], cz + d[2]);
         if (!(occupied[b >> 6] >> (b & 63) & 1)) continue;
-        for (int32_t j = cells.find(cellKey(cx + d[0], cy + d[1], cz + d[2])); j >= 0; j = next[j]) {
-          const uint32_t* q = &pts.pos[3 * size_t(acceptedIdx[j])];
+        for (int32_t j = cells.find(b); j >= 0; j = acc[j].next) {
+          const uint32_t* q = acc[j].p;
           const double ex = double(q[0]) - p[0], ey = double(q[1]) - p[1], ez = double(q[2]) - p[2];
           if (ex * ex + ey * ey + ez * ez < r2) {
             ok = false;
@@ -1005,12 +1015,11 @@ class Builder {
       chosen[k] = ok;
       if (!ok) continue;
       if (++accepted > limit) return accepted * cand.size() / (k + 1);
-      const int64_t b = bit(cx, cy, cz);
+      const uint32_t b = cellKey(cx, cy, cz);
       occupied[b >> 6] |= uint64_t(1) << (b & 63);
-      int32_t& head = cells.slot(cellKey(cx, cy, cz));
-      next.push_back(head);
-      head = static_cast<int32_t>(acceptedIdx.size());
-      acceptedIdx.push_back(cand[k]);
+      int32_t& head = cells.slot(b);
+      acc.push_back({{p[0], p[1], p[2]}, head});
+      head = static_cast<int32_t>(acc.size() - 1);
     }
     return accepted;
   }
@@ -1169,6 +1178,7 @@ class Builder {
   std::unique_ptr<OctreeWriter> writer_;
   fs::path tmp_;
   uint32_t gridLevel_ = 0;
+  uint32_t gridShift_ = 0;  // cubeBits() - gridLevel_, per point in gridCell()
   uint64_t maxChunkPoints_ = 0;
   std::vector<int32_t> cellChunk_;
   std::vector<Chunk> chunks_;

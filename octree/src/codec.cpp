@@ -8,6 +8,7 @@
 
 #include <cstring>
 #include <limits>
+#include <memory>
 
 #include "nestlight/octree/error.h"
 
@@ -139,16 +140,26 @@ U loadU(const Column& c, size_t i) {
   return v;
 }
 
-uint8_t chooseMode(const Column& c, size_t n) {
-  bool constant = true, repeated = c.width == 2 && c.delta;
+template <typename U>
+uint8_t chooseModeTyped(const Column& c, size_t n) {
+  const U first = loadU<U>(c, 0);
+  bool constant = true, repeated = sizeof(U) == 2 && c.delta;
   for (size_t i = 0; i < n && (constant || repeated); ++i) {
-    if (constant && std::memcmp(c.base + i * c.stride, c.base, c.width) != 0) constant = false;
-    if (repeated) {
-      uint16_t v = loadU<uint16_t>(c, i);
-      repeated = (v >> 8) == (v & 0xff);
-    }
+    const U v = loadU<U>(c, i);
+    constant = constant && v == first;
+    if constexpr (sizeof(U) == 2) repeated = repeated && (v >> 8) == (v & 0xff);
   }
   return constant ? kConstant : (repeated ? kRepeated : kPlanes);
+}
+
+uint8_t chooseMode(const Column& c, size_t n) {
+  if (n == 0) return kConstant;  // as the loop below would say; encodePayload never passes 0
+  switch (c.width) {
+    case 1: return chooseModeTyped<uint8_t>(c, n);
+    case 2: return chooseModeTyped<uint16_t>(c, n);
+    case 4: return chooseModeTyped<uint32_t>(c, n);
+    default: return chooseModeTyped<uint64_t>(c, n);
+  }
 }
 
 size_t modeBytes(uint8_t mode, size_t width, size_t n) {
@@ -188,7 +199,9 @@ std::vector<uint8_t> encodeZstd(const PointLayout& layout, const PointBuffer& p)
   std::vector<uint8_t> out(12 + ZSTD_compressBound(rawSize));
   uint32_t hdr[3] = {kZstdMagic, static_cast<uint32_t>(n), static_cast<uint32_t>(rawSize)};
   std::memcpy(out.data(), hdr, 12);
-  size_t z = ZSTD_compress(out.data() + 12, out.size() - 12, streams.data(), rawSize, kZstdLevel);
+  // One context per thread: ZSTD_compress would allocate and clear a fresh one for every node.
+  thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
+  size_t z = ZSTD_compressCCtx(cctx.get(), out.data() + 12, out.size() - 12, streams.data(), rawSize, kZstdLevel);
   NL_CHECK_MSG(!ZSTD_isError(z), ZSTD_getErrorName(z));
   out.resize(12 + z);
   return out;
