@@ -18,7 +18,12 @@ namespace nestlight {
 namespace fs = std::filesystem;
 
 namespace {
+// Per thread, over all readers: what threadReadCalls() and threadBytesRead() report.
+thread_local uint64_t tlsReadCalls = 0;
+thread_local uint64_t tlsBytesRead = 0;
+
 void readAll(int fd, void* dst, size_t size, uint64_t offset, const std::string& path) {
+  tlsBytesRead += size;
   uint8_t* p = static_cast<uint8_t*>(dst);
   while (size > 0) {
     ssize_t r = ::pread(fd, p, size, static_cast<off_t>(offset));
@@ -60,7 +65,8 @@ OctreeReader::OctreeReader(const fs::path& dir) : dir_(dir) {
     hierarchyFd_ = openOrThrow(dir / meta_.hierarchyFile);
     if (meta_.rootChunkSize > 64 * 1024)
       throw Error(mp.string(), "field 'hierarchy.root_chunk_size'", "larger than 64 KiB");
-    loadChunk(NodeKey::root(), 0, meta_.rootChunkSize, meta_.rootChunkChecksum);
+    std::unique_lock<std::mutex> lock(mutex_);
+    loadChunk(lock, NodeKey::root(), 0, meta_.rootChunkSize, meta_.rootChunkChecksum);
   } catch (...) {
     // The destructor does not run for a half-built object.
     if (payloadFd_ >= 0) ::close(payloadFd_);
@@ -74,52 +80,108 @@ OctreeReader::~OctreeReader() {
   if (hierarchyFd_ >= 0) ::close(hierarchyFd_);
 }
 
-void OctreeReader::loadChunk(const NodeKey& root, uint64_t offset, uint64_t size,
-                             uint64_t checksum) {
+uint64_t OctreeReader::threadReadCalls() { return tlsReadCalls; }
+uint64_t OctreeReader::threadBytesRead() { return tlsBytesRead; }
+
+// Called and returns with `lock` held; reads the file without it, so that peek() and readers of
+// other chunks never wait on this read. A failure is remembered and rethrown for the same chunk.
+void OctreeReader::loadChunk(std::unique_lock<std::mutex>& lock, const NodeKey& root,
+                             uint64_t offset, uint64_t size, uint64_t checksum) {
   const std::string path = (dir_ / meta_.hierarchyFile).string();
+  auto fail = [&](const Error& e) {
+    failedChunks_.emplace(offset, e);
+    throw e;
+  };
   if (size > 1 << 20 || size > meta_.hierarchyBytes || offset > meta_.hierarchyBytes - size)
-    throw Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " out of range");
+    fail(Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " out of range"));
   // Each chunk is read once: a damaged file whose proxies point back at loaded chunks would
   // otherwise expand without end.
   if (!loadedChunks_.insert(offset).second)
-    throw Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " is referenced twice");
-  std::vector<uint8_t> bytes(size);
-  readAll(hierarchyFd_, bytes.data(), size, offset, path);
-  hierarchyBytesRead_ += size;
-  if (checksum64(bytes.data(), bytes.size()) != checksum)
-    throw Error(path, Error::atByte(offset), "checksum mismatch in the hierarchy chunk of node " + root.name());
+    fail(Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " is referenced twice"));
+  readingChunks_.insert(offset);
+  lock.unlock();
   std::vector<std::pair<NodeKey, HierarchyEntry>> entries;
-  std::string err = parseHierarchyChunk(bytes.data(), bytes.size(), root, meta_.hierarchyStep, entries);
-  if (!err.empty()) throw Error(path, Error::atByte(offset), err);
+  std::optional<Error> error;
+  try {
+    std::vector<uint8_t> bytes(size);
+    readAll(hierarchyFd_, bytes.data(), size, offset, path);
+    hierarchyBytesRead_ += size;
+    if (checksum64(bytes.data(), bytes.size()) != checksum)
+      throw Error(path, Error::atByte(offset), "checksum mismatch in the hierarchy chunk of node " + root.name());
+    std::string err = parseHierarchyChunk(bytes.data(), bytes.size(), root, meta_.hierarchyStep, entries);
+    if (!err.empty()) throw Error(path, Error::atByte(offset), err);
+  } catch (const Error& e) {
+    error = e;
+  }
+  lock.lock();
+  readingChunks_.erase(offset);
+  chunkRead_.notify_all();
+  if (error) fail(*error);
   if (entries_.size() + entries.size() > meta_.nodes + kMaxProxyOverhead(meta_.nodes))
-    throw Error(path, Error::atByte(offset), "hierarchy holds more nodes than metadata's " + std::to_string(meta_.nodes));
+    fail(Error(path, Error::atByte(offset), "hierarchy holds more nodes than metadata's " + std::to_string(meta_.nodes)));
   for (auto& [k, e] : entries) {
     auto it = entries_.find(k);
     // The chunk's own root entry replaces the proxy that pointed here.
     if (it == entries_.end() || it->second.type == NodeType::Proxy) entries_[k] = e;
   }
   if (entries_.at(root).type == NodeType::Proxy)
-    throw Error(path, Error::atByte(offset), "chunk root " + root.name() + " is itself a proxy");
+    fail(Error(path, Error::atByte(offset), "chunk root " + root.name() + " is itself a proxy"));
+}
+
+std::optional<HierarchyEntry> OctreeReader::resolve(const NodeKey& key) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    // The first proxy on the path from the root: its chunk is the next to read.
+    const HierarchyEntry* proxy = nullptr;
+    NodeKey at;
+    for (uint32_t l = 0; l <= key.level && !proxy; ++l) {
+      at = key.ancestor(l);
+      auto it = entries_.find(at);
+      if (it == entries_.end()) return std::nullopt;
+      if (it->second.type == NodeType::Proxy) proxy = &it->second;
+    }
+    if (!proxy) return entries_.at(key);
+    const HierarchyEntry p = *proxy;
+    if (auto f = failedChunks_.find(p.byteOffset); f != failedChunks_.end()) throw f->second;
+    if (readingChunks_.count(p.byteOffset)) {
+      chunkRead_.wait(lock);
+      continue;
+    }
+    loadChunk(lock, at, p.byteOffset, p.byteSize, p.checksum);
+  }
 }
 
 std::optional<HierarchyEntry> OctreeReader::node(const NodeKey& key) {
+  ++tlsReadCalls;
+  return resolve(key);
+}
+
+std::optional<HierarchyEntry> OctreeReader::ensureLoaded(const NodeKey& key) {
+  ++tlsReadCalls;
+  return resolve(key);
+}
+
+std::optional<HierarchyEntry> OctreeReader::peek(const NodeKey& key) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  // Walk down from the deepest loaded ancestor, loading chunks on the way.
+  auto it = entries_.find(key);
+  if (it == entries_.end()) return std::nullopt;
+  return it->second;
+}
+
+bool OctreeReader::hierarchyPending(const NodeKey& key) const {
+  std::lock_guard<std::mutex> lock(mutex_);
   for (uint32_t l = 0; l <= key.level; ++l) {
-    NodeKey a = key.ancestor(l);
-    auto it = entries_.find(a);
-    if (it == entries_.end()) return std::nullopt;
-    if (it->second.type == NodeType::Proxy) {
-      HierarchyEntry p = it->second;
-      loadChunk(a, p.byteOffset, p.byteSize, p.checksum);
-    }
+    auto it = entries_.find(key.ancestor(l));
+    if (it == entries_.end()) return false;
+    if (it->second.type == NodeType::Proxy) return true;
   }
-  return entries_.at(key);
+  return false;
 }
 
 std::vector<NodeKey> OctreeReader::children(const NodeKey& key) {
+  ++tlsReadCalls;
   std::vector<NodeKey> out;
-  auto e = node(key);
+  auto e = resolve(key);
   if (!e) return out;
   for (int i = 0; i < 8; ++i)
     if (e->childMask & (1u << i)) out.push_back(key.child(i));
@@ -127,12 +189,13 @@ std::vector<NodeKey> OctreeReader::children(const NodeKey& key) {
 }
 
 std::vector<std::pair<NodeKey, HierarchyEntry>> OctreeReader::allNodes() {
+  ++tlsReadCalls;
   std::vector<std::pair<NodeKey, HierarchyEntry>> out;
   std::deque<NodeKey> queue{NodeKey::root()};
   while (!queue.empty()) {
     NodeKey k = queue.front();
     queue.pop_front();
-    auto e = node(k);
+    auto e = resolve(k);
     if (!e) continue;
     out.emplace_back(k, *e);
     for (int i = 0; i < 8; ++i)
@@ -142,17 +205,20 @@ std::vector<std::pair<NodeKey, HierarchyEntry>> OctreeReader::allNodes() {
 }
 
 std::vector<uint8_t> OctreeReader::readPayload(const HierarchyEntry& e) {
+  ++tlsReadCalls;
   const std::string path = (dir_ / meta_.payloadFile).string();
   if (e.byteSize > meta_.payloadBytes || e.byteOffset > meta_.payloadBytes - e.byteSize ||
       e.byteSize > (uint64_t(1) << 32))
     throw Error(path, Error::atByte(e.byteOffset), "payload range lies outside the file");
   std::vector<uint8_t> bytes(e.byteSize);
   readAll(payloadFd_, bytes.data(), bytes.size(), e.byteOffset, path);
+  payloadBytesRead_ += bytes.size();
   return bytes;
 }
 
 PointBuffer OctreeReader::readNode(const NodeKey& key) {
-  auto e = node(key);
+  ++tlsReadCalls;
+  auto e = resolve(key);
   if (!e) throw Error(dir_.string(), "node " + key.name(), "no such node");
   const std::string path = (dir_ / meta_.payloadFile).string();
   if (e->numPoints > meta_.points)
