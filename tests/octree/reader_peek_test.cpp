@@ -1,9 +1,8 @@
 // OctreeReader's non-blocking API for streaming: peek() answers from the chunks already read and
 // never reads a file, ensureLoaded() reads chunks on demand (from any thread), a damaged chunk
 // fails the same way on every call, and per-thread counters see every read.
-#include <gtest/gtest.h>
-
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <atomic>

@@ -1,0 +1,32 @@
+// Where resident nodes live: the GPU in the viewer, plain memory in tests and the stress tool.
+// The scheduler never touches GL; it talks to a NodeStore.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "nestlight/octree/node_key.h"
+#include "nestlight/octree/point_buffer.h"
+
+namespace nestlight::streaming {
+
+// A node as the loader threads leave it: decoded and converted to the store's upload format,
+// ready for one copy on the render thread.
+struct PreparedNode {
+  NodeKey key;
+  uint32_t numPoints = 0;
+  std::vector<uint8_t> bytes;  // what upload() copies; its size is the node's resident bytes
+};
+
+class NodeStore {
+ public:
+  virtual ~NodeStore() = default;
+  // Loader threads: decoded points (global integer grid) -> upload format. Must be thread-safe.
+  virtual void prepare(const NodeKey& key, PointBuffer&& points, PreparedNode& out) const = 0;
+  // Render thread: makes the node resident and returns a handle (> 0) for draw lists.
+  virtual uint64_t upload(const PreparedNode& node) = 0;
+  // Render thread: frees a handle returned by upload().
+  virtual void release(uint64_t handle) = 0;
+};
+
+}  // namespace nestlight::streaming
