@@ -16,6 +16,7 @@ void addExport(CLI::App& app, int& exitCode);
 void addGenerate(CLI::App& app, int& exitCode);
 void addDemo(CLI::App& app, int& exitCode);
 void addBench(CLI::App& app, int& exitCode);
+void addStress(CLI::App& app, int& exitCode);
 
 // "1G", "512M", "64k", plain bytes.
 uint64_t parseBytes(const std::string& text);

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addGenerate(app, code);
   nestlight::cli::addDemo(app, code);
   nestlight::cli::addBench(app, code);
+  nestlight::cli::addStress(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

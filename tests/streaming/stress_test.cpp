@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "nestlight/octree/octree_reader.h"
 #include "streaming_support.h"
 #include "test_support.h"
@@ -44,4 +46,27 @@ TEST(Stress, TwoThousandFramesTinyBudgets) {
       (unsigned long long)r.settleFramesMedian, (unsigned long long)r.settleFramesMax,
       r.updateMsMedian, r.updateMsP99, r.updateMsMax, (unsigned long long)r.totals.completed,
       (unsigned long long)r.totals.cancelled, (unsigned long long)r.totals.evicted);
+}
+
+TEST(Stress, CommandLineSummaryAndJson) {
+  test::TempDir t;
+  std::string out;
+  ASSERT_EQ(test::runCli("stress --generate 150k --dir " + t.file("o") +
+                             " --frames 300 --frame-ms 1 --point-budget 40k --gpu-budget 1M "
+                             "--upload-budget 128k -q --json " +
+                             t.file("s.json"),
+                         &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("result     OK"), std::string::npos) << out;
+  EXPECT_NE(out.find("reader calls on the render thread: 0"), std::string::npos) << out;
+  const nlohmann::json j = nlohmann::json::parse(test::readFile(t.file("s.json")));
+  EXPECT_TRUE(j["ok"].get<bool>());
+  EXPECT_GE(j["frames"].get<uint64_t>(), 300u);
+  EXPECT_EQ(j["render_thread_reader_calls"], 0);
+  EXPECT_EQ(j["points"], 150000);
+
+  // A folder that is not an octree: a clear message and a non-zero exit.
+  EXPECT_NE(test::runCli("stress " + t.file("nothing"), &out), 0);
+  EXPECT_NE(out.find("metadata.json"), std::string::npos) << out;
 }
