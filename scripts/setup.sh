@@ -11,6 +11,11 @@ PACKAGES=(
   libpcl-dev                             # PCD reading (behind one small target)
   libtbb-dev libzstd-dev libxxhash-dev libdraco-dev libeigen3-dev libnanoflann-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
+  libglm-dev libepoxy-dev                # GL maths, GL/EGL function loading
+  libegl-dev libegl1-mesa-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev  # headless GL (llvmpipe)
+  libglfw3-dev libimgui-dev libstb-dev   # the window, its UI, PNG files
+  libopenexr-dev libspdlog-dev           # EXR files, logging
+  xvfb xauth                             # the windowed viewer's test without a display
 )
 
 missing=()

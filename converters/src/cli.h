@@ -3,10 +3,23 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+namespace nestlight::viewer {
+struct RenderJob;
+}
+
 namespace nestlight::cli {
+
+// Render options shared by `render` and `demo` that need parsing after CLI11 is done.
+struct RenderOptionText {
+  std::string camera, view = "35,30", rasteriser = "points", colour;
+  std::string pointBudget = "5M", gpuBudget = "512M", uploadBudget = "32M";
+};
+void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<RenderOptionText> text);
+void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text);
 
 // Each adds its sub-command; the callback stores the exit code in `exitCode`.
 void addConvert(CLI::App& app, int& exitCode);
@@ -17,6 +30,9 @@ void addGenerate(CLI::App& app, int& exitCode);
 void addDemo(CLI::App& app, int& exitCode);
 void addBench(CLI::App& app, int& exitCode);
 void addStress(CLI::App& app, int& exitCode);
+void addRender(CLI::App& app, int& exitCode);
+void addView(CLI::App& app, int& exitCode);
+void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 
 // "1G", "512M", "64k", plain bytes.
 uint64_t parseBytes(const std::string& text);

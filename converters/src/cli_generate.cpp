@@ -3,9 +3,12 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 #include "cli.h"
+#include "nestlight/viewer/headless.h"
+#include "nestlight/viewer/window_app.h"
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/converters/synthetic.h"
@@ -87,13 +90,19 @@ void addGenerate(CLI::App& app, int& exitCode) {
 
 void addDemo(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
-      "demo", "Generate a synthetic scan, convert it, verify it and say what was built and how fast");
+      "demo", "Generate a synthetic scan, convert it, verify it, render it headless and say what was built\n"
+      "and how fast; opens the viewer when a display is present");
   auto points = std::make_shared<uint64_t>(3'000'000);
   auto dir = std::make_shared<std::string>();
   auto keep = std::make_shared<bool>(false);
   cmd->add_option("-n,--points", *points, "Points in the synthetic scan")->capture_default_str();
   cmd->add_option("--dir", *dir, "Work folder (default: a temporary folder, removed afterwards)");
   cmd->add_flag("--keep", *keep, "Keep the work folder");
+  auto image = std::make_shared<std::string>("nestlight-demo.png");
+  auto noView = std::make_shared<bool>(false);
+  cmd->add_option("--image", *image, "Where the headless render of the scan goes (.png or .exr)")
+      ->capture_default_str();
+  cmd->add_flag("--no-view", *noView, "Do not open the viewer even when a display is present");
   cmd->callback([=, &exitCode]() {
     fs::path work = dir->empty() ? fs::temp_directory_path() / ("nestlight-demo-" + std::to_string(::getpid()))
                                  : fs::path(*dir);
@@ -125,6 +134,27 @@ void addDemo(CLI::App& app, int& exitCode) {
     std::printf("  verify    %s (%llu nodes, %llu points)\n", v.ok() ? "OK" : "FAILED", (unsigned long long)v.nodes,
                 (unsigned long long)v.points);
     for (auto& f : v.failures) std::printf("            %s\n", f.c_str());
+    if (v.ok()) {
+      viewer::RenderJob job;
+      job.octree = o.output;
+      job.output = *image;
+      job.waitComplete = true;
+      job.quiet = true;
+      t = std::chrono::steady_clock::now();
+      auto frames = viewer::renderHeadless(job);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+      std::printf("  render    %s: %dx%d, %s points in %u nodes, %.0f ms (streaming and drawing)\n", image->c_str(),
+                  job.width, job.height, humanCount(double(frames.at(0).stats.drawPoints)).c_str(),
+                  frames.at(0).stats.drawNodes, ms);
+      const char* display = std::getenv("DISPLAY");
+      const char* wayland = std::getenv("WAYLAND_DISPLAY");
+      if (!*noView && ((display && *display) || (wayland && *wayland))) {
+        std::printf("  view      opening the viewer (close the window to finish)\n");
+        viewer::ViewerOptions vo;
+        vo.octree = o.output;
+        viewer::runViewer(vo);
+      }
+    }
     if (!*keep && dir->empty()) fs::remove_all(work);
     else std::printf("  kept      %s\n", work.string().c_str());
     exitCode = v.ok() ? 0 : 2;

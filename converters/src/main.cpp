@@ -8,12 +8,14 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "nestlight: converts laser scans far larger than memory into a streamable nested octree,\n"
-      "and (in later versions) views and lights them.\n\n"
+      "and streams it into a viewer or headless renders (lighting comes in later versions).\n\n"
       "Typical use:\n"
       "  nestlight convert scan.las -o scan.octree     build the octree (bounded memory)\n"
       "  nestlight info scan.octree                     what was built\n"
       "  nestlight verify scan.octree                   check every byte and point\n"
-      "  nestlight demo                                 generate, convert and verify a scene\n",
+      "  nestlight view scan.octree                     fly through it (window)\n"
+      "  nestlight render scan.octree -o view.png       headless image (EGL, llvmpipe without a GPU)\n"
+      "  nestlight demo                                 generate, convert, verify and render a scene\n",
       "nestlight"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "nestlight 0.1.0");
@@ -26,6 +28,9 @@ int main(int argc, char** argv) {
   nestlight::cli::addDemo(app, code);
   nestlight::cli::addBench(app, code);
   nestlight::cli::addStress(app, code);
+  nestlight::cli::addRender(app, code);
+  nestlight::cli::addView(app, code);
+  nestlight::cli::addBenchRender(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

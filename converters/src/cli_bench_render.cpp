@@ -1,0 +1,113 @@
+// `nestlight bench render`: points per second of each rasteriser on this machine's GL (an NVIDIA
+// GPU through EGL, or llvmpipe on the CPU), with the whole view's cut resident.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "cli.h"
+#include "nestlight/converters/builder.h"
+#include "nestlight/converters/synthetic.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
+#include "nestlight/viewer/frame_renderer.h"
+#include "nestlight/viewer/gl_context.h"
+
+namespace nestlight::cli {
+
+namespace fs = std::filesystem;
+
+void addBenchRender(CLI::App& app, int& exitCode) {
+  CLI::App* bench = app.get_subcommand("bench");
+  auto* cmd = bench->add_subcommand("render", "Rasteriser speed (points/s) of GL_POINTS and the compute path");
+  auto octree = std::make_shared<std::string>();
+  auto generate = std::make_shared<std::string>("5M");
+  auto dir = std::make_shared<std::string>("bench-data");
+  auto width = std::make_shared<int>(1920), height = std::make_shared<int>(1080), runs = std::make_shared<int>(5);
+  auto json = std::make_shared<std::string>("bench-render.json");
+  cmd->add_option("octree", *octree, "Octree to render (default: a generated synthetic scan)");
+  cmd->add_option("--generate", *generate, "Points of the synthetic scan when no octree is given")
+      ->capture_default_str();
+  cmd->add_option("--dir", *dir, "Folder for the generated scan (reused)")->capture_default_str();
+  cmd->add_option("--width", *width, "Frame width")->capture_default_str();
+  cmd->add_option("--height", *height, "Frame height")->capture_default_str();
+  cmd->add_option("--runs", *runs, "Timed frames per rasteriser (the median is reported)")->capture_default_str();
+  cmd->add_option("--json", *json, "Where to write the results")->capture_default_str();
+  cmd->callback([=, &exitCode]() {
+    fs::path oct = *octree;
+    if (oct.empty()) {
+      double n = std::stod(*generate);
+      const char unit = generate->back();
+      if (unit == 'M' || unit == 'm') n *= 1e6;
+      if (unit == 'k' || unit == 'K') n *= 1e3;
+      oct = fs::path(*dir) / ("synthetic_" + *generate + ".octree");
+      if (!fs::exists(oct / "metadata.json")) {
+        fs::create_directories(*dir);
+        SyntheticSpec spec;
+        spec.points = static_cast<uint64_t>(n);
+        spec.seed = 2026;
+        std::vector<std::unique_ptr<PointReader>> readers;
+        readers.push_back(openSynthetic(spec));
+        BuildOptions o;
+        o.output = oct;
+        o.overwrite = true;
+        o.progress = ProgressMode::Quiet;
+        std::printf("bench render: converting %s synthetic points into %s\n", generate->c_str(), oct.c_str());
+        buildOctree(std::move(readers), o);
+      }
+    }
+    OctreeReader reader(oct);
+    const Metadata& meta = reader.metadata();
+    auto ctx = viewer::createHeadlessContext();
+    nlohmann::json out = {{"device", ctx->description()}, {"octree", oct.string()}, {"width", *width},
+                          {"height", *height}, {"runs", *runs}};
+    {
+      viewer::GlNodeStore store(meta, meta.layout.has(attr::kRgb) ? viewer::ColourMode::Rgb
+                                                                  : viewer::ColourMode::Elevation);
+      viewer::FrameRenderer renderer;
+      streaming::Budgets budgets;
+      budgets.points = 100'000'000;
+      budgets.gpuBytes = 8ull << 30;
+      budgets.uploadBytesPerFrame = 1ull << 30;
+      budgets.spacingPixels = 0;  // every point of the scan: a rasteriser benchmark, not a LOD one
+      streaming::Streamer streamer(reader, store, budgets);
+      viewer::Camera cam = viewer::Camera::framing(meta.bounds);
+      const streaming::View view = cam.view(*width, *height);
+      const auto t0 = std::chrono::steady_clock::now();
+      while (!streamer.update(view).complete) {
+        if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > 600)
+          throw Error("bench render: the cut did not load within 10 minutes");
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+      const auto& st = streamer.stats();
+      std::printf("device  %s\nframe   %dx%d, %llu points in %u nodes resident\n\n", ctx->description().c_str(),
+                  *width, *height, (unsigned long long)st.drawPoints, st.drawNodes);
+      std::printf("%-10s %12s %14s\n", "path", "median ms", "points/s");
+      for (viewer::Rasteriser r : {viewer::Rasteriser::Points, viewer::Rasteriser::Compute}) {
+        viewer::RenderSettings s;
+        s.rasteriser = r;
+        if (r == viewer::Rasteriser::Compute) s.fixedPointSize = 1;
+        s.edlStrength = 0;  // the rasteriser alone
+        std::vector<double> ms;
+        for (int k = 0; k <= *runs; ++k) {
+          viewer::DrawTimings t;
+          renderer.renderToTexture(streamer.drawList(), store, cam, *width, *height, s, &t);
+          if (k > 0) ms.push_back(t.msDraw);  // the first frame allocates targets
+        }
+        std::sort(ms.begin(), ms.end());
+        const double med = ms[ms.size() / 2];
+        const double pps = st.drawPoints / (med / 1000.0);
+        std::printf("%-10s %12.2f %14s\n", viewer::rasteriserName(r), med, humanCount(pps).c_str());
+        out["paths"][viewer::rasteriserName(r)] = {{"median_ms", med}, {"points_per_second", pps}, {"ms", ms},
+                                                  {"points", st.drawPoints}};
+      }
+    }
+    std::ofstream(*json) << out.dump(1) << "\n";
+    std::printf("\nresults written to %s\n", json->c_str());
+    exitCode = 0;
+  });
+}
+
+}  // namespace nestlight::cli

@@ -1,0 +1,337 @@
+// Image tests: small headless renders (EGL; llvmpipe in CI) of converted scans, compared with
+// goldens in tests/goldens/. On a failure the rendered image and a diff image are written beside
+// the test binary (render-<name>.png, render-<name>-diff.png). scripts/update_goldens.sh
+// re-renders the goldens (NESTLIGHT_UPDATE_GOLDENS=1).
+#include <cstdlib>
+#include <fstream>
+#include <regex>
+
+#include "nestlight/converters/builder.h"
+#include "nestlight/converters/reader.h"
+#include "nestlight/converters/synthetic.h"
+#include "nestlight/octree/octree_reader.h"
+#include "nestlight/viewer/gl_context.h"
+#include "nestlight/viewer/headless.h"
+#include "test_support.h"
+
+using namespace nestlight;
+using namespace nestlight::viewer;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path goldenDir() { return fs::path(NESTLIGHT_SOURCE_DIR) / "tests" / "goldens"; }
+
+void convert(std::vector<std::unique_ptr<PointReader>> readers, const fs::path& out) {
+  BuildOptions o;
+  o.output = out;
+  o.overwrite = true;
+  o.progress = ProgressMode::Quiet;
+  buildOctree(std::move(readers), o);
+}
+
+fs::path convertShared(const std::string& rel, const test::TempDir& tmp) {
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openReader((test::sharedData() / rel).string()));
+  const fs::path out = tmp.path() / (fs::path(rel).stem().string() + ".octree");
+  convert(std::move(r), out);
+  return out;
+}
+
+RenderJob smallJob(const fs::path& octree, const std::string& output) {
+  RenderJob j;
+  j.octree = octree;
+  j.output = output;
+  j.width = 160;
+  j.height = 120;
+  j.waitComplete = true;
+  j.timeoutSeconds = 60;
+  j.quiet = true;
+  return j;
+}
+
+// Compares `file` with the golden `name`: a pixel differs when a channel is off by more than
+// `channelTol`; at most `maxFraction` of pixels may differ.
+void expectMatchesGolden(const std::string& file, const std::string& name, float channelTol, double maxFraction) {
+  const fs::path golden = goldenDir() / (name + ".png");
+  const char* update = std::getenv("NESTLIGHT_UPDATE_GOLDENS");
+  if (update && std::string(update) == "1") {
+    fs::copy_file(file, golden, fs::copy_options::overwrite_existing);
+    GTEST_SKIP() << "golden " << golden << " updated";
+  }
+  ASSERT_TRUE(fs::exists(golden)) << "no golden " << golden << "; run scripts/update_goldens.sh";
+  Image got = readImage(file), want = readImage(golden.string());
+  ImageDiff d = compareImages(got, want, channelTol);
+  if (d.fraction > maxFraction) {
+    fs::copy_file(file, "render-" + name + ".png", fs::copy_options::overwrite_existing);
+    writeImage(d.diff, "render-" + name + "-diff.png");
+  }
+  EXPECT_LE(d.fraction, maxFraction) << name << ": " << d.differing << " pixels differ (max channel error "
+                                     << d.maxChannel << "); see render-" << name << "-diff.png in "
+                                     << fs::current_path();
+}
+
+double coverage(const Image& img, const glm::vec3& background) {
+  size_t covered = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const float* p = img.at(x, y);
+      if (std::fabs(p[0] - background.x) + std::fabs(p[1] - background.y) + std::fabs(p[2] - background.z) > 0.02f)
+        ++covered;
+    }
+  return double(covered) / (double(img.width) * img.height);
+}
+
+}  // namespace
+
+// Goldens: llvmpipe is deterministic for a given Mesa and LLVM; the tolerance (3/255 per channel
+// on at most 0.5% of pixels) absorbs rounding changes at splat borders between LLVM versions.
+TEST(RenderGolden, LionPoints) {
+  NL_REQUIRE_SHARED("scans/lion_takanawa.las");
+  test::TempDir tmp;
+  RenderJob j = smallJob(convertShared("scans/lion_takanawa.las", tmp), tmp.file("lion.png"));
+  auto frames = renderHeadless(j);
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_TRUE(frames[0].complete);
+  expectMatchesGolden(j.output, "lion_points", 3.f / 255, 0.005);
+}
+
+TEST(RenderGolden, LionCompute) {
+  NL_REQUIRE_SHARED("scans/lion_takanawa.las");
+  test::TempDir tmp;
+  RenderJob j = smallJob(convertShared("scans/lion_takanawa.las", tmp), tmp.file("lion_compute.png"));
+  j.settings.rasteriser = Rasteriser::Compute;
+  j.settings.fixedPointSize = 1;
+  renderHeadless(j);
+  expectMatchesGolden(j.output, "lion_compute", 3.f / 255, 0.005);
+}
+
+TEST(RenderGolden, AutzenElevation) {
+  NL_REQUIRE_SHARED("scans/autzen_trim.las");
+  test::TempDir tmp;
+  RenderJob j = smallJob(convertShared("scans/autzen_trim.las", tmp), tmp.file("autzen.png"));
+  j.colour = ColourMode::Elevation;
+  j.elevation = 50;
+  renderHeadless(j);
+  expectMatchesGolden(j.output, "autzen_elevation", 3.f / 255, 0.005);
+}
+
+// The two rasterisers agree where both draw one pixel per point: differences come only from
+// pixels where several points fall within 1% of the nearest depth (the compute path averages
+// them, GL_POINTS keeps the first) and from sub-pixel rounding at pixel borders.
+TEST(Render, ComputeAndPointsPathsAgree) {
+  NL_REQUIRE_SHARED("scans/lion_takanawa.las");
+  test::TempDir tmp;
+  const fs::path oct = convertShared("scans/lion_takanawa.las", tmp);
+  RenderJob a = smallJob(oct, tmp.file("a.png"));
+  a.width = 320, a.height = 240;
+  a.settings.fixedPointSize = 1;
+  a.settings.edlStrength = 0;
+  RenderJob b = a;
+  b.output = tmp.file("b.png");
+  b.settings.rasteriser = Rasteriser::Compute;
+  renderHeadless(a);
+  renderHeadless(b);
+  Image ia = readImage(a.output), ib = readImage(b.output);
+  // Coverage must match closely: both paths put each point in the same pixel.
+  EXPECT_NEAR(coverage(ia, a.settings.background), coverage(ib, b.settings.background), 0.01);
+  ImageDiff d = compareImages(ia, ib, 24.f / 255);
+  // Measured on llvmpipe: 1.7% of pixels.
+  EXPECT_LE(d.fraction, 0.05) << d.differing << " pixels differ";
+}
+
+// A tiled render equals the single-framebuffer one: tiles reuse the big image's projection, and
+// their margins give eye-dome lighting its neighbours.
+TEST(Render, TiledEqualsUntiled) {
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 200'000;
+  spec.seed = 7;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  convert(std::move(r), tmp.path() / "s.octree");
+  RenderJob a = smallJob(tmp.path() / "s.octree", tmp.file("whole.png"));
+  a.width = 300, a.height = 200;
+  RenderJob b = a;
+  b.output = tmp.file("tiled.png");
+  b.settings.maxTile = 64;
+  renderHeadless(a);
+  renderHeadless(b);
+  ImageDiff d = compareImages(readImage(a.output), readImage(b.output), 1.f / 255);
+  EXPECT_EQ(d.differing, 0u) << "max channel error " << d.maxChannel;
+}
+
+// National-grid coordinates: the same scan 5,000 km away, seen by the same camera shifted by
+// the same amount, gives the same image (positions reach the GPU relative to the eye).
+TEST(Render, NationalGridDoesNotJitter) {
+  test::TempDir tmp;
+  auto build = [&](Vec3d origin, const std::string& name) {
+    SyntheticSpec spec;
+    spec.points = 150'000;
+    spec.seed = 11;
+    spec.origin = origin;
+    std::vector<std::unique_ptr<PointReader>> r;
+    r.push_back(openSynthetic(spec));
+    convert(std::move(r), tmp.path() / name);
+    return tmp.path() / name;
+  };
+  const Vec3d far{500000, 5000000, 100};
+  const fs::path local = build({0, 0, 0}, "local.octree"), grid = build(far, "grid.octree");
+  Camera c;
+  c.eye = {130, -40, 60};
+  c.target = {50, 50, 10};
+  // Every point drawn (no LOD): the two octrees' cubes sit differently around the points, so
+  // their node samples differ; all points together do not.
+  RenderJob a = smallJob(local, tmp.file("local.png"));
+  a.camera = c;
+  a.width = 320, a.height = 240;
+  a.budgets.spacingPixels = 0;
+  a.budgets.points = 1'000'000;
+  a.settings.fixedPointSize = 2;  // splat sizes follow node levels, which differ between the two
+  RenderJob b = a;
+  b.octree = grid;
+  b.output = tmp.file("grid.png");
+  c.eye += glm::dvec3(far.x, far.y, far.z);
+  c.target += glm::dvec3(far.x, far.y, far.z);
+  b.camera = c;
+  renderHeadless(a);
+  renderHeadless(b);
+  Image ia = readImage(a.output), ib = readImage(b.output);
+  EXPECT_GT(coverage(ia, a.settings.background), 0.2);
+  ImageDiff d = compareImages(ia, ib, 2.f / 255);
+  // Positions reach the GPU as (node origin - eye) in double, then float, plus small node-local
+  // floats: the far scan draws exactly like the near one. Float world positions would be off by
+  // ~0.5 m at y = 5e6 and change most pixels.
+  EXPECT_EQ(d.differing, 0u) << "max channel error " << d.maxChannel;
+}
+
+TEST(Render, ExrOutputIsLinear) {
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 50'000;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  convert(std::move(r), tmp.path() / "s.octree");
+  RenderJob a = smallJob(tmp.path() / "s.octree", tmp.file("x.png"));
+  RenderJob b = a;
+  b.output = tmp.file("x.exr");
+  renderHeadless(a);
+  renderHeadless(b);
+  // readImage converts EXR back to display values: both files hold the same picture.
+  ImageDiff d = compareImages(readImage(a.output), readImage(b.output), 1.5f / 255);
+  EXPECT_EQ(d.differing, 0u) << d.maxChannel;
+}
+
+TEST(Render, UnknownFormatVersionFailsBeforeGl) {
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 1000;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  const fs::path oct = tmp.path() / "s.octree";
+  convert(std::move(r), oct);
+  std::string meta = test::readFile((oct / "metadata.json").string());
+  const std::string before = meta;
+  meta = std::regex_replace(meta, std::regex(R"("version":\s*1\b)"), "\"version\": 99");
+  ASSERT_NE(meta, before);
+  test::writeFile((oct / "metadata.json").string(), meta);
+  Error e = test::errorOf([&] { renderHeadless(smallJob(oct, tmp.file("x.png"))); });
+  EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
+  Error e2 = test::errorOf([&] { renderHeadless(smallJob(tmp.path(), tmp.file("x.png"))); });
+  EXPECT_NE(std::string(e2.what()).find("metadata.json"), std::string::npos) << e2.what();
+}
+
+TEST(Render, CameraPathWritesSequenceAndStats) {
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 100'000;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  convert(std::move(r), tmp.path() / "s.octree");
+  test::writeFile(tmp.file("path.json"),
+                  R"({"fps": 4, "fov": 50, "keyframes": [{"time": 0, "eye": [150, -50, 80], "target": [50, 50, 0]},
+                      {"time": 1, "eye": [50, -100, 60], "target": [50, 50, 0]}]})");
+  RenderJob j = smallJob(tmp.path() / "s.octree", tmp.file("f_%04d.png"));
+  j.path = CameraPath::load(tmp.file("path.json"));
+  j.statsCsv = tmp.file("stats.csv");
+  auto frames = renderHeadless(j);
+  ASSERT_EQ(frames.size(), 5u);
+  for (int f = 0; f < 5; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "f_%04d.png", f);
+    EXPECT_TRUE(fs::exists(tmp.file(name))) << name;
+    EXPECT_TRUE(frames[size_t(f)].complete);
+  }
+  std::ifstream csv(j.statsCsv);
+  std::string line;
+  int lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 6);  // header + 5 frames
+  test::writeFile(tmp.file("bad.json"), R"({"keyframes": [{"time": 0, "eye": [1, 2], "target": [0, 0, 0]}]})");
+  Error e = test::errorOf([&] { CameraPath::load(tmp.file("bad.json")); });
+  EXPECT_NE(std::string(e.what()).find("keyframes[0].eye"), std::string::npos) << e.what();
+}
+
+// The OSMesa fallback draws the same picture as EGL (both are llvmpipe here).
+TEST(Render, OsMesaFallbackMatchesEgl) {
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 60'000;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  convert(std::move(r), tmp.path() / "s.octree");
+  RenderJob a = smallJob(tmp.path() / "s.octree", tmp.file("egl.png"));
+  RenderJob b = a;
+  b.output = tmp.file("osmesa.png");
+  ::setenv("NESTLIGHT_GL_PLATFORM", "surfaceless", 1);
+  renderHeadless(a);
+  ::setenv("NESTLIGHT_GL_PLATFORM", "osmesa", 1);
+  renderHeadless(b);
+  ::unsetenv("NESTLIGHT_GL_PLATFORM");
+  ImageDiff d = compareImages(readImage(a.output), readImage(b.output), 1.f / 255);
+  EXPECT_EQ(d.differing, 0u) << d.maxChannel;
+}
+
+TEST(Render, NoContextMessageNamesEachPlatform) {
+  ::setenv("NESTLIGHT_GL_PLATFORM", "bogus", 1);
+  Error e = test::errorOf([] { createHeadlessContext(); });
+  ::unsetenv("NESTLIGHT_GL_PLATFORM");
+  EXPECT_NE(std::string(e.what()).find("device, surfaceless or osmesa"), std::string::npos) << e.what();
+}
+
+// A damaged payload while rendering: the node is marked bad and logged, the frame completes
+// with the rest of the cut.
+TEST(Render, DamagedPayloadIsSkippedAndRenderingGoesOn) {
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 200'000;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  const fs::path oct = tmp.path() / "s.octree";
+  convert(std::move(r), oct);
+  uint64_t offset = 0, size = 0;
+  {
+    OctreeReader reader(oct);
+    for (auto& [key, e] : reader.allNodes())
+      if (key.level == 1 && e.byteSize > 64) {
+        offset = e.byteOffset, size = e.byteSize;
+        break;
+      }
+  }
+  ASSERT_GT(size, 0u);
+  {
+    std::fstream f((oct / "octree.bin").string(), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(std::streamoff(offset + size / 2));
+    const char junk[8] = {'d', 'a', 'm', 'a', 'g', 'e', 'd', '!'};
+    f.write(junk, sizeof junk);
+  }
+  RenderJob j = smallJob(oct, tmp.file("damaged.png"));
+  j.budgets.spacingPixels = 0;
+  std::vector<RenderedFrame> frames;
+  ASSERT_NO_THROW(frames = renderHeadless(j));
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_TRUE(frames[0].complete);
+  EXPECT_EQ(frames[0].stats.badNodes, 1u);
+  EXPECT_GT(frames[0].stats.drawNodes, 0u);
+  EXPECT_TRUE(fs::exists(j.output));
+}

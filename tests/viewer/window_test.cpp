@@ -1,0 +1,47 @@
+// The windowed viewer under a virtual X server: opens a scan, turns the camera for a number of
+// frames and saves a screenshot; the screenshot must show the scan.
+#include <cmath>
+#include <cstdlib>
+
+#include "nestlight/converters/builder.h"
+#include "nestlight/converters/synthetic.h"
+#include "nestlight/viewer/image.h"
+#include "test_support.h"
+
+using namespace nestlight;
+namespace fs = std::filesystem;
+
+TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is not installed";
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 200'000;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  BuildOptions o;
+  o.output = tmp.path() / "s.octree";
+  o.progress = ProgressMode::Quiet;
+  buildOctree(std::move(r), o);
+  const std::string shot = tmp.file("shot.png");
+  std::string out;
+  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+                          o.output.string() + " --width 320 --height 240 --frames 40 --orbit 3 --screenshot " + shot;
+  const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
+  out = test::readFile(tmp.file("log.txt"));
+  ASSERT_EQ(rc, 0) << out;
+  ASSERT_TRUE(fs::exists(shot)) << out;
+  viewer::Image img = viewer::readImage(shot);
+  EXPECT_EQ(img.width, 320);
+  EXPECT_EQ(img.height, 240);
+  // The scan covers a good part of the picture: pixels that are neither the background colour
+  // (0.08, 0.08, 0.10) nor black (an empty or failed frame).
+  size_t covered = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const float* p = img.at(x, y);
+      const float offBackground = std::fabs(p[0] - 0.08f) + std::fabs(p[1] - 0.08f) + std::fabs(p[2] - 0.10f);
+      if (offBackground > 0.05f && p[0] + p[1] + p[2] > 0.05f) ++covered;
+    }
+  EXPECT_GT(double(covered) / (320.0 * 240.0), 0.1) << out;
+  EXPECT_NE(out.find("GLFW window"), std::string::npos) << out;
+}

@@ -1,0 +1,40 @@
+// A perspective camera in world coordinates (double), and the float matrices the GPU gets.
+//
+// Positions reach the GPU relative to the eye: each node's origin minus the eye is computed in
+// double on the CPU and only the small difference becomes float, so a national-grid scan
+// (x ~ 5e5 m, mm detail) renders without jitter. The view matrix on the GPU is a pure rotation.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include "nestlight/octree/geometry.h"
+#include "nestlight/streaming/view.h"
+
+namespace nestlight::viewer {
+
+struct Camera {
+  glm::dvec3 eye{0, 0, 0};
+  glm::dvec3 target{0, 0, -1};
+  glm::dvec3 up{0, 0, 1};  // scans are z-up
+  double fovYDegrees = 60;
+  double nearPlane = 0.05;
+  double farPlane = 1e5;
+
+  // Looks at `box` from a direction (azimuth/elevation in degrees) so that its bounding sphere
+  // fills the view; near and far follow the box.
+  static Camera framing(const Box3d& box, double fovYDegrees = 60, double azimuth = 35, double elevation = 30);
+  // Fits near/far to the box as seen from the current eye.
+  void fitClipPlanes(const Box3d& box);
+
+  glm::dmat4 viewRotation() const;                  // eye at the origin
+  glm::dmat4 projection(double aspect) const;       // OpenGL clip conventions
+  glm::dmat4 clipFromWorld(double aspect) const;    // projection * full view (double)
+  streaming::View view(int widthPx, int heightPx) const;
+};
+
+// Clip-space transform that maps the pixel rectangle [x0, x0 + w) x [y0, y0 + h) of a
+// width x height image (y from the bottom) onto the whole viewport: renders a tile of a large
+// image with the large image's projection.
+glm::dmat4 tileFromClip(int width, int height, int x0, int y0, int w, int h);
+
+}  // namespace nestlight::viewer

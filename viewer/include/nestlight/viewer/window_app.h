@@ -1,0 +1,29 @@
+// `nestlight view`: the interactive viewer (GLFW window, Dear ImGui panel).
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "nestlight/viewer/headless.h"
+
+namespace nestlight::viewer {
+
+struct ViewerOptions {
+  std::filesystem::path octree;
+  int width = 1280, height = 800;
+  std::optional<Camera> camera;
+  RenderSettings settings;
+  streaming::Budgets budgets;
+  std::optional<ColourMode> colour;
+  // Scripted runs (tests, demos): stop after this many frames (0: run until closed), turn the
+  // orbit camera by this many degrees per frame, and save a screenshot at the end.
+  int frames = 0;
+  double orbitDegreesPerFrame = 0;
+  std::string screenshot;
+};
+
+// Returns the process exit code. Throws nestlight::Error when no window can be opened.
+int runViewer(const ViewerOptions& options);
+
+}  // namespace nestlight::viewer

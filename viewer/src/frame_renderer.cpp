@@ -1,0 +1,255 @@
+#include "nestlight/viewer/frame_renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "nestlight/octree/error.h"
+
+namespace nestlight::viewer {
+
+namespace {
+// llvmpipe (and the issue) limit SSBO bindings to 128 MiB; the compute rasteriser's largest
+// buffer is 16 bytes per pixel, so a tile holds at most 8M pixels.
+constexpr size_t kMaxSsboBytes = size_t(128) << 20;
+
+void setMat4(GLuint prog, const char* name, const glm::dmat4& m) {
+  const glm::mat4 f(m);
+  glProgramUniformMatrix4fv(prog, glGetUniformLocation(prog, name), 1, GL_FALSE, glm::value_ptr(f));
+}
+}  // namespace
+
+const char* rasteriserName(Rasteriser r) { return r == Rasteriser::Points ? "points" : "compute"; }
+Rasteriser parseRasteriser(const std::string& name) {
+  if (name == "points") return Rasteriser::Points;
+  if (name == "compute") return Rasteriser::Compute;
+  throw Error("unknown rasteriser '" + name + "' (points, compute)");
+}
+
+FrameRenderer::FrameRenderer()
+    : points_({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/points.frag"}}),
+      depthPass_({{GL_COMPUTE_SHADER, "points/raster_depth.comp"}}),
+      colourPass_({{GL_COMPUTE_SHADER, "points/raster_colour.comp"}}),
+      resolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve.frag"}}),
+      edl_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}}) {
+  glCreateVertexArrays(1, &vao_);
+}
+
+FrameRenderer::~FrameRenderer() {
+  GLuint fbos[] = {gbuffer_, outputFbo_};
+  glDeleteFramebuffers(2, fbos);
+  GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_};
+  glDeleteTextures(4, tex);
+  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_};
+  glDeleteBuffers(3, bufs);
+  glDeleteVertexArrays(1, &vao_);
+}
+
+void FrameRenderer::ensureTargets(int w, int h, bool compute) {
+  if (w != w_ || h != h_) {
+    GLuint fbos[] = {gbuffer_, outputFbo_};
+    glDeleteFramebuffers(2, fbos);
+    GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_};
+    glDeleteTextures(4, tex);
+    glCreateTextures(GL_TEXTURE_2D, 1, &colourTex_);
+    glTextureStorage2D(colourTex_, 1, GL_RGBA8, w, h);
+    glCreateTextures(GL_TEXTURE_2D, 1, &normalTex_);
+    glTextureStorage2D(normalTex_, 1, GL_RGBA16F, w, h);
+    glCreateTextures(GL_TEXTURE_2D, 1, &depthTex_);
+    glTextureStorage2D(depthTex_, 1, GL_DEPTH_COMPONENT32F, w, h);
+    glCreateTextures(GL_TEXTURE_2D, 1, &outputTex_);
+    glTextureStorage2D(outputTex_, 1, GL_RGBA16F, w, h);
+    for (GLuint t : {colourTex_, normalTex_, depthTex_, outputTex_}) {
+      glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    }
+    glCreateFramebuffers(1, &gbuffer_);
+    glNamedFramebufferTexture(gbuffer_, GL_COLOR_ATTACHMENT0, colourTex_, 0);
+    glNamedFramebufferTexture(gbuffer_, GL_COLOR_ATTACHMENT1, normalTex_, 0);
+    glNamedFramebufferTexture(gbuffer_, GL_DEPTH_ATTACHMENT, depthTex_, 0);
+    const GLenum draw[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(gbuffer_, 2, draw);
+    glCreateFramebuffers(1, &outputFbo_);
+    glNamedFramebufferTexture(outputFbo_, GL_COLOR_ATTACHMENT0, outputTex_, 0);
+    for (GLuint f : {gbuffer_, outputFbo_})
+      if (glCheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw Error("the G-buffer framebuffer is incomplete (" + std::to_string(w) + "x" + std::to_string(h) + ")");
+    w_ = w, h_ = h;
+  }
+  const size_t pixels = size_t(w) * h;
+  if (compute && pixels > ssboPixels_) {
+    NL_CHECK(pixels * 16 <= kMaxSsboBytes);
+    GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_};
+    glDeleteBuffers(3, bufs);
+    glCreateBuffers(1, &depthSsbo_);
+    glNamedBufferStorage(depthSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    glCreateBuffers(1, &accumSsbo_);
+    glNamedBufferStorage(accumSsbo_, pixels * 16, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    glCreateBuffers(1, &normalSsbo_);
+    glNamedBufferStorage(normalSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    ssboPixels_ = pixels;
+  }
+}
+
+void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+                             const Camera& camera, int fullW, int fullH, int x0, int y0, int w, int h,
+                             const RenderSettings& s, DrawTimings* t) {
+  const bool compute = s.rasteriser == Rasteriser::Compute;
+  ensureTargets(w, h, compute);
+  const glm::dmat4 clipFromView =
+      tileFromClip(fullW, fullH, x0, y0, w, h) * camera.projection(double(fullW) / fullH);
+  const glm::dmat4 viewFromCamRel = camera.viewRotation();
+  const double pixelsPerUnit = fullH / (2.0 * std::tan(glm::radians(camera.fovYDegrees) * 0.5));
+
+  glViewport(0, 0, w, h);
+  const float clearColour[4] = {0, 0, 0, 0}, clearNormal[4] = {0, 0, 0, 0};
+  const float clearDepth = 1.0f;
+  glClearNamedFramebufferfv(gbuffer_, GL_COLOR, 0, clearColour);
+  glClearNamedFramebufferfv(gbuffer_, GL_COLOR, 1, clearNormal);
+  glClearNamedFramebufferfv(gbuffer_, GL_DEPTH, 0, &clearDepth);
+  glBindVertexArray(vao_);
+
+  auto nodeOffset = [&](const streaming::DrawNode& n) {
+    const glm::dvec3 origin(n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z);
+    return glm::vec3(origin - camera.eye);  // the difference is small: float keeps it exact enough
+  };
+
+  if (!compute) {
+    const GLuint p = points_.id();
+    points_.use();
+    setMat4(p, "uClipFromView", clipFromView);
+    setMat4(p, "uViewFromCamRel", viewFromCamRel);
+    glProgramUniform1f(p, points_.uniform("uPixelsPerUnit"), float(pixelsPerUnit));
+    glProgramUniform1f(p, points_.uniform("uSizeScale"), s.sizeScale);
+    glProgramUniform2f(p, points_.uniform("uSizeRange"), s.minPointSize, s.maxPointSize);
+    glProgramUniform1f(p, points_.uniform("uFixedSize"), s.fixedPointSize);
+    glProgramUniform1i(p, points_.uniform("uRound"), s.roundPoints && s.fixedPointSize != 1.0f);
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
+    const GLint offLoc = points_.uniform("uNodeOffset"), spLoc = points_.uniform("uSpacing"),
+                nLoc = points_.uniform("uNumPoints");
+    for (const auto& n : nodes) {
+      if (!n.numPoints) continue;
+      const glm::vec3 off = nodeOffset(n);
+      glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
+      glProgramUniform1f(p, spLoc, float(n.spacing));
+      glProgramUniform1ui(p, nLoc, n.numPoints);
+      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
+                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
+      glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
+      if (t) t->points += n.numPoints;
+    }
+    glDisable(GL_DEPTH_TEST);
+  } else {
+    const size_t pixels = size_t(w) * h;
+    const uint32_t far = 0xffffffffu, zero = 0;
+    glClearNamedBufferSubData(depthSsbo_, GL_R32UI, 0, pixels * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
+    glClearNamedBufferSubData(accumSsbo_, GL_R32UI, 0, pixels * 16, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(normalSsbo_, GL_R32UI, 0, pixels * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, depthSsbo_, 0, GLsizeiptr(pixels * 4));
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, accumSsbo_, 0, GLsizeiptr(pixels * 16));
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 3, normalSsbo_, 0, GLsizeiptr(pixels * 4));
+    for (ShaderProgram* pass : {&depthPass_, &colourPass_}) {
+      const GLuint p = pass->id();
+      pass->use();
+      setMat4(p, "uClipFromView", clipFromView);
+      setMat4(p, "uViewFromCamRel", viewFromCamRel);
+      glProgramUniform2i(p, pass->uniform("uViewport"), w, h);
+      const GLint offLoc = pass->uniform("uNodeOffset"), nLoc = pass->uniform("uNumPoints");
+      for (const auto& n : nodes) {
+        if (!n.numPoints) continue;
+        const glm::vec3 off = nodeOffset(n);
+        glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
+        glProgramUniform1ui(p, nLoc, n.numPoints);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
+                          GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
+        glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
+        if (t && pass == &depthPass_) t->points += n.numPoints;
+      }
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    const GLuint r = resolve_.id();
+    resolve_.use();
+    setMat4(r, "uClipFromView", clipFromView);
+    setMat4(r, "uViewFromCamRel", viewFromCamRel);
+    glProgramUniform2i(r, resolve_.uniform("uViewport"), w, h);
+    glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_ALWAYS);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDisable(GL_DEPTH_TEST);
+  }
+
+  // Eye-dome lighting into the output.
+  const GLuint e = edl_.id();
+  edl_.use();
+  glBindTextureUnit(0, colourTex_);
+  glBindTextureUnit(1, depthTex_);
+  glProgramUniform1i(e, edl_.uniform("uColour"), 0);
+  glProgramUniform1i(e, edl_.uniform("uDepth"), 1);
+  glProgramUniform1f(e, edl_.uniform("uNear"), float(camera.nearPlane));
+  glProgramUniform1f(e, edl_.uniform("uFar"), float(camera.farPlane));
+  glProgramUniform1f(e, edl_.uniform("uStrength"), s.edlStrength);
+  glProgramUniform1f(e, edl_.uniform("uRadius"), s.edlRadius);
+  glProgramUniform3f(e, edl_.uniform("uBackground"), s.background.x, s.background.y, s.background.z);
+  glBindFramebuffer(GL_FRAMEBUFFER, outputFbo_);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+                                      const Camera& camera, int width, int height, const RenderSettings& s,
+                                      DrawTimings* t) {
+  const auto t0 = std::chrono::steady_clock::now();
+  drawTile(nodes, store, camera, width, height, 0, 0, width, height, s, t);
+  if (t) {
+    glFinish();
+    t->msDraw += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+  return outputTex_;
+}
+
+Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+                            const Camera& camera, int width, int height, const RenderSettings& s, DrawTimings* t) {
+  if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
+    throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
+  const auto t0 = std::chrono::steady_clock::now();
+  Image img;
+  img.width = width, img.height = height;
+  img.rgba.assign(size_t(width) * height * 4, 0.f);
+  // Tiles overlap by a margin so eye-dome lighting sees its neighbours across tile borders.
+  const int margin = int(std::ceil(s.edlRadius)) + 2;
+  int tile = std::max(64, s.maxTile);
+  while (size_t(tile + 2 * margin) * (tile + 2 * margin) * 16 > kMaxSsboBytes) tile /= 2;
+  std::vector<float> px;
+  for (int ty = 0; ty < height; ty += tile)
+    for (int tx = 0; tx < width; tx += tile) {
+      const int w = std::min(tile, width - tx), h = std::min(tile, height - ty);
+      const bool single = w == width && h == height;
+      const int mx0 = single ? 0 : std::max(0, tx - margin), my0 = single ? 0 : std::max(0, ty - margin);
+      const int mx1 = single ? width : std::min(width, tx + w + margin),
+                my1 = single ? height : std::min(height, ty + h + margin);
+      const int mw = mx1 - mx0, mh = my1 - my0;
+      // GL's rows go up; image rows go down: the tile's GL y range is flipped.
+      const int glY0 = height - my1;
+      drawTile(nodes, store, camera, width, height, mx0, glY0, mw, mh, s, t);
+      px.resize(size_t(w_) * h_ * 4);
+      glGetTextureImage(outputTex_, 0, GL_RGBA, GL_FLOAT, GLsizei(px.size() * sizeof(float)), px.data());
+      for (int y = 0; y < h; ++y) {
+        const int imgY = ty + y;
+        const int glRow = (height - 1 - imgY) - glY0;
+        for (int x = 0; x < w; ++x) {
+          const float* src = &px[4 * (size_t(glRow) * w_ + (tx + x - mx0))];
+          std::copy(src, src + 4, img.at(tx + x, imgY));
+        }
+      }
+    }
+  if (t) t->msDraw += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return img;
+}
+
+}  // namespace nestlight::viewer

@@ -1,0 +1,93 @@
+// The OSMesa fallback: an OpenGL 4.5 core context rendered by Mesa into client memory, for
+// systems whose libEGL lacks the surfaceless platform. libepoxy resolves GL functions only
+// through EGL or GLX, so once the context is current every function the viewer calls
+// (listed at build time by viewer/gl_functions.cmake) is pointed at OSMesa's own.
+#include <epoxy/gl.h>
+#include <GL/osmesa.h>
+
+#include <dlfcn.h>
+
+#include <string>
+#include <vector>
+
+#include "nestlight/octree/error.h"
+#include "nestlight/viewer/gl_context.h"
+
+namespace nestlight::viewer {
+
+namespace {
+
+using GetProc = OSMESAproc (*)(const char*);
+
+class OsMesaContext : public GlContext {
+ public:
+  OsMesaContext(void* lib, OSMesaContext ctx) : lib_(lib), ctx_(ctx), pixels_(4, 0) {
+    makeCurrent();
+    const auto getProc = reinterpret_cast<GetProc>(dlsym(lib_, "OSMesaGetProcAddress"));
+#define NL_GL(name)                                                           \
+  saved_.push_back(reinterpret_cast<void*>(epoxy_##name));                    \
+  epoxy_##name = reinterpret_cast<decltype(epoxy_##name)>(getProc(#name));
+#include "osmesa_gl_functions.inc"
+#undef NL_GL
+    describe("OSMesa");
+  }
+  ~OsMesaContext() override {
+    // Give epoxy its own resolvers back: a later EGL or GLX context must not call into OSMesa.
+    size_t i = 0;
+#define NL_GL(name) epoxy_##name = reinterpret_cast<decltype(epoxy_##name)>(saved_[i++]);
+#include "osmesa_gl_functions.inc"
+#undef NL_GL
+    auto destroy = reinterpret_cast<void (*)(OSMesaContext)>(dlsym(lib_, "OSMesaDestroyContext"));
+    if (destroy) destroy(ctx_);
+    dlclose(lib_);
+  }
+  void makeCurrent() override {
+    auto make = reinterpret_cast<GLboolean (*)(OSMesaContext, void*, GLenum, GLsizei, GLsizei)>(
+        dlsym(lib_, "OSMesaMakeCurrent"));
+    // Every pass draws into FBOs; the client buffer is a 1x1 placeholder.
+    if (!make || !make(ctx_, pixels_.data(), GL_UNSIGNED_BYTE, 1, 1))
+      throw Error("OSMesa: OSMesaMakeCurrent failed");
+  }
+
+ private:
+  void* lib_;
+  OSMesaContext ctx_;
+  std::vector<unsigned char> pixels_;
+  std::vector<void*> saved_;
+};
+
+}  // namespace
+
+// Loaded at run time so that machines without libOSMesa still start.
+std::unique_ptr<GlContext> createOsMesaContext(std::string& why) {
+  void* lib = nullptr;
+  for (const char* name : {"libOSMesa.so.8", "libOSMesa.so.6", "libOSMesa.so"})
+    if ((lib = dlopen(name, RTLD_NOW | RTLD_LOCAL))) break;
+  if (!lib) {
+    why = "libOSMesa is not installed (apt-get install libosmesa6)";
+    return nullptr;
+  }
+  auto create = reinterpret_cast<OSMesaContext (*)(const int*, OSMesaContext)>(
+      dlsym(lib, "OSMesaCreateContextAttribs"));
+  if (!create || !dlsym(lib, "OSMesaGetProcAddress") || !dlsym(lib, "OSMesaMakeCurrent")) {
+    why = "libOSMesa lacks OSMesaCreateContextAttribs";
+    dlclose(lib);
+    return nullptr;
+  }
+  const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
+                       OSMESA_CONTEXT_MAJOR_VERSION, 4, OSMESA_CONTEXT_MINOR_VERSION, 5, 0};
+  OSMesaContext ctx = create(attrs, nullptr);
+  if (!ctx) {
+    why = "no OpenGL 4.5 core context from OSMesaCreateContextAttribs";
+    dlclose(lib);
+    return nullptr;
+  }
+  try {
+    return std::make_unique<OsMesaContext>(lib, ctx);
+  } catch (const Error& e) {
+    why = e.what();
+    return nullptr;
+  }
+}
+
+}  // namespace nestlight::viewer

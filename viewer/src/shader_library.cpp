@@ -1,0 +1,224 @@
+#include "nestlight/viewer/shader_library.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstring>
+#include <sstream>
+
+#include "nestlight/octree/error.h"
+#include "nestlight/shaders/embedded.h"
+
+namespace nestlight::viewer {
+
+namespace {
+
+const shaders::EmbeddedFile* findFile(const std::string& path) {
+  for (const auto& f : shaders::embeddedFiles())
+    if (f.path == path) return &f;
+  return nullptr;
+}
+
+// "points/../common/a.glsl" -> "common/a.glsl"; an empty result means it leaves shaders/.
+std::string normalise(const std::string& path) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (start <= path.size()) {
+    size_t end = path.find('/', start);
+    if (end == std::string::npos) end = path.size();
+    std::string part = path.substr(start, end - start);
+    if (part == "..") {
+      if (parts.empty()) return {};
+      parts.pop_back();
+    } else if (!part.empty() && part != ".") {
+      parts.push_back(part);
+    }
+    start = end + 1;
+  }
+  std::string out;
+  for (const auto& p : parts) out += (out.empty() ? "" : "/") + p;
+  return out;
+}
+
+std::string directoryOf(const std::string& path) {
+  auto slash = path.rfind('/');
+  return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+enum class Directive { None, Include, Version };
+
+// `#include "file"` (the file's name into `included`) or `#version ...`; whitespace as the GLSL
+// preprocessor allows it.
+Directive directiveOf(const std::string& line, std::string& included) {
+  size_t i = line.find_first_not_of(" \t");
+  if (i == std::string::npos || line[i] != '#') return Directive::None;
+  i = line.find_first_not_of(" \t", i + 1);
+  if (i == std::string::npos) return Directive::None;
+  auto word = [&](const char* w) {
+    const size_t n = std::strlen(w);
+    return line.compare(i, n, w) == 0 && (i + n == line.size() || line[i + n] == ' ' || line[i + n] == '\t');
+  };
+  if (word("version")) return Directive::Version;
+  if (!word("include")) return Directive::None;
+  const size_t open = line.find('"', i + 7), close = open == std::string::npos ? open : line.find('"', open + 1);
+  if (close == std::string::npos || line.find_first_not_of(" \t", close + 1) != std::string::npos) return Directive::None;
+  included = line.substr(open + 1, close - open - 1);
+  return included.empty() ? Directive::None : Directive::Include;
+}
+
+void expand(const std::string& path, PreprocessedSource& out, std::vector<std::string>& stack,
+            const std::string& from, int fromLine) {
+  const shaders::EmbeddedFile* f = findFile(path);
+  if (!f)
+    throw Error(from.empty() ? "shaders/" + path : "shaders/" + from,
+                from.empty() ? "" : "line " + std::to_string(fromLine),
+                "no embedded shader file '" + path + "'");
+  for (const auto& s : stack)
+    if (s == path)
+      throw Error("shaders/" + from, "line " + std::to_string(fromLine), "#include cycle through '" + path + "'");
+  stack.push_back(path);
+  int number = -1;
+  for (size_t i = 0; i < out.files.size(); ++i)
+    if (out.files[i] == path) number = static_cast<int>(i);
+  if (number < 0) {
+    number = static_cast<int>(out.files.size());
+    out.files.push_back(path);
+  }
+  std::istringstream in{std::string(f->text)};
+  std::string line;
+  int lineNo = 0;
+  out.text += "#line 1 " + std::to_string(number) + "\n";
+  while (std::getline(in, line)) {
+    ++lineNo;
+    std::string included;
+    const Directive d = directiveOf(line, included);
+    if (d == Directive::Include) {
+      const std::string target = normalise(directoryOf(path) + included);
+      // Each file once per program, as with #pragma once.
+      const bool seen = std::find(out.files.begin(), out.files.end(), target) != out.files.end();
+      const bool cycle = std::find(stack.begin(), stack.end(), target) != stack.end();
+      if (!seen || cycle)
+        expand(target.empty() ? included : target, out, stack, path, lineNo);
+      out.text += "#line " + std::to_string(lineNo + 1) + " " + std::to_string(number) + "\n";
+    } else if (d == Directive::Version) {
+      throw Error("shaders/" + path, "line " + std::to_string(lineNo),
+                  "#version is added by the shader library; remove it from the file");
+    } else {
+      out.text += line + "\n";
+    }
+  }
+  stack.pop_back();
+}
+
+GLuint compile(GLenum type, const PreprocessedSource& src, const std::string& path) {
+  GLuint s = glCreateShader(type);
+  const char* text = src.text.c_str();
+  glShaderSource(s, 1, &text, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
+    std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
+    glGetShaderInfoLog(s, len, nullptr, log.data());
+    glDeleteShader(s);
+    throw Error("shaders/" + path, "", "does not compile:\n" + mapShaderLog(log.c_str(), src.files));
+  }
+  return s;
+}
+
+}  // namespace
+
+PreprocessedSource preprocessShader(const std::string& path,
+                                    const std::vector<std::pair<std::string, std::string>>& defines) {
+  PreprocessedSource out;
+  out.text = "#version 450 core\n";
+  for (const auto& [k, v] : defines) out.text += "#define " + k + " " + v + "\n";
+  std::vector<std::string> stack;
+  expand(path, out, stack, "", 0);
+  return out;
+}
+
+std::string mapShaderLog(const std::string& log, const std::vector<std::string>& files) {
+  // Each line starts with the source-string number: Mesa writes "0:12(5): error: ...", NVIDIA
+  // "0(12) : error C0000: ...".
+  std::string out;
+  size_t start = 0;
+  while (start < log.size()) {
+    size_t end = log.find('\n', start);
+    end = end == std::string::npos ? log.size() : end + 1;
+    std::string line = log.substr(start, end - start);
+    size_t digits = 0;
+    while (digits < line.size() && std::isdigit(static_cast<unsigned char>(line[digits]))) ++digits;
+    if (digits > 0 && digits < line.size() && (line[digits] == ':' || line[digits] == '(')) {
+      const size_t number = std::stoul(line.substr(0, digits));
+      if (number < files.size()) {
+        std::string rest = line.substr(digits);
+        if (rest[0] == ':') {
+          // ":12(5)" -> ":12:5"
+          const size_t paren = rest.find('(');
+          const size_t close = paren == std::string::npos ? paren : rest.find(')', paren);
+          if (close != std::string::npos && rest.find_first_not_of("0123456789", 1) == paren) {
+            std::string r(rest, 0, paren);
+            r.append(1, ':').append(rest, paren + 1, close - paren - 1).append(rest, close + 1);
+            rest = std::move(r);
+          }
+        } else {
+          // "(12)" -> ":12"
+          const size_t close = rest.find(')');
+          if (close != std::string::npos) {
+            std::string r(1, ':');
+            r.append(rest, 1, close - 1).append(rest, close + 1);
+            rest = std::move(r);
+          }
+        }
+        line = "shaders/" + files[number] + rest;
+      }
+    }
+    out += line;
+    start = end;
+  }
+  return out;
+}
+
+ShaderProgram::ShaderProgram(const std::vector<Stage>& stages,
+                             const std::vector<std::pair<std::string, std::string>>& defines) {
+  std::vector<GLuint> shaders;
+  try {
+    for (const auto& st : stages) shaders.push_back(compile(st.type, preprocessShader(st.path, defines), st.path));
+  } catch (...) {
+    for (GLuint s : shaders) glDeleteShader(s);
+    throw;
+  }
+  id_ = glCreateProgram();
+  for (GLuint s : shaders) glAttachShader(id_, s);
+  glLinkProgram(id_);
+  for (GLuint s : shaders) glDeleteShader(s);
+  GLint ok = 0;
+  glGetProgramiv(id_, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    GLint len = 0;
+    glGetProgramiv(id_, GL_INFO_LOG_LENGTH, &len);
+    std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
+    glGetProgramInfoLog(id_, len, nullptr, log.data());
+    glDeleteProgram(id_);
+    id_ = 0;
+    std::string names;
+    for (const auto& st : stages) names += (names.empty() ? "" : " + ") + st.path;
+    throw Error("shaders/" + stages.front().path, "", "program " + names + " does not link:\n" + log.c_str());
+  }
+}
+
+ShaderProgram::~ShaderProgram() {
+  if (id_) glDeleteProgram(id_);
+}
+
+ShaderProgram& ShaderProgram::operator=(ShaderProgram&& o) noexcept {
+  if (this != &o) {
+    if (id_) glDeleteProgram(id_);
+    id_ = std::exchange(o.id_, 0);
+  }
+  return *this;
+}
+
+}  // namespace nestlight::viewer

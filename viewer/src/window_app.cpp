@@ -1,0 +1,223 @@
+#include "nestlight/viewer/window_app.h"
+
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
+#include "nestlight/viewer/gl_context.h"
+
+namespace nestlight::viewer {
+
+namespace {
+
+// Orbit: yaw/pitch/distance around a target. Fly: the eye moves, the target follows the look.
+struct CameraController {
+  enum class Mode { Orbit, Fly } mode = Mode::Orbit;
+  glm::dvec3 target{0};
+  double yaw = 0, pitch = 0, distance = 1;  // degrees, degrees, world units
+  double fov = 60;
+  double speed = 1;                         // fly speed, world units per second
+
+  void from(const Camera& c) {
+    target = c.target;
+    const glm::dvec3 d = c.eye - c.target;
+    distance = std::max(glm::length(d), 1e-6);
+    yaw = glm::degrees(std::atan2(d.y, d.x));
+    pitch = glm::degrees(std::asin(std::clamp(d.z / distance, -1.0, 1.0)));
+    fov = c.fovYDegrees;
+  }
+  glm::dvec3 direction() const {  // from target to eye
+    const double y = glm::radians(yaw), p = glm::radians(pitch);
+    return {std::cos(p) * std::cos(y), std::cos(p) * std::sin(y), std::sin(p)};
+  }
+  Camera camera() const {
+    Camera c;
+    c.fovYDegrees = fov;
+    c.target = target;
+    c.eye = target + direction() * distance;
+    return c;
+  }
+};
+
+}  // namespace
+
+int runViewer(const ViewerOptions& opt) {
+  OctreeReader reader(opt.octree);  // a bad octree fails before a window opens
+  const Metadata& meta = reader.metadata();
+  const auto modes = availableColourModes(meta);
+  ColourMode mode = opt.colour ? *opt.colour : modes.front();
+  WindowContext ctx(opt.width, opt.height, "nestlight view - " + opt.octree.filename().string());
+  std::printf("view: %s\n", ctx.description().c_str());
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  ImGui_ImplGlfw_InitForOpenGL(ctx.window(), true);
+  ImGui_ImplOpenGL3_Init("#version 450 core");
+
+  int exitCode = 0;
+  {
+    auto store = std::make_unique<GlNodeStore>(meta, mode);
+    FrameRenderer renderer;
+    RenderSettings settings = opt.settings;
+    streaming::Budgets budgets = opt.budgets;
+    auto streamer = std::make_unique<streaming::Streamer>(reader, *store, budgets);
+    CameraController cc;
+    cc.from(opt.camera ? *opt.camera : Camera::framing(meta.bounds));
+    cc.speed = std::max(meta.cubeWorldSize() * 0.1, 1e-3);
+    std::string status;
+    int frame = 0;
+    auto last = std::chrono::steady_clock::now();
+    double lastX = 0, lastY = 0;
+    glfwGetCursorPos(ctx.window(), &lastX, &lastY);
+    std::vector<float> pointMillions{float(budgets.points) / 1e6f};
+    while (!glfwWindowShouldClose(ctx.window())) {
+      glfwPollEvents();
+      const auto now = std::chrono::steady_clock::now();
+      const double dt = std::chrono::duration<double>(now - last).count();
+      last = now;
+      ImGuiIO& io = ImGui::GetIO();
+
+      // Camera input, unless the panel has the mouse or keyboard.
+      double x = 0, y = 0;
+      glfwGetCursorPos(ctx.window(), &x, &y);
+      const double dx = x - lastX, dy = y - lastY;
+      lastX = x, lastY = y;
+      GLFWwindow* w = ctx.window();
+      if (!io.WantCaptureMouse) {
+        if (glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
+          cc.yaw -= dx * 0.3;
+          cc.pitch = std::clamp(cc.pitch + dy * 0.3, -89.0, 89.0);
+        }
+        if (glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_MIDDLE) == GLFW_PRESS) {
+          const Camera c = cc.camera();
+          const glm::dvec3 f = glm::normalize(c.target - c.eye);
+          const glm::dvec3 r = glm::normalize(glm::cross(f, c.up)), u = glm::cross(r, f);
+          const double k = cc.distance * 0.0015;
+          cc.target += (-r * dx + u * dy) * k;
+        }
+        if (io.MouseWheel != 0) cc.distance *= std::pow(0.85, io.MouseWheel);
+      }
+      if (!io.WantCaptureKeyboard && cc.mode == CameraController::Mode::Fly) {
+        const Camera c = cc.camera();
+        const glm::dvec3 f = glm::normalize(c.target - c.eye);
+        const glm::dvec3 r = glm::normalize(glm::cross(f, c.up));
+        double v = cc.speed * dt * (glfwGetKey(w, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? 5.0 : 1.0);
+        glm::dvec3 move(0);
+        if (glfwGetKey(w, GLFW_KEY_W) == GLFW_PRESS) move += f;
+        if (glfwGetKey(w, GLFW_KEY_S) == GLFW_PRESS) move -= f;
+        if (glfwGetKey(w, GLFW_KEY_D) == GLFW_PRESS) move += r;
+        if (glfwGetKey(w, GLFW_KEY_A) == GLFW_PRESS) move -= r;
+        if (glfwGetKey(w, GLFW_KEY_E) == GLFW_PRESS) move += c.up;
+        if (glfwGetKey(w, GLFW_KEY_Q) == GLFW_PRESS) move -= c.up;
+        cc.target += move * v;  // the eye follows: it sits at target + direction * distance
+      }
+      cc.yaw += opt.orbitDegreesPerFrame;
+
+      int fbw = 0, fbh = 0;
+      glfwGetFramebufferSize(w, &fbw, &fbh);
+      if (fbw <= 0 || fbh <= 0) continue;  // minimised
+      Camera cam = cc.camera();
+      cam.fitClipPlanes(meta.bounds);
+      // Near the scan, near/far from the box alone would clip what is in front of the eye.
+      cam.nearPlane = std::max(std::min(cam.nearPlane, cc.distance * 0.01), cam.farPlane * 1e-5);
+      const streaming::FrameStats& st = streamer->update(cam.view(fbw, fbh));
+      DrawTimings timings;
+      GLuint tex = renderer.renderToTexture(streamer->drawList(), *store, cam, fbw, fbh, settings, &timings);
+      (void)tex;
+      glBlitNamedFramebuffer(renderer.outputFramebuffer(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh, GL_COLOR_BUFFER_BIT,
+                             GL_NEAREST);
+
+      // The panel.
+      ImGui_ImplOpenGL3_NewFrame();
+      ImGui_ImplGlfw_NewFrame();
+      ImGui::NewFrame();
+      ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+      ImGui::Begin("nestlight");
+      ImGui::Text("%s", opt.octree.filename().string().c_str());
+      int camMode = cc.mode == CameraController::Mode::Orbit ? 0 : 1;
+      if (ImGui::Combo("camera", &camMode, "orbit (drag, wheel)\0fly (WASD QE, drag)\0"))
+        cc.mode = camMode == 0 ? CameraController::Mode::Orbit : CameraController::Mode::Fly;
+      int raster = settings.rasteriser == Rasteriser::Points ? 0 : 1;
+      if (ImGui::Combo("rasteriser", &raster, "GL_POINTS\0compute\0")) {
+        settings.rasteriser = raster == 0 ? Rasteriser::Points : Rasteriser::Compute;
+        settings.fixedPointSize = raster == 1 ? 1.f : 0.f;
+      }
+      int modeIndex = int(std::find(modes.begin(), modes.end(), mode) - modes.begin());
+      std::string names;
+      for (ColourMode m : modes) names += std::string(colourModeName(m)) + '\0';
+      if (ImGui::Combo("colour", &modeIndex, names.c_str()) && modes[size_t(modeIndex)] != mode) {
+        mode = modes[size_t(modeIndex)];
+        // Colours are baked on upload: start the residency again with the new mode.
+        streamer.reset();
+        store->setColourMode(mode);
+        streamer = std::make_unique<streaming::Streamer>(reader, *store, budgets);
+      }
+      ImGui::SliderFloat("point size", &settings.sizeScale, 0.25f, 4.f);
+      ImGui::SliderFloat("EDL strength", &settings.edlStrength, 0.f, 5.f);
+      ImGui::SliderFloat("EDL radius", &settings.edlRadius, 0.5f, 4.f);
+      float pts = float(budgets.points) / 1e6f, gpuMiB = float(budgets.gpuBytes >> 20);
+      float spacing = float(budgets.spacingPixels);
+      bool changed = ImGui::SliderFloat("points (M)", &pts, 0.1f, 50.f, "%.1f", ImGuiSliderFlags_Logarithmic);
+      changed |= ImGui::SliderFloat("GPU (MiB)", &gpuMiB, 16.f, 8192.f, "%.0f", ImGuiSliderFlags_Logarithmic);
+      changed |= ImGui::SliderFloat("spacing px", &spacing, 0.f, 8.f);
+      if (changed) {
+        budgets.points = uint64_t(pts * 1e6f);
+        budgets.gpuBytes = uint64_t(gpuMiB) << 20;
+        budgets.spacingPixels = spacing;
+        streamer->setBudgets(budgets);
+      }
+      ImGui::Separator();
+      ImGui::Text("cut %u nodes, %.2f M points%s", st.cutNodes, st.cutPoints / 1e6, st.complete ? " (complete)" : "");
+      ImGui::Text("drawn %u nodes, %.2f M points", st.drawNodes, st.drawPoints / 1e6);
+      ImGui::Text("resident %u nodes, %.1f MiB", st.residentNodes, st.residentBytes / 1048576.0);
+      ImGui::Text("queue %u, loading %u, uploads %u, evictions %u", st.queueLength, st.inFlight, st.uploads,
+                  st.evictions);
+      ImGui::Text("ms: cut %.2f upload %.2f draw %.1f", st.msCutSelection, st.msUpload, timings.msDraw);
+      bool shot = ImGui::Button("screenshot");
+      if (!status.empty()) ImGui::TextUnformatted(status.c_str());
+      ImGui::End();
+      ImGui::Render();
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      glViewport(0, 0, fbw, fbh);
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+
+      ++frame;
+      const bool last = opt.frames > 0 && frame >= opt.frames;
+      if (shot || (last && !opt.screenshot.empty())) {
+        std::string file = opt.screenshot;
+        if (file.empty() || !last) {
+          char buf[64];
+          std::snprintf(buf, sizeof buf, "nestlight-%ld.png", long(std::time(nullptr)));
+          file = buf;
+        }
+        Image img = renderer.render(streamer->drawList(), *store, cam, fbw, fbh, settings);
+        writeImage(img, file);
+        status = "saved " + file;
+        std::printf("view: %s (%dx%d, %llu points drawn)\n", status.c_str(), fbw, fbh,
+                    (unsigned long long)st.drawPoints);
+      }
+      glfwSwapBuffers(w);
+      if (last) break;
+    }
+    streamer.reset();
+  }
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  return exitCode;
+}
+
+}  // namespace nestlight::viewer
