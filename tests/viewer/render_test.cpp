@@ -38,6 +38,19 @@ fs::path convertShared(const std::string& rel, const test::TempDir& tmp) {
   return out;
 }
 
+// A seeded synthetic scan converted into `tmp`/`name`.
+fs::path syntheticOctree(const test::TempDir& tmp, const std::string& name, uint64_t points, uint64_t seed = 1,
+                         Vec3d origin = {0, 0, 0}) {
+  SyntheticSpec spec;
+  spec.points = points;
+  spec.seed = seed;
+  spec.origin = origin;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  convert(std::move(r), tmp.path() / name);
+  return tmp.path() / name;
+}
+
 RenderJob smallJob(const fs::path& octree, const std::string& output) {
   RenderJob j;
   j.octree = octree;
@@ -144,13 +157,8 @@ TEST(Render, ComputeAndPointsPathsAgree) {
 // their margins give eye-dome lighting its neighbours.
 TEST(Render, TiledEqualsUntiled) {
   test::TempDir tmp;
-  SyntheticSpec spec;
-  spec.points = 200'000;
-  spec.seed = 7;
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openSynthetic(spec));
-  convert(std::move(r), tmp.path() / "s.octree");
-  RenderJob a = smallJob(tmp.path() / "s.octree", tmp.file("whole.png"));
+  const fs::path oct = syntheticOctree(tmp, "s.octree", 200'000, 7);
+  RenderJob a = smallJob(oct, tmp.file("whole.png"));
   a.width = 300, a.height = 200;
   RenderJob b = a;
   b.output = tmp.file("tiled.png");
@@ -165,18 +173,9 @@ TEST(Render, TiledEqualsUntiled) {
 // the same amount, gives the same image (positions reach the GPU relative to the eye).
 TEST(Render, NationalGridDoesNotJitter) {
   test::TempDir tmp;
-  auto build = [&](Vec3d origin, const std::string& name) {
-    SyntheticSpec spec;
-    spec.points = 150'000;
-    spec.seed = 11;
-    spec.origin = origin;
-    std::vector<std::unique_ptr<PointReader>> r;
-    r.push_back(openSynthetic(spec));
-    convert(std::move(r), tmp.path() / name);
-    return tmp.path() / name;
-  };
   const Vec3d far{500000, 5000000, 100};
-  const fs::path local = build({0, 0, 0}, "local.octree"), grid = build(far, "grid.octree");
+  const fs::path local = syntheticOctree(tmp, "local.octree", 150'000, 11);
+  const fs::path grid = syntheticOctree(tmp, "grid.octree", 150'000, 11, far);
   Camera c;
   c.eye = {130, -40, 60};
   c.target = {50, 50, 10};
@@ -207,12 +206,8 @@ TEST(Render, NationalGridDoesNotJitter) {
 
 TEST(Render, ExrOutputIsLinear) {
   test::TempDir tmp;
-  SyntheticSpec spec;
-  spec.points = 50'000;
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openSynthetic(spec));
-  convert(std::move(r), tmp.path() / "s.octree");
-  RenderJob a = smallJob(tmp.path() / "s.octree", tmp.file("x.png"));
+  const fs::path oct = syntheticOctree(tmp, "s.octree", 50'000, 1);
+  RenderJob a = smallJob(oct, tmp.file("x.png"));
   RenderJob b = a;
   b.output = tmp.file("x.exr");
   renderHeadless(a);
@@ -224,12 +219,7 @@ TEST(Render, ExrOutputIsLinear) {
 
 TEST(Render, UnknownFormatVersionFailsBeforeGl) {
   test::TempDir tmp;
-  SyntheticSpec spec;
-  spec.points = 1000;
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openSynthetic(spec));
-  const fs::path oct = tmp.path() / "s.octree";
-  convert(std::move(r), oct);
+  const fs::path oct = syntheticOctree(tmp, "s.octree", 1000, 1);
   std::string meta = test::readFile((oct / "metadata.json").string());
   const std::string before = meta;
   meta = std::regex_replace(meta, std::regex(R"("version":\s*1\b)"), "\"version\": 99");
@@ -243,15 +233,11 @@ TEST(Render, UnknownFormatVersionFailsBeforeGl) {
 
 TEST(Render, CameraPathWritesSequenceAndStats) {
   test::TempDir tmp;
-  SyntheticSpec spec;
-  spec.points = 100'000;
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openSynthetic(spec));
-  convert(std::move(r), tmp.path() / "s.octree");
+  const fs::path oct = syntheticOctree(tmp, "s.octree", 100'000, 1);
   test::writeFile(tmp.file("path.json"),
                   R"({"fps": 4, "fov": 50, "keyframes": [{"time": 0, "eye": [150, -50, 80], "target": [50, 50, 0]},
                       {"time": 1, "eye": [50, -100, 60], "target": [50, 50, 0]}]})");
-  RenderJob j = smallJob(tmp.path() / "s.octree", tmp.file("f_%04d.png"));
+  RenderJob j = smallJob(oct, tmp.file("f_%04d.png"));
   j.path = CameraPath::load(tmp.file("path.json"));
   j.statsCsv = tmp.file("stats.csv");
   auto frames = renderHeadless(j);
@@ -275,12 +261,8 @@ TEST(Render, CameraPathWritesSequenceAndStats) {
 // The OSMesa fallback draws the same picture as EGL (both are llvmpipe here).
 TEST(Render, OsMesaFallbackMatchesEgl) {
   test::TempDir tmp;
-  SyntheticSpec spec;
-  spec.points = 60'000;
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openSynthetic(spec));
-  convert(std::move(r), tmp.path() / "s.octree");
-  RenderJob a = smallJob(tmp.path() / "s.octree", tmp.file("egl.png"));
+  const fs::path oct = syntheticOctree(tmp, "s.octree", 60'000, 1);
+  RenderJob a = smallJob(oct, tmp.file("egl.png"));
   RenderJob b = a;
   b.output = tmp.file("osmesa.png");
   ::setenv("NESTLIGHT_GL_PLATFORM", "surfaceless", 1);
@@ -303,12 +285,7 @@ TEST(Render, NoContextMessageNamesEachPlatform) {
 // with the rest of the cut.
 TEST(Render, DamagedPayloadIsSkippedAndRenderingGoesOn) {
   test::TempDir tmp;
-  SyntheticSpec spec;
-  spec.points = 200'000;
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openSynthetic(spec));
-  const fs::path oct = tmp.path() / "s.octree";
-  convert(std::move(r), oct);
+  const fs::path oct = syntheticOctree(tmp, "s.octree", 200'000, 1);
   uint64_t offset = 0, size = 0;
   {
     OctreeReader reader(oct);
