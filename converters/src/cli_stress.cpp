@@ -159,10 +159,12 @@ void addStress(CLI::App& app, int& exitCode) {
         (unsigned long long)r.settleFramesMedian, (unsigned long long)r.settleFramesMax,
         (unsigned long long)o.settleFrames);
     std::printf(
-        "update     median %.3f ms, p99 %.3f ms, max %.3f ms; reader calls on the render thread: "
-        "%llu\n",
-        r.updateMsMedian, r.updateMsP99, r.updateMsMax,
-        (unsigned long long)r.renderThreadReaderCalls);
+        "update     wall median %.3f ms, p99 %.3f ms, max %.3f ms; CPU median %.3f ms, "
+        "p99 %.3f ms, max %.3f ms\n",
+        r.updateMsMedian, r.updateMsP99, r.updateMsMax, r.updateCpuMsMedian, r.updateCpuMsP99,
+        r.updateCpuMsMax);
+    std::printf("reader     calls on the render thread inside update(): %llu\n",
+                (unsigned long long)r.renderThreadReaderCalls);
     std::printf(
         "loads      %llu requested, %llu completed, %llu cancelled, %llu failed, %llu discarded; "
         "%s read\n",

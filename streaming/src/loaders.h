@@ -82,6 +82,7 @@ class Loaders {
   std::vector<LoadRequest> queue_;
   size_t head_ = 0;
   size_t active_ = 0;
+  size_t idle_ = 0;  // threads waiting for work
   bool stop_ = false;
   std::vector<std::thread> threads_;
   std::atomic<uint32_t> inFlight_{0};

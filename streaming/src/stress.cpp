@@ -6,6 +6,8 @@
 // reader calls are counted around each update().
 #include "nestlight/streaming/stress.h"
 
+#include <time.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -48,6 +50,12 @@ class CheckingStore : public NodeStore {
  private:
   std::thread::id renderThread_;
 };
+
+double threadCpuMs() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) * 1e3 + double(t.tv_nsec) * 1e-6;
+}
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
@@ -159,10 +167,13 @@ class Run {
   const FrameStats& frame() {
     store_.budget = budgets_.gpuBytes;
     const uint64_t callsBefore = OctreeReader::threadReadCalls();
+    const View v = view();
+    const double cpu0 = threadCpuMs();
     const auto t = std::chrono::steady_clock::now();
-    const FrameStats& s = streamer_->update(view());
+    const FrameStats& s = streamer_->update(v);
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    updateCpuMs_.push_back(threadCpuMs() - cpu0);
     const uint64_t calls = OctreeReader::threadReadCalls() - callsBefore;
     ++report_.frames;
     updateMs_.push_back(ms);
@@ -283,6 +294,10 @@ class Run {
     report_.updateMsMax = percentile(updateMs_, 1.0);
     report_.updateMsMedian = percentile(updateMs_, 0.5);
     report_.updateMsP99 = percentile(updateMs_, 0.99);
+    report_.updateCpuMsMax = percentile(updateCpuMs_, 1.0);
+    report_.updateCpuMsMedian = percentile(updateCpuMs_, 0.5);
+    report_.updateCpuMsP99 = percentile(updateCpuMs_, 0.99);
+    for (double f : settle_) report_.settleFrames.push_back(static_cast<uint64_t>(f));
     report_.settleFramesMax = static_cast<uint64_t>(percentile(settle_, 1.0));
     report_.settleFramesMedian = static_cast<uint64_t>(percentile(settle_, 0.5));
     report_.maxResidentBytes = store_.maxLive;
@@ -298,7 +313,7 @@ class Run {
   glm::dvec3 lo_, hi_, center_, eye_, target_;
   double diag_ = 1;
   StressReport report_;
-  std::vector<double> updateMs_, settle_;
+  std::vector<double> updateMs_, updateCpuMs_, settle_;
   std::unordered_set<NodeKey, NodeKeyHash> drawn_;
   std::mutex badMutex_;
   std::vector<std::string> badMessages_;
@@ -312,6 +327,9 @@ nlohmann::json StressReport::toJson() const {
           {"settle_frames_max", settleFramesMax},
           {"settle_frames_median", settleFramesMedian},
           {"update_ms", {{"max", updateMsMax}, {"median", updateMsMedian}, {"p99", updateMsP99}}},
+          {"update_cpu_ms",
+           {{"max", updateCpuMsMax}, {"median", updateCpuMsMedian}, {"p99", updateCpuMsP99}}},
+          {"settle_frames", settleFrames},
           {"render_thread_reader_calls", renderThreadReaderCalls},
           {"max_resident_bytes", maxResidentBytes},
           {"budget_changes", budgetChanges},

@@ -153,7 +153,10 @@ TEST_F(StreamerTest, InvariantsHoldOnRandomFastFlight) {
   Streamer s(reader, store, b);
   std::mt19937 rng(3);
   View v = randomView(rng, m);
-  for (int f = 0; f < 600; ++f) {
+  // At least 600 frames, and on until the small budget forced evictions and teleports made
+  // requests stale (a slow machine loads less per frame).
+  for (int f = 0; f < 600 || ((s.totals().evicted == 0 || s.totals().cancelled == 0) && f < 20000);
+       ++f) {
     if (f % 3 == 0) v = randomView(rng, m);  // a teleport every third frame
     s.update(v);
     test::expectFrameInvariants(s, store, b);
@@ -163,8 +166,8 @@ TEST_F(StreamerTest, InvariantsHoldOnRandomFastFlight) {
   // The store saw every upload: the budget held at every moment, not only between frames.
   EXPECT_LE(store.maxLiveBytes(), b.gpuBytes);
   EXPECT_LE(s.totals().maxResidentBytes, b.gpuBytes);
-  EXPECT_GT(s.totals().evicted, 0u);    // the small budget forced evictions
-  EXPECT_GT(s.totals().cancelled, 0u);  // teleports made requests stale
+  EXPECT_GT(s.totals().evicted, 0u);
+  EXPECT_GT(s.totals().cancelled, 0u);
 }
 
 TEST_F(StreamerTest, EveryRequestEndsCompletedOrCancelled) {

@@ -59,7 +59,7 @@ TEST(Stress, CommandLineSummaryAndJson) {
             0)
       << out;
   EXPECT_NE(out.find("result     OK"), std::string::npos) << out;
-  EXPECT_NE(out.find("reader calls on the render thread: 0"), std::string::npos) << out;
+  EXPECT_NE(out.find("calls on the render thread inside update(): 0"), std::string::npos) << out;
   const nlohmann::json j = nlohmann::json::parse(test::readFile(t.file("s.json")));
   EXPECT_TRUE(j["ok"].get<bool>());
   EXPECT_GE(j["frames"].get<uint64_t>(), 300u);

@@ -8,6 +8,14 @@
 // evicted to stay within Budgets::gpuBytes. Loader threads read, check and decode payloads and
 // hierarchy chunks: update() itself never reads a file. A node is drawn only when it and all its
 // ancestors are resident, so the picture never has holes.
+//
+// The cut is the prefix, in priority order, that fits both budgets: its points within
+// Budgets::points and its resident bytes (known from earlier loads, else estimated from the
+// store's bytes per point so far) within Budgets::gpuBytes, so a complete cut fits in GPU memory.
+// Resident bytes never exceed Budgets::gpuBytes, not even within an update(): room is made
+// before an upload (nodes outside the cut first, least recently wanted first; a cut node only
+// for one of higher priority), and an upload that cannot fit waits. Loader threads run below the
+// render thread's priority (Linux: SCHED_BATCH, nice 10).
 #pragma once
 
 #include <cstdint>
@@ -87,7 +95,8 @@ class Streamer {
   void setBudgets(const Budgets& b);              // takes effect at the next update()
   const Budgets& budgets() const;
   std::vector<BadNode> badNodes() const;
-  // Called once per bad node, from a loader thread (default: a line on stderr); it must stay
+  // Called once per bad node, from the loader thread that found it (from update() for a
+  // hierarchy chunk that contradicts its parent chunk); default: a line on stderr. It must stay
   // callable until the streamer is destroyed.
   void onBadNode(std::function<void(const BadNode&)> log);
 

@@ -35,7 +35,11 @@ struct StressReport {
   uint64_t frames = 0;  // every update(), stops and the final drain included
   uint64_t stops = 0;   // times the camera stopped and the cut had to complete
   uint64_t settleFramesMax = 0, settleFramesMedian = 0;
-  double updateMsMax = 0, updateMsMedian = 0, updateMsP99 = 0;
+  double updateMsMax = 0, updateMsMedian = 0, updateMsP99 = 0;  // wall time of update()
+  // CPU time of the render thread in update(): wall time above it is time the thread was not
+  // running (two cores shared with the loaders), not time it waited for anything.
+  double updateCpuMsMax = 0, updateCpuMsMedian = 0, updateCpuMsP99 = 0;
+  std::vector<uint64_t> settleFrames;    // per stop: frames until the cut was complete
   uint64_t renderThreadReaderCalls = 0;  // reader calls made inside update(): must be 0
   uint64_t maxResidentBytes = 0;         // seen by the store, at any moment
   uint64_t budgetChanges = 0;
