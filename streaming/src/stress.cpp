@@ -95,20 +95,15 @@ class Run {
     target_ = center_;
     while (report_.frames < opt_.frames) {
       if (opt_.varyBudgets && uniform(0, 1) < 0.3) varyBudgets();
-      switch (std::uniform_int_distribution<int>(0, 3)(rng_)) {
-        case 0:
-          teleports();
-          break;
-        case 1:
-          flight();
-          break;
-        case 2:
-          orbit();
-          break;
-        default:
-          stop();
-          break;
-      }
+      // A moving phase, then (every other time or so) a stop where the cut must complete.
+      const int phase = std::uniform_int_distribution<int>(0, 2)(rng_);
+      if (phase == 0)
+        teleports();
+      else if (phase == 1)
+        flight();
+      else
+        orbit();
+      if (report_.frames < opt_.frames && uniform(0, 1) < 0.5) stop();
     }
     // The end: full budgets again, stop, and let every request finish.
     if (opt_.varyBudgets) setBudgets(opt_.budgets);
@@ -126,7 +121,9 @@ class Run {
             uniform(lo_.z, hi_.z + 1e-9)};
   }
   glm::dvec3 randomEye() {
-    if (uniform(0, 1) < 0.3) return randomPointInBounds() + glm::dvec3(0, 0, 0.02 * diag_);
+    // Half the time close to the scan, where the cut goes deep; else around it.
+    if (uniform(0, 1) < 0.5)
+      return randomPointInBounds() + glm::dvec3(0, 0, diag_ * uniform(0.005, 0.1));
     glm::dvec3 d(uniform(-1, 1), uniform(-1, 1), uniform(0.05, 1));
     return center_ + glm::normalize(d) * (diag_ * uniform(0.1, 1.5));
   }
