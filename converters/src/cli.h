@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +35,11 @@ void addRender(CLI::App& app, int& exitCode);
 void addView(CLI::App& app, int& exitCode);
 void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 
+// "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
+uint64_t parseCount(const std::string& text, const std::string& option = "");
+// Converts a seeded synthetic scan of `points` points into `dir` (reused when it already holds
+// that many): the scans of `stress`, `bench stream` and `bench render`.
+std::filesystem::path generateStreamingOctree(uint64_t points, const std::filesystem::path& dir);
 // "1G", "512M", "64k", plain bytes.
 uint64_t parseBytes(const std::string& text);
 // Files as given; a directory stands for its supported point files, sorted by name.

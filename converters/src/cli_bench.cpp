@@ -32,7 +32,6 @@ namespace nestlight::cli {
 
 namespace fs = std::filesystem;
 uint64_t writeSynthetic(const SyntheticSpec& spec, const std::string& path);
-fs::path generateStreamingOctree(uint64_t points, const fs::path& dir);  // cli_stress.cpp
 
 namespace {
 
@@ -66,15 +65,6 @@ ChildRun runChild(const std::vector<std::string>& args) {
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
-
-uint64_t parseCount(std::string s) {
-  double mult = 1;
-  char c = s.empty() ? 0 : s.back();
-  if (c == 'M' || c == 'm') mult = 1e6, s.pop_back();
-  else if (c == 'G' || c == 'g') mult = 1e9, s.pop_back();
-  else if (c == 'k' || c == 'K') mult = 1e3, s.pop_back();
-  return static_cast<uint64_t>(std::stod(s) * mult);
 }
 
 std::string cpuName() {
@@ -155,7 +145,7 @@ void addBenchStream(CLI::App* bench, int& exitCode) {
     if (dir->empty() == generate->empty()) throw Error("", "", "give an octree folder or --generate N (one of them)");
     fs::path octree = *dir;
     if (!generate->empty()) {
-      const uint64_t n = parseCount(*generate);
+      const uint64_t n = parseCount(*generate, "--generate");
       octree = generateStreamingOctree(n, fs::path(*work) / ("stream_" + *generate + ".octree"));
     }
     OctreeReader reader(octree);
@@ -330,7 +320,7 @@ void addBench(CLI::App& app, int& exitCode) {
                 "bytes/pt", "open root");
     bool first = true;
     for (const auto& sz : *sizes) {
-      const uint64_t n = parseCount(sz);
+      const uint64_t n = parseCount(sz, "--sizes");
       const std::string las = (fs::path(*dir) / ("synthetic_" + sz + ".las")).string();
       if (!fs::exists(las)) {
         SyntheticSpec spec;

@@ -8,8 +8,6 @@
 #include <thread>
 
 #include "cli.h"
-#include "nestlight/converters/builder.h"
-#include "nestlight/converters/synthetic.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/frame_renderer.h"
@@ -36,28 +34,9 @@ void addBenchRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--runs", *runs, "Timed frames per rasteriser (the median is reported)")->capture_default_str();
   cmd->add_option("--json", *json, "Where to write the results")->capture_default_str();
   cmd->callback([=, &exitCode]() {
-    fs::path oct = *octree;
-    if (oct.empty()) {
-      double n = std::stod(*generate);
-      const char unit = generate->back();
-      if (unit == 'M' || unit == 'm') n *= 1e6;
-      if (unit == 'k' || unit == 'K') n *= 1e3;
-      oct = fs::path(*dir) / ("synthetic_" + *generate + ".octree");
-      if (!fs::exists(oct / "metadata.json")) {
-        fs::create_directories(*dir);
-        SyntheticSpec spec;
-        spec.points = static_cast<uint64_t>(n);
-        spec.seed = 2026;
-        std::vector<std::unique_ptr<PointReader>> readers;
-        readers.push_back(openSynthetic(spec));
-        BuildOptions o;
-        o.output = oct;
-        o.overwrite = true;
-        o.progress = ProgressMode::Quiet;
-        std::printf("bench render: converting %s synthetic points into %s\n", generate->c_str(), oct.c_str());
-        buildOctree(std::move(readers), o);
-      }
-    }
+    const fs::path oct = octree->empty() ? generateStreamingOctree(parseCount(*generate, "--generate"),
+                                                                   fs::path(*dir) / ("render_" + *generate + ".octree"))
+                                         : fs::path(*octree);
     OctreeReader reader(oct);
     const Metadata& meta = reader.metadata();
     auto ctx = viewer::createHeadlessContext();

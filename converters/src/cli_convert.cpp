@@ -12,6 +12,25 @@ namespace nestlight::cli {
 
 namespace fs = std::filesystem;
 
+uint64_t parseCount(const std::string& text, const std::string& option) {
+  std::string s = text;
+  double mult = 1;
+  const char c = s.empty() ? 0 : s.back();
+  if (c == 'M' || c == 'm') mult = 1e6, s.pop_back();
+  else if (c == 'G' || c == 'g') mult = 1e9, s.pop_back();
+  else if (c == 'k' || c == 'K') mult = 1e3, s.pop_back();
+  size_t used = 0;
+  double v = -1;
+  try {
+    v = std::stod(s, &used);
+  } catch (...) {
+  }
+  if (used != s.size() || !(v >= 0) || !(v * mult < 1.8e19))
+    throw Error("", "", (option.empty() ? "" : option + ": ") + "cannot read '" + text +
+                            "' as a count (e.g. 5M, 800k, 1.5G)");
+  return static_cast<uint64_t>(v * mult);
+}
+
 uint64_t parseBytes(const std::string& text) {
   size_t used = 0;
   double v = 0;

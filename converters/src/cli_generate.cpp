@@ -72,12 +72,7 @@ void addGenerate(CLI::App& app, int& exitCode) {
   cmd->callback([=, &exitCode]() {
     SyntheticSpec s = *spec;
     s.shape = *parseSyntheticShape(*shape);
-    std::string p = *points;
-    double mult = 1;
-    if (!p.empty() && (p.back() == 'M' || p.back() == 'm')) mult = 1e6, p.pop_back();
-    else if (!p.empty() && (p.back() == 'G' || p.back() == 'g')) mult = 1e9, p.pop_back();
-    else if (!p.empty() && (p.back() == 'k' || p.back() == 'K')) mult = 1e3, p.pop_back();
-    s.points = static_cast<uint64_t>(std::stod(p) * mult);
+    s.points = parseCount(*points, "--points");
     s.origin = parseVec(*origin);
     auto t = std::chrono::steady_clock::now();
     uint64_t n = writeSynthetic(s, *out);

@@ -26,23 +26,6 @@ std::vector<double> parseNumbers(const std::string& text, size_t n, const std::s
   if (v.size() != n) throw Error(option + ": expected " + std::to_string(n) + " comma-separated numbers");
   return v;
 }
-
-// "5M" -> 5,000,000 points (decimal, unlike byte sizes).
-uint64_t parsePointCount(std::string s, const std::string& option) {
-  double mult = 1;
-  const char c = s.empty() ? 0 : s.back();
-  if (c == 'M' || c == 'm') mult = 1e6, s.pop_back();
-  else if (c == 'G' || c == 'g') mult = 1e9, s.pop_back();
-  else if (c == 'k' || c == 'K') mult = 1e3, s.pop_back();
-  try {
-    size_t used = 0;
-    const double v = std::stod(s, &used);
-    if (used != s.size() || !(v >= 0)) throw std::invalid_argument(s);
-    return static_cast<uint64_t>(v * mult);
-  } catch (const std::exception&) {
-    throw Error(option + ": cannot read '" + s + "' as a point count (e.g. 5M, 800k)");
-  }
-}
 }  // namespace
 
 void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<RenderOptionText> text) {
@@ -88,7 +71,7 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   job.azimuth = view[0], job.elevation = view[1];
   job.settings.rasteriser = viewer::parseRasteriser(text.rasteriser);
   if (!text.colour.empty()) job.colour = viewer::parseColourMode(text.colour);
-  job.budgets.points = parsePointCount(text.pointBudget, "--point-budget");
+  job.budgets.points = parseCount(text.pointBudget, "--point-budget");
   job.budgets.gpuBytes = parseBytes(text.gpuBudget);
   job.budgets.uploadBytesPerFrame = parseBytes(text.uploadBudget);
   if (job.settings.rasteriser == viewer::Rasteriser::Compute) job.settings.fixedPointSize = 1;

@@ -23,22 +23,6 @@ namespace nestlight::cli {
 namespace fs = std::filesystem;
 
 // "20M", "1.5G", "64k", plain numbers.
-uint64_t parsePointCount(std::string s) {
-  double mult = 1;
-  const char c = s.empty() ? 0 : s.back();
-  if (c == 'M' || c == 'm')
-    mult = 1e6, s.pop_back();
-  else if (c == 'G' || c == 'g')
-    mult = 1e9, s.pop_back();
-  else if (c == 'k' || c == 'K')
-    mult = 1e3, s.pop_back();
-  try {
-    return static_cast<uint64_t>(std::stod(s) * mult);
-  } catch (...) {
-    throw Error("", "", "cannot read '" + s + "' as a point count (e.g. 5M)");
-  }
-}
-
 // Converts a synthetic scan of `points` points (the `generate` scene, seed 42) into `dir`
 // straight from the synthetic source; reuses an octree already there with that many points.
 fs::path generateStreamingOctree(uint64_t points, const fs::path& dir) {
@@ -115,7 +99,7 @@ void addStress(CLI::App& app, int& exitCode) {
   cmd->add_flag("-q,--quiet", *quiet, "No progress lines");
   cmd->callback([=, &exitCode]() {
     streaming::StressOptions o = *opt;
-    o.budgets.points = parsePointCount((*text)[0]);
+    o.budgets.points = parseCount((*text)[0], "--point-budget");
     o.budgets.gpuBytes = parseBytes((*text)[1]);
     o.budgets.uploadBytesPerFrame = parseBytes((*text)[2]);
     o.varyBudgets = !*fixed;
@@ -127,7 +111,7 @@ void addStress(CLI::App& app, int& exitCode) {
       temp = work->empty()
                  ? fs::temp_directory_path() / ("nestlight-stress-" + std::to_string(::getpid()))
                  : fs::path();
-      octree = generateStreamingOctree(parsePointCount(*generate),
+      octree = generateStreamingOctree(parseCount(*generate, "--generate"),
                                        work->empty() ? temp : fs::path(*work));
     }
     OctreeReader reader(octree);
