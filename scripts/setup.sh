@@ -16,6 +16,7 @@ PACKAGES=(
   libglfw3-dev libimgui-dev libstb-dev   # the window, its UI, PNG files
   libopenexr-dev libspdlog-dev           # EXR files, logging
   xvfb xauth                             # the windowed viewer's test without a display
+  glslang-tools                          # checks the GPU-only shaders that llvmpipe cannot compile
 )
 
 missing=()

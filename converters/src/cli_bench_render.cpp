@@ -78,9 +78,11 @@ void addBenchRender(CLI::App& app, int& exitCode) {
         std::sort(ms.begin(), ms.end());
         const double med = ms[ms.size() / 2];
         const double pps = st.drawPoints / (med / 1000.0);
-        std::printf("%-10s %12.2f %14s\n", viewer::rasteriserName(r), med, humanCount(pps).c_str());
+        std::printf("%-10s %12.2f %14s  %s\n", viewer::rasteriserName(r), med, humanCount(pps).c_str(),
+                    r == viewer::Rasteriser::Compute ? renderer.computeVariant() : "");
         out["paths"][viewer::rasteriserName(r)] = {{"median_ms", med}, {"points_per_second", pps}, {"ms", ms},
-                                                  {"points", st.drawPoints}};
+                                                  {"points", st.drawPoints},
+                                                  {"variant", r == viewer::Rasteriser::Compute ? renderer.computeVariant() : "GL_POINTS"}};
       }
     }
     std::ofstream(*json) << out.dump(1) << "\n";

@@ -2,6 +2,8 @@
 // every embedded program compiles on the machine's GL (llvmpipe in CI).
 #include <epoxy/gl.h>
 
+#include <cstdlib>
+
 #include "nestlight/shaders/embedded.h"
 #include "nestlight/viewer/frame_renderer.h"
 #include "nestlight/viewer/gl_context.h"
@@ -74,4 +76,24 @@ TEST(Shaders, EveryProgramCompilesAndLinks) {
   auto ctx = createHeadlessContext();
   EXPECT_NE(ctx->description().find("4.5"), std::string::npos) << ctx->description();
   EXPECT_NO_THROW(FrameRenderer renderer);
+}
+
+// Every stage file, including the 64-bit atomic rasteriser that only GPUs compile, passes the
+// Khronos reference compiler (glslangValidator) after our preprocessing.
+TEST(Shaders, EveryStageValidatesWithGlslang) {
+  if (std::system("command -v glslangValidator >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "glslangValidator (glslang-tools) is not installed";
+  test::TempDir tmp;
+  int checked = 0;
+  for (const auto& f : shaders::embeddedFiles()) {
+    const std::string path(f.path);
+    const std::string ext = path.substr(path.rfind('.'));
+    if (ext != ".vert" && ext != ".frag" && ext != ".comp") continue;
+    const std::string file = tmp.file("stage" + std::to_string(checked++) + ext);
+    test::writeFile(file, preprocessShader(path).text);
+    const std::string log = tmp.file("log.txt");
+    const int rc = std::system(("glslangValidator " + file + " > " + log + " 2>&1").c_str());
+    EXPECT_EQ(rc, 0) << path << ":\n" << test::readFile(log);
+  }
+  EXPECT_GE(checked, 8);
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "nestlight/octree/error.h"
@@ -33,6 +34,19 @@ FrameRenderer::FrameRenderer()
       resolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve.frag"}}),
       edl_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}}) {
   glCreateVertexArrays(1, &vao_);
+  if (epoxy_has_gl_extension("GL_NV_shader_atomic_int64") && epoxy_has_gl_extension("GL_ARB_gpu_shader_int64")) {
+    try {
+      atomic64_ = std::make_unique<ShaderProgram>(std::vector<ShaderProgram::Stage>{
+          {GL_COMPUTE_SHADER, "points/raster_atomic64.comp"}});
+      resolve64_ = std::make_unique<ShaderProgram>(std::vector<ShaderProgram::Stage>{
+          {GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve64.frag"}});
+    } catch (const Error& e) {
+      // A driver that offers the extension but rejects the shader: the 32-bit path still works.
+      std::fprintf(stderr, "nestlight: 64-bit compute rasteriser unavailable, using two passes: %s\n", e.what());
+      atomic64_.reset();
+      resolve64_.reset();
+    }
+  }
 }
 
 FrameRenderer::~FrameRenderer() {
@@ -40,8 +54,8 @@ FrameRenderer::~FrameRenderer() {
   glDeleteFramebuffers(2, fbos);
   GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_};
   glDeleteTextures(4, tex);
-  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_};
-  glDeleteBuffers(3, bufs);
+  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_};
+  glDeleteBuffers(4, bufs);
   glDeleteVertexArrays(1, &vao_);
 }
 
@@ -81,14 +95,19 @@ void FrameRenderer::ensureTargets(int w, int h, bool compute) {
   const size_t pixels = size_t(w) * h;
   if (compute && pixels > ssboPixels_) {
     NL_CHECK(pixels * 16 <= kMaxSsboBytes);
-    GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_};
-    glDeleteBuffers(3, bufs);
+    GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_};
+    glDeleteBuffers(4, bufs);
     glCreateBuffers(1, &depthSsbo_);
     glNamedBufferStorage(depthSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
     glCreateBuffers(1, &accumSsbo_);
     glNamedBufferStorage(accumSsbo_, pixels * 16, nullptr, GL_DYNAMIC_STORAGE_BIT);
     glCreateBuffers(1, &normalSsbo_);
     glNamedBufferStorage(normalSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    packedSsbo_ = 0;
+    if (atomic64_) {
+      glCreateBuffers(1, &packedSsbo_);
+      glNamedBufferStorage(packedSsbo_, pixels * 8, nullptr, GL_DYNAMIC_STORAGE_BIT);
+    }
     ssboPixels_ = pixels;
   }
 }
@@ -143,6 +162,38 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
       glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
       if (t) t->points += n.numPoints;
     }
+    glDisable(GL_DEPTH_TEST);
+  } else if (atomic64_ && s.allowAtomic64) {
+    // One pass: min over (depth << 32 | colour); all ones is "empty".
+    const size_t pixels = size_t(w) * h;
+    const uint32_t empty[2] = {0xffffffffu, 0xffffffffu};
+    glClearNamedBufferSubData(packedSsbo_, GL_RG32UI, 0, pixels * 8, GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 4, packedSsbo_, 0, GLsizeiptr(pixels * 8));
+    const GLuint p = atomic64_->id();
+    atomic64_->use();
+    setMat4(p, "uClipFromView", clipFromView);
+    setMat4(p, "uViewFromCamRel", viewFromCamRel);
+    glProgramUniform2i(p, atomic64_->uniform("uViewport"), w, h);
+    const GLint offLoc = atomic64_->uniform("uNodeOffset"), nLoc = atomic64_->uniform("uNumPoints");
+    for (const auto& n : nodes) {
+      if (!n.numPoints) continue;
+      const glm::vec3 off = nodeOffset(n);
+      glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
+      glProgramUniform1ui(p, nLoc, n.numPoints);
+      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
+                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
+      glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
+      if (t) t->points += n.numPoints;
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    const GLuint r = resolve64_->id();
+    resolve64_->use();
+    setMat4(r, "uClipFromView", clipFromView);
+    glProgramUniform2i(r, resolve64_->uniform("uViewport"), w, h);
+    glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_ALWAYS);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
     glDisable(GL_DEPTH_TEST);
   } else {
     const size_t pixels = size_t(w) * h;

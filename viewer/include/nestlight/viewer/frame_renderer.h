@@ -34,6 +34,7 @@ struct RenderSettings {
   float edlRadius = 1.4f;
   glm::vec3 background{0.08f, 0.08f, 0.10f};
   int maxTile = 2048;            // larger images render in tiles (SSBO and FBO limits)
+  bool allowAtomic64 = true;     // compute path: one 64-bit pass where the GPU has 64-bit atomics
 };
 
 struct DrawTimings {
@@ -57,6 +58,8 @@ class FrameRenderer {
                          const Camera& camera, int width, int height, const RenderSettings& settings,
                          DrawTimings* timings = nullptr);
   GLuint outputFramebuffer() const { return outputFbo_; }
+  // "one-pass 64-bit" where GL_NV_shader_atomic_int64 compiled, else "two-pass 32-bit".
+  const char* computeVariant() const { return atomic64_ ? "one-pass 64-bit" : "two-pass 32-bit"; }
 
  private:
   struct Targets;
@@ -65,6 +68,8 @@ class FrameRenderer {
                 int fullW, int fullH, int x0, int y0, int w, int h, const RenderSettings& s, DrawTimings* t);
 
   ShaderProgram points_, depthPass_, colourPass_, resolve_, edl_;
+  std::unique_ptr<ShaderProgram> atomic64_, resolve64_;  // only with 64-bit atomics
+  GLuint packedSsbo_ = 0;
   GLuint vao_ = 0;
   GLuint gbuffer_ = 0, outputFbo_ = 0;
   GLuint colourTex_ = 0, normalTex_ = 0, depthTex_ = 0, outputTex_ = 0;

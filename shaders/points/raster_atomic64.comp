@@ -1,0 +1,27 @@
+// Compute rasteriser, the one-pass 64-bit variant of Schütz, Kerbl, Wimmer 2021 for GPUs with
+// 64-bit atomics: each pixel keeps min((depth bits << 32) | colour), so the nearest point's
+// colour wins in one atomicMin. Compiled only where GL_NV_shader_atomic_int64 exists.
+#extension GL_ARB_gpu_shader_int64 : require
+#extension GL_NV_shader_atomic_int64 : require
+
+#include "../common/point_data.glsl"
+
+layout(local_size_x = 128) in;
+
+layout(std430, binding = 4) buffer Packed { uint64_t packed[]; } fb64;
+
+uniform ivec2 uViewport;
+
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  if (i >= uNumPoints) return;
+  vec4 view = uViewFromCamRel * vec4(pointCamRel(i), 1.0);
+  vec4 clip = uClipFromView * view;
+  if (clip.w <= 0.0) return;
+  vec3 ndc = clip.xyz / clip.w;
+  if (any(lessThan(ndc, vec3(-1.0))) || any(greaterThanEqual(ndc, vec3(1.0)))) return;
+  ivec2 p = clamp(ivec2((ndc.xy * 0.5 + 0.5) * vec2(uViewport)), ivec2(0), uViewport - 1);
+  uint pixel = uint(p.y * uViewport.x + p.x);
+  uint64_t value = (uint64_t(floatBitsToUint(-view.z)) << 32) | uint64_t(pointColour(i));
+  atomicMin(fb64.packed[pixel], value);
+}
