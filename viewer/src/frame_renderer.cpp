@@ -134,6 +134,26 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
     const glm::dvec3 origin(n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z);
     return glm::vec3(origin - camera.eye);  // the difference is small: float keeps it exact enough
   };
+  // One compute pass over every node: a dispatch per node with its buffer and camera offset.
+  auto dispatchNodes = [&](const ShaderProgram& pass, bool countPoints) {
+    const GLuint p = pass.id();
+    pass.use();
+    setMat4(p, "uClipFromView", clipFromView);
+    setMat4(p, "uViewFromCamRel", viewFromCamRel);
+    glProgramUniform2i(p, pass.uniform("uViewport"), w, h);
+    const GLint offLoc = pass.uniform("uNodeOffset"), nLoc = pass.uniform("uNumPoints");
+    for (const auto& n : nodes) {
+      if (!n.numPoints) continue;
+      const glm::vec3 off = nodeOffset(n);
+      glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
+      glProgramUniform1ui(p, nLoc, n.numPoints);
+      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
+                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
+      glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
+      if (t && countPoints) t->points += n.numPoints;
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  };
 
   if (!compute) {
     const GLuint p = points_.id();
@@ -169,23 +189,7 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
     const uint32_t empty[2] = {0xffffffffu, 0xffffffffu};
     glClearNamedBufferSubData(packedSsbo_, GL_RG32UI, 0, pixels * 8, GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
     glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 4, packedSsbo_, 0, GLsizeiptr(pixels * 8));
-    const GLuint p = atomic64_->id();
-    atomic64_->use();
-    setMat4(p, "uClipFromView", clipFromView);
-    setMat4(p, "uViewFromCamRel", viewFromCamRel);
-    glProgramUniform2i(p, atomic64_->uniform("uViewport"), w, h);
-    const GLint offLoc = atomic64_->uniform("uNodeOffset"), nLoc = atomic64_->uniform("uNumPoints");
-    for (const auto& n : nodes) {
-      if (!n.numPoints) continue;
-      const glm::vec3 off = nodeOffset(n);
-      glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
-      glProgramUniform1ui(p, nLoc, n.numPoints);
-      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
-                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
-      glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
-      if (t) t->points += n.numPoints;
-    }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    dispatchNodes(*atomic64_, true);
     const GLuint r = resolve64_->id();
     resolve64_->use();
     setMat4(r, "uClipFromView", clipFromView);
@@ -204,25 +208,8 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
     glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, depthSsbo_, 0, GLsizeiptr(pixels * 4));
     glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, accumSsbo_, 0, GLsizeiptr(pixels * 16));
     glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 3, normalSsbo_, 0, GLsizeiptr(pixels * 4));
-    for (ShaderProgram* pass : {&depthPass_, &colourPass_}) {
-      const GLuint p = pass->id();
-      pass->use();
-      setMat4(p, "uClipFromView", clipFromView);
-      setMat4(p, "uViewFromCamRel", viewFromCamRel);
-      glProgramUniform2i(p, pass->uniform("uViewport"), w, h);
-      const GLint offLoc = pass->uniform("uNodeOffset"), nLoc = pass->uniform("uNumPoints");
-      for (const auto& n : nodes) {
-        if (!n.numPoints) continue;
-        const glm::vec3 off = nodeOffset(n);
-        glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
-        glProgramUniform1ui(p, nLoc, n.numPoints);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
-                          GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
-        glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
-        if (t && pass == &depthPass_) t->points += n.numPoints;
-      }
-      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-    }
+    dispatchNodes(depthPass_, true);
+    dispatchNodes(colourPass_, false);
     const GLuint r = resolve_.id();
     resolve_.use();
     setMat4(r, "uClipFromView", clipFromView);
