@@ -32,6 +32,26 @@ inline Weighed weigh(const Node& n, const View& view) {
   const double d = std::max(std::sqrt(dx * dx + dy * dy + dz * dz) - n.radius, 0.0);
   return {view.projectedPixels(n.radius, d), d};
 }
+inline void clearCut(CutResult& out) {
+  out.nodes.clear();
+  out.points = out.bytes = 0;
+  out.pendingHierarchy = 0;
+  out.budgetBound = false;
+}
+// Takes node `idx` into the cut; true when its children are to be considered next.
+inline bool admit(Node& n, uint32_t idx, const Weighed& w, const View& view, const Budgets& budgets,
+                  uint64_t frame, CutResult& out) {
+  n.cutFrame = frame;
+  n.weight = w.weight;
+  n.refine = n.childMask != 0 && view.projectedPixels(n.spacing, w.distance) > budgets.spacingPixels;
+  out.nodes.push_back(idx);
+  if (!n.refine) return false;
+  if (n.firstChild == kNone) {
+    ++out.pendingHierarchy;
+    return false;
+  }
+  return true;
+}
 inline uint64_t bytesOf(const Node& n, double bytesPerPoint) {
   return n.bytesKnown ? n.bytes : static_cast<uint64_t>(std::ceil(n.numPoints * bytesPerPoint));
 }
@@ -41,10 +61,7 @@ void CutSelector::select(NodeTable& table, const View& view, const Budgets& budg
                          double bytesPerPoint, uint64_t frame, CutResult& out) {
   const Frustum frustum(view.clipFromWorld);
   if (table.size() == 0) {
-    out.nodes.clear();
-    out.points = out.bytes = 0;
-    out.pendingHierarchy = 0;
-    out.budgetBound = false;
+    clearCut(out);
     return;
   }
   if (selectAll(table, view, frustum, budgets, bytesPerPoint, frame, out)) return;
@@ -54,10 +71,7 @@ void CutSelector::select(NodeTable& table, const View& view, const Budgets& budg
 bool CutSelector::selectAll(NodeTable& table, const View& view, const Frustum& frustum,
                             const Budgets& budgets, double bytesPerPoint, uint64_t frame,
                             CutResult& out) {
-  out.nodes.clear();
-  out.points = out.bytes = 0;
-  out.pendingHierarchy = 0;
-  out.budgetBound = false;
+  clearCut(out);
   work_.clear();
   work_.push_back({0, 0, 0, kAllPlanes});
   while (!work_.empty()) {
@@ -74,17 +88,7 @@ bool CutSelector::selectAll(NodeTable& table, const View& view, const Frustum& f
       for (uint32_t idx : out.nodes) table[idx].cutFrame = frame - 1;
       return false;
     }
-    const Weighed w = weigh(n, view);
-    n.cutFrame = frame;
-    n.weight = w.weight;
-    n.refine =
-        n.childMask != 0 && view.projectedPixels(n.spacing, w.distance) > budgets.spacingPixels;
-    out.nodes.push_back(c.node);
-    if (!n.refine) continue;
-    if (n.firstChild == kNone) {
-      ++out.pendingHierarchy;
-      continue;
-    }
+    if (!admit(n, c.node, weigh(n, view), view, budgets, frame, out)) continue;
     for (uint32_t k = uint32_t(std::popcount(n.childMask)); k-- > 0;)
       work_.push_back({0, 0, n.firstChild + k, planes});
   }
@@ -94,10 +98,7 @@ bool CutSelector::selectAll(NodeTable& table, const View& view, const Frustum& f
 void CutSelector::selectByPriority(NodeTable& table, const View& view, const Frustum& frustum,
                                    const Budgets& budgets, double bytesPerPoint, uint64_t frame,
                                    CutResult& out) {
-  out.nodes.clear();
-  out.points = out.bytes = 0;
-  out.pendingHierarchy = 0;
-  out.budgetBound = false;
+  clearCut(out);
   work_.clear();
   // Lower priority: smaller on screen, then later in breadth-first order (deterministic ties).
   auto lower = [&table](const Candidate& a, const Candidate& b) {
@@ -125,16 +126,7 @@ void CutSelector::selectByPriority(NodeTable& table, const View& view, const Fru
     }
     out.points += n.numPoints;
     out.bytes += bytes;
-    n.cutFrame = frame;
-    n.weight = c.weight;
-    n.refine =
-        n.childMask != 0 && view.projectedPixels(n.spacing, c.distance) > budgets.spacingPixels;
-    out.nodes.push_back(c.node);
-    if (!n.refine) continue;
-    if (n.firstChild == kNone) {
-      ++out.pendingHierarchy;
-      continue;
-    }
+    if (!admit(n, c.node, {c.weight, c.distance}, view, budgets, frame, out)) continue;
     const uint32_t children = uint32_t(std::popcount(n.childMask));
     for (uint32_t k = 0; k < children; ++k) consider(n.firstChild + k, c.planes);
   }
