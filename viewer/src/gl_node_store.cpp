@@ -161,7 +161,6 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
     const uint32_t on = packNormal(nrm[0], nrm[1], nrm[2]);
     std::memcpy(o + 16, &on, 4);
   }
-  PointBuffer().pos.swap(pts.pos);
 }
 
 uint64_t GlNodeStore::upload(const streaming::PreparedNode& node) {
