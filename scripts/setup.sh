@@ -15,6 +15,7 @@ PACKAGES=(
   libegl-dev libegl1-mesa-dev libegl-mesa0 libgl1-mesa-dri libosmesa6-dev  # headless GL (llvmpipe)
   libglfw3-dev libimgui-dev libstb-dev   # the window, its UI, PNG files
   libopenexr-dev libspdlog-dev           # EXR files, logging
+  libembree-dev                          # the path-traced reference (Embree 3)
   xvfb xauth                             # the windowed viewer's test without a display
   glslang-tools                          # checks the GPU-only shaders that llvmpipe cannot compile
 )

@@ -1,0 +1,113 @@
+// A scene: scans (octrees), inserted meshes with materials, lights, an environment map, cameras,
+// the GI method and the outputs. Read from JSON (docs/SCENE.md); every value is checked and an
+// error names the file and the field ("meshes[1].material.roughness: expected a number in
+// [0, 1], got 1.5").
+//
+// Coordinates: the file is in world units (double). Everything that renders works in float
+// relative to `origin` (the first scan's centre unless the file sets it), so a scan in
+// national-grid coordinates keeps millimetre precision.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "nestlight/gi/material.h"
+#include "nestlight/gi/mesh.h"
+#include "nestlight/gi/sampling.h"
+
+namespace nestlight::gi {
+
+struct SceneOctree {
+  std::filesystem::path path;
+  std::optional<int> maxLevel;       // deepest level loaded (none: all, within the budget)
+  uint64_t memoryBudget = 2ull << 30;  // bytes of points the reference may hold
+  float radiusScale = 1.0f;          // disc radius = radiusScale * local spacing
+  float colourScale = 1.0f;          // radiance (or albedo) per unit of recorded colour
+};
+
+struct SceneMesh {
+  std::filesystem::path path;
+  glm::dmat4 worldFromObject{1.0};
+  uint32_t material = 0;             // index into Scene::materials
+  SurfelSampling surfelMethod = SurfelSampling::AreaUniform;
+  size_t surfelCount = 20000;
+};
+
+enum class LightType { Point, Spot, Directional };
+
+struct Light {
+  LightType type = LightType::Point;
+  glm::dvec3 position{0.0};
+  glm::vec3 direction{0, 0, -1};     // spot axis, or the direction light travels (directional)
+  Rgb intensity{1.0f};               // point/spot: W/sr; directional: irradiance W/m^2 (normal)
+  float innerAngleDegrees = 30;      // spot: full intensity inside
+  float outerAngleDegrees = 45;      // spot: zero outside (smoothstep between)
+};
+
+struct SceneEnvironment {
+  std::filesystem::path path;        // empty with `constant`
+  std::optional<Rgb> constant;
+  float rotationDegrees = 0;
+  float scale = 1;
+};
+
+struct SceneCamera {
+  glm::dvec3 eye{0.0}, target{0, 0, -1}, up{0, 0, 1};
+  double fovYDegrees = 45;
+  int width = 640, height = 480;
+};
+
+struct SceneCameraKey {
+  double time = 0;
+  glm::dvec3 eye{0.0}, target{0.0};
+};
+
+enum class RadianceMode { RadianceCache, Albedo };
+
+struct GiSettings {
+  std::string method = "reference";  // reference | direct (more as GI methods land)
+  RadianceMode mode = RadianceMode::RadianceCache;
+  int maxBounces = 4;                // path length in bounces after the camera hit
+  int samplesPerPixel = 256;         // upper bound on samples
+  double targetRelativeError = 0;    // stop when the estimated relative error falls below (0: off)
+  double timeLimitSeconds = 0;       // stop after this long (0: off)
+  uint64_t seed = 1;
+  nlohmann::json parameters;         // method-specific, validated by the method
+};
+
+struct SceneOutput {
+  std::filesystem::path exr;         // linear HDR
+  std::filesystem::path png;         // tone-mapped, optional
+  double exposure = 0;               // stops, for the PNG
+};
+
+struct Scene {
+  std::filesystem::path file;        // where it was read from (relative paths resolve here)
+  glm::dvec3 origin{0.0};
+  bool originSet = false;
+  std::vector<SceneOctree> octrees;
+  std::vector<Material> materials;
+  std::vector<SceneMesh> meshes;
+  std::vector<Light> lights;
+  std::optional<SceneEnvironment> environment;
+  SceneCamera camera;
+  double cameraPathFps = 30;
+  std::vector<SceneCameraKey> cameraPath;  // optional; replaces `camera`'s eye/target per frame
+  GiSettings gi;
+  SceneOutput output;
+
+  // Float offset of a world position from the origin.
+  glm::vec3 local(const glm::dvec3& world) const { return glm::vec3(world - origin); }
+  glm::mat4 localFromObject(const SceneMesh& m) const;
+};
+
+// Throws nestlight::Error("scene.json", "meshes[0].transform.scale", reason) on any fault.
+Scene loadScene(const std::filesystem::path& file);
+Scene parseScene(const nlohmann::json& j, const std::filesystem::path& file);
+nlohmann::json sceneToJson(const Scene& scene);  // round-trips through parseScene
+
+}  // namespace nestlight::gi

@@ -1,0 +1,1 @@
+// Placeholder until the path tracer lands (issue 4).
