@@ -34,6 +34,8 @@ void addStress(CLI::App& app, int& exitCode);
 void addRender(CLI::App& app, int& exitCode);
 void addView(CLI::App& app, int& exitCode);
 void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
+void addBenchGi(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
+void addMakeScene(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");
@@ -45,6 +47,8 @@ uint64_t parseBytes(const std::string& text);
 // Files as given; a directory stands for its supported point files, sorted by name.
 std::vector<std::string> expandInputs(const std::vector<std::string>& inputs);
 std::string humanBytes(double bytes);
+double median(std::vector<double> v);
+std::string cpuName();  // /proc/cpuinfo's model name
 std::string humanCount(double n);
 
 }  // namespace nestlight::cli

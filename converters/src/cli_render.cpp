@@ -4,10 +4,13 @@
 #include <sstream>
 
 #include "cli.h"
+#include "cli_scene.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/viewer/headless.h"
 
 namespace nestlight::cli {
+
+namespace fs = std::filesystem;
 
 namespace {
 std::vector<double> parseNumbers(const std::string& text, size_t n, const std::string& option) {
@@ -82,14 +85,18 @@ void addRender(CLI::App& app, int& exitCode) {
       "render",
       "Render an octree headless to PNG or EXR (EGL: an NVIDIA GPU, or Mesa's llvmpipe on the CPU).\n"
       "A still by default; --path renders a camera path (JSON keyframes) to an image sequence.\n"
-      "Example: nestlight render scan.octree -o view.png --width 1920 --height 1080 --wait-complete");
+      "Example: nestlight render scan.octree -o view.png --width 1920 --height 1080 --wait-complete\n\n"
+      "Given a scene file (.json, docs/SCENE.md) it renders the scene's GI instead: the Embree path-\n"
+      "traced reference (or direct lighting) of scans and inserted meshes, to linear EXR, progressive\n"
+      "until --target-error, --time-limit or --spp is reached.\n"
+      "Example: nestlight render cornell/scene.json --target-error 0.01 -o cornell.exr");
   auto job = std::make_shared<viewer::RenderJob>();
   auto text = std::make_shared<RenderOptionText>();
   auto octree = std::make_shared<std::string>();
   auto path = std::make_shared<std::string>();
-  cmd->add_option("octree", *octree, "Octree folder made by `nestlight convert`")->required();
-  cmd->add_option("-o,--output", job->output, "Image file (.png or .exr); with --path a pattern with %04d")
-      ->required();
+  cmd->add_option("input", *octree, "Octree folder made by `nestlight convert`, or a scene file (.json)")->required();
+  cmd->add_option("-o,--output", job->output,
+                  "Image file (.png or .exr); with --path a pattern with %04d. Scenes: .exr, default from the scene");
   cmd->add_option("--path", *path, "Camera path JSON: {\"fps\": 30, \"fov\": 60, \"keyframes\": "
                                    "[{\"time\": 0, \"eye\": [x,y,z], \"target\": [x,y,z]}, ...]}");
   cmd->add_option("--stats", job->statsCsv, "Per-frame stats CSV (cut, resident bytes, loads, timings)");
@@ -97,7 +104,34 @@ void addRender(CLI::App& app, int& exitCode) {
                 "Render each frame only once its cut is fully loaded (deterministic images)");
   cmd->add_option("--timeout", job->timeoutSeconds, "Seconds to wait for a complete cut")->capture_default_str();
   addRenderOptions(cmd, *job, text);
+  auto sc = std::make_shared<SceneRenderOverrides>();
+  auto mode = std::make_shared<std::string>();
+  std::string group = "Scene files";
+  cmd->add_option("--method", sc->method, "Scenes: reference (path traced) or direct (one bounce)")
+      ->check(CLI::IsMember({"reference", "direct"}))->group(group);
+  cmd->add_option("--mode", *mode, "Scenes: radiance_cache (scan points emit their colour) or albedo (scan points "
+                                   "reflect with their colour as albedo)")
+      ->check(CLI::IsMember({"radiance_cache", "albedo"}))->group(group);
+  cmd->add_option("--spp", sc->spp, "Scenes: samples per pixel at most")->check(CLI::Range(1, 1 << 24))->group(group);
+  cmd->add_option("--target-error", sc->targetError,
+                  "Scenes: stop when the estimated relative error (two half-sample images) falls below")
+      ->check(CLI::Range(0.0, 1.0))->group(group);
+  cmd->add_option("--time-limit", sc->timeLimit, "Scenes: stop after this many seconds")->check(CLI::Range(0.0, 1e7))->group(group);
+  cmd->add_option("--bounces", sc->bounces, "Scenes: scattering events per path (1: direct light)")
+      ->check(CLI::Range(0, 64))->group(group);
+  cmd->add_option("--seed", sc->seed, "Scenes: random seed")->group(group);
   cmd->callback([=, &exitCode]() {
+    if (fs::path(*octree).extension() == ".json") {
+      if (cmd->count("--width")) sc->width = job->width;
+      if (cmd->count("--height")) sc->height = job->height;
+      if (cmd->count("--fov")) sc->fov = job->fovYDegrees;
+      if (!mode->empty()) sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
+      sc->output = job->output;
+      renderSceneFile(*octree, *sc);
+      exitCode = 0;
+      return;
+    }
+    if (job->output.empty()) throw Error("render: -o/--output is required for an octree");
     job->octree = *octree;
     applyRenderOptions(*job, *text);
     if (!path->empty()) job->path = viewer::CameraPath::load(*path);

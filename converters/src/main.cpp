@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   nestlight::cli::addRender(app, code);
   nestlight::cli::addView(app, code);
   nestlight::cli::addBenchRender(app, code);
+  nestlight::cli::addBenchGi(app, code);
+  nestlight::cli::addMakeScene(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -158,6 +158,47 @@ std::vector<Prim> buildingScene() {
   return s;
 }
 
+// Cornell-box-like room in [0,1]^3 (Goral et al. 1984's box, with a closed front wall so the
+// scan is a closed room): walls face inwards.
+std::vector<Prim> roomScene() {
+  std::vector<Prim> s;
+  const std::array<int, 3> white{200, 196, 188}, red{190, 40, 36}, green{44, 160, 60};
+  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, 0, 0, white, 0.7});    // floor
+  s.push_back({Prim::Rect, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}, 0, 0, white, 0.7});   // ceiling
+  s.push_back({Prim::Rect, {0, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, 0, 0, red, 0.5});      // left
+  s.push_back({Prim::Rect, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, 0, 0, green, 0.5});   // right
+  s.push_back({Prim::Rect, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}, {0, -1, 0}, 0, 0, white, 0.7});   // back
+  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}, 0, 0, white, 0.7});    // front
+  // The light: a patch just below the ceiling, facing down, saturated white in the scan.
+  s.push_back({Prim::Rect, {0.38, 0.38, 0.995}, {0.24, 0, 0}, {0, 0.24, 0}, {0, 0, -1}, 0, 0, {255, 255, 255}, 1.0});
+  addBuilding(s, 0.18, 0.55, 0.46, 0.83, 0.60, white, white);  // tall block
+  addBuilding(s, 0.55, 0.18, 0.83, 0.46, 0.30, white, white);  // short block
+  return s;
+}
+
+// A nave in [0,1] x [0,0.5] x [0,0.3]: hall walls facing inwards, two colonnades, an apse dome
+// (a half dome on the east wall seen from inside is approximated by a full dome's inside).
+std::vector<Prim> naveScene() {
+  std::vector<Prim> s;
+  const std::array<int, 3> stone{196, 186, 160}, floor{120, 104, 90}, plaster{226, 220, 206};
+  const double W = 0.5, H = 0.3;
+  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, W, 0}, {0, 0, 1}, 0, 0, floor, 0.4});
+  s.push_back({Prim::Rect, {0, 0, H}, {1, 0, 0}, {0, W, 0}, {0, 0, -1}, 0, 0, plaster, 0.6});
+  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 0, H}, {0, 1, 0}, 0, 0, stone, 0.6});
+  s.push_back({Prim::Rect, {0, W, 0}, {1, 0, 0}, {0, 0, H}, {0, -1, 0}, 0, 0, stone, 0.6});
+  s.push_back({Prim::Rect, {0, 0, 0}, {0, W, 0}, {0, 0, H}, {1, 0, 0}, 0, 0, stone, 0.6});
+  s.push_back({Prim::Rect, {1, 0, 0}, {0, W, 0}, {0, 0, H}, {-1, 0, 0}, 0, 0, {210, 170, 90}, 0.6});  // gilded east wall
+  Prim column{Prim::Cylinder, {0, 0, 0}, {}, {}, {}, 0.018, H, stone, 0.7};
+  for (int k = 0; k < 7; ++k) {
+    column.c[0] = 0.12 + 0.12 * k;
+    column.c[1] = 0.14;
+    s.push_back(column);
+    column.c[1] = W - 0.14;
+    s.push_back(column);
+  }
+  return s;
+}
+
 class SyntheticReader final : public PointReader {
  public:
   explicit SyntheticReader(const SyntheticSpec& spec) : spec_(spec) {
@@ -207,8 +248,10 @@ class SyntheticReader final : public PointReader {
 
     // Shape bounds in metres relative to the origin, before quantisation.
     Box3d unit;
-    if (spec.shape == SyntheticShape::Surfaces) {
-      scene_ = buildingScene();
+    if (primitiveScene()) {
+      scene_ = spec.shape == SyntheticShape::Room   ? roomScene()
+               : spec.shape == SyntheticShape::Nave ? naveScene()
+                                                    : buildingScene();
       double total = 0;
       for (const Prim& p : scene_) total += p.area();
       double acc = 0;
@@ -235,7 +278,7 @@ class SyntheticReader final : public PointReader {
       unit.extend(0.5, 0.5, 0.5);
     }
     // Noise along the normal is bounded by 2*sqrt(3) sigma; 4 sigma is the documented clamp.
-    const double margin = spec.shape == SyntheticShape::Surfaces ? 4 * spec.noise : 0;
+    const double margin = primitiveScene() ? 4 * spec.noise : 0;
     Box3d b;
     for (int a = 0; a < 3; ++a) {
       // world() is monotone in its argument, so the images of the extremes bound every point.
@@ -278,6 +321,10 @@ class SyntheticReader final : public PointReader {
 
  private:
   uint64_t bytesPerPoint() const { return 24 + header_.layout.stride(); }
+  bool primitiveScene() const {
+    return spec_.shape == SyntheticShape::Surfaces || spec_.shape == SyntheticShape::Room ||
+           spec_.shape == SyntheticShape::Nave;
+  }
 
   // cos and sin of 2*pi*turns, turns in [0, 1): a table of 1024 angles and a rotation by the
   // remainder d < 2*pi/1024 with Taylor terms to d^5 (error < 1e-13). libm's sincos took an
@@ -310,7 +357,9 @@ class SyntheticReader final : public PointReader {
     uint32_t tex = 0;  // random bits for colour and intensity texture
 
     switch (spec_.shape) {
-      case SyntheticShape::Surfaces: {
+      case SyntheticShape::Surfaces:
+      case SyntheticShape::Room:
+      case SyntheticShape::Nave: {
         const uint64_t r1 = rng.next(), r2 = rng.next();
         tex = uint32_t(r2);
         const double sel = PointRng::hi(r1), u = PointRng::lo(r1), v = PointRng::hi(r2);
@@ -451,6 +500,8 @@ std::optional<SyntheticShape> parseSyntheticShape(std::string_view name) {
   if (s == "cube") return SyntheticShape::Cube;
   if (s == "duplicates") return SyntheticShape::Duplicates;
   if (s == "plane") return SyntheticShape::Plane;
+  if (s == "room") return SyntheticShape::Room;
+  if (s == "nave") return SyntheticShape::Nave;
   return std::nullopt;
 }
 
@@ -464,6 +515,10 @@ const char* syntheticShapeName(SyntheticShape shape) {
       return "duplicates";
     case SyntheticShape::Plane:
       return "plane";
+    case SyntheticShape::Room:
+      return "room";
+    case SyntheticShape::Nave:
+      return "nave";
   }
   return "?";
 }

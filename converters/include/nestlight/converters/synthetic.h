@@ -19,6 +19,11 @@ enum class SyntheticShape {
   Cube,        // uniform in the filled cube [origin, origin + size]^3
   Duplicates,  // every point the same: origin + size/2, same attributes
   Plane,       // uniform on the square [origin, origin + size]^2 at z = origin.z exactly
+  Room,        // a closed Cornell-box-like room [0, size]^3: red wall at x = 0, green at x = size,
+               // white elsewhere, a bright ceiling patch, a tall and a short white block;
+               // normals face into the room
+  Nave,        // a church nave: floor, walls and ceiling of a hall 2 x 1 x 0.6 (times size / 2),
+               // two rows of columns, an apse dome at the east end; normals face inwards
 };
 
 struct SyntheticSpec {

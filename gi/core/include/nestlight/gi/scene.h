@@ -105,9 +105,13 @@ struct Scene {
   glm::mat4 localFromObject(const SceneMesh& m) const;
 };
 
-// Throws nestlight::Error("scene.json", "meshes[0].transform.scale", reason) on any fault.
+// Throws nestlight::Error("scene.json", "scene.meshes[0].transform.scale", reason) on any
+// fault. Relative paths resolve against the scene file's folder. Without "origin", the origin is
+// the centre of the first octree's bounds (its metadata is read), else 0.
 Scene loadScene(const std::filesystem::path& file);
+// The same for a parsed document; `file` names it in messages and anchors relative paths. Reads
+// no octree: the origin stays 0 unless the document sets it (see resolveOrigin()).
 Scene parseScene(const nlohmann::json& j, const std::filesystem::path& file);
-nlohmann::json sceneToJson(const Scene& scene);  // round-trips through parseScene
+void resolveOrigin(Scene& scene);
 
 }  // namespace nestlight::gi

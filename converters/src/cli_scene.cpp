@@ -1,0 +1,120 @@
+// `nestlight make-scene` (the project's GI test scenes) and `nestlight render scene.json` (the
+// path-traced reference, or direct lighting, of a scene file).
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "cli.h"
+#include "cli_scene.h"
+#include "nestlight/converters/test_scenes.h"
+#include "nestlight/gi/reference/path_tracer.h"
+#include "nestlight/gi/scene.h"
+#include "nestlight/gi/tone_map.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+void logLine(const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); }
+}  // namespace
+
+void addMakeScene(CLI::App& app, int& exitCode) {
+  auto* cmd = app.add_subcommand(
+      "make-scene",
+      "Generate a GI test scene: a synthetic scan converted into DIR/scan.octree, inserted meshes\n"
+      "(OBJ) and DIR/scene.json for `nestlight render` and `nestlight bench gi`.\n"
+      "  cornell  a closed 4 m room of coloured walls (a Cornell-box-like scan) with a glossy sphere\n"
+      "  nave     a 40 m nave with two colonnades and a marble statue on a pedestal\n"
+      "  object   the synthetic town scan with a gold torus, under a sky and a sun (albedo mode)\n"
+      "Example: nestlight make-scene cornell -o cornell && nestlight render cornell/scene.json");
+  auto kind = std::make_shared<std::string>();
+  auto dir = std::make_shared<std::string>();
+  auto opt = std::make_shared<TestSceneOptions>();
+  auto points = std::make_shared<std::string>("1M");
+  cmd->add_option("kind", *kind, "cornell, nave or object")->required()->check(CLI::IsMember({"cornell", "nave", "object"}));
+  cmd->add_option("-o,--output", *dir, "Folder to write (created)")->required();
+  cmd->add_option("-n,--points", *points, "Points in the scan (e.g. 200k, 2M)")->capture_default_str();
+  cmd->add_option("--seed", opt->seed, "Seed of the synthetic scan")->capture_default_str();
+  cmd->add_option("--width", opt->width, "Image width in the scene's camera")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", opt->height, "Image height")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_flag("--overwrite", opt->overwrite, "Rebuild the octree even when one is there");
+  cmd->add_flag("-q,--quiet", opt->quiet, "No progress output");
+  cmd->callback([=, &exitCode]() {
+    opt->points = parseCount(*points, "--points");
+    fs::path file = makeTestScene(*parseTestSceneKind(*kind), *dir, *opt);
+    std::printf("make-scene: wrote %s\n", file.c_str());
+    exitCode = 0;
+  });
+}
+
+SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrides& ov) {
+  auto t0 = std::chrono::steady_clock::now();
+  gi::Scene scene = gi::loadScene(file);
+  if (ov.width) scene.camera.width = *ov.width;
+  if (ov.height) scene.camera.height = *ov.height;
+  if (ov.fov) scene.camera.fovYDegrees = *ov.fov;
+  if (ov.method) scene.gi.method = *ov.method;
+  if (ov.mode) scene.gi.mode = *ov.mode;
+  if (ov.bounces) scene.gi.maxBounces = *ov.bounces;
+  if (ov.spp) scene.gi.samplesPerPixel = *ov.spp;
+  if (ov.targetError) scene.gi.targetRelativeError = *ov.targetError;
+  if (ov.timeLimit) scene.gi.timeLimitSeconds = *ov.timeLimit;
+  if (ov.seed) scene.gi.seed = *ov.seed;
+  if (!ov.output.empty()) scene.output.exr = ov.output;
+  if (scene.output.exr.empty()) scene.output.exr = file.parent_path() / (file.stem().string() + ".exr");
+  if (scene.output.exr.extension() != ".exr")
+    throw Error(scene.output.exr.string(), "", "the scene renderer writes linear HDR: give a .exr file");
+  void (*logFn)(const std::string&) = ov.quiet ? nullptr : &logLine;
+  if (!ov.quiet) std::fprintf(stderr, "render: loading %s\n", file.c_str());
+  auto rs = gi::ReferenceScene::load(scene, logFn);
+  double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  gi::ReferenceOptions opt = gi::referenceOptionsFrom(scene.gi);
+  if (!ov.quiet)
+    std::fprintf(stderr, "render: %s, %s mode, %dx%d, up to %d samples/pixel%s%s (loaded in %.1f s)\n",
+                 scene.gi.method.c_str(), scene.gi.mode == gi::RadianceMode::Albedo ? "albedo" : "radiance-cache",
+                 scene.camera.width, scene.camera.height, opt.maxSamplesPerPixel,
+                 opt.targetRelativeError > 0 ? (", error target " + std::to_string(opt.targetRelativeError)).c_str() : "",
+                 opt.timeLimitSeconds > 0 ? (", time limit " + std::to_string(opt.timeLimitSeconds) + " s").c_str() : "",
+                 loadSeconds);
+  int lastReported = 0;
+  auto progress = [&](const gi::ReferenceProgress& p) {
+    if (!ov.quiet && (p.samplesPerPixel >= 2 * lastReported || p.samplesPerPixel == opt.maxSamplesPerPixel)) {
+      lastReported = p.samplesPerPixel;
+      std::fprintf(stderr, "  %5d spp  %7.2f s  estimated error %.4f\n", p.samplesPerPixel, p.seconds, p.relativeError);
+    }
+    return true;
+  };
+  gi::ReferenceResult r = gi::renderReference(*rs, scene.camera, opt, progress);
+  gi::ImageAttributes attrs{{"nestlight:samples", std::to_string(r.samplesPerPixel)},
+                            {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
+                            {"nestlight:seconds", std::to_string(r.seconds)},
+                            {"nestlight:rays", std::to_string(r.rays)},
+                            {"nestlight:method", scene.gi.method},
+                            {"nestlight:mode", scene.gi.mode == gi::RadianceMode::Albedo ? "albedo" : "radiance_cache"},
+                            {"nestlight:max_bounces", std::to_string(opt.maxBounces)},
+                            {"nestlight:stop", r.stopReason},
+                            {"nestlight:scene", fs::absolute(file).string()}};
+  fs::create_directories(fs::absolute(scene.output.exr).parent_path());
+  gi::writeExr(scene.output.exr.string(), r.image, attrs);
+  if (!scene.output.png.empty() && ov.output.empty())
+    gi::writeToneMappedPng(scene.output.png.string(), r.image, scene.output.exposure);
+  SceneRenderReport rep;
+  rep.exr = scene.output.exr;
+  rep.result = std::move(r);
+  rep.loadSeconds = loadSeconds;
+  rep.discs = rs->discs();
+  rep.triangles = rs->triangles();
+  rep.scene = std::move(scene);
+  if (!ov.quiet) {
+    const auto& res = rep.result;
+    std::printf("render: wrote %s: %d samples/pixel in %.2f s (%s), estimated relative error %.4f, %.2f M rays/s, %.0f k samples/s%s\n",
+                rep.exr.c_str(), res.samplesPerPixel, res.seconds, res.stopReason.c_str(), res.relativeError,
+                res.raysPerSecond() / 1e6, res.samplesPerSecond() / 1e3,
+                res.nonFiniteSamples ? (", " + std::to_string(res.nonFiniteSamples) + " non-finite samples dropped").c_str() : "");
+  }
+  return rep;
+}
+
+}  // namespace nestlight::cli

@@ -1,0 +1,212 @@
+// Test scenes for GI (issue 4): synthetic scans of a Cornell-like room, a nave and a town, with
+// inserted meshes; see test_scenes.h.
+#include "nestlight/converters/test_scenes.h"
+
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <vector>
+
+#include "nestlight/converters/builder.h"
+#include "nestlight/converters/synthetic.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+struct ObjMesh {
+  std::vector<std::array<double, 3>> v;
+  std::vector<std::array<uint32_t, 3>> f;
+};
+
+void writeObj(const fs::path& path, const ObjMesh& m, const std::string& comment) {
+  fs::path tmp = path;
+  tmp += ".partial";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw Error(path.string(), "", "cannot write");
+    out << "# " << comment << "\n";
+    char buf[128];
+    for (const auto& v : m.v) {
+      std::snprintf(buf, sizeof buf, "v %.9g %.9g %.9g\n", v[0], v[1], v[2]);
+      out << buf;
+    }
+    for (const auto& f : m.f) out << "f " << f[0] + 1 << ' ' << f[1] + 1 << ' ' << f[2] + 1 << '\n';
+    if (!out) throw Error(path.string(), "", "write failed");
+  }
+  fs::rename(tmp, path);
+}
+
+}  // namespace
+
+void writeIcosphereObj(const fs::path& path, int subdivisions) {
+  // Icosahedron, then each triangle split in four with the new vertices pushed onto the sphere.
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  ObjMesh m;
+  m.v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+         {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+         {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  auto normalise = [](std::array<double, 3>& p) {
+    double l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    for (double& c : p) c /= l;
+  };
+  for (auto& p : m.v) normalise(p);
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      std::array<double, 3> p{(m.v[a][0] + m.v[b][0]) / 2, (m.v[a][1] + m.v[b][1]) / 2, (m.v[a][2] + m.v[b][2]) / 2};
+      normalise(p);
+      m.v.push_back(p);
+      return mid[key] = uint32_t(m.v.size() - 1);
+    };
+    std::vector<std::array<uint32_t, 3>> next;
+    for (const auto& f : m.f) {
+      uint32_t a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
+      next.push_back({f[0], a, c});
+      next.push_back({f[1], b, a});
+      next.push_back({f[2], c, b});
+      next.push_back({a, b, c});
+    }
+    m.f = std::move(next);
+  }
+  writeObj(path, m, "unit icosphere, " + std::to_string(subdivisions) + " subdivisions (nestlight)");
+}
+
+void writeTorusObj(const fs::path& path, double R, double r, int segments, int sides) {
+  ObjMesh m;
+  const double tau = 2 * std::numbers::pi;
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      double u = tau * i / segments, v = tau * j / sides;
+      m.v.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+    }
+  auto id = [&](int i, int j) { return uint32_t((i % segments) * sides + (j % sides)); };
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      m.f.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.f.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  writeObj(path, m, "torus R=" + std::to_string(R) + " r=" + std::to_string(r) + " (nestlight)");
+}
+
+void writeBoxObj(const fs::path& path) {
+  ObjMesh m;
+  for (int i = 0; i < 8; ++i) m.v.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
+  // Counter-clockwise seen from outside.
+  m.f = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+         {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  writeObj(path, m, "unit box [0,1]^3 (nestlight)");
+}
+
+std::optional<TestSceneKind> parseTestSceneKind(const std::string& name) {
+  if (name == "cornell") return TestSceneKind::Cornell;
+  if (name == "nave") return TestSceneKind::Nave;
+  if (name == "object") return TestSceneKind::Object;
+  return std::nullopt;
+}
+
+const char* testSceneKindName(TestSceneKind kind) {
+  switch (kind) {
+    case TestSceneKind::Cornell: return "cornell";
+    case TestSceneKind::Nave: return "nave";
+    case TestSceneKind::Object: return "object";
+  }
+  return "?";
+}
+
+fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneOptions& o) {
+  fs::create_directories(dir);
+  SyntheticSpec spec;
+  spec.points = o.points;
+  spec.seed = o.seed;
+  spec.intensity = false;
+  spec.normals = true;  // the reference's discs need them; real scans get --estimate-normals
+  json scene;
+  scene["version"] = 1;
+  scene["octrees"] = json::array({json{{"path", "scan.octree"}}});
+  auto camera = [&](std::array<double, 3> eye, std::array<double, 3> target, double fov) {
+    return json{{"eye", eye}, {"target", target}, {"fov", fov}, {"width", o.width}, {"height", o.height}};
+  };
+  switch (kind) {
+    case TestSceneKind::Cornell: {
+      // A 4 m room; the ceiling patch is the light (its recorded colour is the brightest).
+      spec.shape = SyntheticShape::Room;
+      spec.size = 4;
+      spec.noise = 0.001;
+      writeIcosphereObj(dir / "sphere.obj", 3);
+      scene["materials"] = {{"glossy", {{"type", "ggx"}, {"base_color", {0.9, 0.8, 0.6}}, {"roughness", 0.35}, {"metallic", 0.0}}}};
+      scene["meshes"] = json::array({json{{"path", "sphere.obj"},
+                                          {"transform", {{"translate", {2.6, 2.6, 0.5}}, {"scale", 0.5}}},
+                                          {"material", "glossy"},
+                                          {"surfels", {{"method", "area"}, {"count", 20000}}}}});
+      scene["camera"] = camera({2.0, 0.25, 2.0}, {2.0, 4.0, 1.6}, 62);
+      scene["gi"] = {{"method", "reference"}, {"mode", "radiance_cache"}, {"max_bounces", 4}, {"samples_per_pixel", 1024},
+                     {"target_relative_error", 0.01}};
+      break;
+    }
+    case TestSceneKind::Nave: {
+      spec.shape = SyntheticShape::Nave;
+      spec.size = 40;  // 40 x 20 x 12 m
+      spec.noise = 0.003;
+      writeIcosphereObj(dir / "statue.obj", 3);
+      writeBoxObj(dir / "pedestal.obj");
+      scene["materials"] = {{"marble", {{"type", "principled"}, {"base_color", {0.85, 0.83, 0.8}}, {"roughness", 0.3},
+                                        {"specular", 0.5}, {"clearcoat", 0.3}}},
+                            {"stone", {{"type", "lambert"}, {"base_color", {0.5, 0.48, 0.45}}}}};
+      scene["meshes"] = json::array(
+          {json{{"path", "pedestal.obj"},
+                {"transform", {{"translate", {23.0, 9.0, 0.0}}, {"scale", {2.0, 2.0, 1.2}}}},
+                {"material", "stone"}},
+           json{{"path", "statue.obj"}, {"transform", {{"translate", {24.0, 10.0, 2.2}}, {"scale", 1.0}}}, {"material", "marble"}}});
+      scene["camera"] = camera({4.0, 10.0, 3.0}, {30.0, 10.0, 3.5}, 55);
+      scene["gi"] = {{"method", "reference"}, {"mode", "radiance_cache"}, {"max_bounces", 4}, {"samples_per_pixel", 1024},
+                     {"target_relative_error", 0.01}};
+      break;
+    }
+    case TestSceneKind::Object: {
+      spec.shape = SyntheticShape::Surfaces;
+      spec.size = 100;
+      writeTorusObj(dir / "torus.obj", 1.0, 0.35, 64, 24);
+      scene["materials"] = {{"gold", {{"type", "ggx"}, {"base_color", {1.0, 0.78, 0.34}}, {"roughness", 0.25}, {"metallic", 1.0}}}};
+      scene["meshes"] = json::array({json{{"path", "torus.obj"},
+                                          {"transform", {{"translate", {50.0, 45.0, 4.0}}, {"rotate", {60.0, 0.0, 20.0}}, {"scale", 3.0}}},
+                                          {"material", "gold"}}});
+      scene["lights"] = json::array({json{{"type", "directional"}, {"direction", {-0.4, -0.3, -0.87}}, {"irradiance", {3.0, 2.9, 2.7}}}});
+      scene["environment"] = {{"constant", {0.35, 0.45, 0.6}}};
+      scene["camera"] = camera({30.0, 20.0, 18.0}, {50.0, 45.0, 4.0}, 50);
+      scene["gi"] = {{"method", "reference"}, {"mode", "albedo"}, {"max_bounces", 3}, {"samples_per_pixel", 1024},
+                     {"target_relative_error", 0.01}};
+      break;
+    }
+  }
+  scene["output"] = {{"exr", std::string(testSceneKindName(kind)) + ".exr"}, {"png", std::string(testSceneKindName(kind)) + ".png"}};
+
+  fs::path octree = dir / "scan.octree";
+  if (o.overwrite || !fs::exists(octree / "metadata.json")) {
+    BuildOptions b;
+    b.output = octree;
+    b.overwrite = true;
+    b.progress = o.quiet ? ProgressMode::Quiet : ProgressMode::Auto;
+    std::vector<std::unique_ptr<PointReader>> sources;
+    sources.push_back(openSynthetic(spec));
+    buildOctree(std::move(sources), b);
+  }
+  fs::path file = dir / "scene.json";
+  std::ofstream out(file);
+  out << scene.dump(2) << "\n";
+  if (!out) throw Error(file.string(), "", "cannot write the scene file");
+  return file;
+}
+
+}  // namespace nestlight

@@ -1,0 +1,407 @@
+// Scene files (docs/SCENE.md). Validation is strict: an unknown key is an error (a typo in
+// "roughnes" must not silently fall back to a default), and every error names the field by its
+// JSON path.
+#include "nestlight/gi/scene.h"
+
+#include <cmath>
+#include <fstream>
+#include <glm/gtc/matrix_transform.hpp>
+#include <set>
+#include <sstream>
+
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
+
+namespace nestlight::gi {
+namespace {
+
+using json = nlohmann::json;
+
+// A JSON value and its path, for messages.
+class Field {
+ public:
+  Field(const json& j, std::string path, const std::string& file) : j_(j), path_(std::move(path)), file_(file) {}
+
+  [[noreturn]] void fail(const std::string& why) const { throw Error(file_, path_, why); }
+  const json& value() const { return j_; }
+  const std::string& path() const { return path_; }
+
+  Field at(const std::string& key) const { return Field(j_.at(key), path_ + "." + key, file_); }
+  Field at(size_t i) const { return Field(j_.at(i), path_ + "[" + std::to_string(i) + "]", file_); }
+  bool has(const std::string& key) const { return j_.is_object() && j_.contains(key); }
+
+  void expectObject(std::initializer_list<const char*> allowed) const {
+    if (!j_.is_object()) fail("expected an object, got " + std::string(j_.type_name()));
+    std::set<std::string> ok(allowed.begin(), allowed.end());
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      if (!ok.count(it.key())) {
+        std::string list;
+        for (const auto& k : ok) list += (list.empty() ? "" : ", ") + k;
+        Field(it.value(), path_ + "." + it.key(), file_).fail("unknown field (expected one of: " + list + ")");
+      }
+    }
+  }
+  size_t arraySize() const {
+    if (!j_.is_array()) fail("expected an array, got " + std::string(j_.type_name()));
+    return j_.size();
+  }
+
+  double number(double lo = -INFINITY, double hi = INFINITY) const {
+    if (!j_.is_number()) fail("expected a number, got " + std::string(j_.type_name()));
+    double v = j_.get<double>();
+    if (!std::isfinite(v) || v < lo || v > hi) {
+      std::ostringstream s;
+      s << "expected a number in [" << lo << ", " << hi << "], got " << v;
+      fail(s.str());
+    }
+    return v;
+  }
+  int64_t integer(int64_t lo, int64_t hi) const {
+    if (!j_.is_number_integer() && !j_.is_number_unsigned())
+      fail("expected an integer, got " + std::string(j_.type_name()) + " " + j_.dump());
+    int64_t v = j_.get<int64_t>();
+    if (v < lo || v > hi)
+      fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(v));
+    return v;
+  }
+  bool boolean() const {
+    if (!j_.is_boolean()) fail("expected true or false, got " + std::string(j_.type_name()));
+    return j_.get<bool>();
+  }
+  std::string string() const {
+    if (!j_.is_string()) fail("expected a string, got " + std::string(j_.type_name()));
+    return j_.get<std::string>();
+  }
+  std::string choice(std::initializer_list<const char*> options) const {
+    std::string v = string();
+    std::string list;
+    for (const char* o : options) {
+      if (v == o) return v;
+      list += (list.empty() ? "" : ", ") + std::string(o);
+    }
+    fail("'" + v + "' is not one of: " + list);
+  }
+  glm::dvec3 vec3(double lo = -INFINITY, double hi = INFINITY) const {
+    if (!j_.is_array() || j_.size() != 3) fail("expected an array of 3 numbers, got " + j_.dump());
+    return {at(size_t(0)).number(lo, hi), at(size_t(1)).number(lo, hi), at(size_t(2)).number(lo, hi)};
+  }
+  // A colour: [r, g, b] or a single number for grey.
+  Rgb colour(double lo = 0, double hi = INFINITY) const {
+    if (j_.is_number()) return Rgb(float(number(lo, hi)));
+    return Rgb(vec3(lo, hi));
+  }
+  glm::dvec3 direction() const {
+    glm::dvec3 d = vec3();
+    double len = glm::length(d);
+    if (!(len > 1e-12)) fail("a direction must not be the zero vector");
+    return d / len;
+  }
+  uint64_t bytes() const {
+    if (j_.is_number()) return uint64_t(number(1, 1e18));
+    std::string s = string();
+    char* end = nullptr;
+    double v = std::strtod(s.c_str(), &end);
+    std::string unit(end);
+    double mul = 0;
+    if (unit.empty() || unit == "B") mul = 1;
+    else if (unit == "KiB" || unit == "K") mul = 1024.0;
+    else if (unit == "MiB" || unit == "M") mul = 1024.0 * 1024;
+    else if (unit == "GiB" || unit == "G") mul = 1024.0 * 1024 * 1024;
+    if (mul == 0 || !(v > 0) || end == s.c_str()) fail("expected a size such as \"512MiB\" or \"2GiB\", got '" + s + "'");
+    return uint64_t(v * mul);
+  }
+
+ private:
+  const json& j_;
+  std::string path_;
+  const std::string& file_;
+};
+
+std::filesystem::path resolvePath(const Field& f, const std::filesystem::path& sceneFile) {
+  std::filesystem::path p = f.string();
+  if (p.empty()) f.fail("a path must not be empty");
+  if (p.is_relative()) p = sceneFile.parent_path() / p;
+  return p.lexically_normal();
+}
+
+glm::dmat4 parseTransform(const Field& f) {
+  f.expectObject({"translate", "rotate", "scale", "matrix"});
+  if (f.has("matrix")) {
+    if (f.has("translate") || f.has("rotate") || f.has("scale"))
+      f.fail("give either \"matrix\" or translate/rotate/scale, not both");
+    Field m = f.at("matrix");
+    if (m.arraySize() != 16) m.fail("expected 16 numbers (row-major 4x4), got " + std::to_string(m.arraySize()));
+    glm::dmat4 r(1.0);
+    for (int row = 0; row < 4; ++row)
+      for (int col = 0; col < 4; ++col) r[col][row] = m.at(size_t(row * 4 + col)).number();
+    if (std::abs(glm::determinant(glm::dmat3(r))) < 1e-18) m.fail("the matrix is singular");
+    return r;
+  }
+  glm::dmat4 t(1.0);
+  if (f.has("translate")) t = glm::translate(t, f.at("translate").vec3());
+  if (f.has("rotate")) {
+    // Degrees about x, then y, then z (applied to the object in that order).
+    glm::dvec3 r = glm::radians(f.at("rotate").vec3(-36000, 36000));
+    t = glm::rotate(t, r.z, glm::dvec3(0, 0, 1));
+    t = glm::rotate(t, r.y, glm::dvec3(0, 1, 0));
+    t = glm::rotate(t, r.x, glm::dvec3(1, 0, 0));
+  }
+  if (f.has("scale")) {
+    Field s = f.at("scale");
+    glm::dvec3 v = s.value().is_number() ? glm::dvec3(s.number(1e-12, 1e12)) : s.vec3(1e-12, 1e12);
+    t = glm::scale(t, v);
+  }
+  return t;
+}
+
+Material parseMaterial(const Field& f, const std::string& name) {
+  f.expectObject({"type", "base_color", "roughness", "metallic", "specular", "specular_tint", "sheen",
+                  "sheen_tint", "clearcoat", "clearcoat_gloss", "emission"});
+  Material m;
+  m.name = name;
+  std::string type = f.has("type") ? f.at("type").choice({"lambert", "ggx", "principled"}) : "lambert";
+  m.type = type == "ggx" ? MaterialType::GGX : type == "principled" ? MaterialType::Principled : MaterialType::Lambert;
+  if (f.has("base_color")) m.baseColor = f.at("base_color").colour(0, 1);
+  auto unit = [&](const char* key, float& out) {
+    if (f.has(key)) out = float(f.at(key).number(0, 1));
+  };
+  unit("roughness", m.roughness);
+  unit("metallic", m.metallic);
+  unit("specular", m.specular);
+  unit("specular_tint", m.specularTint);
+  unit("sheen", m.sheen);
+  unit("sheen_tint", m.sheenTint);
+  unit("clearcoat", m.clearcoat);
+  unit("clearcoat_gloss", m.clearcoatGloss);
+  if (f.has("emission")) m.emission = f.at("emission").colour(0, 1e30);
+  if (m.type == MaterialType::Lambert) {
+    for (const char* k : {"roughness", "metallic", "specular", "specular_tint", "sheen", "sheen_tint", "clearcoat", "clearcoat_gloss"})
+      if (f.has(k)) f.at(k).fail(std::string("'") + k + "' has no effect on a lambert material (use \"type\": \"ggx\" or \"principled\")");
+  } else if (m.type == MaterialType::GGX) {
+    for (const char* k : {"specular", "specular_tint", "sheen", "sheen_tint", "clearcoat", "clearcoat_gloss"})
+      if (f.has(k)) f.at(k).fail(std::string("'") + k + "' is a principled parameter (use \"type\": \"principled\")");
+  }
+  return m;
+}
+
+Light parseLight(const Field& f) {
+  if (!f.value().is_object()) f.fail("expected an object");
+  if (!f.has("type")) f.fail("missing \"type\" (point, spot or directional)");
+  std::string type = f.at("type").choice({"point", "spot", "directional"});
+  Light l;
+  if (type == "point") {
+    f.expectObject({"type", "position", "intensity"});
+    l.type = LightType::Point;
+  } else if (type == "spot") {
+    f.expectObject({"type", "position", "direction", "intensity", "inner_angle", "outer_angle"});
+    l.type = LightType::Spot;
+  } else {
+    f.expectObject({"type", "direction", "irradiance"});
+    l.type = LightType::Directional;
+  }
+  if (l.type != LightType::Directional) {
+    if (!f.has("position")) f.fail("missing \"position\"");
+    l.position = f.at("position").vec3();
+    if (!f.has("intensity")) f.fail("missing \"intensity\" (W/sr, a number or [r, g, b])");
+    l.intensity = f.at("intensity").colour(0, 1e30);
+  } else {
+    if (!f.has("irradiance")) f.fail("missing \"irradiance\" (W/m^2 on a surface facing the light)");
+    l.intensity = f.at("irradiance").colour(0, 1e30);
+  }
+  if (l.type != LightType::Point) {
+    if (!f.has("direction")) f.fail("missing \"direction\"");
+    l.direction = glm::vec3(f.at("direction").direction());
+  }
+  if (l.type == LightType::Spot) {
+    if (f.has("inner_angle")) l.innerAngleDegrees = float(f.at("inner_angle").number(0, 179));
+    if (f.has("outer_angle")) l.outerAngleDegrees = float(f.at("outer_angle").number(0, 179));
+    if (l.outerAngleDegrees < l.innerAngleDegrees)
+      f.at("outer_angle").fail("outer_angle must not be smaller than inner_angle");
+  }
+  return l;
+}
+
+SceneCamera parseCamera(const Field& f) {
+  f.expectObject({"eye", "target", "up", "fov", "width", "height"});
+  SceneCamera c;
+  if (!f.has("eye") || !f.has("target")) f.fail("a camera needs \"eye\" and \"target\"");
+  c.eye = f.at("eye").vec3();
+  c.target = f.at("target").vec3();
+  if (glm::length(c.target - c.eye) < 1e-12) f.at("target").fail("target equals eye");
+  if (f.has("up")) c.up = f.at("up").direction();
+  if (glm::length(glm::cross(glm::normalize(c.target - c.eye), c.up)) < 1e-9)
+    f.fail("the view direction is parallel to \"up\"");
+  if (f.has("fov")) c.fovYDegrees = f.at("fov").number(0.01, 179);
+  if (f.has("width")) c.width = int(f.at("width").integer(1, 16384));
+  if (f.has("height")) c.height = int(f.at("height").integer(1, 16384));
+  return c;
+}
+
+}  // namespace
+
+glm::mat4 Scene::localFromObject(const SceneMesh& m) const {
+  glm::dmat4 localFromWorld = glm::translate(glm::dmat4(1.0), -origin);
+  return glm::mat4(localFromWorld * m.worldFromObject);
+}
+
+Scene parseScene(const json& j, const std::filesystem::path& file) {
+  const std::string fileName = file.string();
+  Field root(j, "scene", fileName);
+  root.expectObject({"version", "origin", "octrees", "materials", "meshes", "lights", "environment", "camera",
+                     "camera_path", "gi", "output"});
+  Scene s;
+  s.file = file;
+  if (root.has("version") && root.at("version").integer(1, 1000) != 1)
+    root.at("version").fail("this nestlight reads scene version 1");
+  if (root.has("origin")) {
+    s.origin = root.at("origin").vec3();
+    s.originSet = true;
+  }
+  if (root.has("octrees")) {
+    Field a = root.at("octrees");
+    for (size_t i = 0; i < a.arraySize(); ++i) {
+      Field o = a.at(i);
+      SceneOctree t;
+      if (o.value().is_string()) {
+        t.path = resolvePath(o, file);
+      } else {
+        o.expectObject({"path", "max_level", "memory_budget", "radius_scale", "colour_scale"});
+        if (!o.has("path")) o.fail("missing \"path\"");
+        t.path = resolvePath(o.at("path"), file);
+        if (o.has("max_level")) t.maxLevel = int(o.at("max_level").integer(0, 30));
+        if (o.has("memory_budget")) t.memoryBudget = o.at("memory_budget").bytes();
+        if (o.has("radius_scale")) t.radiusScale = float(o.at("radius_scale").number(0, 100));
+        if (o.has("colour_scale")) t.colourScale = float(o.at("colour_scale").number(0, 1e9));
+      }
+      s.octrees.push_back(std::move(t));
+    }
+  }
+  std::map<std::string, uint32_t> materialIndex;
+  if (root.has("materials")) {
+    Field m = root.at("materials");
+    if (!m.value().is_object()) m.fail("expected an object of named materials");
+    for (auto it = m.value().begin(); it != m.value().end(); ++it) {
+      materialIndex[it.key()] = uint32_t(s.materials.size());
+      s.materials.push_back(parseMaterial(m.at(it.key()), it.key()));
+    }
+  }
+  if (root.has("meshes")) {
+    Field a = root.at("meshes");
+    for (size_t i = 0; i < a.arraySize(); ++i) {
+      Field o = a.at(i);
+      o.expectObject({"path", "transform", "material", "surfels"});
+      SceneMesh mesh;
+      if (!o.has("path")) o.fail("missing \"path\" (a .ply or .obj file)");
+      mesh.path = resolvePath(o.at("path"), file);
+      if (o.has("transform")) mesh.worldFromObject = parseTransform(o.at("transform"));
+      if (o.has("material")) {
+        Field mf = o.at("material");
+        if (mf.value().is_string()) {
+          auto it = materialIndex.find(mf.string());
+          if (it == materialIndex.end()) mf.fail("no material named '" + mf.string() + "' in \"materials\"");
+          mesh.material = it->second;
+        } else {
+          mesh.material = uint32_t(s.materials.size());
+          s.materials.push_back(parseMaterial(mf, "meshes[" + std::to_string(i) + "]"));
+        }
+      } else {
+        mesh.material = uint32_t(s.materials.size());
+        s.materials.push_back(Material{});
+      }
+      if (o.has("surfels")) {
+        Field sf = o.at("surfels");
+        sf.expectObject({"method", "count"});
+        if (sf.has("method"))
+          mesh.surfelMethod = sf.at("method").choice({"area", "poisson"}) == "poisson" ? SurfelSampling::PoissonDisk
+                                                                                      : SurfelSampling::AreaUniform;
+        if (sf.has("count")) mesh.surfelCount = size_t(sf.at("count").integer(1, 100'000'000));
+      }
+      s.meshes.push_back(mesh);
+    }
+  }
+  if (root.has("lights")) {
+    Field a = root.at("lights");
+    for (size_t i = 0; i < a.arraySize(); ++i) s.lights.push_back(parseLight(a.at(i)));
+  }
+  if (root.has("environment")) {
+    Field e = root.at("environment");
+    e.expectObject({"path", "constant", "rotation", "scale"});
+    SceneEnvironment env;
+    if (e.has("path") == e.has("constant")) e.fail("give exactly one of \"path\" (EXR or HDR lat-long) and \"constant\"");
+    if (e.has("path")) env.path = resolvePath(e.at("path"), file);
+    if (e.has("constant")) env.constant = e.at("constant").colour(0, 1e30);
+    if (e.has("rotation")) env.rotationDegrees = float(e.at("rotation").number(-36000, 36000));
+    if (e.has("scale")) env.scale = float(e.at("scale").number(0, 1e30));
+    s.environment = env;
+  }
+  if (root.has("camera")) s.camera = parseCamera(root.at("camera"));
+  if (root.has("camera_path")) {
+    Field p = root.at("camera_path");
+    p.expectObject({"fps", "keyframes"});
+    if (p.has("fps")) s.cameraPathFps = p.at("fps").number(0.001, 10000);
+    if (!p.has("keyframes")) p.fail("missing \"keyframes\"");
+    Field keys = p.at("keyframes");
+    double last = -INFINITY;
+    for (size_t i = 0; i < keys.arraySize(); ++i) {
+      Field k = keys.at(i);
+      k.expectObject({"time", "eye", "target"});
+      if (!k.has("time") || !k.has("eye") || !k.has("target")) k.fail("a key needs \"time\", \"eye\" and \"target\"");
+      SceneCameraKey key{k.at("time").number(0, 1e9), k.at("eye").vec3(), k.at("target").vec3()};
+      if (key.time <= last) k.at("time").fail("key times must increase");
+      last = key.time;
+      s.cameraPath.push_back(key);
+    }
+    if (s.cameraPath.empty()) keys.fail("a camera path needs at least one key");
+  }
+  if (root.has("gi")) {
+    Field g = root.at("gi");
+    g.expectObject({"method", "mode", "max_bounces", "samples_per_pixel", "target_relative_error", "time_limit",
+                    "seed", "parameters"});
+    if (g.has("method")) s.gi.method = g.at("method").choice({"reference", "direct"});
+    if (g.has("mode"))
+      s.gi.mode = g.at("mode").choice({"radiance_cache", "albedo"}) == "albedo" ? RadianceMode::Albedo
+                                                                               : RadianceMode::RadianceCache;
+    if (g.has("max_bounces")) s.gi.maxBounces = int(g.at("max_bounces").integer(0, 64));
+    if (g.has("samples_per_pixel")) s.gi.samplesPerPixel = int(g.at("samples_per_pixel").integer(1, 1 << 24));
+    if (g.has("target_relative_error")) s.gi.targetRelativeError = g.at("target_relative_error").number(0, 1);
+    if (g.has("time_limit")) s.gi.timeLimitSeconds = g.at("time_limit").number(0, 1e7);
+    if (g.has("seed")) s.gi.seed = uint64_t(g.at("seed").integer(0, INT64_MAX));
+    if (g.has("parameters")) {
+      if (!g.at("parameters").value().is_object()) g.at("parameters").fail("expected an object");
+      s.gi.parameters = g.at("parameters").value();
+    }
+  }
+  if (root.has("output")) {
+    Field o = root.at("output");
+    o.expectObject({"exr", "png", "exposure"});
+    if (o.has("exr")) s.output.exr = resolvePath(o.at("exr"), file);
+    if (o.has("png")) s.output.png = resolvePath(o.at("png"), file);
+    if (o.has("exposure")) s.output.exposure = o.at("exposure").number(-64, 64);
+  }
+  if (s.octrees.empty() && s.meshes.empty()) root.fail("a scene needs at least one octree or mesh");
+  return s;
+}
+
+Scene loadScene(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw Error(file.string(), "", "cannot open scene file");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw Error(file.string(), Error::atByte(e.byte), std::string("not valid JSON: ") + e.what());
+  }
+  Scene s = parseScene(j, std::filesystem::absolute(file));
+  resolveOrigin(s);
+  return s;
+}
+
+void resolveOrigin(Scene& scene) {
+  if (scene.originSet || scene.octrees.empty()) return;
+  OctreeReader reader(scene.octrees.front().path);
+  const Box3d& b = reader.metadata().bounds;
+  scene.origin = {(b.min.x + b.max.x) / 2, (b.min.y + b.max.y) / 2, (b.min.z + b.max.z) / 2};
+  scene.originSet = true;
+}
+
+}  // namespace nestlight::gi

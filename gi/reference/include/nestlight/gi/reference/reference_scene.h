@@ -1,0 +1,105 @@
+// The reference's view of a scene: scan points as oriented discs and inserted meshes as
+// triangles in one Embree 3 BVH, plus the materials, lights and environment that shade them.
+// Everything is in the scene's local float frame (Scene::local), so national-grid scans keep
+// their precision.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nestlight/gi/environment_map.h"
+#include "nestlight/gi/material.h"
+#include "nestlight/gi/mesh.h"
+#include "nestlight/gi/scene.h"
+
+namespace nestlight::gi {
+
+// Points of one scan, ready for Embree: (x, y, z, radius) and a unit normal per point.
+struct DiscCloud {
+  std::vector<glm::vec4> discs;
+  std::vector<glm::vec3> normals;  // empty: discs face the ray (the scan has no normals)
+  std::vector<Rgb> colour;         // linear; emitted radiance (radiance cache) or albedo
+};
+
+struct DiscCloudStats {
+  uint64_t nodes = 0, points = 0, bytes = 0;
+  int deepestLevel = -1;          // deepest level loaded
+  int octreeDepth = 0;            // deepest level the octree has
+  bool limitedByBudget = false;   // stopped above maxLevel (or the octree's depth) for memory
+  uint64_t zeroRadius = 0;        // discs with no extent (coincident points): never hit
+};
+
+// Loads whole levels of an octree, from the root down to `octree.maxLevel` or the deepest level
+// whose points fit in `octree.memoryBudget` (40 bytes per point here). A disc's radius follows
+// the local spacing of the loaded points: with d8 the distance to the 8th nearest neighbour,
+// r = radiusScale * d8 / 2, so that discs cover about twice the surface on average and leave
+// no holes on an evenly sampled surface (pi r^2 * density = 8 pi (d8/2)^2 / (pi d8^2) = 2).
+DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, DiscCloudStats* stats = nullptr);
+// Radii for `discs` from their neighbours as above (positions in .xyz; writes .w).
+void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale);
+
+struct SurfaceHit {
+  enum class Kind { None, Disc, Triangle } kind = Kind::None;
+  float t = 0;
+  glm::vec3 position{0.0f};
+  glm::vec3 geometricNormal{0.0f};  // unit; not flipped towards the ray
+  glm::vec3 shadingNormal{0.0f};    // unit; interpolated for meshes with normals
+  Rgb colour{1.0f};                 // disc colour, or the mesh's vertex colour (1 without)
+  uint32_t material = 0;            // meshes: index into materials()
+  float radius = 0;                 // discs: their radius (sets the ray offset)
+  bool orientedDisc = true;         // false: a ray-facing disc (no normal known)
+};
+
+class ReferenceScene {
+ public:
+  // Loads octrees, meshes and the environment map named by `scene`. `log` gets one line per
+  // loaded part (may be null).
+  static std::unique_ptr<ReferenceScene> load(const Scene& scene, void (*log)(const std::string&) = nullptr);
+  // From data already in the local frame (tests build analytic scenes this way). `meshes` are
+  // already transformed; meshMaterial[i] indexes `materials`.
+  ReferenceScene(std::vector<DiscCloud> clouds, std::vector<TriangleMesh> meshes, std::vector<uint32_t> meshMaterial,
+                 std::vector<Material> materials, std::vector<Light> lights, EnvironmentMap environment,
+                 glm::dvec3 origin = glm::dvec3(0.0));
+  ~ReferenceScene();
+  ReferenceScene(const ReferenceScene&) = delete;
+  ReferenceScene& operator=(const ReferenceScene&) = delete;
+
+  bool intersect(const glm::vec3& origin, const glm::vec3& direction, float tMax, SurfaceHit* hit) const;
+  bool occluded(const glm::vec3& origin, const glm::vec3& direction, float tMax) const;
+
+  const std::vector<Material>& materials() const { return materials_; }
+  const std::vector<Light>& lights() const { return lights_; }
+  const EnvironmentMap& environment() const { return environment_; }
+  bool hasEnvironment() const { return !environment_.black(); }
+  const glm::dvec3& origin() const { return origin_; }
+  // Light positions in the local frame.
+  glm::vec3 lightPosition(size_t i) const { return glm::vec3(lights_[i].position - origin_); }
+  // Scale of the scene's coordinates: ray offsets are relative to it.
+  float extent() const { return extent_; }
+
+  uint64_t discs() const;
+  uint64_t triangles() const;
+  const std::vector<DiscCloudStats>& cloudStats() const { return cloudStats_; }
+  const std::vector<MeshReadReport>& meshReports() const { return meshReports_; }
+
+ private:
+  void build();
+
+  std::vector<DiscCloud> clouds_;
+  std::vector<TriangleMesh> meshes_;
+  std::vector<uint32_t> meshMaterial_;
+  std::vector<Material> materials_;
+  std::vector<Light> lights_;
+  EnvironmentMap environment_;
+  glm::dvec3 origin_{0.0};
+  float extent_ = 1;
+  std::vector<DiscCloudStats> cloudStats_;
+  std::vector<MeshReadReport> meshReports_;
+  struct Embree;
+  std::unique_ptr<Embree> rtc_;
+  // geomID -> (is a cloud, index)
+  std::vector<std::pair<bool, uint32_t>> geometry_;
+};
+
+}  // namespace nestlight::gi

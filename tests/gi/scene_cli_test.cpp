@@ -1,0 +1,78 @@
+// `nestlight make-scene`, `nestlight render scene.json` and `nestlight bench gi` end to end on
+// small generated scenes.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "nestlight/gi/hdr_image.h"
+#include "test_support.h"
+
+using namespace nestlight;
+
+TEST(SceneCli, MakeSceneAndRenderBothModes) {
+  test::TempDir dir;
+  std::string out;
+  ASSERT_EQ(test::runCli("make-scene cornell -q -n 60k --width 24 --height 16 -o " + dir.file("cornell"), &out), 0) << out;
+  const std::string scene = dir.file("cornell/scene.json");
+  ASSERT_TRUE(std::filesystem::exists(scene));
+  for (const char* mode : {"radiance_cache", "albedo"}) {
+    std::string exr = dir.file(std::string("c_") + mode + ".exr");
+    ASSERT_EQ(test::runCli("render " + scene + " --spp 4 --mode " + mode + " -o " + exr, &out), 0) << out;
+    gi::ImageAttributes attrs;
+    gi::HdrImage img = gi::readHdrImage(exr, &attrs);
+    EXPECT_EQ(img.width, 24);
+    EXPECT_EQ(img.height, 16);
+    EXPECT_EQ(attrs["nestlight:samples"], "4");
+    EXPECT_EQ(attrs["nestlight:mode"], mode);
+    double sum = 0;
+    for (float v : img.rgb) {
+      ASSERT_TRUE(std::isfinite(v));
+      sum += v;
+    }
+    EXPECT_GT(sum, 0) << mode << ": a lit room renders black";
+  }
+}
+
+TEST(SceneCli, BadSceneFilesNameTheField) {
+  test::TempDir dir;
+  test::writeFile(dir.file("s.json"), R"({"meshes": [{"path": "a.obj", "material": {"type": "ggx", "roughness": 2}}]})");
+  std::string out;
+  EXPECT_EQ(test::runCli("render " + dir.file("s.json"), &out), 1);
+  EXPECT_NE(out.find("scene.meshes[0].material.roughness"), std::string::npos) << out;
+  test::writeFile(dir.file("t.json"), R"({"meshes": [{"path": "missing.obj"}]})");
+  EXPECT_EQ(test::runCli("render " + dir.file("t.json"), &out), 1);
+  EXPECT_NE(out.find("missing.obj"), std::string::npos) << out;
+}
+
+TEST(SceneCli, BenchGiWritesTableAndPlot) {
+  test::TempDir dir;
+  std::string out;
+  ASSERT_EQ(test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out), 0) << out;
+  ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
+                             " --runs 1 --spp 1,4 --reference-error 0.05 --reference-spp 256 -o " + dir.file("b"),
+                         &out),
+            0)
+      << out;
+  std::ifstream csv(dir.file("b/bench_gi.csv"));
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("method,samples_per_pixel", 0), 0u);
+  int rows = 0;
+  while (std::getline(csv, line)) rows++;
+  EXPECT_EQ(rows, 4);  // direct and reference at 1 and 4 spp
+  auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
+  EXPECT_EQ(j["rows"].size(), 4u);
+  EXPECT_TRUE(j.contains("time_to_1_percent"));
+  EXPECT_NE(j["device"].get<std::string>().find("threads"), std::string::npos);
+  // More samples, less error (4 spp against 1 spp of the same method).
+  EXPECT_LT(j["rows"][3]["relative_l2"].get<double>(), j["rows"][2]["relative_l2"].get<double>());
+  std::string svg = test::readFile(dir.file("b/bench_gi.svg"));
+  EXPECT_NE(svg.find("<svg"), std::string::npos);
+  // The reference is cached: a second run does not render it again.
+  ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
+                             " --runs 1 --spp 1 --methods direct --reference-error 0.05 --reference-spp 256 -o " + dir.file("b"),
+                         &out),
+            0);
+  EXPECT_EQ(out.find("rendering the reference"), std::string::npos) << out;
+}
