@@ -87,8 +87,9 @@ std::vector<Candidate> areaUniform(const WorldMesh& w, size_t n, Rng& rng) {
     const float u = std::min(float((double(i) + rng.uniform()) / double(n)), kOneMinusEpsilon);
     const uint32_t t = w.triangle[size_t(pick.sampleDiscrete(u))];
     const glm::vec3 b = sampleUniformTriangle(rng.uniform2());
-    const glm::dvec3 p = double(b[0]) * w.corner(t, 0) + double(b[1]) * w.corner(t, 1) +
-                         double(b[2]) * w.corner(t, 2);
+    // From a corner along the edges: a point of a plane z = c keeps z = c exactly.
+    const glm::dvec3 a = w.corner(t, 0);
+    const glm::dvec3 p = a + double(b[1]) * (w.corner(t, 1) - a) + double(b[2]) * (w.corner(t, 2) - a);
     out.push_back({t, b, glm::vec3(p)});
   }
   return out;
@@ -185,27 +186,49 @@ std::vector<Candidate> poissonDisk(const WorldMesh& w, size_t n, Rng& rng) {
   const double rMax = std::sqrt(w.total / (2 * std::sqrt(3.0) * double(n)));
   const double dMax = 2 * rMax;
   const double dMin = dMax * (1 - std::pow(double(n) / double(m), kGamma)) * kBeta;
-  const auto weight = [&](float d2) {
-    const double d = std::max(std::sqrt(double(d2)), dMin);
-    return std::pow(1 - d / dMax, kAlpha);
+  const auto weight = [&](uint32_t i, uint32_t j) {
+    const double d = std::max(double(glm::distance(cand[i].position, cand[j].position)), dMin);
+    const double x = 1 - std::min(d / dMax, 1.0);
+    const double x2 = x * x, x4 = x2 * x2;
+    static_assert(kAlpha == 8);
+    return x4 * x4;
   };
   const Cloud cloud{&cand};
   const Tree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   const float r2 = float(dMax * dMax);
 
-  std::vector<double> wsum(m, 0.0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, m, 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i)
-      forNeighbours(tree, cand[i].position, r2, [&](uint32_t j, float d2) {
-        if (j != i) wsum[i] += weight(d2);
+  // Every candidate's neighbours, found once (in parallel) and kept for the elimination: each
+  // removal visits its neighbours, and looking them up again in the tree would cost twice the
+  // whole sampling. Chunks are joined in index order, so the lists do not depend on threads.
+  constexpr size_t kChunk = 4096;
+  const size_t chunks = (m + kChunk - 1) / kChunk;
+  std::vector<std::vector<uint32_t>> found(chunks), counts(chunks);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+    for (size_t i = c * kChunk; i < std::min(m, (c + 1) * kChunk); ++i) {
+      uint32_t k = 0;
+      forNeighbours(tree, cand[i].position, r2, [&](uint32_t j, float) {
+        if (j != i) found[c].push_back(j), ++k;
       });
+      counts[c].push_back(k);
+    }
+  });
+  std::vector<size_t> first(m + 1, 0);
+  std::vector<uint32_t> neighbours;
+  for (size_t c = 0, i = 0; c < chunks; ++c) {
+    for (uint32_t k : counts[c]) first[i + 1] = first[i] + k, ++i;
+    neighbours.insert(neighbours.end(), found[c].begin(), found[c].end());
+    std::vector<uint32_t>().swap(found[c]);
+  }
+
+  std::vector<double> wsum(m, 0.0);
+  tbb::parallel_for(size_t(0), m, [&](size_t i) {
+    for (size_t k = first[i]; k < first[i + 1]; ++k) wsum[i] += weight(uint32_t(i), neighbours[k]);
   });
   EliminationHeap heap(wsum);
   while (heap.size() > n) {
     const uint32_t i = heap.popMax();
-    forNeighbours(tree, cand[i].position, r2, [&](uint32_t j, float d2) {
-      if (heap.contains(j)) heap.lower(j, weight(d2));
-    });
+    for (size_t k = first[i]; k < first[i + 1]; ++k)
+      if (const uint32_t j = neighbours[k]; heap.contains(j)) heap.lower(j, weight(i, j));
   }
   std::vector<Candidate> out;
   out.reserve(n);
