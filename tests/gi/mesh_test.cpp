@@ -23,14 +23,14 @@ using nestlight::Error;
 
 namespace {
 
-TriangleMesh read(const std::string& name, const std::string& bytes, MeshReadReport* r = nullptr) {
+TriangleMesh readBytes(const std::string& name, const std::string& bytes, MeshReadReport* r = nullptr) {
   return readMeshFromMemory(name, bytes.data(), bytes.size(), r);
 }
 
 // The Error that reading `bytes` as `name` throws; fails the test if it reads.
 Error errorOf(const std::string& name, const std::string& bytes) {
   try {
-    read(name, bytes);
+    readBytes(name, bytes);
   } catch (const Error& e) {
     return e;
   }
@@ -95,7 +95,7 @@ const std::string kAsciiPly =
 
 TEST(MeshReader, AsciiPlyReadsKnownValuesAndSkipsTheRest) {
   MeshReadReport r;
-  TriangleMesh m = read("hand.ply", kAsciiPly, &r);
+  TriangleMesh m = readBytes("hand.ply", kAsciiPly, &r);
   ASSERT_EQ(m.positions.size(), 5u);
   EXPECT_EQ(m.positions[2], glm::vec3(1, 1, 0));
   EXPECT_EQ(m.positions[4], glm::vec3(9, 9, 9));
@@ -165,7 +165,7 @@ TEST(MeshReader, BinaryPlyOfBothByteOrdersReadsTheSameKnownValues) {
   for (bool big : {false, true}) {
     SCOPED_TRACE(big ? "big endian" : "little endian");
     MeshReadReport r;
-    TriangleMesh m = read("bin.ply", binaryPly(big), &r);
+    TriangleMesh m = readBytes("bin.ply", binaryPly(big), &r);
     ASSERT_EQ(m.positions.size(), 6u);
     EXPECT_EQ(m.positions[2], glm::vec3(3, 1, 0.5f));
     EXPECT_EQ(m.positions[5], glm::vec3(-2, -2, 1.25f));
@@ -205,7 +205,7 @@ TEST(MeshReader, ObjReadsAllCornerFormsNegativeIndicesAndFans) {
       "l 1 2\n"
       "p 3\n";
   MeshReadReport r;
-  TriangleMesh m = read("hand.obj", obj, &r);
+  TriangleMesh m = readBytes("hand.obj", obj, &r);
   ASSERT_EQ(m.positions.size(), 5u);
   EXPECT_EQ(m.positions[1], glm::vec3(1, 0, 0));
   EXPECT_EQ(m.positions[4], glm::vec3(5, 5, 5));
@@ -229,7 +229,7 @@ TEST(MeshReader, ObjSplitsVerticesWhoseCornersNameDifferentNormals) {
       "f 4//2 3//2 5//2 6//2\n"
       "f 3//2 5//2 4//2\n";
   MeshReadReport r;
-  TriangleMesh m = read("box.obj", obj, &r);
+  TriangleMesh m = readBytes("box.obj", obj, &r);
   // Vertices 3 and 4 (0-based 2, 3) have a copy each with normal 2.
   ASSERT_EQ(m.positions.size(), 8u);
   ASSERT_EQ(m.normals.size(), 8u);
@@ -248,7 +248,7 @@ TEST(MeshReader, ObjCornersWithoutNormalsGetTheirTrianglesNormalAndAWarning) {
       "f 1//1 3//1 4//1\n"  // in the x = 0 plane
       "f 1 2 3\n";          // in the z = 0 plane, no normals
   MeshReadReport r;
-  TriangleMesh m = read("mixed.obj", obj, &r);
+  TriangleMesh m = readBytes("mixed.obj", obj, &r);
   ASSERT_EQ(m.positions.size(), 6u);  // vertices 1 and 3 split: one with vn 1, one without
   EXPECT_EQ(m.normals[0], glm::vec3(1, 0, 0));
   EXPECT_EQ(m.normals[1], glm::vec3(0, 0, 1));  // computed from triangle (1 2 3)
@@ -273,7 +273,7 @@ TEST(MeshReader, DegenerateTrianglesAreDroppedAndCounted) {
       "2 0 1\n"          // an edge, not a triangle
       "4 1 0 3 2\n";     // a quad whose first fan triangle is collinear: one kept, one dropped
   MeshReadReport r;
-  TriangleMesh m = read("degenerate.ply", ply, &r);
+  TriangleMesh m = readBytes("degenerate.ply", ply, &r);
   EXPECT_EQ(m.positions.size(), 6u);  // all vertices stay; none of the bad ones is referenced
   EXPECT_EQ(m.indices, tri({0, 1, 2, 1, 3, 2}));
   EXPECT_EQ(r.facesRead, 7u);
@@ -285,14 +285,14 @@ TEST(MeshReader, DegenerateTrianglesAreDroppedAndCounted) {
   const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 0 0 inf\n"
                           "f 1 2 3\nf 1 1 3\nf 1 2 4\nf 1 2 5\nf 1 2\nf 3\n";
   MeshReadReport o;
-  m = read("degenerate.obj", obj, &o);
+  m = readBytes("degenerate.obj", obj, &o);
   EXPECT_EQ(m.indices, tri({0, 1, 2}));
   EXPECT_EQ(o.facesRead, 6u);
   EXPECT_EQ(o.degenerateDropped, 5u);
   EXPECT_EQ(o.nonFiniteVertices, 1u);
 
   // All faces degenerate: an empty mesh, not an error.
-  m = read("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", &o);
+  m = readBytes("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", &o);
   EXPECT_EQ(m.triangles(), 0u);
   EXPECT_EQ(o.degenerateDropped, 1u);
 }
@@ -305,13 +305,31 @@ TEST(MeshReader, UnusableNormalsAndOddColoursAreWarnedAbout) {
       "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
       "0 0 0 0 0 0 1 2 3\n1 0 0 nan 0 1 1 2 3\n0 1 0 0 0 1 1 2 3\n3 0 1 2\n";
   MeshReadReport r;
-  TriangleMesh m = read("odd.ply", ply, &r);
+  TriangleMesh m = readBytes("odd.ply", ply, &r);
   EXPECT_TRUE(m.colors.empty());
   EXPECT_EQ(m.normals[0], glm::vec3(0));
   EXPECT_EQ(m.normals[1], glm::vec3(0));
   ASSERT_EQ(r.warnings.size(), 2u);
   EXPECT_NE(r.warnings[0].find("colours ignored"), std::string::npos) << r.warnings[0];
   EXPECT_NE(r.warnings[1].find("2 vertex normals"), std::string::npos) << r.warnings[1];
+}
+
+TEST(MeshReader, ColourTypes) {
+  // ushort codes are sRGB like uchar ones; float values are linear, clamped into [0,1].
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nproperty ushort red\nproperty float green\nproperty double blue\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0 65535 1.5 0.25\n1 0 0 0 -2 nan\n0 1 0 32896 0.5 1\n3 0 1 2\n";
+  MeshReadReport r;
+  TriangleMesh m = readBytes("colours.ply", ply, &r);
+  ASSERT_EQ(m.colors.size(), 3u);
+  EXPECT_EQ(m.colors[0], Rgb(1, 1, 0.25f));
+  EXPECT_EQ(m.colors[1], Rgb(0, 0, 0));
+  EXPECT_FLOAT_EQ(m.colors[2].r, srgb8(128));  // 32896 = 128 * 257
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("3 colour values outside [0, 1] were clamped"), std::string::npos)
+      << r.warnings[0];
 }
 
 struct BadCase {
@@ -425,7 +443,7 @@ TEST(MeshReader, EveryTruncationOfValidFilesFailsCleanly) {
   for (const auto& [name, bytes] : files)
     for (size_t n = 0; n <= bytes.size(); ++n) {
       try {
-        TriangleMesh m = read(name, bytes.substr(0, n));
+        TriangleMesh m = readBytes(name, bytes.substr(0, n));
         for (uint32_t i : m.indices) ASSERT_LT(i, m.positions.size()) << name << " " << n;
       } catch (const Error& e) {
         ASSERT_EQ(e.file(), name);
@@ -439,7 +457,7 @@ TEST(MeshReader, ReadsFromAFileByExtensionAndNamesAMissingOne) {
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "Hand.PLY").string();
   std::ofstream(path, std::ios::binary) << kAsciiPly;
-  TriangleMesh a = readMesh(path), b = read("x.ply", kAsciiPly);
+  TriangleMesh a = readMesh(path), b = readBytes("x.ply", kAsciiPly);
   EXPECT_EQ(a.positions, b.positions);
   EXPECT_EQ(a.indices, b.indices);
   std::filesystem::remove_all(dir);

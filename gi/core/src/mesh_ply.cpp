@@ -3,6 +3,11 @@
 // wants other things from them than a scan does: the "face" element's vertex lists, and vertex
 // colours as linear albedo rather than 16-bit sRGB.
 //
+// Read: vertex x, y, z of any numeric type (float and double in practice); nx, ny, nz; red,
+// green, blue (uchar or ushort as sRGB codes, decoded to linear; float or double as linear values
+// in [0,1], clamped); the face list "vertex_indices" (or "vertex_index") of any integer count and
+// index types. Every other element and property is walked over, lists included.
+//
 // Every count in the file is untrusted: records are read one by one against the bytes that are
 // really there, memory is reserved only for what the remaining bytes can hold, and an element
 // without properties (records of no bytes) is passed over without looping over its count.
