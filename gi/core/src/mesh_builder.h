@@ -3,9 +3,11 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "nestlight/gi/mesh.h"
+#include "nestlight/octree/text.h"
 
 namespace nestlight::gi::meshio {
 
@@ -25,6 +27,20 @@ class MeshBuilder {
   // Once every vertex and face is in: drops and counts degenerate triangles, normalises normals
   // and fills the rest of the report.
   void finish();
+};
+
+// Blank-separated tokens of a line, without allocating (ascii PLY records, OBJ statements).
+struct Tokens {
+  const char* p;
+  const char* e;
+  bool next(std::string_view& t) {
+    while (p < e && text::isBlank(*p)) ++p;
+    if (p == e) return false;
+    const char* b = p;
+    while (p < e && !text::isBlank(*p)) ++p;
+    t = std::string_view(b, size_t(p - b));
+    return true;
+  }
 };
 
 // The format readers; both throw nestlight::Error naming `file` and the line or byte.

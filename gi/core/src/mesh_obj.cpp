@@ -26,19 +26,6 @@ namespace {
 constexpr uint32_t kNoNormal = std::numeric_limits<uint32_t>::max();
 constexpr uint32_t kUnassigned = kNoNormal - 1;
 
-struct Tokens {
-  const char* p;
-  const char* e;
-  bool next(std::string_view& t) {
-    while (p < e && text::isBlank(*p)) ++p;
-    if (p == e) return false;
-    const char* b = p;
-    while (p < e && !text::isBlank(*p)) ++p;
-    t = std::string_view(b, size_t(p - b));
-    return true;
-  }
-};
-
 class ObjMeshReader {
  public:
   ObjMeshReader(const std::string& file, const uint8_t* data, size_t size, MeshBuilder& out)

@@ -77,20 +77,6 @@ bool parseAscii(ScalarType t, std::string_view tok, double& out) {
   return out >= lo && out <= hi;
 }
 
-// Blank-separated tokens of one ascii record.
-struct Tokens {
-  const char* p;
-  const char* e;
-  bool next(std::string_view& t) {
-    while (p < e && text::isBlank(*p)) ++p;
-    if (p == e) return false;
-    const char* b = p;
-    while (p < e && !text::isBlank(*p)) ++p;
-    t = std::string_view(b, size_t(p - b));
-    return true;
-  }
-};
-
 class PlyMeshReader {
  public:
   PlyMeshReader(const std::string& file, const uint8_t* data, size_t size, MeshBuilder& out)
