@@ -13,7 +13,7 @@
 
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
-#include "text_util.h"
+#include "nestlight/octree/text.h"
 
 namespace nestlight {
 namespace {

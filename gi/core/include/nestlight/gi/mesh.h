@@ -11,6 +11,12 @@
 
 namespace nestlight::gi {
 
+// What the readers return. `positions` holds every vertex of the file in file order, also those
+// no triangle uses (a NaN vertex stays there, referenced by none); an OBJ vertex whose corners
+// name different normals (`vn`) is split, and its copies follow the file's vertices. `normals`
+// are unit length, or zero where the file gives none usable (a zero or NaN normal, or an OBJ
+// vertex used by no corner): there, shade with the geometric normal. `indices` hold only
+// triangles of non-zero area with finite corners.
 struct TriangleMesh {
   std::vector<glm::vec3> positions;
   std::vector<glm::vec3> normals;  // per vertex, empty when the file has none
@@ -23,13 +29,20 @@ struct TriangleMesh {
 struct MeshReadReport {
   uint64_t facesRead = 0;            // polygons in the file
   uint64_t trianglesKept = 0;        // after fan triangulation and cleaning
-  uint64_t degenerateDropped = 0;    // zero-area or non-finite triangles (not rendered, counted)
+  // Zero-area triangles (a repeated index, collinear corners), triangles with a non-finite
+  // corner, and faces of fewer than three vertices (one each): not rendered, counted.
+  uint64_t degenerateDropped = 0;
   uint64_t polygonsTriangulated = 0; // faces with more than three vertices
   uint64_t nonFiniteVertices = 0;    // vertices with NaN/Inf coordinates
+  // What was read differently from what the file says, without losing a triangle: colours of a
+  // type that is not a colour, normals that cannot be normalised, OBJ corners without a normal
+  // beside corners with one, bytes after the last element.
+  std::vector<std::string> warnings;
 };
 
 // By extension: .ply (ASCII, binary little- or big-endian) or .obj. Throws nestlight::Error with
-// the file and the line or byte of the fault; never asserts on malformed input.
+// the file and the line or byte of the fault; never asserts on malformed input. A file with no
+// faces at all (a point cloud) is an error; faces that are all degenerate give an empty mesh.
 TriangleMesh readMesh(const std::string& path, MeshReadReport* report = nullptr);
 // The same on bytes in memory (for fuzzing); `name` is used in messages, its extension picks
 // the format.

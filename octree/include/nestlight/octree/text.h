@@ -1,4 +1,6 @@
-// Text helpers of the readers (PLY, XYZ/PTS/TXT): number tokens, and strings for metadata.
+// Text helpers of the readers (PLY, XYZ/PTS/TXT, and the mesh readers' PLY and OBJ): number
+// tokens, and strings for metadata. They live in octree, the library every reader links, so that
+// gi's mesh reader shares them without linking the converters (and, through them, PCL).
 //
 // std::from_chars is the fast path: it neither allocates nor consults the locale, and in
 // libstdc++ 12 it is fast_float. It leaves out two forms that scan files contain: a leading '+',
@@ -13,11 +15,30 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace nestlight::text {
 
 inline bool isBlank(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
+
+inline std::string_view trim(std::string_view s) {
+  while (!s.empty() && isBlank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && isBlank(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+inline std::vector<std::string_view> splitWords(std::string_view line) {
+  std::vector<std::string_view> words;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && isBlank(line[i])) ++i;
+    size_t b = i;
+    while (i < line.size() && !isBlank(line[i])) ++i;
+    if (i > b) words.push_back(line.substr(b, i - b));
+  }
+  return words;
 }
 
 // The line of [d, d + size) that starts at `pos`, without its '\n', into `out`; moves `pos` to the
