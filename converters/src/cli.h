@@ -34,6 +34,7 @@ void addStress(CLI::App& app, int& exitCode);
 void addRender(CLI::App& app, int& exitCode);
 void addView(CLI::App& app, int& exitCode);
 void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
+void addCompare(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");
