@@ -137,7 +137,8 @@ TEST(Metrics, RelativeMseOfScaledImageMatchesClosedForm) {
   b.set(0, 0, {0.5f, 0.1f, 2.0f});
   a.set(0, 0, {1.0f, 0.2f, 4.0f});
   // 1e-7: 0.1f is not 0.1; its rounding (3e-9 relative) moves the second term by about that.
-  EXPECT_NEAR(compareImages(a, b).linear.relativeMse, (0.25 / 0.26 + 0.01 / 0.02 + 4.0 / 4.01) / 3, 1e-7);
+  EXPECT_NEAR(compareImages(a, b).linear.relativeMse, (0.25 / 0.26 + 0.01 / 0.02 + 4.0 / 4.01) / 3,
+              1e-7);
 
   // A whole image, a = k b with k = 1.5: mean of (k-1)^2 b^2 / (b^2 + eps) per channel value.
   const double k = 1.5, eps = 1e-2;
@@ -243,7 +244,8 @@ TEST(Metrics, NonFinitePixelsAreCountedAndLeftOut) {
   // Every other pixel is off by exactly 1/4, so nothing non-finite leaked into the numbers.
   EXPECT_EQ(c.linear.rmse, 0.25);
   EXPECT_EQ(c.linear.maxAbsolute, 0.25);
-  for (double v : {c.linear.ssim, c.linear.relativeMse, c.linear.psnr, c.toneMapped.rmse, c.toneMapped.ssim})
+  for (double v :
+       {c.linear.ssim, c.linear.relativeMse, c.linear.psnr, c.toneMapped.rmse, c.toneMapped.ssim})
     EXPECT_TRUE(std::isfinite(v)) << v;
 
   // Nothing comparable: every number is NaN, not 0 (which would read as "perfect").
@@ -290,8 +292,8 @@ TEST(Metrics, ValuesBeyondHalfFloatRangeDoNotOverflow) {
   c = compareImages(test, ref);
   EXPECT_EQ(c.compared, c.pixels);
   EXPECT_NEAR(c.linear.maxAbsolute, 6e38, 1e32);
-  for (double v : {c.linear.mse, c.linear.rmse, c.linear.relativeMse, c.linear.meanRelative, c.linear.psnr,
-                   c.linear.ssim, c.toneMapped.rmse, c.toneMapped.ssim})
+  for (double v : {c.linear.mse, c.linear.rmse, c.linear.relativeMse, c.linear.meanRelative,
+                   c.linear.psnr, c.linear.ssim, c.toneMapped.rmse, c.toneMapped.ssim})
     EXPECT_TRUE(std::isfinite(v)) << v;
   EXPECT_TRUE(std::isfinite(ssim(test, ref, 3e38)));
 }
@@ -313,12 +315,13 @@ TEST(Metrics, FalseColourImageHasInputSizeAndMapsTheLegend) {
   auto expectColour = [&](int x, int y, Rgb want) {
     const Rgb got = fc.get(x, y);
     // 1e-4: float rounding of the viridis interpolation; colours are written with 1/255 steps.
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], want[k], 1e-4) << x << "," << y << " channel " << k;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(got[k], want[k], 1e-4) << x << "," << y << " channel " << k;
   };
   expectColour(0, 0, Rgb(68, 1, 84) / 255.0f);     // zero error: bottom of viridis
-  expectColour(1, 0, viridis(0.5));                 // the range's middle
+  expectColour(1, 0, viridis(0.5));                // the range's middle
   expectColour(2, 0, Rgb(253, 231, 37) / 255.0f);  // clamped to the top
-  expectColour(3, 0, Rgb(1, 0, 1));                 // non-finite: magenta
+  expectColour(3, 0, Rgb(1, 0, 1));                // non-finite: magenta
   expectColour(4, 4, Rgb(68, 1, 84) / 255.0f);
 
   TempDir t;
@@ -351,7 +354,8 @@ TEST(ToneMap, SrgbCurveExposureAndNonFinite) {
   EXPECT_NEAR(srgbEncode(0.0031308f), 0.04045f, 1e-6);
   EXPECT_NEAR(srgbEncode(0.5f), 0.7353569830524495, 1e-6);
   EXPECT_NEAR(srgbEncode(0.18f), 0.4613561295004745, 1e-6);
-  for (float v : {0.001f, 0.01f, 0.2f, 0.7f, 1.0f}) EXPECT_NEAR(srgbDecode(srgbEncode(v)), v, 2e-6 * (1 + v));
+  for (float v : {0.001f, 0.01f, 0.2f, 0.7f, 1.0f})
+    EXPECT_NEAR(srgbDecode(srgbEncode(v)), v, 2e-6 * (1 + v));
   EXPECT_NEAR(toneMapValue(0.25f, exposureScale(1)), srgbEncode(0.5f), 1e-7);  // +1 stop doubles
   EXPECT_NEAR(toneMapValue(2.0f, exposureScale(-1)), 1.0f, 1e-6);
   EXPECT_EQ(toneMapValue(70000.0f, 1), 1.0f);

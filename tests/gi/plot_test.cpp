@@ -35,12 +35,14 @@ std::string xmlFault(const std::string& s) {
   while (i < s.size()) {
     if (s[i] == '&') {
       bool ok = false;
-      for (const char* e : {"&amp;", "&lt;", "&gt;", "&quot;", "&apos;"}) ok = ok || s.compare(i, std::strlen(e), e) == 0;
+      for (const char* e : {"&amp;", "&lt;", "&gt;", "&quot;", "&apos;"})
+        ok = ok || s.compare(i, std::strlen(e), e) == 0;
       if (!ok) return "bare & at " + std::to_string(i);
     }
     if (s[i] == '>') return "bare > at " + std::to_string(i);  // we escape it in text too
     if (s[i] != '<') {
-      if (open.empty() && !std::isspace(static_cast<unsigned char>(s[i]))) return "text outside the root";
+      if (open.empty() && !std::isspace(static_cast<unsigned char>(s[i])))
+        return "text outside the root";
       ++i;
       continue;
     }
@@ -60,8 +62,10 @@ std::string xmlFault(const std::string& s) {
     char quote = 0;
     for (; end < s.size(); ++end) {  // '>' inside a quoted attribute value does not end the tag
       if (quote) {
-        if (s[end] == quote) quote = 0;
-        else if (s[end] == '<') return "< inside an attribute value";
+        if (s[end] == quote)
+          quote = 0;
+        else if (s[end] == '<')
+          return "< inside an attribute value";
       } else if (s[end] == '"' || s[end] == '\'') {
         quote = s[end];
       } else if (s[end] == '>') {
@@ -74,7 +78,8 @@ std::string xmlFault(const std::string& s) {
     if (tag.empty()) return "empty tag";
     if (tag[0] == '/') {
       std::string name = tag.substr(1);
-      if (open.empty() || open.back() != name) return "</" + name + "> closes " + (open.empty() ? "nothing" : open.back());
+      if (open.empty() || open.back() != name)
+        return "</" + name + "> closes " + (open.empty() ? "nothing" : open.back());
       open.pop_back();
       continue;
     }
@@ -101,14 +106,15 @@ std::vector<PlotSeries> speedError() {
 }  // namespace
 
 TEST(Plot, WellFormedWithEveryNameAndOneMarkerPerPoint) {
-  const std::string svg = svgPlot("Speed against error", "ms per frame", "relMSE", speedError(), true, true);
+  const std::string svg =
+      svgPlot("Speed against error", "ms per frame", "relMSE", speedError(), true, true);
   EXPECT_EQ(xmlFault(svg), "") << svg;
   EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
   EXPECT_EQ(count(svg, "class=\"marker\""), 6u);
   EXPECT_EQ(count(svg, "class=\"legend-marker\""), 3u);
   EXPECT_EQ(count(svg, "<polyline"), 2u);  // a single point draws no line
-  for (const char* s : {"VPL+ISM", "PBGI", "path tracer", "Speed against error", "ms per frame", "relMSE",
-                        "256 VPL", "4096 spp"})
+  for (const char* s : {"VPL+ISM", "PBGI", "path tracer", "Speed against error", "ms per frame",
+                        "relMSE", "256 VPL", "4096 spp"})
     EXPECT_NE(svg.find(s), std::string::npos) << s;
   EXPECT_EQ(svg.find("nan"), std::string::npos);
   EXPECT_EQ(svg.find("inf"), std::string::npos);
@@ -133,7 +139,8 @@ TEST(Plot, LogAxesHaveDecadeTicks) {
 TEST(Plot, ZeroNegativeAndNonFinitePointsAreSkippedAndExplained) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
-  std::vector<PlotSeries> s = {{"a", {{0, 1}, {1, -1}, {10, 0.1}, {100, 0.01}, {nan, 1}, {1, inf}}}};
+  std::vector<PlotSeries> s = {
+      {"a", {{0, 1}, {1, -1}, {10, 0.1}, {100, 0.01}, {nan, 1}, {1, inf}}}};
   const std::string svg = svgPlot("t", "x", "y", s, true, true);
   EXPECT_EQ(xmlFault(svg), "") << svg;
   EXPECT_EQ(count(svg, "class=\"marker\""), 2u);
@@ -150,13 +157,13 @@ TEST(Plot, ZeroNegativeAndNonFinitePointsAreSkippedAndExplained) {
 
 TEST(Plot, SinglePointEqualValuesAndNoDataStillMakeAChart) {
   for (bool logAxes : {false, true}) {
-    for (const auto& s : std::vector<std::vector<PlotSeries>>{
-             {{"one", {{5, 5}}}},
-             {{"equal", {{3, 0.1}, {3, 0.1}, {3, 0.1}}}},
-             {{"decade", {{10, 100}}}},
-             {{"zero", {{0, 0}}}},
-             {},
-             {{"empty", {}}}}) {
+    for (const auto& s :
+         std::vector<std::vector<PlotSeries>>{{{"one", {{5, 5}}}},
+                                              {{"equal", {{3, 0.1}, {3, 0.1}, {3, 0.1}}}},
+                                              {{"decade", {{10, 100}}}},
+                                              {{"zero", {{0, 0}}}},
+                                              {},
+                                              {{"empty", {}}}}) {
       const std::string svg = svgPlot("t", "x", "y", s, logAxes, logAxes);
       EXPECT_EQ(xmlFault(svg), "") << svg;
       EXPECT_EQ(svg.find("nan"), std::string::npos) << svg;
@@ -185,7 +192,8 @@ TEST(Plot, TextIsEscaped) {
 TEST(Plot, ManySeriesCycleStylesAndHugeRangesStayFinite) {
   std::vector<PlotSeries> s;
   for (int i = 0; i < 12; ++i)
-    s.push_back({"series " + std::to_string(i), {{1e-300 * (i + 1), 1e300 / (i + 1)}, {1e300, 1e-300}}});
+    s.push_back(
+        {"series " + std::to_string(i), {{1e-300 * (i + 1), 1e300 / (i + 1)}, {1e300, 1e-300}}});
   for (bool logAxes : {false, true}) {
     const std::string svg = svgPlot("t", "x", "y", s, logAxes, logAxes);
     EXPECT_EQ(xmlFault(svg), "");
@@ -201,6 +209,7 @@ TEST(Plot, WriteSvgPlotWritesTheSameTextOrThrowsNamingThePath) {
   writeSvgPlot(t.file("p.svg"), "t", "x", "y", series, true, false);
   EXPECT_EQ(readFile(t.file("p.svg")), svgPlot("t", "x", "y", series, true, false));
   EXPECT_FALSE(std::filesystem::exists(t.file("p.svg.partial")));
-  const nestlight::Error e = errorOf([&] { writeSvgPlot(t.file("missing/p.svg"), "t", "x", "y", series, 0, 0); });
+  const nestlight::Error e =
+      errorOf([&] { writeSvgPlot(t.file("missing/p.svg"), "t", "x", "y", series, 0, 0); });
   EXPECT_NE(e.file().find("missing/p.svg"), std::string::npos) << e.what();
 }

@@ -27,7 +27,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool finitePixel(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+bool finitePixel(const float* p) {
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
 
 // Runs f(y) for every row in parallel.
 template <typename F>
@@ -45,8 +47,10 @@ NonFiniteCount countNonFinite(const HdrImage& img) {
       const float* p = &img.rgb[3 * (size_t(y) * img.width + x)];
       bool bad = false;
       for (int k = 0; k < 3; ++k) {
-        if (std::isnan(p[k])) ++n.nan, bad = true;
-        else if (std::isinf(p[k])) ++n.inf, bad = true;
+        if (std::isnan(p[k]))
+          ++n.nan, bad = true;
+        else if (std::isinf(p[k]))
+          ++n.inf, bad = true;
       }
       n.pixels += bad;
     }
@@ -74,7 +78,8 @@ double maxCompared(const HdrImage& img, const std::vector<uint8_t>& mask) {
     for (int x = 0; x < img.width; ++x) {
       size_t i = size_t(y) * img.width + x;
       if (!mask[i]) continue;
-      for (int k = 0; k < 3; ++k) rows[size_t(y)] = std::max(rows[size_t(y)], double(img.rgb[3 * i + k]));
+      for (int k = 0; k < 3; ++k)
+        rows[size_t(y)] = std::max(rows[size_t(y)], double(img.rgb[3 * i + k]));
     }
   });
   double m = -std::numeric_limits<double>::infinity();
@@ -84,10 +89,12 @@ double maxCompared(const HdrImage& img, const std::vector<uint8_t>& mask) {
 
 // A peak of 0 (a black reference) would make PSNR -inf for any error and SSIM's constants 0;
 // the display range is the only other scale there is.
-double peakOrOne(double peak) { return peak > 0 ? peak : 1.0; }
+double peakOrOne(double peak) {
+  return peak > 0 ? peak : 1.0;
+}
 
-ErrorStats pixelStats(const HdrImage& t, const HdrImage& r, const std::vector<uint8_t>& mask, double eps,
-                      double peak) {
+ErrorStats pixelStats(const HdrImage& t, const HdrImage& r, const std::vector<uint8_t>& mask,
+                      double eps, double peak) {
   struct Sums {
     double sq = 0, abs = 0, max = 0, relSq = 0, rel = 0;
     uint64_t n = 0;
@@ -112,13 +119,15 @@ ErrorStats pixelStats(const HdrImage& t, const HdrImage& r, const std::vector<ui
   });
   Sums total;
   for (const auto& s : rows) {
-    total.sq += s.sq, total.abs += s.abs, total.relSq += s.relSq, total.rel += s.rel, total.n += s.n;
+    total.sq += s.sq, total.abs += s.abs, total.relSq += s.relSq, total.rel += s.rel,
+        total.n += s.n;
     total.max = std::max(total.max, s.max);
   }
   ErrorStats e;
   e.peak = peak;
   if (total.n == 0) {
-    e.mse = e.rmse = e.meanAbsolute = e.maxAbsolute = e.relativeMse = e.meanRelative = e.psnr = e.ssim = kNaN;
+    e.mse = e.rmse = e.meanAbsolute = e.maxAbsolute = e.relativeMse = e.meanRelative = e.psnr =
+        e.ssim = kNaN;
     return e;
   }
   const double samples = 3.0 * double(total.n);
@@ -128,7 +137,8 @@ ErrorStats pixelStats(const HdrImage& t, const HdrImage& r, const std::vector<ui
   e.maxAbsolute = total.max;
   e.relativeMse = total.relSq / samples;
   e.meanRelative = total.rel / samples;
-  e.psnr = e.mse == 0 ? std::numeric_limits<double>::infinity() : 10.0 * std::log10(peak * peak / e.mse);
+  e.psnr =
+      e.mse == 0 ? std::numeric_limits<double>::infinity() : 10.0 * std::log10(peak * peak / e.mse);
   return e;
 }
 
@@ -137,12 +147,14 @@ ErrorStats pixelStats(const HdrImage& t, const HdrImage& r, const std::vector<ui
 // the image or non-finite) thus drop out of every neighbour's statistics instead of entering
 // them as zeros. The 2D Gaussian is separable, and so are the weighted sums: one horizontal pass
 // into a strip of rows (with the window's radius of halo), then one vertical pass.
-double maskedSsim(const HdrImage& a, const HdrImage& b, const std::vector<uint8_t>& mask, double L) {
+double maskedSsim(const HdrImage& a, const HdrImage& b, const std::vector<uint8_t>& mask,
+                  double L) {
   constexpr int R = kSsimWindow / 2;
   std::array<double, kSsimWindow> kernel{};
   double ksum = 0;
   for (int i = 0; i < kSsimWindow; ++i)
-    ksum += kernel[size_t(i)] = std::exp(-double((i - R) * (i - R)) / (2 * kSsimSigma * kSsimSigma));
+    ksum += kernel[size_t(i)] =
+        std::exp(-double((i - R) * (i - R)) / (2 * kSsimSigma * kSsimSigma));
   for (double& k : kernel) k /= ksum;
   const double c1 = (kSsimK1 * L) * (kSsimK1 * L), c2 = (kSsimK2 * L) * (kSsimK2 * L);
 
@@ -171,7 +183,8 @@ double maskedSsim(const HdrImage& a, const HdrImage& b, const std::vector<uint8_
             const double va = a.rgb[3 * i + c], vb = b.rgb[3 * i + c];
             double* m = acc + 1 + 5 * c;
             // k * (va * vb), not (k * va) * vb: swapping the images must not change the rounding.
-            m[0] += k * va, m[1] += k * vb, m[2] += k * (va * va), m[3] += k * (vb * vb), m[4] += k * (va * vb);
+            m[0] += k * va, m[1] += k * vb, m[2] += k * (va * va), m[3] += k * (vb * vb),
+                m[4] += k * (va * vb);
           }
         }
       }
@@ -192,7 +205,8 @@ double maskedSsim(const HdrImage& a, const HdrImage& b, const std::vector<uint8_
         for (int c = 0; c < 3; ++c) {
           const double* m = &acc[size_t(1 + 5 * c)];
           const double ma = m[0] / wsum, mb = m[1] / wsum;
-          const double va = m[2] / wsum - ma * ma, vb = m[3] / wsum - mb * mb, cov = m[4] / wsum - ma * mb;
+          const double va = m[2] / wsum - ma * ma, vb = m[3] / wsum - mb * mb,
+                       cov = m[4] / wsum - ma * mb;
           s += ((2 * ma * mb + c1) * (2 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2));
         }
         rowSum[size_t(y)] += s / 3.0;
@@ -209,7 +223,9 @@ void checkLayout(const HdrImage& img) {
   NL_CHECK(img.width >= 0 && img.height >= 0 && img.rgb.size() == img.pixels() * 3);
 }
 
-std::string nameOr(const std::string& name, const char* fallback) { return name.empty() ? fallback : name; }
+std::string nameOr(const std::string& name, const char* fallback) {
+  return name.empty() ? fallback : name;
+}
 
 std::string shortNumber(double v) {
   char buf[32];
@@ -223,9 +239,10 @@ void checkSameSize(const HdrImage& test, const HdrImage& reference, const std::s
                    const std::string& referenceName) {
   if (test.width == reference.width && test.height == reference.height) return;
   throw Error(nameOr(testName, "test image"), "",
-              "is " + std::to_string(test.width) + "x" + std::to_string(test.height) + " pixels but the reference " +
-                  nameOr(referenceName, "image") + " is " + std::to_string(reference.width) + "x" +
-                  std::to_string(reference.height) + " pixels; images must be the same size to compare");
+              "is " + std::to_string(test.width) + "x" + std::to_string(test.height) +
+                  " pixels but the reference " + nameOr(referenceName, "image") + " is " +
+                  std::to_string(reference.width) + "x" + std::to_string(reference.height) +
+                  " pixels; images must be the same size to compare");
 }
 
 double ssim(const HdrImage& a, const HdrImage& b, double dynamicRange) {
@@ -235,7 +252,8 @@ double ssim(const HdrImage& a, const HdrImage& b, double dynamicRange) {
   return maskedSsim(a, b, comparedMask(a, b), dynamicRange);
 }
 
-ImageComparison compareImages(const HdrImage& test, const HdrImage& reference, const CompareOptions& options) {
+ImageComparison compareImages(const HdrImage& test, const HdrImage& reference,
+                              const CompareOptions& options) {
   checkLayout(test);
   checkLayout(reference);
   checkSameSize(test, reference, options.testName, options.referenceName);
@@ -255,7 +273,8 @@ ImageComparison compareImages(const HdrImage& test, const HdrImage& reference, c
   c.linear.ssim = maskedSsim(test, reference, mask, peak);
 
   // Same mask: tone mapping clips Inf to a finite 1, which must not bring the pixel back.
-  const HdrImage tt = toneMap(test, options.exposureStops), tr = toneMap(reference, options.exposureStops);
+  const HdrImage tt = toneMap(test, options.exposureStops),
+                 tr = toneMap(reference, options.exposureStops);
   c.toneMapped = pixelStats(tt, tr, mask, options.relativeEpsilon, 1.0);
   c.toneMapped.ssim = maskedSsim(tt, tr, mask, 1.0);
   return c;
@@ -284,14 +303,15 @@ Rgb viridis(double t) {
   return c;
 }
 
-HdrImage errorFalseColour(const HdrImage& test, const HdrImage& reference, const ErrorImageOptions& o,
-                          const CompareOptions& names) {
+HdrImage errorFalseColour(const HdrImage& test, const HdrImage& reference,
+                          const ErrorImageOptions& o, const CompareOptions& names) {
   checkLayout(test);
   checkLayout(reference);
   checkSameSize(test, reference, names.testName, names.referenceName);
   if (!(o.minRelative > 0) || !(o.maxRelative > o.minRelative) || !std::isfinite(o.maxRelative))
     throw Error("", "error image range",
-                "needs 0 < min < max, got " + shortNumber(o.minRelative) + " .. " + shortNumber(o.maxRelative));
+                "needs 0 < min < max, got " + shortNumber(o.minRelative) + " .. " +
+                    shortNumber(o.maxRelative));
   if (!(o.epsilon > 0) || !std::isfinite(o.epsilon))
     throw Error("", "error image epsilon", "must be positive, got " + shortNumber(o.epsilon));
   const double lo = std::log10(o.minRelative), span = std::log10(o.maxRelative) - lo;
@@ -306,7 +326,8 @@ HdrImage errorFalseColour(const HdrImage& test, const HdrImage& reference, const
         continue;
       }
       double e = 0;
-      for (int k = 0; k < 3; ++k) e += std::abs(double(a[k]) - b[k]) / (std::abs(double(b[k])) + o.epsilon);
+      for (int k = 0; k < 3; ++k)
+        e += std::abs(double(a[k]) - b[k]) / (std::abs(double(b[k])) + o.epsilon);
       e /= 3;
       // log10(0) is -inf, which viridis clamps to the bottom of the scale as it should.
       out.set(x, y, viridis((std::log10(e) - lo) / span));
@@ -315,15 +336,17 @@ HdrImage errorFalseColour(const HdrImage& test, const HdrImage& reference, const
   return out;
 }
 
-ErrorImageLegend writeErrorImage(const std::string& pngPath, const HdrImage& test, const HdrImage& reference,
-                                 const ErrorImageOptions& options, const CompareOptions& names) {
+ErrorImageLegend writeErrorImage(const std::string& pngPath, const HdrImage& test,
+                                 const HdrImage& reference, const ErrorImageOptions& options,
+                                 const CompareOptions& names) {
   writePng(pngPath, errorFalseColour(test, reference, options, names));
   return ErrorImageLegend{options.minRelative, options.maxRelative, options.epsilon};
 }
 
 std::string ErrorImageLegend::describe() const {
-  return "per-pixel relative error |t-r|/(|r|+" + shortNumber(epsilon) + "), mean of R,G,B, log scale from " +
-         shortNumber(minRelative) + " (dark purple) to " + shortNumber(maxRelative) +
+  return "per-pixel relative error |t-r|/(|r|+" + shortNumber(epsilon) +
+         "), mean of R,G,B, log scale from " + shortNumber(minRelative) + " (dark purple) to " +
+         shortNumber(maxRelative) +
          " (yellow), viridis; values beyond clamp; magenta = non-finite pixel";
 }
 

@@ -111,20 +111,25 @@ std::string markerShape(int shape, double x, double y, const std::string& attrs)
   const double r = 4;
   switch (shape % kShapes) {
     case 0:
-      return "<circle " + attrs + " cx=\"" + num(x) + "\" cy=\"" + num(y) + "\" r=\"" + num(r) + "\"";
+      return "<circle " + attrs + " cx=\"" + num(x) + "\" cy=\"" + num(y) + "\" r=\"" + num(r) +
+             "\"";
     case 1:
-      return "<rect " + attrs + " x=\"" + num(x - r) + "\" y=\"" + num(y - r) + "\" width=\"" + num(2 * r) +
-             "\" height=\"" + num(2 * r) + "\"";
+      return "<rect " + attrs + " x=\"" + num(x - r) + "\" y=\"" + num(y - r) + "\" width=\"" +
+             num(2 * r) + "\" height=\"" + num(2 * r) + "\"";
     case 2:
-      return "<path " + attrs + " d=\"M" + num(x) + "," + num(y - 1.2 * r) + " L" + num(x + 1.1 * r) + "," +
-             num(y + 0.8 * r) + " L" + num(x - 1.1 * r) + "," + num(y + 0.8 * r) + " Z\"";
+      return "<path " + attrs + " d=\"M" + num(x) + "," + num(y - 1.2 * r) + " L" +
+             num(x + 1.1 * r) + "," + num(y + 0.8 * r) + " L" + num(x - 1.1 * r) + "," +
+             num(y + 0.8 * r) + " Z\"";
     default:
-      return "<path " + attrs + " d=\"M" + num(x) + "," + num(y - 1.3 * r) + " L" + num(x + 1.3 * r) + "," +
-             num(y) + " L" + num(x) + "," + num(y + 1.3 * r) + " L" + num(x - 1.3 * r) + "," + num(y) + " Z\"";
+      return "<path " + attrs + " d=\"M" + num(x) + "," + num(y - 1.3 * r) + " L" +
+             num(x + 1.3 * r) + "," + num(y) + " L" + num(x) + "," + num(y + 1.3 * r) + " L" +
+             num(x - 1.3 * r) + "," + num(y) + " Z\"";
   }
 }
 
-std::string plural(size_t n, const char* one, const char* many) { return std::to_string(n) + " " + (n == 1 ? one : many); }
+std::string plural(size_t n, const char* one, const char* many) {
+  return std::to_string(n) + " " + (n == 1 ? one : many);
+}
 
 }  // namespace
 
@@ -134,12 +139,23 @@ std::string xmlEscape(const std::string& text) {
   for (char ch : text) {
     const unsigned char c = static_cast<unsigned char>(ch);
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += (c < 0x20 && c != '\t' && c != '\n' && c != '\r') || c == 0x7f ? '?' : ch;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += (c < 0x20 && c != '\t' && c != '\n' && c != '\r') || c == 0x7f ? '?' : ch;
     }
   }
   return out;
@@ -173,26 +189,30 @@ std::string svgPlot(const std::string& title, const std::string& xLabel, const s
     notes.push_back(plural(skippedLog, "point", "points") +
                     " left out: zero or negative values cannot be drawn on a log axis.");
   if (skippedNonFinite)
-    notes.push_back(plural(skippedNonFinite, "point", "points") + " left out: not finite (NaN or Inf).");
+    notes.push_back(plural(skippedNonFinite, "point", "points") +
+                    " left out: not finite (NaN or Inf).");
 
   const std::string nothingDrawn = " (nothing drawn)";
   size_t longestName = 0;
   for (size_t s = 0; s < series.size(); ++s)
-    longestName = std::max(longestName, series[s].name.size() + (drawn[s].empty() ? nothingDrawn.size() : 0));
+    longestName =
+        std::max(longestName, series[s].name.size() + (drawn[s].empty() ? nothingDrawn.size() : 0));
   const double legendX = kMarginLeft + kPlotW + kLegendGap;
   const double width = std::max(800.0, legendX + 40 + kCharW * double(longestName) + 20);
-  const double height = std::max(kMarginTop + kPlotH + kMarginBottom + kNoteLine * double(notes.size()) + 10,
-                                 kMarginTop + 22 * double(series.size()) + 20);
+  const double height =
+      std::max(kMarginTop + kPlotH + kMarginBottom + kNoteLine * double(notes.size()) + 10,
+               kMarginTop + 22 * double(series.size()) + 20);
   const double left = kMarginLeft, top = kMarginTop, right = left + kPlotW, bottom = top + kPlotH;
   auto px = [&](double fx) { return left + fx * kPlotW; };
   auto py = [&](double fy) { return bottom - fy * kPlotH; };
 
   std::ostringstream o;
   o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << num(width) << "\" height=\"" << num(height)
-    << "\" viewBox=\"0 0 " << num(width) << " " << num(height)
+  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << num(width) << "\" height=\""
+    << num(height) << "\" viewBox=\"0 0 " << num(width) << " " << num(height)
     << "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\" font-size=\"12\">\n";
-  o << "<rect x=\"0\" y=\"0\" width=\"" << num(width) << "\" height=\"" << num(height) << "\" fill=\"white\"/>\n";
+  o << "<rect x=\"0\" y=\"0\" width=\"" << num(width) << "\" height=\"" << num(height)
+    << "\" fill=\"white\"/>\n";
   o << "<text class=\"title\" x=\"" << num(left + kPlotW / 2) << "\" y=\"" << num(top - 20)
     << "\" text-anchor=\"middle\" font-size=\"15\">" << xmlEscape(title) << "</text>\n";
 
@@ -200,31 +220,32 @@ std::string svgPlot(const std::string& title, const std::string& xLabel, const s
   o << "<g class=\"axes\" stroke-width=\"1\">\n";
   for (const Tick& t : ax.ticks) {
     const double x = px((t.at - ax.lo) / (ax.hi - ax.lo));
-    o << "<line x1=\"" << num(x) << "\" y1=\"" << num(top) << "\" x2=\"" << num(x) << "\" y2=\"" << num(bottom)
-      << "\" stroke=\"" << (t.major ? "#dddddd" : "#f0f0f0") << "\"/>\n";
+    o << "<line x1=\"" << num(x) << "\" y1=\"" << num(top) << "\" x2=\"" << num(x) << "\" y2=\""
+      << num(bottom) << "\" stroke=\"" << (t.major ? "#dddddd" : "#f0f0f0") << "\"/>\n";
     o << "<line x1=\"" << num(x) << "\" y1=\"" << num(bottom) << "\" x2=\"" << num(x) << "\" y2=\""
       << num(bottom + (t.major ? 5 : 3)) << "\" stroke=\"black\"/>\n";
     if (t.major)
-      o << "<text class=\"tick\" x=\"" << num(x) << "\" y=\"" << num(bottom + 20) << "\" text-anchor=\"middle\">"
-        << t.label << "</text>\n";
+      o << "<text class=\"tick\" x=\"" << num(x) << "\" y=\"" << num(bottom + 20)
+        << "\" text-anchor=\"middle\">" << t.label << "</text>\n";
   }
   for (const Tick& t : ay.ticks) {
     const double y = py((t.at - ay.lo) / (ay.hi - ay.lo));
-    o << "<line x1=\"" << num(left) << "\" y1=\"" << num(y) << "\" x2=\"" << num(right) << "\" y2=\"" << num(y)
-      << "\" stroke=\"" << (t.major ? "#dddddd" : "#f0f0f0") << "\"/>\n";
-    o << "<line x1=\"" << num(left - (t.major ? 5 : 3)) << "\" y1=\"" << num(y) << "\" x2=\"" << num(left)
-      << "\" y2=\"" << num(y) << "\" stroke=\"black\"/>\n";
+    o << "<line x1=\"" << num(left) << "\" y1=\"" << num(y) << "\" x2=\"" << num(right)
+      << "\" y2=\"" << num(y) << "\" stroke=\"" << (t.major ? "#dddddd" : "#f0f0f0") << "\"/>\n";
+    o << "<line x1=\"" << num(left - (t.major ? 5 : 3)) << "\" y1=\"" << num(y) << "\" x2=\""
+      << num(left) << "\" y2=\"" << num(y) << "\" stroke=\"black\"/>\n";
     if (t.major)
-      o << "<text class=\"tick\" x=\"" << num(left - 8) << "\" y=\"" << num(y + 4) << "\" text-anchor=\"end\">"
-        << t.label << "</text>\n";
+      o << "<text class=\"tick\" x=\"" << num(left - 8) << "\" y=\"" << num(y + 4)
+        << "\" text-anchor=\"end\">" << t.label << "</text>\n";
   }
-  o << "<rect x=\"" << num(left) << "\" y=\"" << num(top) << "\" width=\"" << num(kPlotW) << "\" height=\""
-    << num(kPlotH) << "\" fill=\"none\" stroke=\"black\"/>\n";
+  o << "<rect x=\"" << num(left) << "\" y=\"" << num(top) << "\" width=\"" << num(kPlotW)
+    << "\" height=\"" << num(kPlotH) << "\" fill=\"none\" stroke=\"black\"/>\n";
   o << "</g>\n";
   o << "<text class=\"axis-label\" x=\"" << num(left + kPlotW / 2) << "\" y=\"" << num(bottom + 45)
     << "\" text-anchor=\"middle\">" << xmlEscape(xLabel) << "</text>\n";
-  o << "<text class=\"axis-label\" transform=\"translate(" << num(left - 58) << "," << num(top + kPlotH / 2)
-    << ") rotate(-90)\" text-anchor=\"middle\">" << xmlEscape(yLabel) << "</text>\n";
+  o << "<text class=\"axis-label\" transform=\"translate(" << num(left - 58) << ","
+    << num(top + kPlotH / 2) << ") rotate(-90)\" text-anchor=\"middle\">" << xmlEscape(yLabel)
+    << "</text>\n";
 
   // Series: line first so markers sit on top of it.
   for (size_t s = 0; s < series.size(); ++s) {
@@ -233,18 +254,26 @@ std::string svgPlot(const std::string& title, const std::string& xLabel, const s
     o << "<g class=\"series\" data-name=\"" << name << "\">\n";
     if (drawn[s].size() > 1) {
       o << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"1.5\" points=\"";
-      for (const PlotPoint* p : drawn[s]) o << num(px(ax.fraction(p->x))) << "," << num(py(ay.fraction(p->y))) << " ";
+      for (const PlotPoint* p : drawn[s])
+        o << num(px(ax.fraction(p->x))) << "," << num(py(ay.fraction(p->y))) << " ";
       o << "\"/>\n";
     }
     for (const PlotPoint* p : drawn[s]) {
       const double x = px(ax.fraction(p->x)), y = py(ay.fraction(p->y));
       char coords[80];
       std::snprintf(coords, sizeof coords, "(%g, %g)", p->x, p->y);
-      o << markerShape(int(s), x, y, "class=\"marker\" fill=\"" + colour + "\" stroke=\"white\" stroke-width=\"0.8\"")
-        << "><title>" << name << " " << coords << (p->label.empty() ? "" : " " + xmlEscape(p->label))
-        << "</title></" << (s % kShapes == 0 ? "circle" : s % kShapes == 1 ? "rect" : "path") << ">\n";
+      o << markerShape(
+               int(s), x, y,
+               "class=\"marker\" fill=\"" + colour + "\" stroke=\"white\" stroke-width=\"0.8\"")
+        << "><title>" << name << " " << coords
+        << (p->label.empty() ? "" : " " + xmlEscape(p->label)) << "</title></"
+        << (s % kShapes == 0   ? "circle"
+            : s % kShapes == 1 ? "rect"
+                               : "path")
+        << ">\n";
       if (!p->label.empty())
-        o << "<text class=\"point-label\" x=\"" << num(x + 6) << "\" y=\"" << num(y - 6) << "\" font-size=\"10\" fill=\""
+        o << "<text class=\"point-label\" x=\"" << num(x + 6) << "\" y=\"" << num(y - 6)
+          << "\" font-size=\"10\" fill=\""
           << "#333333\">" << xmlEscape(p->label) << "</text>\n";
     }
     o << "</g>\n";
@@ -255,23 +284,26 @@ std::string svgPlot(const std::string& title, const std::string& xLabel, const s
   for (size_t s = 0; s < series.size(); ++s) {
     const std::string colour = kColours[s % kColours.size()];
     const double y = top + 10 + 22 * double(s);
-    o << "<line x1=\"" << num(legendX) << "\" y1=\"" << num(y) << "\" x2=\"" << num(legendX + 28) << "\" y2=\""
-      << num(y) << "\" stroke=\"" << colour << "\" stroke-width=\"1.5\"/>\n";
-    o << markerShape(int(s), legendX + 14, y, "class=\"legend-marker\" fill=\"" + colour + "\"") << "/>\n";
-    o << "<text x=\"" << num(legendX + 36) << "\" y=\"" << num(y + 4) << "\">" << xmlEscape(series[s].name)
-      << (drawn[s].empty() ? nothingDrawn : "") << "</text>\n";
+    o << "<line x1=\"" << num(legendX) << "\" y1=\"" << num(y) << "\" x2=\"" << num(legendX + 28)
+      << "\" y2=\"" << num(y) << "\" stroke=\"" << colour << "\" stroke-width=\"1.5\"/>\n";
+    o << markerShape(int(s), legendX + 14, y, "class=\"legend-marker\" fill=\"" + colour + "\"")
+      << "/>\n";
+    o << "<text x=\"" << num(legendX + 36) << "\" y=\"" << num(y + 4) << "\">"
+      << xmlEscape(series[s].name) << (drawn[s].empty() ? nothingDrawn : "") << "</text>\n";
   }
   o << "</g>\n";
 
   for (size_t i = 0; i < notes.size(); ++i)
-    o << "<text class=\"note\" x=\"" << num(left) << "\" y=\"" << num(bottom + kMarginBottom + 4 + kNoteLine * double(i))
+    o << "<text class=\"note\" x=\"" << num(left) << "\" y=\""
+      << num(bottom + kMarginBottom + 4 + kNoteLine * double(i))
       << "\" font-size=\"11\" fill=\"#a00000\">" << xmlEscape(notes[i]) << "</text>\n";
   o << "</svg>\n";
   return o.str();
 }
 
 void writeSvgPlot(const std::string& path, const std::string& title, const std::string& xLabel,
-                  const std::string& yLabel, const std::vector<PlotSeries>& series, bool logX, bool logY) {
+                  const std::string& yLabel, const std::vector<PlotSeries>& series, bool logX,
+                  bool logY) {
   const std::string svg = svgPlot(title, xLabel, yLabel, series, logX, logY);
   const std::string tmp = path + ".partial";
   {

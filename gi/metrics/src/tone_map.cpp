@@ -26,7 +26,9 @@ float srgbDecode(float encoded) {
   return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
 }
 
-float exposureScale(double stops) { return float(std::exp2(stops)); }
+float exposureScale(double stops) {
+  return float(std::exp2(stops));
+}
 
 float toneMapValue(float linear, float scale) {
   if (std::isnan(linear)) return linear;
@@ -57,7 +59,8 @@ void writePng(const std::string& path, const HdrImage& display) {
       bytes[3 * p + k] = uint8_t(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255.0f));
   }
   const std::string tmp = path + ".partial";
-  if (!stbi_write_png(tmp.c_str(), display.width, display.height, 3, bytes.data(), display.width * 3)) {
+  if (!stbi_write_png(tmp.c_str(), display.width, display.height, 3, bytes.data(),
+                      display.width * 3)) {
     std::remove(tmp.c_str());
     throw Error(path, "", "cannot write PNG");
   }

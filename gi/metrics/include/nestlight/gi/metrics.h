@@ -40,9 +40,9 @@ inline constexpr double kSsimSigma = 1.5;
 inline constexpr double kSsimK1 = 0.01, kSsimK2 = 0.03;
 
 struct CompareOptions {
-  double exposureStops = 0;                  // before the tone map, for the tone-mapped metrics
+  double exposureStops = 0;  // before the tone map, for the tone-mapped metrics
   double relativeEpsilon = kRelativeEpsilon;
-  std::string testName, referenceName;       // files, for error messages
+  std::string testName, referenceName;  // files, for error messages
 };
 
 // One image domain (linear HDR or tone-mapped). NaN when no pixel could be compared.
@@ -55,7 +55,7 @@ struct ErrorStats {
 };
 
 struct NonFiniteCount {
-  uint64_t pixels = 0;  // pixels with at least one non-finite channel
+  uint64_t pixels = 0;        // pixels with at least one non-finite channel
   uint64_t nan = 0, inf = 0;  // channel values
 };
 

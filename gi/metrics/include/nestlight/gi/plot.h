@@ -32,7 +32,8 @@ std::string svgPlot(const std::string& title, const std::string& xLabel, const s
 
 // svgPlot written to `path` (temporary name, then rename). Throws nestlight::Error naming it.
 void writeSvgPlot(const std::string& path, const std::string& title, const std::string& xLabel,
-                  const std::string& yLabel, const std::vector<PlotSeries>& series, bool logX, bool logY);
+                  const std::string& yLabel, const std::vector<PlotSeries>& series, bool logX,
+                  bool logY);
 
 // `text` with & < > " ' as entities and the control characters XML 1.0 forbids replaced by '?'.
 std::string xmlEscape(const std::string& text);
