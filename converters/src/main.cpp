@@ -15,7 +15,8 @@ int main(int argc, char** argv) {
       "  nestlight verify scan.octree                   check every byte and point\n"
       "  nestlight view scan.octree                     fly through it (window)\n"
       "  nestlight render scan.octree -o view.png       headless image (EGL, llvmpipe without a GPU)\n"
-      "  nestlight demo                                 generate, convert, verify and render a scene\n",
+      "  nestlight demo                                 generate, convert, verify and render a scene\n"
+      "  nestlight compare render.exr reference.exr     error metrics against a reference image\n",
       "nestlight"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "nestlight 0.1.0");
@@ -33,6 +34,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addBenchRender(app, code);
   nestlight::cli::addBenchGi(app, code);
   nestlight::cli::addMakeScene(app, code);
+  nestlight::cli::addCompare(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
