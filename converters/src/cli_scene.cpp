@@ -98,8 +98,9 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
                             {"nestlight:scene", fs::absolute(file).string()}};
   fs::create_directories(fs::absolute(scene.output.exr).parent_path());
   gi::writeExr(scene.output.exr.string(), r.image, attrs);
-  if (!scene.output.png.empty() && ov.output.empty())
-    gi::writeToneMappedPng(scene.output.png.string(), r.image, scene.output.exposure);
+  // With -o the PNG (when the scene asks for one) goes beside the EXR under the same name.
+  if (!scene.output.png.empty() && !ov.output.empty()) scene.output.png = fs::path(ov.output).replace_extension(".png");
+  if (!scene.output.png.empty()) gi::writeToneMappedPng(scene.output.png.string(), r.image, scene.output.exposure);
   SceneRenderReport rep;
   rep.exr = scene.output.exr;
   rep.result = std::move(r);

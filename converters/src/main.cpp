@@ -8,7 +8,8 @@
 int main(int argc, char** argv) {
   CLI::App app{
       "nestlight: converts laser scans far larger than memory into a streamable nested octree,\n"
-      "and streams it into a viewer or headless renders (lighting comes in later versions).\n\n"
+      "streams it into a viewer or headless renders, and lights scans and objects inserted into them\n"
+      "(scene files; an Embree path-traced reference that the real-time GI methods are measured against).\n\n"
       "Typical use:\n"
       "  nestlight convert scan.las -o scan.octree     build the octree (bounded memory)\n"
       "  nestlight info scan.octree                     what was built\n"
@@ -16,7 +17,10 @@ int main(int argc, char** argv) {
       "  nestlight view scan.octree                     fly through it (window)\n"
       "  nestlight render scan.octree -o view.png       headless image (EGL, llvmpipe without a GPU)\n"
       "  nestlight demo                                 generate, convert, verify and render a scene\n"
-      "  nestlight compare render.exr reference.exr     error metrics against a reference image\n",
+      "  nestlight make-scene cornell -o room           a GI test scene (scan, meshes, scene.json)\n"
+      "  nestlight render room/scene.json               path-traced reference of a scene, linear EXR\n"
+      "  nestlight compare render.exr reference.exr     error metrics against a reference image\n"
+      "  nestlight bench gi room/scene.json             speed against error of the GI methods\n",
       "nestlight"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "nestlight 0.1.0");

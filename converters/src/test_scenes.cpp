@@ -150,7 +150,10 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
                                           {"transform", {{"translate", {2.6, 2.6, 0.5}}, {"scale", 0.5}}},
                                           {"material", "glossy"},
                                           {"surfels", {{"method", "area"}, {"count", 20000}}}}});
-      scene["camera"] = camera({2.0, 0.25, 2.0}, {2.0, 4.0, 1.6}, 62);
+      // A lamp under the light patch: it lights the sphere in both modes, and the whole room in
+      // the albedo mode, where the scan's recorded light does not emit.
+      scene["lights"] = json::array({json{{"type", "point"}, {"position", {2.0, 2.0, 3.7}}, {"intensity", 6.0}}});
+      scene["camera"] = camera({2.0, 0.12, 3.2}, {2.2, 3.0, 0.5}, 68);
       scene["gi"] = {{"method", "reference"}, {"mode", "radiance_cache"}, {"max_bounces", 4}, {"samples_per_pixel", 1024},
                      {"target_relative_error", 0.01}};
       break;

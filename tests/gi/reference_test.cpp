@@ -288,10 +288,11 @@ TEST(Reference, ReceiverTouchingOrInsideADisc) {
 }
 
 TEST(Reference, ZeroRadiusDiscsAreNeverHit) {
-  // A million coincident points: the neighbour rule gives them no extent; they must neither
-  // crash Embree nor produce NaN, and the environment behind them stays visible.
+  // A million coincident points: the neighbour rule gives them no extent (and must not turn
+  // quadratic on them); they must neither crash Embree nor produce NaN, and the environment
+  // behind them stays visible.
   DiscCloud dup;
-  for (int i = 0; i < 100000; ++i) {
+  for (int i = 0; i < 1000000; ++i) {
     dup.discs.emplace_back(0.0f, 0.0f, 0.0f, 0.0f);
     dup.normals.emplace_back(0, -1, 0);
     dup.colour.emplace_back(5.0f);
@@ -304,6 +305,23 @@ TEST(Reference, ZeroRadiusDiscsAreNeverHit) {
   o.maxSamplesPerPixel = 2;
   ReferenceResult r = renderReference(s, lookAt({0, -1, 0}, {0, 0, 0}, 8, 8, 20), o);
   for (float v : r.image.rgb) ASSERT_EQ(v, 0.25f);
+}
+
+TEST(Reference, DuplicatesDoNotShrinkTheirNeighboursDiscs) {
+  // A grid of spacing 0.1 where every point is stored five times: radii equal those of the grid
+  // stored once.
+  std::vector<glm::vec4> once, five;
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 30; ++x) {
+      once.emplace_back(x * 0.1f, y * 0.1f, 0.0f, 0.0f);
+      for (int c = 0; c < 5; ++c) five.emplace_back(x * 0.1f, y * 0.1f, 0.0f, 0.0f);
+    }
+  assignDiscRadii(once, 1.0f);
+  assignDiscRadii(five, 1.0f);
+  for (size_t i = 0; i < once.size(); ++i) {
+    ASSERT_GT(once[i].w, 0.05f);
+    for (int c = 0; c < 5; ++c) ASSERT_EQ(five[5 * i + c].w, once[i].w);
+  }
 }
 
 TEST(Reference, GrazingAnglesStayFiniteAndMatchTheAnalyticValue) {

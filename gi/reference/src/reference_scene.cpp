@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <tuple>
 #include <nanoflann.hpp>
 
 #include "nestlight/octree/error.h"
@@ -38,22 +39,40 @@ void embreeError(void*, RTCError code, const char* message) {
 
 }  // namespace
 
-void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale) {
+void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std::vector<float>* maxRadius) {
+  NL_CHECK(!maxRadius || maxRadius->size() == discs.size());
   if (discs.empty()) return;
-  DiscAdaptor adaptor{discs};
+  // Spacing is measured between distinct positions: coincident copies (merged scans, a
+  // million duplicates) neither shrink their neighbours' discs nor degrade the k-d tree, whose
+  // queries turn quadratic on a leaf of identical points.
+  std::vector<uint32_t> order(discs.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](uint32_t i) { return std::tuple(discs[i].x, discs[i].y, discs[i].z); };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  std::vector<glm::vec4> unique;
+  std::vector<uint32_t> uniqueOf(discs.size());
+  for (size_t j = 0; j < order.size(); ++j) {
+    if (j == 0 || key(order[j]) != key(order[j - 1])) unique.push_back(discs[order[j]]);
+    uniqueOf[order[j]] = uint32_t(unique.size() - 1);
+  }
+  DiscAdaptor adaptor{unique};
   DiscTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
-  const size_t k = std::min<size_t>(kRadiusNeighbours + 1, discs.size());  // +1: the point itself
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, discs.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+  const size_t k = std::min<size_t>(kRadiusNeighbours + 1, unique.size());  // +1: the point itself
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, unique.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<uint32_t> idx(k);
     std::vector<float> d2(k);
     for (size_t i = r.begin(); i < r.end(); ++i) {
-      float q[3] = {discs[i].x, discs[i].y, discs[i].z};
+      float q[3] = {unique[i].x, unique[i].y, unique[i].z};
       size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
       float dk = found > 1 ? std::sqrt(d2[found - 1]) : 0.0f;
-      discs[i].w = radiusScale * 0.5f * dk;
+      unique[i].w = radiusScale * 0.5f * dk;
     }
   });
+  for (size_t i = 0; i < discs.size(); ++i) {
+    discs[i].w = unique[uniqueOf[i]].w;
+    if (maxRadius) discs[i].w = std::min(discs[i].w, (*maxRadius)[i]);
+  }
 }
 
 DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, DiscCloudStats* statsOut) {
@@ -89,14 +108,20 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
   cloud.colour.reserve(total);
   if (normal >= 0) cloud.normals.reserve(total);
   const glm::dvec3 base = glm::dvec3(meta.offset.x, meta.offset.y, meta.offset.z) - origin;
+  std::vector<float> maxRadius;
+  maxRadius.reserve(total);
   for (auto& [key, e] : nodes) {
     if (int(key.level) > level || e.numPoints == 0) continue;
     PointBuffer pts = reader.readNode(key);
     stats.nodes++;
+    // A node's sample keeps points at least its spacing apart: no surface it stands for needs a
+    // disc wider than that.
+    const float nodeSpacing = float(meta.spacing / double(1u << key.level)) * octree.radiusScale;
     for (size_t i = 0; i < pts.size(); ++i) {
       const uint32_t* p = &pts.pos[3 * i];
       glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) * meta.scale;
       cloud.discs.emplace_back(glm::vec3(local), 0.0f);
+      maxRadius.push_back(nodeSpacing);
       const uint8_t* a = pts.attrsOf(i);
       Rgb c(0.8f);
       if (rgb >= 0) {
@@ -113,7 +138,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
       }
     }
   }
-  assignDiscRadii(cloud.discs, octree.radiusScale);
+  assignDiscRadii(cloud.discs, octree.radiusScale, &maxRadius);
   stats.points = cloud.discs.size();
   stats.bytes = stats.points * kBytesPerDisc;
   for (const auto& d : cloud.discs) stats.zeroRadius += d.w <= 0;
@@ -160,9 +185,11 @@ std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene, void (*
       float len = glm::length(n);
       n = len > 0 ? n / len : glm::vec3(0, 0, 1);
     }
-    if (log)
+    if (log) {
       log(m.path.string() + ": " + std::to_string(mesh.triangles()) + " triangles" +
           (report.degenerateDropped ? " (" + std::to_string(report.degenerateDropped) + " degenerate dropped)" : ""));
+      for (const auto& w : report.warnings) log(m.path.string() + ": warning: " + w);
+    }
     meshes.push_back(std::move(mesh));
     meshMaterial.push_back(m.material);
     reports.push_back(report);

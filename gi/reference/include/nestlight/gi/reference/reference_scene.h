@@ -36,8 +36,11 @@ struct DiscCloudStats {
 // r = radiusScale * d8 / 2, so that discs cover about twice the surface on average and leave
 // no holes on an evenly sampled surface (pi r^2 * density = 8 pi (d8/2)^2 / (pi d8^2) = 2).
 DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, DiscCloudStats* stats = nullptr);
-// Radii for `discs` from their neighbours as above (positions in .xyz; writes .w).
-void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale);
+// Radii for `discs` from their neighbours as above (positions in .xyz; writes .w). With
+// `maxRadius` (one per disc), a radius never exceeds it: the loader passes the spacing of the
+// node a point came from, so an isolated outlier, whose neighbours are far, does not become a
+// disc metres wide.
+void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std::vector<float>* maxRadius = nullptr);
 
 struct SurfaceHit {
   enum class Kind { None, Disc, Triangle } kind = Kind::None;
