@@ -130,6 +130,7 @@ void addBenchGi(CLI::App& app, int& exitCode) {
     if (*width) base.width = *width;
     if (*height) base.height = *height;
     base.quiet = true;
+    base.still = true;
 
     // The reference, cached under a key of everything that changes it.
     gi::Scene probe = gi::loadScene(sceneFile);

@@ -120,6 +120,9 @@ void addRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--bounces", sc->bounces, "Scenes: scattering events per path (1: direct light)")
       ->check(CLI::Range(0, 64))->group(group);
   cmd->add_option("--seed", sc->seed, "Scenes: random seed")->group(group);
+  cmd->add_flag("--still", sc->still, "Scenes: one image from the scene's camera even when it has a camera path "
+                                      "(a path renders one image per frame, NAME_0000.exr, ...)")
+      ->group(group);
   cmd->callback([=, &exitCode]() {
     if (fs::path(*octree).extension() == ".json") {
       if (cmd->count("--width")) sc->width = job->width;

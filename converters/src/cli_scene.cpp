@@ -1,6 +1,7 @@
 // `nestlight make-scene` (the project's GI test scenes) and `nestlight render scene.json` (the
 // path-traced reference, or direct lighting, of a scene file).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -86,23 +87,63 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
     }
     return true;
   };
-  gi::ReferenceResult r = gi::renderReference(*rs, scene.camera, opt, progress);
-  gi::ImageAttributes attrs{{"nestlight:samples", std::to_string(r.samplesPerPixel)},
-                            {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
-                            {"nestlight:seconds", std::to_string(r.seconds)},
-                            {"nestlight:rays", std::to_string(r.rays)},
-                            {"nestlight:method", scene.gi.method},
-                            {"nestlight:mode", scene.gi.mode == gi::RadianceMode::Albedo ? "albedo" : "radiance_cache"},
-                            {"nestlight:max_bounces", std::to_string(opt.maxBounces)},
-                            {"nestlight:stop", r.stopReason},
-                            {"nestlight:scene", fs::absolute(file).string()}};
-  fs::create_directories(fs::absolute(scene.output.exr).parent_path());
-  gi::writeExr(scene.output.exr.string(), r.image, attrs);
+  // A camera path renders one image per frame (eye and target interpolated linearly between
+  // keyframes at the path's fps), named base_0000.exr, base_0001.exr, ...
+  std::vector<gi::SceneCamera> cameras;
+  if (!scene.cameraPath.empty() && !ov.still) {
+    const auto& keys = scene.cameraPath;
+    const int frames = int(std::floor(keys.back().time * scene.cameraPathFps + 1e-9)) + 1;
+    for (int f = 0; f < frames; ++f) {
+      double t = f / scene.cameraPathFps;
+      size_t k = 0;
+      while (k + 1 < keys.size() && keys[k + 1].time <= t) ++k;
+      gi::SceneCamera c = scene.camera;
+      if (k + 1 < keys.size() && t >= keys[k].time) {
+        double a = (t - keys[k].time) / (keys[k + 1].time - keys[k].time);
+        c.eye = glm::mix(keys[k].eye, keys[k + 1].eye, a);
+        c.target = glm::mix(keys[k].target, keys[k + 1].target, a);
+      } else {
+        c.eye = keys[k].eye;
+        c.target = keys[k].target;
+      }
+      cameras.push_back(c);
+    }
+  } else {
+    cameras.push_back(scene.camera);
+  }
   // With -o the PNG (when the scene asks for one) goes beside the EXR under the same name.
   if (!scene.output.png.empty() && !ov.output.empty()) scene.output.png = fs::path(ov.output).replace_extension(".png");
-  if (!scene.output.png.empty()) gi::writeToneMappedPng(scene.output.png.string(), r.image, scene.output.exposure);
+  auto numbered = [&](const fs::path& p, size_t f) {
+    if (cameras.size() == 1 || p.empty()) return p;
+    char suffix[16];
+    std::snprintf(suffix, sizeof suffix, "_%04zu", f);
+    return p.parent_path() / (p.stem().string() + suffix + p.extension().string());
+  };
+  fs::create_directories(fs::absolute(scene.output.exr).parent_path());
+  gi::ReferenceResult r;
+  fs::path exr;
+  for (size_t f = 0; f < cameras.size(); ++f) {
+    if (!ov.quiet && cameras.size() > 1) std::fprintf(stderr, "render: frame %zu of %zu\n", f + 1, cameras.size());
+    lastReported = 0;
+    r = gi::renderReference(*rs, cameras[f], opt, progress);
+    gi::ImageAttributes attrs{{"nestlight:samples", std::to_string(r.samplesPerPixel)},
+                              {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
+                              {"nestlight:seconds", std::to_string(r.seconds)},
+                              {"nestlight:rays", std::to_string(r.rays)},
+                              {"nestlight:method", scene.gi.method},
+                              {"nestlight:mode", scene.gi.mode == gi::RadianceMode::Albedo ? "albedo" : "radiance_cache"},
+                              {"nestlight:max_bounces", std::to_string(opt.maxBounces)},
+                              {"nestlight:stop", r.stopReason},
+                              {"nestlight:frame", std::to_string(f)},
+                              {"nestlight:scene", fs::absolute(file).string()}};
+    exr = numbered(scene.output.exr, f);
+    gi::writeExr(exr.string(), r.image, attrs);
+    if (!scene.output.png.empty())
+      gi::writeToneMappedPng(numbered(scene.output.png, f).string(), r.image, scene.output.exposure);
+  }
   SceneRenderReport rep;
-  rep.exr = scene.output.exr;
+  rep.exr = exr;
+  rep.frames = int(cameras.size());
   rep.result = std::move(r);
   rep.loadSeconds = loadSeconds;
   rep.discs = rs->discs();

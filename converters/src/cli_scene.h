@@ -21,12 +21,14 @@ struct SceneRenderOverrides {
   std::optional<uint64_t> seed;
   std::filesystem::path output;  // .exr; empty: the scene's output
   bool quiet = false;
+  bool still = false;            // ignore the scene's camera path: one image from its camera
 };
 
 struct SceneRenderReport {
   gi::Scene scene;
   gi::ReferenceResult result;
-  std::filesystem::path exr;
+  std::filesystem::path exr;    // the last frame's
+  int frames = 1;
   double loadSeconds = 0;
   uint64_t discs = 0, triangles = 0;
 };

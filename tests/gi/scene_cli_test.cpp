@@ -76,3 +76,22 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
             0);
   EXPECT_EQ(out.find("rendering the reference"), std::string::npos) << out;
 }
+
+TEST(SceneCli, CameraPathRendersOneImagePerFrame) {
+  test::TempDir dir;
+  std::string out;
+  ASSERT_EQ(test::runCli("make-scene cornell -q -n 30k --width 8 --height 6 -o " + dir.file("c"), &out), 0) << out;
+  auto j = nlohmann::json::parse(test::readFile(dir.file("c/scene.json")));
+  j["camera_path"] = {{"fps", 2},
+                      {"keyframes", {{{"time", 0}, {"eye", {2, 0.3, 2}}, {"target", {2, 3, 1}}},
+                                     {{"time", 1}, {"eye", {1, 0.3, 2}}, {"target", {2, 3, 1}}}}}};
+  test::writeFile(dir.file("c/path.json"), j.dump());
+  ASSERT_EQ(test::runCli("render " + dir.file("c/path.json") + " --spp 1 -o " + dir.file("f.exr"), &out), 0) << out;
+  // Frames at t = 0, 0.5 and 1 s; different views give different images.
+  for (const char* f : {"f_0000.exr", "f_0001.exr", "f_0002.exr", "f_0000.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir.file(f))) << f;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("f_0003.exr")));
+  EXPECT_NE(gi::readHdrImage(dir.file("f_0000.exr")).rgb, gi::readHdrImage(dir.file("f_0002.exr")).rgb);
+  ASSERT_EQ(test::runCli("render " + dir.file("c/path.json") + " --spp 1 --still -o " + dir.file("s.exr"), &out), 0) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("s.exr")));
+}
