@@ -8,6 +8,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/sampling.h"
@@ -42,12 +43,16 @@ class EnvironmentMap {
  private:
   glm::vec2 uvFromDirection(const glm::vec3& d) const;
   glm::vec3 directionFromUv(glm::vec2 uv) const;
+  // The texel a direction falls in; false for an empty map or a non-finite or zero direction.
+  bool texelOf(const glm::vec3& direction, int* x, int* y) const;
 
   HdrImage image_;
   Distribution2D distribution_;
   float rotation_ = 0, scale_ = 1;
   bool black_ = true;
   size_t invalidTexels_ = 0;
+  std::vector<double> rowCos_;  // cos theta at the height+1 row edges, top first
+  double totalPower_ = 0;       // sum over texels of luminance * solid angle (unscaled)
 };
 
 }  // namespace nestlight::gi
