@@ -24,5 +24,8 @@ case "$name" in
   fuzz_mesh_obj)
     printf '# cube corner\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvn 0 0 1\nvn 0 -1 0\no box\ng side\nusemtl m\ns 1\nf 1/1/1 2/2/1 3/2/1 4/1/1\nf 1//2 2//2 -1//2\nf -5 -4 \\\n -1\nl 1 2\n' > "$dir/a.obj"
     printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nf 1 2 3\nf 1 2 4\nf 1 1 2\n' > "$dir/b.obj" ;;
+  fuzz_scene)
+    printf '{"version": 1, "octrees": ["a.octree", {"path": "b", "max_level": 3, "memory_budget": "1GiB"}],\n "materials": {"m": {"type": "principled", "base_color": [1, 0.5, 0.2], "clearcoat": 1}},\n "meshes": [{"path": "x.obj", "material": "m", "transform": {"translate": [1, 2, 3], "rotate": [0, 0, 90], "scale": [1, 2, 3]}, "surfels": {"method": "poisson", "count": 10}}],\n "lights": [{"type": "spot", "position": [0, 0, 1], "direction": [0, 0, -1], "intensity": 2, "inner_angle": 5, "outer_angle": 9}],\n "environment": {"constant": [1, 1, 1]}, "camera": {"eye": [0, -1, 0], "target": [0, 0, 0]},\n "camera_path": {"fps": 2, "keyframes": [{"time": 0, "eye": [0, 1, 0], "target": [0, 0, 0]}]},\n "gi": {"mode": "albedo", "max_bounces": 2}, "output": {"exr": "o.exr"}}\n' > "$dir/a.json"
+    printf '{"meshes": [{"path": "m.ply", "transform": {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}}]}' > "$dir/b.json" ;;
   *) : ;;
 esac
