@@ -1,9 +1,9 @@
-// Pearson's chi-square goodness-of-fit test for samplers of directions, in the manner of pbrt-v4's
-// BSDF sampling tests and Mitsuba's chi2 module (Jakob, "Mitsuba 2 ... chi2 tests"; Pearson
-// 1900): histogram many samples over theta x phi bins of the sphere, compare with the counts the
-// sampler's claimed pdf predicts (the pdf integrated over each bin), pool sparse bins, and reject
-// when the statistic is improbable under the chi-square distribution, at a significance Sidak-
-// corrected for the number of tests. Header-only because tests/CMakeLists.txt globs *_test.cpp.
+// Pearson's chi-square goodness-of-fit test (Pearson 1900) for samplers of directions, in the
+// manner of pbrt-v4's BSDF sampling tests and Mitsuba's ChiSquareTest: histogram many samples
+// over theta x phi bins of the sphere, compare with the counts the sampler's claimed pdf
+// predicts (the pdf integrated over each bin), pool sparse bins, and reject when the statistic
+// is improbable under the chi-square distribution, at a significance Sidak-corrected for the
+// number of tests. Header-only because tests/CMakeLists.txt globs only *_test.cpp.
 #pragma once
 
 #include <algorithm>

@@ -1,17 +1,19 @@
 // BSDFs of inserted objects. Lambert; GGX microfacet reflection (Walter, Marschner, Li, Torrance
-// 2007, "Microfacet Models for Refraction through Rough Surfaces", eqs. 20 (F), 33 (D), 34 (G1))
-// with Smith's height-correlated masking-shadowing (Heitz 2014, "Understanding the Masking-
-// Shadowing Function", eq. 99) and visible-normal sampling (Heitz 2018, "Sampling the GGX
-// Distribution of Visible Normals", JCGT 7(4), listing 1); Schlick's Fresnel (Schlick 1994); the
-// Disney principled BRDF subset of Burley 2012 ("Physically-Based Shading at Disney", section
-// 5: diffuse with retro-reflection, sheen, specular with tint, GTR1 clearcoat).
+// 2007, "Microfacet Models for Refraction through Rough Surfaces": the reflection term
+// F G D / (4 cos_o cos_i) and GGX's D and Smith G1) with Smith's height-correlated masking-
+// shadowing G2 = 1 / (1 + Lambda_o + Lambda_i) (Heitz 2014, "Understanding the Masking-Shadowing
+// Function in Microfacet-Based BRDFs") and visible-normal sampling (Heitz 2018, "Sampling the GGX
+// Distribution of Visible Normals", JCGT 7(4)); Schlick's Fresnel approximation (Schlick 1994);
+// the Disney principled BRDF subset of Burley 2012 ("Physically-Based Shading at Disney":
+// diffuse with retro-reflection, sheen, specular with tint, a GTR1 clearcoat).
 //
 // Deviations, all so that the white furnace holds (directional albedo <= 1 at every angle):
 // - The diffuse part (Lambert or Burley, and sheen) lies under the dielectric specular layer: it
 //   is weighted by (1 - F(cos theta_o)) (1 - F(cos theta_i)) with the dielectric F0 (0.04 for
 //   GGX, 0.08 specular tint for Principled). Adding an unweighted Lambert lobe to a specular
-//   one reflects 1 + F of the light; Burley's diffuse alone reflects up to ~1.04 at normal
-//   incidence and more at grazing. The weight is symmetric, so reciprocity holds.
+//   one reflects 1 + F of the light; Burley's diffuse alone, at roughness 1, reflects 1.04
+//   head-on and 1.5 at cos theta_o = 0.03 (measured by quadrature). The weight is symmetric,
+//   so reciprocity holds. The price: a white dielectric reflects ~0.92 head-on, not 1.
 // - The clearcoat attenuates what lies under it by (1 - c F_c(cos theta_o)) (1 - c F_c(cos
 //   theta_i)), c = 0.25 clearcoat being Burley's coat strength.
 // - The clearcoat's masking is the same height-correlated Smith term with Burley's fixed
@@ -58,7 +60,7 @@ float ggxD(const glm::vec3& h, float alpha2) {
   return alpha2 / (kPi * t * t);
 }
 
-// GTR1 (Burley 2012, appendix B.2): the clearcoat's longer-tailed distribution. Its
+// GTR1 (Burley 2012's generalised Trowbridge-Reitz, gamma = 1): the clearcoat's long tails. Its
 // 1 + (a^2 - 1) cos^2 is written sin^2 + a^2 cos^2: near the peak the former cancels to 1e-6
 // and float keeps only a few bits of it.
 float gtr1D(const glm::vec3& h, float alpha2, float logAlpha2) {
