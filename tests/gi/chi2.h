@@ -1,9 +1,9 @@
-// Pearson's chi-square goodness-of-fit test for samplers of directions, in the manner of pbrt-v4's
-// BSDF sampling tests and Mitsuba's chi2 module (Jakob, "Mitsuba 2 ... chi2 tests"; Pearson
-// 1900): histogram many samples over theta x phi bins of the sphere, compare with the counts the
-// sampler's claimed pdf predicts (the pdf integrated over each bin), pool sparse bins, and reject
-// when the statistic is improbable under the chi-square distribution, at a significance Sidak-
-// corrected for the number of tests. Header-only because tests/CMakeLists.txt globs *_test.cpp.
+// Pearson's chi-square goodness-of-fit test (Pearson 1900) for samplers of directions, in the
+// manner of pbrt-v4's BSDF sampling tests and Mitsuba's ChiSquareTest: histogram many samples
+// over theta x phi bins of the sphere, compare with the counts the sampler's claimed pdf
+// predicts (the pdf integrated over each bin), pool sparse bins, and reject when the statistic
+// is improbable under the chi-square distribution, at a significance Sidak-corrected for the
+// number of tests. Header-only because tests/CMakeLists.txt globs only *_test.cpp.
 #pragma once
 
 #include <algorithm>
@@ -56,7 +56,9 @@ inline double regularizedGammaQ(double a, double x) {
 }
 
 // P(X >= statistic) for X chi-square distributed with `dof` degrees of freedom.
-inline double chi2Survival(double statistic, double dof) { return regularizedGammaQ(dof / 2, statistic / 2); }
+inline double chi2Survival(double statistic, double dof) {
+  return regularizedGammaQ(dof / 2, statistic / 2);
+}
 
 // Adaptive Simpson quadrature. At least `minDepth` bisections everywhere, so that a peak much
 // narrower than [a, b] cannot hide between the first five samples; then bisection until the
@@ -64,19 +66,23 @@ inline double chi2Survival(double statistic, double dof) { return regularizedGam
 // tol is the larger of an absolute share (halved with each bisection, so the shares sum to
 // absEps) and relEps of the piece's own integral (so a lobe of 1e5 is not chased to 1e-12).
 template <class F>
-double adaptiveSimpson(F& f, double a, double b, double absEps, double relEps, int minDepth, int maxDepth) {
+double adaptiveSimpson(F& f, double a, double b, double absEps, double relEps, int minDepth,
+                       int maxDepth) {
   struct Rec {
     F& f;
     double relEps;
     int minDepth, maxDepth;
-    double run(double a, double b, double fa, double fm, double fb, double whole, double absEps, int depth) {
+    double run(double a, double b, double fa, double fm, double fb, double whole, double absEps,
+               int depth) {
       double m = 0.5 * (a + b), lm = 0.5 * (a + m), rm = 0.5 * (m + b);
       double flm = f(lm), frm = f(rm);
       double left = (m - a) / 6 * (fa + 4 * flm + fm), right = (b - m) / 6 * (fm + 4 * frm + fb);
       double delta = left + right - whole;
       double tol = std::max(absEps, relEps * std::abs(left + right));
-      if (depth >= maxDepth || (depth >= minDepth && std::abs(delta) <= 15 * tol)) return left + right + delta / 15;
-      return run(a, m, fa, flm, fm, left, absEps / 2, depth + 1) + run(m, b, fm, frm, fb, right, absEps / 2, depth + 1);
+      if (depth >= maxDepth || (depth >= minDepth && std::abs(delta) <= 15 * tol))
+        return left + right + delta / 15;
+      return run(a, m, fa, flm, fm, left, absEps / 2, depth + 1) +
+             run(m, b, fm, frm, fb, right, absEps / 2, depth + 1);
     }
   } rec{f, relEps, minDepth, maxDepth};
   double fa = f(a), fm = f(0.5 * (a + b)), fb = f(b);
@@ -106,8 +112,9 @@ inline glm::dvec3 sphericalDirection(double theta, double phi) {
 // The integrand is sampled a hair (1e-5 of the patch) inside its edges: where f jumps at an edge
 // (the horizon, a texel border) the value on the edge belongs to either side, and Simpson's end
 // weights would otherwise chase that ambiguity to maxDepth for a wrong answer.
-inline double integratePatch(const std::function<double(const glm::vec3&)>& f, double theta0, double theta1,
-                             double phi0, double phi1, const QuadratureOptions& q = {}) {
+inline double integratePatch(const std::function<double(const glm::vec3&)>& f, double theta0,
+                             double theta1, double phi0, double phi1,
+                             const QuadratureOptions& q = {}) {
   const double dt = 1e-5 * (theta1 - theta0), dp = 1e-5 * (phi1 - phi0);
   auto outer = [&](double theta) {
     theta = std::clamp(theta, theta0 + dt, theta1 - dt);
@@ -122,13 +129,13 @@ inline double integratePatch(const std::function<double(const glm::vec3&)>& f, d
 }
 
 // Integral over theta in [0, thetaMax], all phi, as a sum of thetaBins x phiBins patches.
-inline double integrateSphere(const std::function<double(const glm::vec3&)>& f, double thetaMax, int thetaBins,
-                              int phiBins, const QuadratureOptions& q = {}) {
+inline double integrateSphere(const std::function<double(const glm::vec3&)>& f, double thetaMax,
+                              int thetaBins, int phiBins, const QuadratureOptions& q = {}) {
   double sum = 0;
   for (int t = 0; t < thetaBins; ++t)
     for (int p = 0; p < phiBins; ++p)
-      sum += integratePatch(f, thetaMax * t / thetaBins, thetaMax * (t + 1) / thetaBins, 2 * M_PI * p / phiBins,
-                            2 * M_PI * (p + 1) / phiBins, q);
+      sum += integratePatch(f, thetaMax * t / thetaBins, thetaMax * (t + 1) / thetaBins,
+                            2 * M_PI * p / phiBins, 2 * M_PI * (p + 1) / phiBins, q);
   return sum;
 }
 
@@ -137,7 +144,7 @@ struct Chi2Options {
   int phiBins = 64;
   size_t samples = 1000000;
   double significance = 0.01;
-  int tests = 1;          // chi-square tests in the family, for the Sidak correction
+  int tests = 1;           // chi-square tests in the family, for the Sidak correction
   double minExpected = 5;  // Pearson's statistic is chi-square distributed only for cells this full
   uint64_t seed = 1;
   QuadratureOptions quadrature;
@@ -147,7 +154,7 @@ struct Chi2Result {
   bool passed = false;
   double statistic = 0, pValue = 0, threshold = 0;
   int dof = 0;
-  double pdfIntegral = 0;  // over the sphere, by quadrature
+  double pdfIntegral = 0;    // over the sphere, by quadrature
   size_t failedSamples = 0;  // the sampler returned nothing
   std::string message;       // why it failed, and the worst bins
 };
@@ -155,7 +162,8 @@ struct Chi2Result {
 // `sample` draws one direction (unit) or nothing (a rejected sample); `pdf` is its claimed density
 // per solid angle. Rejections form one more cell, expected N (1 - integral of pdf).
 inline Chi2Result chi2Test(const std::function<std::optional<glm::vec3>(Rng&)>& sample,
-                           const std::function<double(const glm::vec3&)>& pdf, const Chi2Options& o) {
+                           const std::function<double(const glm::vec3&)>& pdf,
+                           const Chi2Options& o) {
   Chi2Result r;
   const int nt = o.thetaBins, np = o.phiBins;
   const size_t bins = size_t(nt) * np;
@@ -174,15 +182,16 @@ inline Chi2Result chi2Test(const std::function<std::optional<glm::vec3>(Rng&)>& 
       r.message = "the sampler returned a non-finite direction";
       return r;
     }
-    int t = std::clamp(int(theta / M_PI * nt), 0, nt - 1), p = std::clamp(int(phi / (2 * M_PI) * np), 0, np - 1);
+    int t = std::clamp(int(theta / M_PI * nt), 0, nt - 1),
+        p = std::clamp(int(phi / (2 * M_PI) * np), 0, np - 1);
     observed[size_t(t) * np + p] += 1;
   }
   r.failedSamples = size_t(observed[bins]);
   double integral = 0;
   for (int t = 0; t < nt; ++t)
     for (int p = 0; p < np; ++p) {
-      double v = integratePatch(pdf, M_PI * t / nt, M_PI * (t + 1) / nt, 2 * M_PI * p / np, 2 * M_PI * (p + 1) / np,
-                                o.quadrature);
+      double v = integratePatch(pdf, M_PI * t / nt, M_PI * (t + 1) / nt, 2 * M_PI * p / np,
+                                2 * M_PI * (p + 1) / np, o.quadrature);
       expected[size_t(t) * np + p] = v * double(o.samples);
       integral += v;
     }
@@ -193,8 +202,8 @@ inline Chi2Result chi2Test(const std::function<std::optional<glm::vec3>(Rng&)>& 
   for (size_t i = 0; i < bins; ++i)
     if (observed[i] > 0 && expected[i] == 0) {
       char buf[160];
-      std::snprintf(buf, sizeof buf, "%g samples in bin theta %zu phi %zu where the pdf is zero", observed[i],
-                    i / np, i % np);
+      std::snprintf(buf, sizeof buf, "%g samples in bin theta %zu phi %zu where the pdf is zero",
+                    observed[i], i / np, i % np);
       r.message = buf;
       return r;
     }
@@ -202,7 +211,8 @@ inline Chi2Result chi2Test(const std::function<std::optional<glm::vec3>(Rng&)>& 
   // Pool the cells expected to hold fewer than minExpected samples, smallest first.
   std::vector<size_t> order(bins + 1);
   for (size_t i = 0; i <= bins; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return expected[a] < expected[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return expected[a] < expected[b]; });
   std::vector<std::pair<double, double>> cells;  // (observed, expected)
   double poolObs = 0, poolExp = 0;
   size_t k = 0;
@@ -223,7 +233,8 @@ inline Chi2Result chi2Test(const std::function<std::optional<glm::vec3>(Rng&)>& 
   std::vector<std::pair<double, size_t>> worst;
   for (size_t i = 0; i < cells.size(); ++i) {
     double diff = cells[i].first - cells[i].second;
-    stat += cells[i].second > 0 ? diff * diff / cells[i].second : (cells[i].first > 0 ? INFINITY : 0);
+    stat +=
+        cells[i].second > 0 ? diff * diff / cells[i].second : (cells[i].first > 0 ? INFINITY : 0);
   }
   for (size_t i = 0; i <= bins; ++i)
     if (expected[i] >= o.minExpected) {
@@ -241,15 +252,18 @@ inline Chi2Result chi2Test(const std::function<std::optional<glm::vec3>(Rng&)>& 
   r.pValue = chi2Survival(stat, r.dof);
   r.passed = r.pValue >= r.threshold;
   char buf[256];
-  std::snprintf(buf, sizeof buf, "chi2 = %.1f, dof = %d, p = %.3g (threshold %.3g), pdf integral %.6f, %zu rejected;",
-                stat, r.dof, r.pValue, r.threshold, integral, r.failedSamples);
+  std::snprintf(
+      buf, sizeof buf,
+      "chi2 = %.1f, dof = %d, p = %.3g (threshold %.3g), pdf integral %.6f, %zu rejected;", stat,
+      r.dof, r.pValue, r.threshold, integral, r.failedSamples);
   r.message = buf;
   for (size_t i = 0; i < std::min<size_t>(5, worst.size()); ++i) {
     size_t b = worst[i].second;
     if (b == bins)
       std::snprintf(buf, sizeof buf, " [rejected: obs %.0f exp %.1f]", observed[b], expected[b]);
     else
-      std::snprintf(buf, sizeof buf, " [theta %zu phi %zu: obs %.0f exp %.1f]", b / np, b % np, observed[b], expected[b]);
+      std::snprintf(buf, sizeof buf, " [theta %zu phi %zu: obs %.0f exp %.1f]", b / np, b % np,
+                    observed[b], expected[b]);
     r.message += buf;
   }
   return r;

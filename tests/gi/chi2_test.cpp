@@ -14,7 +14,9 @@ TEST(Chi2, IncompleteGammaMatchesClosedForms) {
   for (double x : {1e-3, 0.1, 0.9, 1.0, 2.5, 5.0, 30.0, 200.0}) {
     // 1e-12 relative: both branches converge to ~1e-16; lgamma and exp cost a few ulps more.
     EXPECT_NEAR(regularizedGammaQ(1, x), std::exp(-x), 1e-12 * std::exp(-x) + 1e-300) << x;
-    EXPECT_NEAR(regularizedGammaQ(0.5, x), std::erfc(std::sqrt(x)), 1e-12 * std::erfc(std::sqrt(x)) + 1e-300) << x;
+    EXPECT_NEAR(regularizedGammaQ(0.5, x), std::erfc(std::sqrt(x)),
+                1e-12 * std::erfc(std::sqrt(x)) + 1e-300)
+        << x;
     double q3 = std::exp(-x) * (1 + x + x * x / 2);
     EXPECT_NEAR(regularizedGammaQ(3, x), q3, 1e-12 * q3 + 1e-300) << x;
   }
@@ -50,14 +52,20 @@ TEST(Chi2, AcceptsACorrectSamplerAndRejectsAWrongOne) {
   Chi2Options o;
   o.samples = 200000;
   o.tests = 2;
-  auto cosine = [](Rng& rng) -> std::optional<glm::vec3> { return sampleCosineHemisphere(rng.uniform2()); };
-  Chi2Result good = chi2Test(cosine, [](const glm::vec3& d) { return d.z > 0 ? d.z / M_PI : 0.0; }, o);
+  auto cosine = [](Rng& rng) -> std::optional<glm::vec3> {
+    return sampleCosineHemisphere(rng.uniform2());
+  };
+  Chi2Result good = chi2Test(
+      cosine, [](const glm::vec3& d) { return d.z > 0 ? d.z / M_PI : 0.0; }, o);
   EXPECT_TRUE(good.passed) << good.message;
   EXPECT_NEAR(good.pdfIntegral, 1, 1e-6);
   // cos^1.1 instead of cos: densities differ by a few percent, which 200k samples resolve.
-  Chi2Result bad = chi2Test(cosine, [](const glm::vec3& d) {
-    return d.z > 0 ? 2.1 / (2 * M_PI) * std::pow(double(d.z), 1.1) : 0.0;
-  }, o);
+  Chi2Result bad = chi2Test(
+      cosine,
+      [](const glm::vec3& d) {
+        return d.z > 0 ? 2.1 / (2 * M_PI) * std::pow(double(d.z), 1.1) : 0.0;
+      },
+      o);
   EXPECT_FALSE(bad.passed) << bad.message;
   // A sampler that rejects half of its samples while its pdf integrates to 1 fails too.
   auto lossy = [](Rng& rng) -> std::optional<glm::vec3> {
@@ -65,6 +73,7 @@ TEST(Chi2, AcceptsACorrectSamplerAndRejectsAWrongOne) {
     if (rng.uniform() < 0.5f) return std::nullopt;
     return d;
   };
-  Chi2Result lost = chi2Test(lossy, [](const glm::vec3& d) { return d.z > 0 ? d.z / M_PI : 0.0; }, o);
+  Chi2Result lost = chi2Test(
+      lossy, [](const glm::vec3& d) { return d.z > 0 ? d.z / M_PI : 0.0; }, o);
   EXPECT_FALSE(lost.passed) << lost.message;
 }

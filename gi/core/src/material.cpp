@@ -1,17 +1,19 @@
 // BSDFs of inserted objects. Lambert; GGX microfacet reflection (Walter, Marschner, Li, Torrance
-// 2007, "Microfacet Models for Refraction through Rough Surfaces", eqs. 20 (F), 33 (D), 34 (G1))
-// with Smith's height-correlated masking-shadowing (Heitz 2014, "Understanding the Masking-
-// Shadowing Function", eq. 99) and visible-normal sampling (Heitz 2018, "Sampling the GGX
-// Distribution of Visible Normals", JCGT 7(4), listing 1); Schlick's Fresnel (Schlick 1994); the
-// Disney principled BRDF subset of Burley 2012 ("Physically-Based Shading at Disney", section
-// 5: diffuse with retro-reflection, sheen, specular with tint, GTR1 clearcoat).
+// 2007, "Microfacet Models for Refraction through Rough Surfaces": the reflection term
+// F G D / (4 cos_o cos_i) and GGX's D and Smith G1) with Smith's height-correlated masking-
+// shadowing G2 = 1 / (1 + Lambda_o + Lambda_i) (Heitz 2014, "Understanding the Masking-Shadowing
+// Function in Microfacet-Based BRDFs") and visible-normal sampling (Heitz 2018, "Sampling the GGX
+// Distribution of Visible Normals", JCGT 7(4)); Schlick's Fresnel approximation (Schlick 1994);
+// the Disney principled BRDF subset of Burley 2012 ("Physically-Based Shading at Disney":
+// diffuse with retro-reflection, sheen, specular with tint, a GTR1 clearcoat).
 //
 // Deviations, all so that the white furnace holds (directional albedo <= 1 at every angle):
 // - The diffuse part (Lambert or Burley, and sheen) lies under the dielectric specular layer: it
 //   is weighted by (1 - F(cos theta_o)) (1 - F(cos theta_i)) with the dielectric F0 (0.04 for
 //   GGX, 0.08 specular tint for Principled). Adding an unweighted Lambert lobe to a specular
-//   one reflects 1 + F of the light; Burley's diffuse alone reflects up to ~1.04 at normal
-//   incidence and more at grazing. The weight is symmetric, so reciprocity holds.
+//   one reflects 1 + F of the light; Burley's diffuse alone, at roughness 1, reflects 1.04
+//   head-on and 1.5 at cos theta_o = 0.03 (measured by quadrature). The weight is symmetric,
+//   so reciprocity holds. The price: a white dielectric reflects ~0.92 head-on, not 1.
 // - The clearcoat attenuates what lies under it by (1 - c F_c(cos theta_o)) (1 - c F_c(cos
 //   theta_i)), c = 0.25 clearcoat being Burley's coat strength.
 // - The clearcoat's masking is the same height-correlated Smith term with Burley's fixed
@@ -33,23 +35,32 @@ constexpr float kMinCos = 1e-9f;
 constexpr float kClearcoatMaskingAlpha = 0.25f;
 constexpr float kClearcoatF0 = 0.04f;
 constexpr float kClearcoatStrength = 0.25f;
-// Every lobe that can reflect keeps about this share of the samples, so that a crude lobe weight
-// (estimated from wo alone) never starves a lobe whose f is not zero.
+// Every lobe that can reflect keeps at least this share of the samples, so that a crude lobe
+// weight (estimated from wo alone) never starves a lobe whose f is not zero.
 constexpr float kMinLobeProbability = 0.05f;
 
 float unit(float x, float fallback) {  // NaN -> fallback, clamp to [0, 1]
   return std::isnan(x) ? fallback : std::clamp(x, 0.0f, 1.0f);
 }
-Rgb unit(const Rgb& c) { return {unit(c.r, 0), unit(c.g, 0), unit(c.b, 0)}; }
+Rgb unit(const Rgb& c) {
+  return {unit(c.r, 0), unit(c.g, 0), unit(c.b, 0)};
+}
 
 float pow5(float x) {
   float x2 = x * x;
   return x2 * x2 * x;
 }
-float schlick(float f0, float cosTheta) { return f0 + (1 - f0) * pow5(1 - cosTheta); }
-Rgb schlick(const Rgb& f0, float cosTheta) { return f0 + (Rgb(1.0f) - f0) * pow5(1 - cosTheta); }
+float schlick(float f0, float cosTheta) {
+  return f0 + (1 - f0) * pow5(1 - cosTheta);
+}
+Rgb schlick(const Rgb& f0, float cosTheta) {
+  return f0 + (Rgb(1.0f) - f0) * pow5(1 - cosTheta);
+}
 
-float sin2(const glm::vec3& w) { return w.x * w.x + w.y * w.y; }  // no 1 - cos^2 cancellation
+// sin^2 from the components: 1 - cos^2 cancels near the normal.
+float sin2(const glm::vec3& w) {
+  return w.x * w.x + w.y * w.y;
+}
 
 // GGX (Trowbridge-Reitz) normal distribution, D(h) = a^2 / (pi (sin^2 + a^2 cos^2)^2), written
 // with sin^2 from the components so that a = 1e-3 around the normal keeps its precision.
@@ -58,7 +69,7 @@ float ggxD(const glm::vec3& h, float alpha2) {
   return alpha2 / (kPi * t * t);
 }
 
-// GTR1 (Burley 2012, appendix B.2): the clearcoat's longer-tailed distribution. Its
+// GTR1 (Burley 2012's generalised Trowbridge-Reitz, gamma = 1): the clearcoat's long tails. Its
 // 1 + (a^2 - 1) cos^2 is written sin^2 + a^2 cos^2: near the peak the former cancels to 1e-6
 // and float keeps only a few bits of it.
 float gtr1D(const glm::vec3& h, float alpha2, float logAlpha2) {
@@ -80,7 +91,9 @@ float smithG1OverCos(const glm::vec3& w, float alpha2) {
   return 2 / (w.z + std::sqrt(w.z * w.z + alpha2 * sin2(w)));
 }
 
-glm::vec3 reflect(const glm::vec3& wo, const glm::vec3& h) { return 2 * glm::dot(wo, h) * h - wo; }
+glm::vec3 reflect(const glm::vec3& wo, const glm::vec3& h) {
+  return 2 * glm::dot(wo, h) * h - wo;
+}
 
 // Heitz 2018: the visible normals of a GGX surface are the normals of a hemisphere seen from wo
 // once the surface is stretched to alpha = 1; sample the projected disk of that hemisphere (the
@@ -141,7 +154,8 @@ Lobes resolve(const Material& m) {
     Rgb tint = lum > 0 ? base / lum : Rgb(1.0f);  // hue and saturation without luminance
     l.f0Dielectric = glm::min(Rgb(1.0f), 0.08f * unit(m.specular, 0.5f) *
                                              glm::mix(Rgb(1.0f), tint, unit(m.specularTint, 0)));
-    l.sheen = (1 - metallic) * unit(m.sheen, 0) * glm::mix(Rgb(1.0f), tint, unit(m.sheenTint, 0.5f));
+    l.sheen =
+        (1 - metallic) * unit(m.sheen, 0) * glm::mix(Rgb(1.0f), tint, unit(m.sheenTint, 0.5f));
     l.coat = kClearcoatStrength * unit(m.clearcoat, 0);
     float coatAlpha = glm::mix(0.1f, 0.001f, unit(m.clearcoatGloss, 1));
     l.coatAlpha2 = coatAlpha * coatAlpha;
@@ -175,26 +189,12 @@ LobeProbabilities lobeProbabilities(const Lobes& l, const glm::vec3& wo) {
     wc = hasCoat ? 1.0f : 0.0f;
     total = wd + ws + wc;
   }
-  p.diffuse = hasDiffuse ? wd / total : 0;
-  p.specular = ws / total;
-  p.coat = hasCoat ? wc / total : 0;
-  int lobes = 1 + int(hasDiffuse) + int(hasCoat);
-  float floor = kMinLobeProbability;
-  // Raise starved lobes to the floor, taking the difference from the others in proportion.
-  float raised = 0, rest = 0;
-  for (float* q : {&p.diffuse, &p.specular, &p.coat}) {
-    bool enabled = (q == &p.specular) || (q == &p.diffuse ? hasDiffuse : hasCoat);
-    if (!enabled) continue;
-    if (*q < floor) raised += floor - *q; else rest += *q;
-  }
-  if (lobes > 1 && raised > 0) {
-    float k = (rest - raised) / rest;  // rest >= 1 - 2 floor > raised
-    for (float* q : {&p.diffuse, &p.specular, &p.coat}) {
-      bool enabled = (q == &p.specular) || (q == &p.diffuse ? hasDiffuse : hasCoat);
-      if (!enabled) continue;
-      *q = *q < floor ? floor : *q * k;
-    }
-  }
+  // Each lobe that can reflect gets the floor, and the rest of the samples in proportion.
+  const int lobes = 1 + int(hasDiffuse) + int(hasCoat);
+  const float k = (1 - float(lobes) * kMinLobeProbability) / total;
+  p.diffuse = hasDiffuse ? kMinLobeProbability + k * wd : 0;
+  p.specular = kMinLobeProbability + k * ws;
+  p.coat = hasCoat ? kMinLobeProbability + k * wc : 0;
   return p;
 }
 
@@ -203,7 +203,9 @@ struct EvalPdf {
   float pdf = 0;
 };
 
-bool above(const glm::vec3& w) { return w.z > kMinCos; }  // false for NaN too
+bool above(const glm::vec3& w) {
+  return w.z > kMinCos;
+}  // false for NaN too
 
 // f and the mixture pdf share the half vector and D; `want` skips the half not asked for
 // (eval and pdf are called once per path vertex each, by MIS).
@@ -230,10 +232,13 @@ EvalPdf evalAndPdf(const Lobes& l, const glm::vec3& wo, const glm::vec3& wi, int
       float fo = 1 + (fd90 - 1) * pow5(1 - wo.z), fi = 1 + (fd90 - 1) * pow5(1 - wi.z);
       diffuse = diffuse * (fo * fi) + l.sheen * pow5(1 - cosD);
     }
-    Rgb transmitted = (Rgb(1.0f) - schlick(l.f0Dielectric, wo.z)) * (Rgb(1.0f) - schlick(l.f0Dielectric, wi.z));
-    Rgb below = diffuse * transmitted + schlick(l.f0, cosD) * (d * smithVisibility(wo, wi, l.alpha2));
+    Rgb transmitted =
+        (Rgb(1.0f) - schlick(l.f0Dielectric, wo.z)) * (Rgb(1.0f) - schlick(l.f0Dielectric, wi.z));
+    Rgb below =
+        diffuse * transmitted + schlick(l.f0, cosD) * (d * smithVisibility(wo, wi, l.alpha2));
     if (l.coat > 0) {
-      float coatO = l.coat * schlick(kClearcoatF0, wo.z), coatI = l.coat * schlick(kClearcoatF0, wi.z);
+      float coatO = l.coat * schlick(kClearcoatF0, wo.z),
+            coatI = l.coat * schlick(kClearcoatF0, wi.z);
       r.f = below * ((1 - coatO) * (1 - coatI)) +
             Rgb(l.coat * dc * schlick(kClearcoatF0, cosD) *
                 smithVisibility(wo, wi, kClearcoatMaskingAlpha * kClearcoatMaskingAlpha));
@@ -260,7 +265,8 @@ float pdfBsdf(const Material& m, const glm::vec3& wo, const glm::vec3& wi) {
   return evalAndPdf(resolve(m), wo, wi, kPdf).pdf;
 }
 
-std::optional<BsdfSample> sampleBsdf(const Material& m, const glm::vec3& wo, glm::vec2 u, float uLobe) {
+std::optional<BsdfSample> sampleBsdf(const Material& m, const glm::vec3& wo, glm::vec2 u,
+                                     float uLobe) {
   if (!above(wo)) return std::nullopt;
   Lobes l = resolve(m);
   u = glm::clamp(u, glm::vec2(0.0f), glm::vec2(kOneMinusEpsilon));
@@ -297,9 +303,12 @@ Rgb directionalAlbedo(const Material& m, const glm::vec3& wo, int samples, uint6
 
 const char* materialTypeName(MaterialType t) {
   switch (t) {
-    case MaterialType::Lambert: return "lambert";
-    case MaterialType::GGX: return "ggx";
-    case MaterialType::Principled: return "principled";
+    case MaterialType::Lambert:
+      return "lambert";
+    case MaterialType::GGX:
+      return "ggx";
+    case MaterialType::Principled:
+      return "principled";
   }
   return "unknown";
 }
