@@ -265,8 +265,8 @@ std::string svgPlot(const std::string& title, const std::string& xLabel, const s
       o << markerShape(
                int(s), x, y,
                "class=\"marker\" fill=\"" + colour + "\" stroke=\"white\" stroke-width=\"0.8\"")
-        << "><title>" << name << " " << coords
-        << (p->label.empty() ? "" : " " + xmlEscape(p->label)) << "</title></"
+        << "><title>" << name << " " << coords << (p->label.empty() ? "" : " ")
+        << (p->label.empty() ? std::string() : xmlEscape(p->label)) << "</title></"
         << (s % kShapes == 0   ? "circle"
             : s % kShapes == 1 ? "rect"
                                : "path")
