@@ -49,6 +49,8 @@ uint64_t parseBytes(const std::string& text);
 std::vector<std::string> expandInputs(const std::vector<std::string>& inputs);
 std::string humanBytes(double bytes);
 double median(std::vector<double> v);
+// "1,4.5,16": comma-separated numbers; Error naming `option` and the item that is not one.
+std::vector<double> parseNumberList(const std::string& text, const std::string& option);
 std::string cpuName();  // /proc/cpuinfo's model name
 std::string humanCount(double n);
 

@@ -39,17 +39,10 @@ double relativeL2(const gi::HdrImage& t, const gi::HdrImage& r) {
 
 std::vector<int> parseIntList(const std::string& text, const std::string& option) {
   std::vector<int> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      size_t used = 0;
-      int x = std::stoi(item, &used);
-      if (used != item.size() || x < 1) throw std::invalid_argument(item);
-      v.push_back(x);
-    } catch (const std::exception&) {
-      throw Error(option + ": '" + item + "' is not a positive integer");
-    }
+  for (double x : parseNumberList(text, option)) {
+    if (!(x >= 1 && x <= (1 << 24)) || x != std::floor(x))
+      throw Error(option + ": '" + std::to_string(x) + "' is not a positive integer");
+    v.push_back(int(x));
   }
   if (v.empty()) throw Error(option + ": give at least one value");
   return v;

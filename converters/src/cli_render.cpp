@@ -12,8 +12,7 @@ namespace nestlight::cli {
 
 namespace fs = std::filesystem;
 
-namespace {
-std::vector<double> parseNumbers(const std::string& text, size_t n, const std::string& option) {
+std::vector<double> parseNumberList(const std::string& text, const std::string& option) {
   std::vector<double> v;
   std::stringstream ss(text);
   std::string item;
@@ -26,6 +25,12 @@ std::vector<double> parseNumbers(const std::string& text, size_t n, const std::s
       throw Error(option + ": '" + item + "' is not a number");
     }
   }
+  return v;
+}
+
+namespace {
+std::vector<double> parseNumbers(const std::string& text, size_t n, const std::string& option) {
+  std::vector<double> v = parseNumberList(text, option);
   if (v.size() != n) throw Error(option + ": expected " + std::to_string(n) + " comma-separated numbers");
   return v;
 }
