@@ -116,6 +116,16 @@ void addBenchGi(CLI::App& app, int& exitCode) {
   cmd->add_option("--height", *height, "Override the scene camera's height");
   cmd->add_flag("--force-reference", *force, "Render the reference again even when a cached one matches");
   cmd->callback([=, &exitCode]() {
+    // Options first: a typo must not cost a reference render.
+    std::vector<int> levels = parseIntList(*spp, "--spp");
+    std::vector<std::string> methodList;
+    {
+      std::stringstream ss(*methods);
+      std::string m;
+      while (std::getline(ss, m, ','))
+        if (m == "direct" || m == "reference") methodList.push_back(m);
+        else throw Error("--methods: unknown method '" + m + "' (direct, reference)");
+    }
     const fs::path sceneFile = fs::absolute(*scene);
     const fs::path dir = out->empty() ? sceneFile.parent_path() / "bench-gi" : fs::path(*out);
     fs::create_directories(dir);
@@ -175,15 +185,6 @@ void addBenchGi(CLI::App& app, int& exitCode) {
     gi::writeToneMappedPng((dir / "reference.png").string(), reference, probe.output.exposure);
 
     // Each method at each setting.
-    std::vector<int> levels = parseIntList(*spp, "--spp");
-    std::vector<std::string> methodList;
-    {
-      std::stringstream ss(*methods);
-      std::string m;
-      while (std::getline(ss, m, ','))
-        if (m == "direct" || m == "reference") methodList.push_back(m);
-        else throw Error("--methods: unknown method '" + m + "' (direct, reference)");
-    }
     std::vector<Row> rows;
     std::printf("%-10s %6s %10s %12s %10s %10s %9s %7s %11s\n", "method", "spp", "median ms", "rays/s", "rel L2",
                 "RMSE", "PSNR dB", "SSIM", "SSIM (tm)");
