@@ -36,6 +36,7 @@ void addView(CLI::App& app, int& exitCode);
 void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 void addBenchGi(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 void addMakeScene(CLI::App& app, int& exitCode);
+void addSurfels(CLI::App& app, int& exitCode);
 void addCompare(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.

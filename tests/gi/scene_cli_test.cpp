@@ -95,3 +95,38 @@ TEST(SceneCli, CameraPathRendersOneImagePerFrame) {
   ASSERT_EQ(test::runCli("render " + dir.file("c/path.json") + " --spp 1 --still -o " + dir.file("s.exr"), &out), 0) << out;
   EXPECT_TRUE(std::filesystem::exists(dir.file("s.exr")));
 }
+
+TEST(SceneCli, SurfelsOfAScaledBoxSumToItsArea) {
+  // A unit box scaled by (2, 3, 4) at national-grid coordinates: 2(6 + 8 + 12) = 52 m^2, every
+  // point on its surface, normals unit length, written through double so millimetres survive.
+  test::TempDir dir;
+  test::writeFile(dir.file("box.obj"),
+                  "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n"
+                  "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n");
+  nlohmann::json scene = {{"origin", {500000.0, 5000000.0, 100.0}},
+                          {"materials", {{"red", {{"base_color", {0.5, 0.1, 0.1}}}}}},
+                          {"meshes", {{{"path", "box.obj"}, {"material", "red"},
+                                       {"transform", {{"translate", {500000.0, 5000000.0, 100.0}}, {"scale", {2, 3, 4}}}},
+                                       {"surfels", {{"method", "poisson"}, {"count", 3000}}}}}}};
+  test::writeFile(dir.file("scene.json"), scene.dump());
+  std::string out;
+  ASSERT_EQ(test::runCli("surfels " + dir.file("scene.json") + " -o " + dir.file("s.ply"), &out), 0) << out;
+  auto reader = openReader(dir.file("s.ply"));
+  test::Points pts = test::readAll(*reader);
+  ASSERT_EQ(pts.size(), 3000u);
+  double area = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    area += test::attrAt<float>(pts, *reader, i, "area");
+    double x = pts.xyz[3 * i] - 500000.0, y = pts.xyz[3 * i + 1] - 5000000.0, z = pts.xyz[3 * i + 2] - 100.0;
+    // On a face: one coordinate at 0 or its extent (within the 0.1 mm the PLY keeps plus float
+    // rounding of local coordinates, 1e-3 m).
+    double d = std::min({std::abs(x), std::abs(x - 2), std::abs(y), std::abs(y - 3), std::abs(z), std::abs(z - 4)});
+    ASSERT_LT(d, 1e-3) << x << " " << y << " " << z;
+    float n[3] = {test::attrAt<float>(pts, *reader, i, "normal", 0), test::attrAt<float>(pts, *reader, i, "normal", 1),
+                  test::attrAt<float>(pts, *reader, i, "normal", 2)};
+    ASSERT_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0, 1e-5);
+    ASSERT_EQ(test::attrAt<uint32_t>(pts, *reader, i, "material"), 0u);
+  }
+  // Float areas summed over 3000 points: 1e-5 relative.
+  EXPECT_NEAR(area, 52.0, 52e-5);
+}
