@@ -54,6 +54,25 @@ std::string fileHash(const fs::path& p) {
   return std::to_string(std::hash<std::string>{}(bytes));
 }
 
+// What the reference depends on besides the scene file: its octrees (metadata and payload),
+// meshes and environment map, by size and modification time, so an edited asset is noticed.
+std::string assetStamp(const gi::Scene& s) {
+  std::string stamp;
+  auto add = [&](const fs::path& p) {
+    std::error_code ec;
+    auto size = fs::file_size(p, ec);
+    auto time = fs::last_write_time(p, ec).time_since_epoch().count();
+    stamp += p.string() + "=" + std::to_string(ec ? 0 : size) + "@" + std::to_string(ec ? 0 : time) + ";";
+  };
+  for (const auto& o : s.octrees) {
+    add(o.path / "metadata.json");
+    add(o.path / "octree.bin");
+  }
+  for (const auto& m : s.meshes) add(m.path);
+  if (s.environment && !s.environment->path.empty()) add(s.environment->path);
+  return std::to_string(std::hash<std::string>{}(stamp));
+}
+
 struct Row {
   std::string method;
   int spp = 0;
@@ -108,12 +127,14 @@ void addBenchGi(CLI::App& app, int& exitCode) {
   cmd->add_option("--runs", *runs, "Timed runs per setting; the median is reported")->capture_default_str()->check(CLI::Range(1, 100));
   cmd->add_option("--reference-error", *refError, "Relative error the cached reference is rendered to")
       ->capture_default_str()->check(CLI::Range(1e-6, 0.5));
-  cmd->add_option("--reference-time-limit", *refTime, "Seconds the reference may take at most")->capture_default_str();
-  cmd->add_option("--reference-spp", *refSpp, "Samples per pixel of the reference at most")->capture_default_str();
+  cmd->add_option("--reference-time-limit", *refTime, "Seconds the reference may take at most")
+      ->capture_default_str()->check(CLI::Range(1.0, 1e7));
+  cmd->add_option("--reference-spp", *refSpp, "Samples per pixel of the reference at most")
+      ->capture_default_str()->check(CLI::Range(2, 1 << 24));
   cmd->add_option("--spp", *spp, "Quality settings: samples per pixel, comma-separated")->capture_default_str();
   cmd->add_option("--methods", *methods, "Methods to measure, comma-separated (direct, reference)")->capture_default_str();
-  cmd->add_option("--width", *width, "Override the scene camera's width");
-  cmd->add_option("--height", *height, "Override the scene camera's height");
+  cmd->add_option("--width", *width, "Override the scene camera's width")->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", *height, "Override the scene camera's height")->check(CLI::Range(1, 16384));
   cmd->add_flag("--force-reference", *force, "Render the reference again even when a cached one matches");
   cmd->callback([=, &exitCode]() {
     // Options first: a typo must not cost a reference render.
@@ -138,8 +159,8 @@ void addBenchGi(CLI::App& app, int& exitCode) {
     // The reference, cached under a key of everything that changes it.
     gi::Scene probe = gi::loadScene(sceneFile);
     int W = *width ? *width : probe.camera.width, H = *height ? *height : probe.camera.height;
-    std::string key = fileHash(sceneFile) + ":" + std::to_string(W) + "x" + std::to_string(H) + ":" +
-                      std::to_string(*refError);
+    std::string key = fileHash(sceneFile) + ":" + assetStamp(probe) + ":" + std::to_string(W) + "x" +
+                      std::to_string(H) + ":" + std::to_string(*refError);
     fs::path refPath = dir / "reference.exr";
     gi::HdrImage reference;
     json refInfo;
@@ -168,7 +189,9 @@ void addBenchGi(CLI::App& app, int& exitCode) {
       ov.output = dir / "reference.exr.tmp.exr";
       SceneRenderReport rep = renderSceneFile(sceneFile, ov);
       reference = rep.result.image;
-      gi::ImageAttributes attrs{{"nestlight:cache_key", key},
+      // One that stopped short of the error target (time or sample limit) is kept for this run
+      // but not reused: the next run tries again.
+      gi::ImageAttributes attrs{{"nestlight:cache_key", rep.result.stopReason == "error target" ? key : "incomplete"},
                                 {"nestlight:samples", std::to_string(rep.result.samplesPerPixel)},
                                 {"nestlight:relative_error_estimate", std::to_string(rep.result.relativeError)},
                                 {"nestlight:seconds", std::to_string(rep.result.seconds)},
@@ -181,6 +204,8 @@ void addBenchGi(CLI::App& app, int& exitCode) {
                  {"samples_per_second", rep.result.samplesPerSecond()}};
       std::printf("  reference: %d spp, estimated error %.4f, %.1f s (%s)\n", rep.result.samplesPerPixel,
                   rep.result.relativeError, rep.result.seconds, rep.result.stopReason.c_str());
+      if (rep.result.stopReason != "error target")
+        std::printf("  warning: the reference stopped before %.4g error; errors below its own are not meaningful\n", *refError);
     }
     gi::writeToneMappedPng((dir / "reference.png").string(), reference, probe.output.exposure);
 

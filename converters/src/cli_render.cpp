@@ -132,7 +132,10 @@ void addRender(CLI::App& app, int& exitCode) {
     if (fs::path(*octree).extension() == ".json") {
       if (cmd->count("--width")) sc->width = job->width;
       if (cmd->count("--height")) sc->height = job->height;
-      if (cmd->count("--fov")) sc->fov = job->fovYDegrees;
+      if (cmd->count("--fov")) {
+        if (!(job->fovYDegrees >= 0.01 && job->fovYDegrees <= 179)) throw Error("--fov: expected degrees in [0.01, 179]");
+        sc->fov = job->fovYDegrees;
+      }
       if (!mode->empty()) sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
       sc->output = job->output;
       renderSceneFile(*octree, *sc);

@@ -92,7 +92,12 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
   std::vector<gi::SceneCamera> cameras;
   if (!scene.cameraPath.empty() && !ov.still) {
     const auto& keys = scene.cameraPath;
-    const int frames = int(std::floor(keys.back().time * scene.cameraPathFps + 1e-9)) + 1;
+    const double frameCount = std::floor(keys.back().time * scene.cameraPathFps + 1e-9) + 1;
+    constexpr double kMaxFrames = 1e6;
+    if (frameCount > kMaxFrames)
+      throw Error(file.string(), "scene.camera_path", "asks for " + std::to_string(frameCount) + " frames (at most " +
+                                                          std::to_string(int(kMaxFrames)) + ")");
+    const int frames = int(frameCount);
     for (int f = 0; f < frames; ++f) {
       double t = f / scene.cameraPathFps;
       size_t k = 0;
@@ -106,9 +111,13 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
         c.eye = keys[k].eye;
         c.target = keys[k].target;
       }
+      if (!gi::viewIsValid(c.eye, c.target, c.up))
+        throw Error(file.string(), "scene.camera_path", "frame " + std::to_string(f) +
+                                                           ": eye meets target or looks along \"up\" between keyframes");
       cameras.push_back(c);
     }
   } else {
+    if (!scene.cameraSet) throw Error(file.string(), "scene.camera", "missing: a render needs a camera (or a camera_path)");
     cameras.push_back(scene.camera);
   }
   // With -o the PNG (when the scene asks for one) goes beside the EXR under the same name.

@@ -183,11 +183,12 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
       writeTorusObj(dir / "torus.obj", 1.0, 0.35, 64, 24);
       scene["materials"] = {{"gold", {{"type", "ggx"}, {"base_color", {1.0, 0.78, 0.34}}, {"roughness", 0.25}, {"metallic", 1.0}}}};
       scene["meshes"] = json::array({json{{"path", "torus.obj"},
-                                          {"transform", {{"translate", {50.0, 45.0, 4.0}}, {"rotate", {60.0, 0.0, 20.0}}, {"scale", 3.0}}},
+                                          {"transform", {{"translate", {50.0, 45.0, 5.0}}, {"rotate", {60.0, 0.0, 20.0}}, {"scale", 3.0}}},
                                           {"material", "gold"}}});
       scene["lights"] = json::array({json{{"type", "directional"}, {"direction", {-0.4, -0.3, -0.87}}, {"irradiance", {3.0, 2.9, 2.7}}}});
       scene["environment"] = {{"constant", {0.35, 0.45, 0.6}}};
-      scene["camera"] = camera({30.0, 20.0, 18.0}, {50.0, 45.0, 4.0}, 50);
+      // From the street between the two buildings (x 42..55), looking north at the torus.
+      scene["camera"] = camera({48.5, 20.0, 10.0}, {50.0, 45.0, 5.0}, 50);
       scene["gi"] = {{"method", "reference"}, {"mode", "albedo"}, {"max_bounces", 3}, {"samples_per_pixel", 1024},
                      {"target_relative_error", 0.01}};
       break;

@@ -40,7 +40,11 @@ TEST(SceneCli, BadSceneFilesNameTheField) {
   std::string out;
   EXPECT_EQ(test::runCli("render " + dir.file("s.json"), &out), 1);
   EXPECT_NE(out.find("scene.meshes[0].material.roughness"), std::string::npos) << out;
-  test::writeFile(dir.file("t.json"), R"({"meshes": [{"path": "missing.obj"}]})");
+  test::writeFile(dir.file("box.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  test::writeFile(dir.file("nocam.json"), R"({"meshes": [{"path": "box.obj"}]})");
+  EXPECT_EQ(test::runCli("render " + dir.file("nocam.json"), &out), 1);
+  EXPECT_NE(out.find("scene.camera: missing"), std::string::npos) << out;
+  test::writeFile(dir.file("t.json"), R"({"meshes": [{"path": "missing.obj"}], "camera": {"eye": [0, -1, 0], "target": [0, 0, 0]}})");
   EXPECT_EQ(test::runCli("render " + dir.file("t.json"), &out), 1);
   EXPECT_NE(out.find("missing.obj"), std::string::npos) << out;
 }

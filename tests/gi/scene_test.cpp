@@ -126,6 +126,15 @@ TEST(Scene, ErrorsNameTheField) {
   EXPECT_EQ(errorField(with("/camera_path", json{{"keyframes", json::array({json{{"time", 1}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}},
                                                                              json{{"time", 1}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}}})}})),
             "scene.camera_path.keyframes[1].time");
+  EXPECT_EQ(errorField(with("/lights", json::array({json{{"type", "spot"}, {"position", {0, 0, 1}},
+                                                          {"direction", {0, 0, -1}}, {"intensity", 1}, {"inner_angle", 60}}}))),
+            "scene.lights[0].inner_angle");  // wider than the default outer angle, which it does not name
+  EXPECT_EQ(errorField(with("/octrees", json::array({json{{"path", "a"}, {"memory_budget", "1e30GiB"}}}))),
+            "scene.octrees[0].memory_budget");
+  EXPECT_EQ(errorField(with("/meshes/0/transform", json{{"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1}}})),
+            "scene.meshes[0].transform.matrix");  // projective
+  EXPECT_EQ(errorField(with("/camera_path", json{{"keyframes", json::array({json{{"time", 0}, {"eye", {0, 0, 0}}, {"target", {0, 0, -1}}}})}})),
+            "scene.camera_path.keyframes[0]");  // looks along up
   EXPECT_EQ(errorField(with("/version", 2)), "scene.version");
   EXPECT_EQ(errorField(with("/colour", 1)), "scene.colour");
   EXPECT_EQ(errorField(json::object()), "scene");  // nothing to render

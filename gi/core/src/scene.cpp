@@ -107,7 +107,8 @@ class Field {
     else if (unit == "KiB" || unit == "K") mul = 1024.0;
     else if (unit == "MiB" || unit == "M") mul = 1024.0 * 1024;
     else if (unit == "GiB" || unit == "G") mul = 1024.0 * 1024 * 1024;
-    if (mul == 0 || !(v > 0) || end == s.c_str()) fail("expected a size such as \"512MiB\" or \"2GiB\", got '" + s + "'");
+    if (mul == 0 || !(v > 0) || end == s.c_str() || !std::isfinite(v * mul) || v * mul > 1e18)
+      fail("expected a size such as \"512MiB\" or \"2GiB\", got '" + s + "'");
     return uint64_t(v * mul);
   }
 
@@ -135,6 +136,8 @@ glm::dmat4 parseTransform(const Field& f) {
     for (int row = 0; row < 4; ++row)
       for (int col = 0; col < 4; ++col) r[col][row] = m.at(size_t(row * 4 + col)).number();
     if (std::abs(glm::determinant(glm::dmat3(r))) < 1e-18) m.fail("the matrix is singular");
+    if (r[0][3] != 0 || r[1][3] != 0 || r[2][3] != 0 || r[3][3] != 1)
+      m.fail("the last row must be 0, 0, 0, 1 (an affine transform; projective ones are not meshes' transforms)");
     return r;
   }
   glm::dmat4 t(1.0);
@@ -216,7 +219,9 @@ Light parseLight(const Field& f) {
     if (f.has("inner_angle")) l.innerAngleDegrees = float(f.at("inner_angle").number(0, 179));
     if (f.has("outer_angle")) l.outerAngleDegrees = float(f.at("outer_angle").number(0, 179));
     if (l.outerAngleDegrees < l.innerAngleDegrees)
-      f.at("outer_angle").fail("outer_angle must not be smaller than inner_angle");
+      (f.has("outer_angle") ? f.at("outer_angle") : f.at("inner_angle"))
+          .fail("outer_angle (" + std::to_string(l.outerAngleDegrees) + ") must not be smaller than inner_angle (" +
+                std::to_string(l.innerAngleDegrees) + ")");
   }
   return l;
 }
@@ -229,8 +234,7 @@ SceneCamera parseCamera(const Field& f) {
   c.target = f.at("target").vec3();
   if (glm::length(c.target - c.eye) < 1e-12) f.at("target").fail("target equals eye");
   if (f.has("up")) c.up = f.at("up").direction();
-  if (glm::length(glm::cross(glm::normalize(c.target - c.eye), c.up)) < 1e-9)
-    f.fail("the view direction is parallel to \"up\"");
+  if (!viewIsValid(c.eye, c.target, c.up)) f.fail("the view direction is parallel to \"up\"");
   if (f.has("fov")) c.fovYDegrees = f.at("fov").number(0.01, 179);
   if (f.has("width")) c.width = int(f.at("width").integer(1, 16384));
   if (f.has("height")) c.height = int(f.at("height").integer(1, 16384));
@@ -238,6 +242,12 @@ SceneCamera parseCamera(const Field& f) {
 }
 
 }  // namespace
+
+bool viewIsValid(const glm::dvec3& eye, const glm::dvec3& target, const glm::dvec3& up) {
+  glm::dvec3 d = target - eye;
+  double len = glm::length(d);
+  return len > 1e-12 && glm::length(glm::cross(d / len, glm::normalize(up))) > 1e-9;
+}
 
 glm::mat4 Scene::localFromObject(const SceneMesh& m) const {
   glm::dmat4 localFromWorld = glm::translate(glm::dmat4(1.0), -origin);
@@ -334,7 +344,10 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
     if (e.has("scale")) env.scale = float(e.at("scale").number(0, 1e30));
     s.environment = env;
   }
-  if (root.has("camera")) s.camera = parseCamera(root.at("camera"));
+  if (root.has("camera")) {
+    s.camera = parseCamera(root.at("camera"));
+    s.cameraSet = true;
+  }
   if (root.has("camera_path")) {
     Field p = root.at("camera_path");
     p.expectObject({"fps", "keyframes"});
@@ -346,7 +359,9 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
       Field k = keys.at(i);
       k.expectObject({"time", "eye", "target"});
       if (!k.has("time") || !k.has("eye") || !k.has("target")) k.fail("a key needs \"time\", \"eye\" and \"target\"");
-      SceneCameraKey key{k.at("time").number(0, 1e9), k.at("eye").vec3(), k.at("target").vec3()};
+      SceneCameraKey key{k.at("time").number(0, 1e6), k.at("eye").vec3(), k.at("target").vec3()};
+      if (!viewIsValid(key.eye, key.target, s.camera.up))
+        k.fail("eye equals target, or the view is parallel to \"up\"");
       if (key.time <= last) k.at("time").fail("key times must increase");
       last = key.time;
       s.cameraPath.push_back(key);

@@ -225,7 +225,11 @@ ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& 
       for (int y = r.rows().begin(); y < r.rows().end(); ++y)
         for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
           // The sample of pixel (x, y) in pass p is the same whatever the threads do.
-          Rng rng(mix64(opt.seed * 0x9E3779B97F4A7C15ULL + uint64_t(y) * W + x), uint64_t(pass));
+          // Pass and pixel both enter the seed: PCG streams that differ only in their increment
+          // are correlated, and the two half images must be independent for the error estimate.
+          const uint64_t pixel = uint64_t(y) * W + x;
+          Rng rng(mix64(mix64(opt.seed * 0x9E3779B97F4A7C15ULL + pixel) ^ (uint64_t(pass) * 0xD1B54A32D192ED03ULL)),
+                  mix64(pixel));
           glm::vec2 j = rng.uniform2();
           glm::vec3 ro, rd;
           cameraRay(camera, scene.origin(), x + j.x, y + j.y, &ro, &rd);

@@ -254,6 +254,8 @@ void ReferenceScene::build() {
     bool oriented = !c.normals.empty();
     RTCGeometry g = rtcNewGeometry(rtc_->device, oriented ? RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT : RTC_GEOMETRY_TYPE_DISC_POINT);
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, c.discs.data(), 0, sizeof(glm::vec4), c.discs.size());
+    // Embree may read 16 bytes at the last FLOAT3 element: one element of padding.
+    if (oriented) c.normals.reserve(c.normals.size() + 1);
     if (oriented)
       rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, c.normals.data(), 0, sizeof(glm::vec3), c.normals.size());
     rtcCommitGeometry(g);

@@ -95,6 +95,7 @@ struct Scene {
   std::vector<Light> lights;
   std::optional<SceneEnvironment> environment;
   SceneCamera camera;
+  bool cameraSet = false;            // the file has "camera" (renders need it or a camera path)
   double cameraPathFps = 30;
   std::vector<SceneCameraKey> cameraPath;  // optional; replaces `camera`'s eye/target per frame
   GiSettings gi;
@@ -113,5 +114,7 @@ Scene loadScene(const std::filesystem::path& file);
 // no octree: the origin stays 0 unless the document sets it (see resolveOrigin()).
 Scene parseScene(const nlohmann::json& j, const std::filesystem::path& file);
 void resolveOrigin(Scene& scene);
+// A camera can look from `eye` at `target`: they differ and the view is not parallel to `up`.
+bool viewIsValid(const glm::dvec3& eye, const glm::dvec3& target, const glm::dvec3& up);
 
 }  // namespace nestlight::gi
