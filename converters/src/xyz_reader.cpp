@@ -29,15 +29,7 @@ std::string_view trim(std::string_view s) {
 }
 
 std::vector<std::string_view> tokens(std::string_view line) {
-  std::vector<std::string_view> t;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && isSeparator(line[i])) ++i;
-    size_t b = i;
-    while (i < line.size() && !isSeparator(line[i])) ++i;
-    if (i > b) t.push_back(line.substr(b, i - b));
-  }
-  return t;
+  return text::splitBy(line, [](char c) { return isSeparator(c); });
 }
 
 bool isNumber(std::string_view t) {

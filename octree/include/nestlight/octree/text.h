@@ -29,16 +29,22 @@ inline std::string_view trim(std::string_view s) {
   return s;
 }
 
-inline std::vector<std::string_view> splitWords(std::string_view line) {
+// The non-empty runs of `line` between characters for which `separator` is true.
+template <class IsSeparator>
+std::vector<std::string_view> splitBy(std::string_view line, IsSeparator separator) {
   std::vector<std::string_view> words;
   size_t i = 0;
   while (i < line.size()) {
-    while (i < line.size() && isBlank(line[i])) ++i;
+    while (i < line.size() && separator(line[i])) ++i;
     size_t b = i;
-    while (i < line.size() && !isBlank(line[i])) ++i;
+    while (i < line.size() && !separator(line[i])) ++i;
     if (i > b) words.push_back(line.substr(b, i - b));
   }
   return words;
+}
+
+inline std::vector<std::string_view> splitWords(std::string_view line) {
+  return splitBy(line, [](char c) { return isBlank(c); });
 }
 
 // The line of [d, d + size) that starts at `pos`, without its '\n', into `out`; moves `pos` to the
