@@ -11,10 +11,6 @@
 
 namespace nestlight::gi::meshio {
 
-float srgbToLinear(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-
 void MeshBuilder::addPolygon(const uint32_t* corners, size_t n) {
   ++report.facesRead;
   if (n < 3) {

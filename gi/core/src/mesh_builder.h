@@ -47,7 +47,4 @@ struct Tokens {
 void readPly(const std::string& file, const uint8_t* data, size_t size, MeshBuilder& out);
 void readObj(const std::string& file, const uint8_t* data, size_t size, MeshBuilder& out);
 
-// An 8-bit sRGB-encoded value in [0,1] to linear (IEC 61966-2-1).
-float srgbToLinear(float v);
-
 }  // namespace nestlight::gi::meshio

@@ -21,6 +21,7 @@
 #include <string_view>
 
 #include "mesh_builder.h"
+#include "nestlight/gi/srgb.h"
 #include "nestlight/octree/attribute.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/ply_header.h"
@@ -250,10 +251,10 @@ class PlyMeshReader {
         double x = v[int(Role::Red) + k];
         switch (colourCode_[k]) {
           case ColourCode::Srgb8:
-            x = srgbToLinear(float(x / 255.0));
+            x = srgbDecode(float(x / 255.0));
             break;
           case ColourCode::Srgb16:
-            x = srgbToLinear(float(x / 65535.0));
+            x = srgbDecode(float(x / 65535.0));
             break;
           case ColourCode::Linear:
             if (!(x >= 0 && x <= 1)) {

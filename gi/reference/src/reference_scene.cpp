@@ -12,6 +12,7 @@
 #include <tuple>
 #include <nanoflann.hpp>
 
+#include "nestlight/gi/srgb.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 
@@ -29,8 +30,6 @@ struct DiscAdaptor {
   bool kdtree_get_bbox(B&) const { return false; }
 };
 using DiscTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, DiscAdaptor>, DiscAdaptor, 3, uint32_t>;
-
-float srgbToLinear(float v) { return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f); }
 
 void embreeError(void*, RTCError code, const char* message) {
   // Embree reports misuse here; it is a programming error (bad buffers), never user input.
@@ -127,7 +126,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
       if (rgb >= 0) {
         uint16_t v[3];
         std::memcpy(v, a + rgbOff, 6);
-        c = Rgb(srgbToLinear(v[0] / 65535.0f), srgbToLinear(v[1] / 65535.0f), srgbToLinear(v[2] / 65535.0f));
+        c = Rgb(srgbDecode(v[0] / 65535.0f), srgbDecode(v[1] / 65535.0f), srgbDecode(v[2] / 65535.0f));
       }
       cloud.colour.push_back(c * octree.colourScale);
       if (normal >= 0) {

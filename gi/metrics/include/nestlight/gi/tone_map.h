@@ -12,12 +12,10 @@
 #include <string>
 
 #include "nestlight/gi/hdr_image.h"
+#include "nestlight/gi/srgb.h"  // srgbEncode, srgbDecode
 
 namespace nestlight::gi {
 
-// sRGB OETF on [0, 1] (values outside are clamped first) and its inverse.
-float srgbEncode(float linear);
-float srgbDecode(float encoded);
 
 // 2^stops as a float multiplier.
 float exposureScale(double stops);
