@@ -41,6 +41,7 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/node_key.h"
 #include "nestlight/octree/octree_writer.h"
+#include "nestlight/octree/spacing.h"
 
 namespace nestlight {
 
@@ -895,7 +896,9 @@ class Builder {
         else
           rest.push_back(idx);
       }
-      writeNode(key.child(c), pts, rest);
+      // sets[c] is the child's sample before this node took its share: the points drawn where
+      // the child is the finest drawn node.
+      writeNode(key.child(c), pts, rest, sets[c]);
     }
     return selected;
   }
@@ -1042,7 +1045,10 @@ class Builder {
     return accepted;
   }
 
-  void writeNode(const NodeKey& key, const PointBuffer& pts, const std::vector<uint32_t>& set) {
+  // `drawnSet`: `set` and the ancestors' points inside the node (a superset of `set`, in Morton
+  // order), on which the node's spacing is measured.
+  void writeNode(const NodeKey& key, const PointBuffer& pts, const std::vector<uint32_t>& set,
+                 const std::vector<uint32_t>& drawnSet) {
     PointBuffer local(stride_);
     local.reserve(set.size());
     const uint32_t size = meta_.cubeSize >> key.level;
@@ -1053,7 +1059,9 @@ class Builder {
       NL_CHECK(rel[0] < size && rel[1] < size && rel[2] < size);
       local.push(rel, pts.attrsOf(i));
     }
-    writer_->writeNode(key, local);
+    const double measured = medianNeighbourSpacing(pts.pos.data(), drawnSet.data(), drawnSet.size()) * meta_.scale;
+    const double nominal = meta_.cubeWorldSize() / 128.0 / double(uint64_t(1) << key.level);
+    writer_->writeNode(key, local, encodeSpacing(measured, nominal));
     stored_ += set.size();
   }
 
@@ -1115,7 +1123,7 @@ class Builder {
     PointBuffer root = loadRecords(rootFile);
     std::vector<uint32_t> all(root.size());
     std::iota(all.begin(), all.end(), 0u);
-    writeNode(NodeKey::root(), root, all);
+    writeNode(NodeKey::root(), root, all, all);
   }
 
   // ---- metadata -------------------------------------------------------------------------------

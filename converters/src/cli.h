@@ -16,7 +16,7 @@ namespace nestlight::cli {
 
 // Render options shared by `render` and `demo` that need parsing after CLI11 is done.
 struct RenderOptionText {
-  std::string camera, view = "35,30", rasteriser = "points", colour;
+  std::string camera, view = "35,30", rasteriser = "points", splatting = "hqs", colour;
   std::string pointBudget = "5M", gpuBudget = "512M", uploadBudget = "32M";
 };
 void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<RenderOptionText> text);

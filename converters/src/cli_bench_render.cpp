@@ -52,7 +52,7 @@ void addBenchRender(CLI::App& app, int& exitCode) {
       budgets.uploadBytesPerFrame = 1ull << 30;
       budgets.spacingPixels = 0;  // every point of the scan: a rasteriser benchmark, not a LOD one
       streaming::Streamer streamer(reader, store, budgets);
-      viewer::Camera cam = viewer::Camera::framing(meta.bounds);
+      viewer::Camera cam = viewer::Camera::framing(meta.bounds, 60, double(*width) / *height);
       const streaming::View view = cam.view(*width, *height);
       const auto t0 = std::chrono::steady_clock::now();
       while (!streamer.update(view).complete) {

@@ -47,12 +47,19 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<Ren
   cmd->add_option("--view", text->view, "Azimuth,elevation in degrees of the default camera")->capture_default_str();
   cmd->add_option("--fov", job.fovYDegrees, "Vertical field of view, degrees")->capture_default_str();
   cmd->add_option("--rasteriser", text->rasteriser,
-                  "points: GL_POINTS splats sized by node spacing; compute: compute-shader rasteriser "
-                  "(Schuetz et al. 2021), one pixel per point")
+                  "points: GL_POINTS splats sized by the measured point spacing; compute: compute-shader "
+                  "rasteriser (Schuetz et al. 2021), one pixel per point")
+      ->capture_default_str();
+  cmd->add_option("--splatting", text->splatting,
+                  "Points rasteriser: hqs (high-quality splatting: splats within a small depth of the front "
+                  "surface blend, weighted; smooth colour and depth, about twice the cost) or basic (the "
+                  "nearest splat wins each pixel)")
       ->capture_default_str();
   cmd->add_option("--colour", text->colour, "rgb, intensity, classification, elevation or normal (default: rgb "
                                             "when the scan has colour, else elevation)");
-  cmd->add_option("--point-size", job.settings.sizeScale, "Splat diameter in node spacings (points rasteriser)")
+  cmd->add_option("--point-size", job.settings.sizeScale,
+                  "Splat diameter in point spacings: the measured spacing of the finest drawn node at each "
+                  "point (points rasteriser)")
       ->capture_default_str();
   cmd->add_option("--fixed-point-size", job.settings.fixedPointSize, "Every splat this many pixels (0: by spacing)");
   cmd->add_option("--edl", job.settings.edlStrength, "Eye-dome lighting strength (0: off)")->capture_default_str();
@@ -78,6 +85,7 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   auto view = parseNumbers(text.view, 2, "--view");
   job.azimuth = view[0], job.elevation = view[1];
   job.settings.rasteriser = viewer::parseRasteriser(text.rasteriser);
+  job.settings.splatting = viewer::parseSplatting(text.splatting);
   if (!text.colour.empty()) job.colour = viewer::parseColourMode(text.colour);
   job.budgets.points = parseCount(text.pointBudget, "--point-budget");
   job.budgets.gpuBytes = parseBytes(text.gpuBudget);

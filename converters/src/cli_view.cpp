@@ -28,6 +28,7 @@ void addView(CLI::App& app, int& exitCode) {
     opt->width = job->width;
     opt->height = job->height;
     opt->camera = job->camera;
+    opt->azimuth = job->azimuth, opt->elevation = job->elevation, opt->fovYDegrees = job->fovYDegrees;
     opt->settings = job->settings;
     opt->budgets = job->budgets;
     opt->colour = job->colour;

@@ -3,6 +3,7 @@
 #include "nestlight/octree/hierarchy.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <deque>
 #include <unordered_map>
@@ -17,7 +18,7 @@ void putEntry(uint8_t* p, const HierarchyEntry& e) {
   p[0] = static_cast<uint8_t>(e.type);
   p[1] = e.childMask;
   p[2] = static_cast<uint8_t>(e.codec);
-  p[3] = 0;
+  p[3] = e.spacingCode;
   std::memcpy(p + 4, &e.numPoints, 4);
   std::memcpy(p + 8, &e.byteOffset, 8);
   std::memcpy(p + 16, &e.byteSize, 8);
@@ -29,6 +30,7 @@ HierarchyEntry getEntry(const uint8_t* p) {
   e.type = static_cast<NodeType>(p[0]);
   e.childMask = p[1];
   e.codec = static_cast<Codec>(p[2]);
+  e.spacingCode = p[3];
   std::memcpy(&e.numPoints, p + 4, 4);
   std::memcpy(&e.byteOffset, p + 8, 8);
   std::memcpy(&e.byteSize, p + 16, 8);
@@ -42,6 +44,16 @@ struct BuildNode {
 };
 
 }  // namespace
+
+uint8_t encodeSpacing(double measured, double nominal) {
+  if (!(measured > 0) || !(nominal > 0) || !std::isfinite(measured / nominal)) return 0;
+  const double steps = std::round(16.0 * std::log2(measured / nominal));
+  return static_cast<uint8_t>(std::clamp(128.0 + steps, 1.0, 255.0));
+}
+
+double decodeSpacing(uint8_t code, double nominal) {
+  return code == 0 ? 0.0 : nominal * std::exp2((int(code) - 128) / 16.0);
+}
 
 HierarchyBlob buildHierarchy(std::vector<NodeRecord> nodes, uint32_t step) {
   NL_CHECK(step >= 1);
@@ -109,6 +121,7 @@ HierarchyBlob buildHierarchy(std::vector<NodeRecord> nodes, uint32_t step) {
       e.childMask = n.childMask;
       e.numPoints = n.rec.numPoints;
       e.codec = n.rec.codec;
+      e.spacingCode = n.rec.spacingCode;
       bool proxy = k.level - c.root.level == step && n.childMask;
       if (proxy) {
         size_t sub = chunkOf.at(k);

@@ -125,9 +125,9 @@ Metadata Metadata::fromJson(const json& j, const std::string& file) {
   if (f.string(f.get(j, "format", "format"), "format") != "nestlight-octree")
     f.fail("format", "is not 'nestlight-octree'");
   m.version = static_cast<int>(f.count(f.get(j, "version", "version"), "version"));
-  if (m.version != kFormatVersion)
-    f.fail("version", "is " + std::to_string(m.version) + "; this build reads version " +
-                          std::to_string(kFormatVersion));
+  if (m.version < kOldestReadableVersion || m.version > kFormatVersion)
+    f.fail("version", "is " + std::to_string(m.version) + "; this build reads versions " +
+                          std::to_string(kOldestReadableVersion) + " to " + std::to_string(kFormatVersion));
   if (j.contains("generator") && j["generator"].is_string()) m.generator = j["generator"];
   m.points = f.count(f.get(j, "points", "points"), "points");
   m.nodes = f.count(f.get(j, "nodes", "nodes"), "nodes");

@@ -68,7 +68,7 @@ OctreeWriter::~OctreeWriter() {
   }
 }
 
-void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points) {
+void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points, uint8_t spacingCode) {
   NL_CHECK(points.stride == layout_.stride());
   NL_CHECK_MSG(points.size() < (uint64_t(1) << 32), "node " + key.name() + " holds 2^32 points or more");
   // An empty node (its points all moved up into its parent) has an empty payload in any codec.
@@ -77,6 +77,7 @@ void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points) {
   NodeRecord r;
   r.key = key;
   r.codec = codec_;
+  r.spacingCode = spacingCode;
   r.numPoints = static_cast<uint32_t>(points.size());
   r.byteSize = bytes.size();
   r.checksum = checksum64(bytes.data(), bytes.size());

@@ -8,10 +8,12 @@ uniform mat4 uViewFromCamRel;  // rotation only: positions arrive relative to th
 uniform mat4 uClipFromView;    // projection (times a tile transform for large images)
 uniform uint uNumPoints;
 
-vec3 pointCamRel(uint i) {
-  return uNodeOffset + vec3(uintBitsToFloat(node.words[5u * i]), uintBitsToFloat(node.words[5u * i + 1u]),
-                            uintBitsToFloat(node.words[5u * i + 2u]));
+// Relative to the node's cube origin.
+vec3 pointLocal(uint i) {
+  return vec3(uintBitsToFloat(node.words[5u * i]), uintBitsToFloat(node.words[5u * i + 1u]),
+              uintBitsToFloat(node.words[5u * i + 2u]));
 }
+vec3 pointCamRel(uint i) { return uNodeOffset + pointLocal(i); }
 uint pointColour(uint i) { return node.words[5u * i + 3u]; }
 uint pointNormalWord(uint i) { return node.words[5u * i + 4u]; }
 

@@ -11,28 +11,30 @@ uniform vec3 uBackground;
 
 out vec4 outColour;
 
+// log2 of the linear depth, which is negative closer than one world unit: background is told
+// apart by the depth buffer's clear value, never by the sign.
+bool covered(vec2 uv) { return texture(uDepth, uv).r < 1.0; }
 float logDepth(vec2 uv) {
-  float d = texture(uDepth, uv).r;
-  if (d >= 1.0) return -1.0;  // background
-  float z = d * 2.0 - 1.0;
+  float z = texture(uDepth, uv).r * 2.0 - 1.0;
   return log2(2.0 * uNear * uFar / (uFar + uNear - z * (uFar - uNear)));
 }
 
 void main() {
-  float centre = logDepth(vUv);
+  bool isScan = covered(vUv);
+  float centre = isScan ? logDepth(vUv) : 0.0;
   vec2 texel = uRadius / vec2(textureSize(uDepth, 0));
   float response = 0.0;
-  int covered = 0;
+  int neighbours = 0;
   for (int k = 0; k < 8; ++k) {
     float a = float(k) * 0.78539816;
-    float n = logDepth(vUv + vec2(cos(a), sin(a)) * texel);
-    if (n < 0.0) continue;  // background neighbours say nothing about shape
-    ++covered;
-    response += max(0.0, centre - n);
+    vec2 uv = vUv + vec2(cos(a), sin(a)) * texel;
+    if (!covered(uv)) continue;  // background neighbours say nothing about shape
+    ++neighbours;
+    if (isScan) response += max(0.0, centre - logDepth(uv));
   }
-  if (centre < 0.0) {
+  if (!isScan) {
     // Background next to the scan: a dark outline around silhouettes (as Potree does).
-    float outline = uStrength > 0.0 && covered > 0 ? 1.0 - exp(-float(covered) * uStrength) : 0.0;
+    float outline = uStrength > 0.0 && neighbours > 0 ? 1.0 - exp(-float(neighbours) * uStrength) : 0.0;
     outColour = vec4(uBackground * (1.0 - outline), 1.0);
     return;
   }

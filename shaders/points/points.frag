@@ -1,4 +1,5 @@
-// Writes the G-buffer: colour (display-referred scan colour), view-space normal.
+// Basic splats: the nearest splat wins each pixel. Writes the G-buffer: colour (display-referred
+// scan colour) and view-space normal.
 in vec4 vColour;
 in vec3 vNormal;
 uniform bool uRound;

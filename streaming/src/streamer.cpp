@@ -195,7 +195,8 @@ void Streamer::Impl::buildDrawList(FrameStats& s) {
     // The parent precedes its children in the cut: its drawFrame is already this frame's.
     if (n.parent != kNone && drawFrame[n.parent] != frame) continue;
     drawFrame[idx] = frame;
-    drawList.push_back({n.key, n.handle, n.numPoints, table.cube(n.key), n.spacing});
+    const double measured = decodeSpacing(n.entry.spacingCode, n.spacing);
+    drawList.push_back({n.key, n.handle, n.numPoints, table.cube(n.key), n.spacing, measured > 0 ? measured : n.spacing});
     s.drawPoints += n.numPoints;
   }
   s.drawNodes = static_cast<uint32_t>(drawList.size());

@@ -2,21 +2,49 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace nestlight::viewer {
 
-Camera Camera::framing(const Box3d& box, double fovYDegrees, double azimuth, double elevation) {
+Camera Camera::framing(const Box3d& box, double fovYDegrees, double aspect, double azimuth, double elevation,
+                       double margin) {
   Camera c;
   c.fovYDegrees = fovYDegrees;
   const glm::dvec3 lo(box.min.x, box.min.y, box.min.z), hi(box.max.x, box.max.y, box.max.z);
   const glm::dvec3 centre = (lo + hi) * 0.5;
-  const double radius = std::max(glm::length(hi - lo) * 0.5, 1e-6);
-  const double distance = radius / std::sin(glm::radians(fovYDegrees) * 0.5);
   const double az = glm::radians(azimuth), el = glm::radians(elevation);
   const glm::dvec3 dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
-  c.target = centre;
-  c.eye = centre + dir * distance;
+  // The camera's axes for this direction (as glm::lookAt builds them; straight down or up picks
+  // +y as the screen's up so that the basis stays defined).
+  const glm::dvec3 forward = -dir;
+  glm::dvec3 right = glm::cross(forward, c.up);
+  if (glm::length(right) < 1e-9) right = glm::cross(forward, glm::dvec3(0, 1, 0));
+  right = glm::normalize(right);
+  const glm::dvec3 upAxis = glm::cross(right, forward);
+  // The nearest eye that keeps all 8 corners inside the frame shrunk by `margin`, panning in the
+  // image plane as well as moving back. With a corner at (x, y) across the view and t towards
+  // the camera from the centre, an eye at distance D and pan (a, b) sees it at depth D - t, and
+  // the corner is inside when |x - a| <= T (D - t), T = tan(fovX / 2) (likewise y with fovY).
+  // So D >= (max(x + T t) - min(x - T t)) / 2T, with a = (max(x + T t) + min(x - T t)) / 2: the
+  // binding axis touches both edges of the frame. Fitting a bounding sphere instead leaves a flat
+  // scan (an airborne strip, a facade) small in the middle of the frame.
+  const double tanY = std::tan(glm::radians(fovYDegrees) * 0.5) * (1.0 - margin);
+  const double tanX = tanY * std::max(aspect, 1e-6);
+  double hiX = -INFINITY, loX = INFINITY, hiY = -INFINITY, loY = INFINITY;
+  for (int k = 0; k < 8; ++k) {
+    const glm::dvec3 corner((k & 4) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 1) ? hi.z : lo.z);
+    const glm::dvec3 o = corner - centre;
+    const double x = glm::dot(o, right), y = glm::dot(o, upAxis), t = glm::dot(o, dir);
+    hiX = std::max(hiX, x + tanX * t), loX = std::min(loX, x - tanX * t);
+    hiY = std::max(hiY, y + tanY * t), loY = std::min(loY, y - tanY * t);
+  }
+  const double radius = glm::length(hi - lo) * 0.5;
+  const double distance =
+      std::max({(hiX - loX) / (2 * tanX), (hiY - loY) / (2 * tanY), std::max(radius, 1e-6) * 1e-3});
+  c.target = centre + right * (0.5 * (hiX + loX)) + upAxis * (0.5 * (hiY + loY));
+  c.eye = c.target + dir * distance;
+  if (glm::length(glm::cross(forward, c.up)) < 1e-9) c.up = upAxis;
   c.fitClipPlanes(box);
   return c;
 }

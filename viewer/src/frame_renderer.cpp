@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
+#include <unordered_map>
 #include <glm/gtc/type_ptr.hpp>
 
 #include "nestlight/octree/error.h"
@@ -27,8 +29,18 @@ Rasteriser parseRasteriser(const std::string& name) {
   throw Error("unknown rasteriser '" + name + "' (points, compute)");
 }
 
+const char* splattingName(Splatting s) { return s == Splatting::Basic ? "basic" : "hqs"; }
+Splatting parseSplatting(const std::string& name) {
+  if (name == "basic") return Splatting::Basic;
+  if (name == "hqs") return Splatting::Hqs;
+  throw Error("unknown splatting '" + name + "' (basic, hqs)");
+}
+
 FrameRenderer::FrameRenderer()
     : points_({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/points.frag"}}),
+      hqsDepth_({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/hqs_depth.frag"}}),
+      hqsAccum_({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/hqs_accum.frag"}}),
+      hqsResolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/hqs_resolve.frag"}}),
       depthPass_({{GL_COMPUTE_SHADER, "points/raster_depth.comp"}}),
       colourPass_({{GL_COMPUTE_SHADER, "points/raster_colour.comp"}}),
       resolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve.frag"}}),
@@ -50,21 +62,21 @@ FrameRenderer::FrameRenderer()
 }
 
 FrameRenderer::~FrameRenderer() {
-  GLuint fbos[] = {gbuffer_, outputFbo_};
-  glDeleteFramebuffers(2, fbos);
-  GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_};
-  glDeleteTextures(4, tex);
-  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_};
-  glDeleteBuffers(4, bufs);
+  GLuint fbos[] = {gbuffer_, outputFbo_, hqsFbo_};
+  glDeleteFramebuffers(3, fbos);
+  GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_};
+  glDeleteTextures(6, tex);
+  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_, drawTreeSsbo_};
+  glDeleteBuffers(5, bufs);
   glDeleteVertexArrays(1, &vao_);
 }
 
 void FrameRenderer::ensureTargets(int w, int h, bool compute) {
   if (w != w_ || h != h_) {
-    GLuint fbos[] = {gbuffer_, outputFbo_};
-    glDeleteFramebuffers(2, fbos);
-    GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_};
-    glDeleteTextures(4, tex);
+    GLuint fbos[] = {gbuffer_, outputFbo_, hqsFbo_};
+    glDeleteFramebuffers(3, fbos);
+    GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_};
+    glDeleteTextures(6, tex);
     glCreateTextures(GL_TEXTURE_2D, 1, &colourTex_);
     glTextureStorage2D(colourTex_, 1, GL_RGBA8, w, h);
     glCreateTextures(GL_TEXTURE_2D, 1, &normalTex_);
@@ -73,7 +85,12 @@ void FrameRenderer::ensureTargets(int w, int h, bool compute) {
     glTextureStorage2D(depthTex_, 1, GL_DEPTH_COMPONENT32F, w, h);
     glCreateTextures(GL_TEXTURE_2D, 1, &outputTex_);
     glTextureStorage2D(outputTex_, 1, GL_RGBA16F, w, h);
-    for (GLuint t : {colourTex_, normalTex_, depthTex_, outputTex_}) {
+    // HQS sums in 32-bit float: hundreds of weighted colours per pixel at close range.
+    glCreateTextures(GL_TEXTURE_2D, 1, &accColourTex_);
+    glTextureStorage2D(accColourTex_, 1, GL_RGBA32F, w, h);
+    glCreateTextures(GL_TEXTURE_2D, 1, &accNormalTex_);
+    glTextureStorage2D(accNormalTex_, 1, GL_RGBA32F, w, h);
+    for (GLuint t : {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_}) {
       glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
       glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
       glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -87,7 +104,12 @@ void FrameRenderer::ensureTargets(int w, int h, bool compute) {
     glNamedFramebufferDrawBuffers(gbuffer_, 2, draw);
     glCreateFramebuffers(1, &outputFbo_);
     glNamedFramebufferTexture(outputFbo_, GL_COLOR_ATTACHMENT0, outputTex_, 0);
-    for (GLuint f : {gbuffer_, outputFbo_})
+    glCreateFramebuffers(1, &hqsFbo_);
+    glNamedFramebufferTexture(hqsFbo_, GL_COLOR_ATTACHMENT0, accColourTex_, 0);
+    glNamedFramebufferTexture(hqsFbo_, GL_COLOR_ATTACHMENT1, accNormalTex_, 0);
+    glNamedFramebufferTexture(hqsFbo_, GL_DEPTH_ATTACHMENT, depthTex_, 0);
+    glNamedFramebufferDrawBuffers(hqsFbo_, 2, draw);
+    for (GLuint f : {gbuffer_, outputFbo_, hqsFbo_})
       if (glCheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw Error("the G-buffer framebuffer is incomplete (" + std::to_string(w) + "x" + std::to_string(h) + ")");
     w_ = w, h_ = h;
@@ -156,31 +178,81 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
   };
 
   if (!compute) {
-    const GLuint p = points_.id();
-    points_.use();
-    setMat4(p, "uClipFromView", clipFromView);
-    setMat4(p, "uViewFromCamRel", viewFromCamRel);
-    glProgramUniform1f(p, points_.uniform("uPixelsPerUnit"), float(pixelsPerUnit));
-    glProgramUniform1f(p, points_.uniform("uSizeScale"), s.sizeScale);
-    glProgramUniform2f(p, points_.uniform("uSizeRange"), s.minPointSize, s.maxPointSize);
-    glProgramUniform1f(p, points_.uniform("uFixedSize"), s.fixedPointSize);
-    glProgramUniform1i(p, points_.uniform("uRound"), s.roundPoints && s.fixedPointSize != 1.0f);
+    const bool hqs = s.splatting == Splatting::Hqs;
+    // GL clips a point by its centre, so a splat whose centre lies just outside the frame would
+    // leave its part inside uncovered (holes along the edges). The splats are drawn into a
+    // viewport larger by half the largest splat on every side, with the projection widened to
+    // match: pixels inside the frame map exactly as before.
+    const int guard = int(std::ceil(0.5 * (s.fixedPointSize > 0 ? s.fixedPointSize : s.maxPointSize))) + 1;
+    const glm::dmat4 splatClipFromView = tileFromClip(fullW, fullH, x0 - guard, y0 - guard, w + 2 * guard,
+                                                      h + 2 * guard) *
+                                         camera.projection(double(fullW) / fullH);
+    // One draw of every node with `prog`: the splat vertex shader's uniforms and each node's
+    // buffer, offset and place in the draw tree.
+    auto drawSplats = [&](const ShaderProgram& prog, bool countPoints) {
+      const GLuint p = prog.id();
+      prog.use();
+      setMat4(p, "uClipFromView", splatClipFromView);
+      setMat4(p, "uViewFromCamRel", viewFromCamRel);
+      glProgramUniform1f(p, prog.uniform("uPixelsPerUnit"), float(pixelsPerUnit));
+      glProgramUniform1f(p, prog.uniform("uSizeScale"), s.sizeScale);
+      glProgramUniform2f(p, prog.uniform("uSizeRange"), s.minPointSize, s.maxPointSize);
+      glProgramUniform1f(p, prog.uniform("uFixedSize"), s.fixedPointSize);
+      const GLint offLoc = prog.uniform("uNodeOffset"), idxLoc = prog.uniform("uNodeIndex"),
+                  sizeLoc = prog.uniform("uNodeSize"), nLoc = prog.uniform("uNumPoints");
+      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 5, drawTreeSsbo_, 0, GLsizeiptr(drawTreeBytes_));
+      for (size_t k = 0; k < nodes.size(); ++k) {
+        const auto& n = nodes[k];
+        if (!n.numPoints) continue;
+        const glm::vec3 off = nodeOffset(n);
+        glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
+        glProgramUniform1i(p, idxLoc, GLint(k));
+        glProgramUniform1f(p, sizeLoc, float(n.worldBounds.max.x - n.worldBounds.min.x));
+        glProgramUniform1ui(p, nLoc, n.numPoints);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
+                          GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
+        glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
+        if (t && countPoints) t->points += n.numPoints;
+      }
+    };
     glEnable(GL_PROGRAM_POINT_SIZE);
     glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
-    const GLint offLoc = points_.uniform("uNodeOffset"), spLoc = points_.uniform("uSpacing"),
-                nLoc = points_.uniform("uNumPoints");
-    for (const auto& n : nodes) {
-      if (!n.numPoints) continue;
-      const glm::vec3 off = nodeOffset(n);
-      glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
-      glProgramUniform1f(p, spLoc, float(n.spacing));
-      glProgramUniform1ui(p, nLoc, n.numPoints);
-      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
-                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
-      glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
-      if (t) t->points += n.numPoints;
+    glViewport(-guard, -guard, w + 2 * guard, h + 2 * guard);
+    if (!hqs) {
+      glProgramUniform1i(points_.id(), points_.uniform("uRound"), s.roundPoints && s.fixedPointSize != 1.0f);
+      glDepthFunc(GL_LESS);
+      glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
+      drawSplats(points_, true);
+      glViewport(0, 0, w, h);
+    } else {
+      // Pass 1: depth pushed back by epsilon. Pass 2: weighted sums of what lies in front of it.
+      glProgramUniform1f(hqsDepth_.id(), hqsDepth_.uniform("uDepthEpsilon"), s.hqsDepthEpsilon);
+      glDepthFunc(GL_LESS);
+      glBindFramebuffer(GL_FRAMEBUFFER, hqsFbo_);
+      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+      drawSplats(hqsDepth_, true);
+      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+      const float zero[4] = {0, 0, 0, 0};
+      glClearNamedFramebufferfv(hqsFbo_, GL_COLOR, 0, zero);
+      glClearNamedFramebufferfv(hqsFbo_, GL_COLOR, 1, zero);
+      glDepthFunc(GL_LEQUAL);
+      glDepthMask(GL_FALSE);
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_ONE, GL_ONE);
+      drawSplats(hqsAccum_, false);
+      glDisable(GL_BLEND);
+      glDepthMask(GL_TRUE);
+      glViewport(0, 0, w, h);
+      // Pass 3: normalise into the G-buffer, depth included (pixels no splat covered keep the
+      // cleared far depth).
+      const GLuint r = hqsResolve_.id();
+      hqsResolve_.use();
+      setMat4(r, "uClipFromView", clipFromView);
+      glBindTextureUnit(0, accColourTex_);
+      glBindTextureUnit(1, accNormalTex_);
+      glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
+      glDepthFunc(GL_ALWAYS);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
     }
     glDisable(GL_DEPTH_TEST);
   } else if (atomic64_ && s.allowAtomic64) {
@@ -239,10 +311,37 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+void FrameRenderer::uploadDrawTree(const std::vector<streaming::DrawNode>& nodes) {
+  // 12 words per node: the drawn child in each octant (-1: none), the spacing, padding.
+  std::vector<int32_t> words(std::max<size_t>(nodes.size(), 1) * 12, -1);
+  std::unordered_map<NodeKey, int32_t, NodeKeyHash> index;
+  index.reserve(nodes.size());
+  for (size_t k = 0; k < nodes.size(); ++k) {
+    const auto& n = nodes[k];
+    index.emplace(n.key, int32_t(k));
+    const float spacing = float(n.pointSpacing > 0 ? n.pointSpacing : n.spacing);
+    std::memcpy(&words[12 * k + 8], &spacing, 4);
+    // The draw list puts parents first: a drawn node's parent is already indexed.
+    if (n.key.level == 0) continue;
+    auto parent = index.find(n.key.parent());
+    if (parent != index.end()) words[12 * size_t(parent->second) + n.key.childIndex()] = int32_t(k);
+  }
+  const size_t bytes = words.size() * 4;
+  if (bytes > drawTreeCapacity_) {
+    glDeleteBuffers(1, &drawTreeSsbo_);
+    glCreateBuffers(1, &drawTreeSsbo_);
+    drawTreeCapacity_ = std::max(bytes, size_t(4096));
+    glNamedBufferStorage(drawTreeSsbo_, GLsizeiptr(drawTreeCapacity_), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  }
+  glNamedBufferSubData(drawTreeSsbo_, 0, GLsizeiptr(bytes), words.data());
+  drawTreeBytes_ = bytes;
+}
+
 GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
                                       const Camera& camera, int width, int height, const RenderSettings& s,
                                       DrawTimings* t) {
   const auto t0 = std::chrono::steady_clock::now();
+  uploadDrawTree(nodes);
   drawTile(nodes, store, camera, width, height, 0, 0, width, height, s, t);
   if (t) {
     glFinish();
@@ -256,6 +355,7 @@ Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
     throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
   const auto t0 = std::chrono::steady_clock::now();
+  uploadDrawTree(nodes);
   Image img;
   img.width = width, img.height = height;
   img.rgba.assign(size_t(width) * height * 4, 0.f);

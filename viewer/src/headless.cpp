@@ -126,7 +126,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
         Camera cam;
         if (job.path) cam = job.path->at(f);
         else if (job.camera) cam = *job.camera;
-        else cam = Camera::framing(meta.bounds, job.fovYDegrees, job.azimuth, job.elevation);
+        else cam = Camera::framing(meta.bounds, job.fovYDegrees, double(job.width) / job.height, job.azimuth, job.elevation);
         cam.fitClipPlanes(meta.bounds);
         const streaming::View view = cam.view(job.width, job.height);
         streaming::FrameStats st = streamer.update(view);

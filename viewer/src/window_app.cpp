@@ -75,7 +75,11 @@ int runViewer(const ViewerOptions& opt) {
     streaming::Budgets budgets = opt.budgets;
     auto streamer = std::make_unique<streaming::Streamer>(reader, *store, budgets);
     CameraController cc;
-    cc.from(opt.camera ? *opt.camera : Camera::framing(meta.bounds));
+    int winW = opt.width, winH = opt.height;
+    glfwGetFramebufferSize(ctx.window(), &winW, &winH);
+    cc.from(opt.camera ? *opt.camera
+                       : Camera::framing(meta.bounds, opt.fovYDegrees, double(std::max(winW, 1)) / std::max(winH, 1),
+                                         opt.azimuth, opt.elevation));
     cc.speed = std::max(meta.cubeWorldSize() * 0.1, 1e-3);
     std::string status;
     int frame = 0;
@@ -164,6 +168,11 @@ int runViewer(const ViewerOptions& opt) {
         streamer.reset();
         store->setColourMode(mode);
         streamer = std::make_unique<streaming::Streamer>(reader, *store, budgets);
+      }
+      if (settings.rasteriser == Rasteriser::Points) {
+        int splat = settings.splatting == Splatting::Hqs ? 0 : 1;
+        if (ImGui::Combo("splatting", &splat, "high quality (blended)\0basic (nearest)\0"))
+          settings.splatting = splat == 0 ? Splatting::Hqs : Splatting::Basic;
       }
       ImGui::SliderFloat("point size", &settings.sizeScale, 0.25f, 4.f);
       ImGui::SliderFloat("EDL strength", &settings.edlStrength, 0.f, 5.f);

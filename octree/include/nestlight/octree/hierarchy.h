@@ -19,9 +19,9 @@ namespace nestlight {
 
 enum class NodeType : uint8_t { Inner = 0, Leaf = 1, Proxy = 2 };
 
-// On disk, little endian: u8 type, u8 childMask, u8 codec, u8 reserved, u32 numPoints,
+// On disk, little endian: u8 type, u8 childMask, u8 codec, u8 spacingCode, u32 numPoints,
 // u64 byteOffset, u64 byteSize, u64 checksum (XXH3-64 of the payload bytes, or of the child
-// chunk for a proxy).
+// chunk for a proxy). Format version 1 wrote 0 for spacingCode (unknown).
 struct HierarchyEntry {
   NodeType type = NodeType::Leaf;
   uint8_t childMask = 0;
@@ -30,6 +30,7 @@ struct HierarchyEntry {
   uint64_t byteOffset = 0;
   uint64_t byteSize = 0;
   uint64_t checksum = 0;
+  uint8_t spacingCode = 0;  // see encodeSpacing(); 0: not measured
 };
 inline constexpr size_t kHierarchyEntryBytes = 32;
 inline constexpr uint32_t kHierarchyStep = 3;
@@ -42,7 +43,17 @@ struct NodeRecord {
   uint64_t byteOffset = 0;
   uint64_t byteSize = 0;
   uint64_t checksum = 0;
+  uint8_t spacingCode = 0;  // see encodeSpacing()
 };
+
+// A node's measured point spacing, in one byte: the spacing (medianNeighbourSpacing, spacing.h)
+// of the points drawn where this node is the finest drawn node (the node's own points and its
+// ancestors' points inside its cube), relative to the nominal spacing of its
+// level, in steps of 2^(1/16) (4.4%): code = 128 + round(16 log2(measured / nominal)), clamped to
+// [1, 255], so ratios from 1/240 to 240 are kept. 0 means not measured.
+uint8_t encodeSpacing(double measured, double nominal);
+// The measured spacing in the units of `nominal`; 0 when `code` is 0.
+double decodeSpacing(uint8_t code, double nominal);
 
 struct HierarchyBlob {
   std::vector<uint8_t> bytes;

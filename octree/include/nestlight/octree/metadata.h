@@ -14,7 +14,11 @@
 
 namespace nestlight {
 
-inline constexpr int kFormatVersion = 1;
+// Version 2 stores each node's measured point spacing in its hierarchy entry (byte 3, which
+// version 1 wrote as 0). Readers open versions 1 and 2; a version 1 octree has no measured
+// spacing and viewers fall back to the nominal spacing of each level.
+inline constexpr int kFormatVersion = 2;
+inline constexpr int kOldestReadableVersion = 1;
 
 // Every input point is kept, merged as an exact duplicate, or rejected with a reason:
 // input == kept + duplicatesMerged + sum(rejected).

@@ -23,8 +23,9 @@ class OctreeWriter {
   ~OctreeWriter();
 
   // Encodes and appends one node. `points.pos` holds positions relative to the node's cube min
-  // corner and should be in Morton order. Thread-safe; encoding runs on the calling thread.
-  void writeNode(const NodeKey& key, const PointBuffer& points);
+  // corner and should be in Morton order. `spacingCode` is the node's measured spacing
+  // (encodeSpacing; 0: not measured). Thread-safe; encoding runs on the calling thread.
+  void writeNode(const NodeKey& key, const PointBuffer& points, uint8_t spacingCode = 0);
 
   // Writes the hierarchy and `meta` (payload, hierarchy and node fields are filled here).
   void finish(Metadata& meta);

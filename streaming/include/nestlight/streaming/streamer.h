@@ -74,6 +74,10 @@ struct DrawNode {
   uint32_t numPoints = 0;
   Box3d worldBounds;              // the node's cube in world units
   double spacing = 0;             // the node's nominal point spacing, world units
+  // The measured spacing of the points drawn where this node is the finest drawn node (its own
+  // and its ancestors' points in its cube), world units; the nominal spacing for octrees that
+  // did not record it (format version 1). Splats are sized by it.
+  double pointSpacing = 0;
 };
 
 struct BadNode {

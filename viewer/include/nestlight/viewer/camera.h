@@ -20,9 +20,12 @@ struct Camera {
   double nearPlane = 0.05;
   double farPlane = 1e5;
 
-  // Looks at `box` from a direction (azimuth/elevation in degrees) so that its bounding sphere
-  // fills the view; near and far follow the box.
-  static Camera framing(const Box3d& box, double fovYDegrees = 60, double azimuth = 35, double elevation = 30);
+  // Looks at the centre of `box` from a direction (azimuth/elevation in degrees) from as close as
+  // keeps the box's 8 corners inside the frame of aspect `aspect` (width / height) shrunk by
+  // `margin` on each side (a fraction of the half-frame): the scan's bounds fill the frame. Near
+  // and far follow the box.
+  static Camera framing(const Box3d& box, double fovYDegrees = 60, double aspect = 16.0 / 9.0, double azimuth = 35,
+                        double elevation = 30, double margin = 0.05);
   // Fits near/far to the box as seen from the current eye.
   void fitClipPlanes(const Box3d& box);
 

@@ -23,11 +23,26 @@ enum class Rasteriser { Points, Compute };
 const char* rasteriserName(Rasteriser r);
 Rasteriser parseRasteriser(const std::string& name);  // "points" or "compute"
 
+// How the GL_POINTS rasteriser resolves overlapping splats. Basic: the nearest splat wins each
+// pixel (one pass). Hqs: high-quality splatting (Botsch et al. 2005, as Potree's HQS): a depth
+// pass, a weighted blend of the splats within epsilon of the front surface, a normalisation;
+// smooth colour and depth across splats, at about twice the cost. The compute rasteriser draws
+// one pixel per point and always averages the points within 1% of the nearest depth (its
+// two-pass variant), which is the same idea at one pixel, so the setting does not apply there.
+enum class Splatting { Basic, Hqs };
+const char* splattingName(Splatting s);
+Splatting parseSplatting(const std::string& name);  // "basic" or "hqs"
+
 struct RenderSettings {
   Rasteriser rasteriser = Rasteriser::Points;
-  float sizeScale = 1.5f;        // GL_POINTS splat diameter in node spacings
-  float minPointSize = 1.0f;
-  float maxPointSize = 16.0f;
+  Splatting splatting = Splatting::Hqs;
+  // GL_POINTS splat diameter in measured point spacings of the finest drawn node at the point
+  // (see shaders/points/splat_size.glsl and docs/VIEWER.md for how the default was chosen).
+  float sizeScale = kDefaultSizeScale;
+  static constexpr float kDefaultSizeScale = 1.75f;
+  float hqsDepthEpsilon = 1.0f;  // HQS: blend splats within this many splat radii of the front
+  float minPointSize = 2.0f;     // pixels: below 2 a round splat covers fewer pixels than a spacing (holes)
+  float maxPointSize = 64.0f;    // pixels: close to a sparse scan splats grow this far before holes open
   float fixedPointSize = 0.0f;   // > 0: every splat this many pixels (the compute path draws 1)
   bool roundPoints = true;
   float edlStrength = 1.0f;      // 0 disables eye-dome lighting
@@ -64,15 +79,20 @@ class FrameRenderer {
  private:
   struct Targets;
   void ensureTargets(int w, int h, bool compute);
+  // The drawn nodes as a tree for the vertex shader's finest-node lookup (splat_size.glsl).
+  void uploadDrawTree(const std::vector<streaming::DrawNode>& nodes);
   void drawTile(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store, const Camera& camera,
                 int fullW, int fullH, int x0, int y0, int w, int h, const RenderSettings& s, DrawTimings* t);
 
-  ShaderProgram points_, depthPass_, colourPass_, resolve_, edl_;
+  ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_, edl_;
   std::unique_ptr<ShaderProgram> atomic64_, resolve64_;  // only with 64-bit atomics
   GLuint packedSsbo_ = 0;
   GLuint vao_ = 0;
   GLuint gbuffer_ = 0, outputFbo_ = 0;
   GLuint colourTex_ = 0, normalTex_ = 0, depthTex_ = 0, outputTex_ = 0;
+  GLuint hqsFbo_ = 0, accColourTex_ = 0, accNormalTex_ = 0;  // HQS sums: rgb w, w | normal w, depth w
+  GLuint drawTreeSsbo_ = 0;
+  size_t drawTreeBytes_ = 0, drawTreeCapacity_ = 0;
   GLuint depthSsbo_ = 0, accumSsbo_ = 0, normalSsbo_ = 0;
   int w_ = 0, h_ = 0;
   size_t ssboPixels_ = 0;

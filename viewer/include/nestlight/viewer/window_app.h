@@ -12,7 +12,8 @@ namespace nestlight::viewer {
 struct ViewerOptions {
   std::filesystem::path octree;
   int width = 1280, height = 800;
-  std::optional<Camera> camera;
+  std::optional<Camera> camera;       // none: framing the scan from azimuth/elevation
+  double azimuth = 35, elevation = 30, fovYDegrees = 60;
   RenderSettings settings;
   streaming::Budgets budgets;
   std::optional<ColourMode> colour;

@@ -1,0 +1,32 @@
+// The measured point spacing of a node, stored in its hierarchy entry (encodeSpacing).
+//
+// A viewer sizes each splat by the spacing of the points drawn around it. The nominal spacing of
+// a level (the root's spacing / 2^level) says how far apart the level's Poisson-disk samples are
+// at least, but not how dense the scan really is: a leaf holds every remaining point of the scan
+// at its raw density, and an inner node's sample radius may have been widened to fit the node's
+// point limit. So the builder measures it, on the set that is drawn where the node is the finest
+// drawn node: the node's own points together with its ancestors' points inside its cube.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace nestlight {
+
+// The spacing of a point set on a surface: the side of the square of surface each point stands
+// for, sqrt(area / points), estimated locally from the distance r to the k-th nearest distinct
+// neighbour (k points within r: spacing = r sqrt(pi / k)) and taken as the median over the set.
+// It equals the step of a regular grid, and does not shrink for irregular sets as the
+// nearest-neighbour distance does (a jittered grid's nearest neighbours are closer than its step).
+// Positions are integers (x, y, z per point) in `xyz`; `indices` selects `n` of them (nullptr: the
+// first n), which must be in Morton order: the neighbour search looks at the `window` points on
+// either side of a query in that order, where a point's spatial neighbours nearly always are (a
+// Z-order jump can hide a neighbour, which the median absorbs). At most `maxQueries` evenly
+// strided points are queried, so the cost is bounded per node: about 33k distance tests.
+// Returns 0 when fewer than 8 queries find k distinct neighbours (too few points, or coincident
+// ones): the caller then keeps the nominal spacing.
+inline constexpr int kSpacingNeighbours = 6;
+double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size_t n, size_t maxQueries = 512,
+                              size_t window = 32);
+
+}  // namespace nestlight

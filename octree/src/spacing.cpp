@@ -1,0 +1,44 @@
+#include "nestlight/octree/spacing.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace nestlight {
+
+double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size_t n, size_t maxQueries,
+                              size_t window) {
+  if (n < 2 || maxQueries == 0 || window == 0) return 0;
+  auto at = [&](size_t i) { return xyz + 3 * size_t(indices ? indices[i] : i); };
+  const size_t queries = std::min(n, maxQueries);
+  std::vector<double> spacing;
+  spacing.reserve(queries);
+  for (size_t q = 0; q < queries; ++q) {
+    // Evenly strided over the whole set, so the median speaks for every part of the node.
+    const size_t i = q * n / queries;
+    const uint32_t* p = at(i);
+    const size_t lo = i > window ? i - window : 0, hi = std::min(n, i + window + 1);
+    // The kSpacingNeighbours smallest distinct squared distances, ascending.
+    std::array<double, kSpacingNeighbours> best;
+    best.fill(INFINITY);
+    for (size_t j = lo; j < hi; ++j) {
+      const uint32_t* o = at(j);
+      const double dx = double(o[0]) - p[0], dy = double(o[1]) - p[1], dz = double(o[2]) - p[2];
+      const double d2 = dx * dx + dy * dy + dz * dz;
+      if (d2 <= 0 || d2 >= best.back()) continue;  // coincident points are one point on screen
+      size_t k = best.size() - 1;
+      for (; k > 0 && best[k - 1] > d2; --k) best[k] = best[k - 1];
+      best[k] = d2;
+    }
+    if (!std::isfinite(best.back())) continue;
+    // k points within r_k on a surface: pi r_k^2 / k of surface per point.
+    spacing.push_back(std::sqrt(best.back() * M_PI / kSpacingNeighbours));
+  }
+  if (spacing.size() < 8) return 0;
+  auto mid = spacing.begin() + spacing.size() / 2;
+  std::nth_element(spacing.begin(), mid, spacing.end());
+  return *mid;
+}
+
+}  // namespace nestlight
