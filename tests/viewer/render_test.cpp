@@ -99,6 +99,9 @@ double coverage(const Image& img, const glm::vec3& background) {
 
 // Goldens: llvmpipe is deterministic for a given Mesa and LLVM; the tolerance (3/255 per channel
 // on at most 0.5% of pixels) absorbs rounding changes at splat borders between LLVM versions.
+// Re-made when splats became sized by the measured spacing of the finest drawn node, HQS the
+// default, the default camera a fit of the bounds to the frame, and eye-dome lighting stopped
+// dropping points nearer than one world unit (the lion is metre-sized: its near side was lost).
 TEST(RenderGolden, LionPoints) {
   NL_REQUIRE_SHARED("scans/lion_takanawa.las");
   test::TempDir tmp;
@@ -158,15 +161,22 @@ TEST(Render, ComputeAndPointsPathsAgree) {
 TEST(Render, TiledEqualsUntiled) {
   test::TempDir tmp;
   const fs::path oct = syntheticOctree(tmp, "s.octree", 200'000, 7);
-  RenderJob a = smallJob(oct, tmp.file("whole.png"));
-  a.width = 300, a.height = 200;
-  RenderJob b = a;
-  b.output = tmp.file("tiled.png");
-  b.settings.maxTile = 64;
-  renderHeadless(a);
-  renderHeadless(b);
-  ImageDiff d = compareImages(readImage(a.output), readImage(b.output), 1.f / 255);
-  EXPECT_EQ(d.differing, 0u) << "max channel error " << d.maxChannel;
+  for (Splatting splatting : {Splatting::Basic, Splatting::Hqs}) {
+    RenderJob a = smallJob(oct, tmp.file("whole.png"));
+    a.width = 300, a.height = 200;
+    a.settings.splatting = splatting;
+    RenderJob b = a;
+    b.output = tmp.file("tiled.png");
+    b.settings.maxTile = 64;
+    renderHeadless(a);
+    renderHeadless(b);
+    ImageDiff d = compareImages(readImage(a.output), readImage(b.output), 1.f / 255);
+    // A tile's projection (and the guard band's wider viewport) rounds differently in its last
+    // bits from the whole image's, which moves a splat's edge across a pixel centre now and
+    // then, and HQS weights with it: a handful of pixels (11 of 60,000 measured on llvmpipe).
+    const size_t allowed = size_t(0.001 * a.width * a.height);
+    EXPECT_LE(d.differing, allowed) << splattingName(splatting) << ": max channel error " << d.maxChannel;
+  }
 }
 
 // National-grid coordinates: the same scan 5,000 km away, seen by the same camera shifted by
@@ -187,6 +197,9 @@ TEST(Render, NationalGridDoesNotJitter) {
   a.budgets.spacingPixels = 0;
   a.budgets.points = 1'000'000;
   a.settings.fixedPointSize = 2;  // splat sizes follow node levels, which differ between the two
+  // Nearest-splat: HQS weights move with the last float bits of a position, which is not what
+  // this test is about (node offsets reaching the GPU exactly).
+  a.settings.splatting = Splatting::Basic;
   RenderJob b = a;
   b.octree = grid;
   b.output = tmp.file("grid.png");
@@ -222,7 +235,7 @@ TEST(Render, UnknownFormatVersionFailsBeforeGl) {
   const fs::path oct = syntheticOctree(tmp, "s.octree", 1000, 1);
   std::string meta = test::readFile((oct / "metadata.json").string());
   const std::string before = meta;
-  meta = std::regex_replace(meta, std::regex(R"("version":\s*1\b)"), "\"version\": 99");
+  meta = std::regex_replace(meta, std::regex(R"("version":\s*\d+)"), "\"version\": 99");
   ASSERT_NE(meta, before);
   test::writeFile((oct / "metadata.json").string(), meta);
   Error e = test::errorOf([&] { renderHeadless(smallJob(oct, tmp.file("x.png"))); });
