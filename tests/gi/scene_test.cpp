@@ -92,6 +92,19 @@ TEST(Scene, FullSceneParses) {
   EXPECT_NEAR(l.y, 0.002f, 1e-6);
 }
 
+TEST(Scene, DisplaySettingsParse) {
+  json j = minimal();
+  Scene d = parseScene(j, "/scenes/test.json");
+  EXPECT_EQ(d.display.splatting, "hqs");
+  EXPECT_FALSE(d.display.pointSize);
+  j["display"] = json{{"rasteriser", "points"}, {"splatting", "basic"}, {"point_size", 2.5}, {"edl_strength", 0}};
+  Scene s = parseScene(j, "/scenes/test.json");
+  EXPECT_EQ(s.display.rasteriser, "points");
+  EXPECT_EQ(s.display.splatting, "basic");
+  EXPECT_EQ(s.display.pointSize.value_or(0), 2.5f);
+  EXPECT_EQ(s.display.edlStrength.value_or(-1), 0.f);
+}
+
 TEST(Scene, ErrorsNameTheField) {
   auto with = [](const std::string& pointer, const json& v) {
     json j = minimal();
@@ -135,6 +148,9 @@ TEST(Scene, ErrorsNameTheField) {
             "scene.meshes[0].transform.matrix");  // projective
   EXPECT_EQ(errorField(with("/camera_path", json{{"keyframes", json::array({json{{"time", 0}, {"eye", {0, 0, 0}}, {"target", {0, 0, -1}}}})}})),
             "scene.camera_path.keyframes[0]");  // looks along up
+  EXPECT_EQ(errorField(with("/display", json{{"splatting", "gaussian"}})), "scene.display.splatting");
+  EXPECT_EQ(errorField(with("/display", json{{"point_size", 0}})), "scene.display.point_size");
+  EXPECT_EQ(errorField(with("/display", json{{"edl", 1}})), "scene.display.edl");
   EXPECT_EQ(errorField(with("/version", 2)), "scene.version");
   EXPECT_EQ(errorField(with("/colour", 1)), "scene.colour");
   EXPECT_EQ(errorField(json::object()), "scene");  // nothing to render

@@ -2,6 +2,7 @@
 // frames and saves a screenshot; the screenshot must show the scan.
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/synthetic.h"
@@ -44,4 +45,46 @@ TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
     }
   EXPECT_GT(double(covered) / (320.0 * 240.0), 0.1) << out;
   EXPECT_NE(out.find("GLFW window"), std::string::npos) << out;
+}
+
+TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is not installed";
+  test::TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 100'000;
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openSynthetic(spec));
+  BuildOptions o;
+  o.output = tmp.path() / "s.octree";
+  o.progress = ProgressMode::Quiet;
+  buildOctree(std::move(r), o);
+  {
+    std::ofstream f(tmp.file("scene.json"));
+    f << R"({"octrees": ["s.octree"], "camera": {"eye": [150, -60, 80], "target": [50, 50, 10], "fov": 50},
+             "display": {"splatting": "basic", "edl_strength": 0}})";
+  }
+  const std::string shot = tmp.file("shot.png");
+  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+                          tmp.file("scene.json") + " --width 160 --height 120 --frames 20 --screenshot " + shot;
+  const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
+  const std::string out = test::readFile(tmp.file("log.txt"));
+  ASSERT_EQ(rc, 0) << out;
+  viewer::Image img = viewer::readImage(shot);
+  size_t covered = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const float* p = img.at(x, y);
+      covered += std::fabs(p[0] - 0.08f) + std::fabs(p[1] - 0.08f) + std::fabs(p[2] - 0.10f) > 0.05f;
+    }
+  EXPECT_GT(double(covered) / (160.0 * 120.0), 0.1) << out;
+  // A scene that names an unknown splatting stops with the file and the field.
+  {
+    std::ofstream f(tmp.file("bad.json"));
+    f << R"({"octrees": ["s.octree"], "display": {"splatting": "soft"}})";
+  }
+  const int bad = std::system((std::string(NESTLIGHT_BINARY) + " view " + tmp.file("bad.json") + " > " +
+                               tmp.file("bad.txt") + " 2>&1").c_str());
+  EXPECT_NE(bad, 0);
+  EXPECT_NE(test::readFile(tmp.file("bad.txt")).find("scene.display.splatting"), std::string::npos)
+      << test::readFile(tmp.file("bad.txt"));
 }

@@ -258,7 +258,7 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
   const std::string fileName = file.string();
   Field root(j, "scene", fileName);
   root.expectObject({"version", "origin", "octrees", "materials", "meshes", "lights", "environment", "camera",
-                     "camera_path", "gi", "output"});
+                     "camera_path", "gi", "display", "output"});
   Scene s;
   s.file = file;
   if (root.has("version") && root.at("version").integer(1, 1000) != 1)
@@ -385,6 +385,14 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
       if (!g.at("parameters").value().is_object()) g.at("parameters").fail("expected an object");
       s.gi.parameters = g.at("parameters").value();
     }
+  }
+  if (root.has("display")) {
+    Field d = root.at("display");
+    d.expectObject({"rasteriser", "splatting", "point_size", "edl_strength"});
+    if (d.has("rasteriser")) s.display.rasteriser = d.at("rasteriser").choice({"points", "compute"});
+    if (d.has("splatting")) s.display.splatting = d.at("splatting").choice({"hqs", "basic"});
+    if (d.has("point_size")) s.display.pointSize = float(d.at("point_size").number(0.05, 64));
+    if (d.has("edl_strength")) s.display.edlStrength = float(d.at("edl_strength").number(0, 100));
   }
   if (root.has("output")) {
     Field o = root.at("output");

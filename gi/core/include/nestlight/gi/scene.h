@@ -85,6 +85,15 @@ struct SceneOutput {
   double exposure = 0;               // stops, for the PNG
 };
 
+// How `nestlight view scene.json` draws the scene's scans (the real-time point rendering; the
+// GI methods read `gi`). Names as `nestlight render` takes them.
+struct SceneDisplay {
+  std::string rasteriser = "points";  // points | compute
+  std::string splatting = "hqs";      // hqs | basic (points rasteriser)
+  std::optional<float> pointSize;     // splat diameter in measured spacings (none: the viewer's default)
+  std::optional<float> edlStrength;   // eye-dome lighting (0: off; none: the viewer's default)
+};
+
 struct Scene {
   std::filesystem::path file;        // where it was read from (relative paths resolve here)
   glm::dvec3 origin{0.0};
@@ -99,6 +108,7 @@ struct Scene {
   double cameraPathFps = 30;
   std::vector<SceneCameraKey> cameraPath;  // optional; replaces `camera`'s eye/target per frame
   GiSettings gi;
+  SceneDisplay display;
   SceneOutput output;
 
   // Float offset of a world position from the origin.
