@@ -12,21 +12,29 @@
 using namespace nestlight;
 namespace fs = std::filesystem;
 
-TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
-  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is not installed";
-  test::TempDir tmp;
+namespace {
+// A synthetic scan converted into `tmp`/s.octree.
+fs::path syntheticOctree(const test::TempDir& tmp, uint64_t points) {
   SyntheticSpec spec;
-  spec.points = 200'000;
+  spec.points = points;
   std::vector<std::unique_ptr<PointReader>> r;
   r.push_back(openSynthetic(spec));
   BuildOptions o;
   o.output = tmp.path() / "s.octree";
   o.progress = ProgressMode::Quiet;
   buildOctree(std::move(r), o);
+  return o.output;
+}
+}  // namespace
+
+TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is not installed";
+  test::TempDir tmp;
+  const fs::path octree = syntheticOctree(tmp, 200'000);
   const std::string shot = tmp.file("shot.png");
   std::string out;
   const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
-                          o.output.string() + " --width 320 --height 240 --frames 40 --orbit 3 --screenshot " + shot;
+                          octree.string() + " --width 320 --height 240 --frames 40 --orbit 3 --screenshot " + shot;
   const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
   out = test::readFile(tmp.file("log.txt"));
   ASSERT_EQ(rc, 0) << out;
@@ -50,14 +58,7 @@ TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
 TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
   if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is not installed";
   test::TempDir tmp;
-  SyntheticSpec spec;
-  spec.points = 100'000;
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openSynthetic(spec));
-  BuildOptions o;
-  o.output = tmp.path() / "s.octree";
-  o.progress = ProgressMode::Quiet;
-  buildOctree(std::move(r), o);
+  syntheticOctree(tmp, 100'000);
   {
     std::ofstream f(tmp.file("scene.json"));
     f << R"({"octrees": ["s.octree"], "camera": {"eye": [150, -60, 80], "target": [50, 50, 10], "fov": 50},
