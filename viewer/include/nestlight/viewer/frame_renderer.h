@@ -39,7 +39,7 @@ struct RenderSettings {
   // GL_POINTS splat diameter in measured point spacings of the finest drawn node at the point
   // (see shaders/points/splat_size.glsl and docs/VIEWER.md for how the default was chosen).
   float sizeScale = kDefaultSizeScale;
-  static constexpr float kDefaultSizeScale = 1.75f;
+  static constexpr float kDefaultSizeScale = 2.25f;
   float hqsDepthEpsilon = 1.0f;  // HQS: blend splats within this many splat radii of the front
   float minPointSize = 2.0f;     // pixels: below 2 a round splat covers fewer pixels than a spacing (holes)
   float maxPointSize = 64.0f;    // pixels: close to a sparse scan splats grow this far before holes open
