@@ -1,4 +1,5 @@
 // `nestlight view`: the interactive viewer.
+#include <functional>
 #include <memory>
 
 #include "cli.h"
@@ -9,12 +10,14 @@
 namespace nestlight::cli {
 
 namespace {
-// A scene file opens its first scan with the scene's camera and display settings (docs/SCENE.md).
-void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt) {
+// A scene file opens its first scan with the scene's camera and display settings (docs/SCENE.md);
+// what the command line says explicitly wins over the file (`given`: an option was on it).
+void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
+                const std::function<bool(const char*)>& given) {
   const gi::Scene scene = gi::loadScene(file);
   if (scene.octrees.empty()) throw Error(file.string(), "scene.octrees", "the viewer needs a scan to show");
   opt.octree = scene.octrees.front().path;
-  if (scene.cameraSet) {
+  if (scene.cameraSet && !given("--camera")) {
     viewer::Camera c;
     c.eye = scene.camera.eye;
     c.target = scene.camera.target;
@@ -22,11 +25,15 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt) {
     c.fovYDegrees = scene.camera.fovYDegrees;
     opt.camera = c;
   }
-  opt.settings.rasteriser = viewer::parseRasteriser(scene.display.rasteriser);
-  opt.settings.fixedPointSize = opt.settings.rasteriser == viewer::Rasteriser::Compute ? 1.f : 0.f;
-  opt.settings.splatting = viewer::parseSplatting(scene.display.splatting);
-  if (scene.display.pointSize) opt.settings.sizeScale = *scene.display.pointSize;
-  if (scene.display.edlStrength) opt.settings.edlStrength = *scene.display.edlStrength;
+  const gi::SceneDisplay& d = scene.display;
+  if (d.rasteriser && !given("--rasteriser")) {
+    opt.settings.rasteriser = viewer::parseRasteriser(*d.rasteriser);
+    if (!given("--fixed-point-size"))
+      opt.settings.fixedPointSize = opt.settings.rasteriser == viewer::Rasteriser::Compute ? 1.f : 0.f;
+  }
+  if (d.splatting && !given("--splatting")) opt.settings.splatting = viewer::parseSplatting(*d.splatting);
+  if (d.pointSize && !given("--point-size")) opt.settings.sizeScale = *d.pointSize;
+  if (d.edlStrength && !given("--edl")) opt.settings.edlStrength = *d.edlStrength;
 }
 }  // namespace
 
@@ -58,7 +65,8 @@ void addView(CLI::App& app, int& exitCode) {
     opt->settings = job->settings;
     opt->budgets = job->budgets;
     opt->colour = job->colour;
-    if (std::filesystem::path(*input).extension() == ".json") applyScene(*input, *opt);
+    if (std::filesystem::path(*input).extension() == ".json")
+      applyScene(*input, *opt, [cmd](const char* name) { return cmd->count(name) > 0; });
     exitCode = viewer::runViewer(*opt);
   });
 }

@@ -24,6 +24,12 @@ double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size
     best.fill(INFINITY);
     for (size_t j = lo; j < hi; ++j) {
       const uint32_t* o = at(j);
+      // Copies of one position (kept when their attributes differ) sort next to each other in
+      // Morton order: count each distinct neighbour once.
+      if (j > lo) {
+        const uint32_t* prev = at(j - 1);
+        if (prev[0] == o[0] && prev[1] == o[1] && prev[2] == o[2]) continue;
+      }
       const double dx = double(o[0]) - p[0], dy = double(o[1]) - p[1], dz = double(o[2]) - p[2];
       const double d2 = dx * dx + dy * dy + dz * dz;
       if (d2 <= 0 || d2 >= best.back()) continue;  // coincident points are one point on screen

@@ -95,12 +95,12 @@ TEST(Scene, FullSceneParses) {
 TEST(Scene, DisplaySettingsParse) {
   json j = minimal();
   Scene d = parseScene(j, "/scenes/test.json");
-  EXPECT_EQ(d.display.splatting, "hqs");
+  EXPECT_FALSE(d.display.splatting);
   EXPECT_FALSE(d.display.pointSize);
   j["display"] = json{{"rasteriser", "points"}, {"splatting", "basic"}, {"point_size", 2.5}, {"edl_strength", 0}};
   Scene s = parseScene(j, "/scenes/test.json");
-  EXPECT_EQ(s.display.rasteriser, "points");
-  EXPECT_EQ(s.display.splatting, "basic");
+  EXPECT_EQ(s.display.rasteriser.value_or(""), "points");
+  EXPECT_EQ(s.display.splatting.value_or(""), "basic");
   EXPECT_EQ(s.display.pointSize.value_or(0), 2.5f);
   EXPECT_EQ(s.display.edlStrength.value_or(-1), 0.f);
 }

@@ -76,6 +76,11 @@ TEST(Spacing, IndicesSelectTheSetAndDegenerateSetsAreUnknown) {
   std::vector<uint32_t> same(3 * 100000, 5);
   EXPECT_EQ(medianNeighbourSpacing(same.data(), nullptr, 100000), 0.0);
   EXPECT_EQ(medianNeighbourSpacing(xyz.data(), nullptr, 1), 0.0);
+  // Each point of the grid three times over (kept apart by their attributes): the same spacing.
+  std::vector<std::array<uint32_t, 3>> tripled;
+  for (auto& p : pts) tripled.insert(tripled.end(), {p, p, p});
+  const auto xyz3 = sortedPlane(tripled);
+  EXPECT_NEAR(medianNeighbourSpacing(xyz3.data(), nullptr, tripled.size(), 128, 96), all, 0.02 * all);
   EXPECT_EQ(medianNeighbourSpacing(xyz.data(), nullptr, 0), 0.0);
 }
 

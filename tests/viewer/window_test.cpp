@@ -78,6 +78,26 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
       covered += std::fabs(p[0] - 0.08f) + std::fabs(p[1] - 0.08f) + std::fabs(p[2] - 0.10f) > 0.05f;
     }
   EXPECT_GT(double(covered) / (160.0 * 120.0), 0.1) << out;
+  // The scene's camera is the one used: looking away from the scan, the frame is empty (the
+  // default camera, which frames the scan, would fill it).
+  {
+    std::ofstream f(tmp.file("away.json"));
+    f << R"({"octrees": ["s.octree"], "camera": {"eye": [150, -60, 80], "target": [250, -160, 150]}})";
+  }
+  const std::string away = tmp.file("away.png");
+  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+                         tmp.file("away.json") + " --width 160 --height 120 --frames 5 --screenshot " + away +
+                         " > " + tmp.file("away.txt") + " 2>&1").c_str()),
+            0)
+      << test::readFile(tmp.file("away.txt"));
+  viewer::Image empty = viewer::readImage(away);
+  size_t seen = 0;
+  for (int y = 0; y < empty.height; ++y)
+    for (int x = 0; x < empty.width; ++x) {
+      const float* p = empty.at(x, y);
+      seen += std::fabs(p[0] - 0.08f) + std::fabs(p[1] - 0.08f) + std::fabs(p[2] - 0.10f) > 0.05f;
+    }
+  EXPECT_EQ(seen, 0u);
   // A scene that names an unknown splatting stops with the file and the field.
   {
     std::ofstream f(tmp.file("bad.json"));

@@ -13,7 +13,9 @@ Camera Camera::framing(const Box3d& box, double fovYDegrees, double aspect, doub
   c.fovYDegrees = fovYDegrees;
   const glm::dvec3 lo(box.min.x, box.min.y, box.min.z), hi(box.max.x, box.max.y, box.max.z);
   const glm::dvec3 centre = (lo + hi) * 0.5;
-  const double az = glm::radians(azimuth), el = glm::radians(elevation);
+  // Straight down or up has no screen "up" for a z-up camera (glm::lookAt degenerates, and the
+  // viewer's orbit controller rebuilds its camera with z up): stop just short of the pole.
+  const double az = glm::radians(azimuth), el = glm::radians(std::clamp(elevation, -89.9, 89.9));
   const glm::dvec3 dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
   // The camera's axes for this direction (as glm::lookAt builds them; straight down or up picks
   // +y as the screen's up so that the basis stays defined).
@@ -39,9 +41,12 @@ Camera Camera::framing(const Box3d& box, double fovYDegrees, double aspect, doub
     hiX = std::max(hiX, x + tanX * t), loX = std::min(loX, x - tanX * t);
     hiY = std::max(hiY, y + tanY * t), loY = std::min(loY, y - tanY * t);
   }
+  // A scan of one point (or of coincident ones) has no extent to fit: stand off by a distance
+  // that doubles and the GPU's float offsets still resolve at the scan's coordinates.
   const double radius = glm::length(hi - lo) * 0.5;
-  const double distance =
-      std::max({(hiX - loX) / (2 * tanX), (hiY - loY) / (2 * tanY), std::max(radius, 1e-6) * 1e-3});
+  const double magnitude = std::max({std::fabs(centre.x), std::fabs(centre.y), std::fabs(centre.z)});
+  const double distance = std::max({(hiX - loX) / (2 * tanX), (hiY - loY) / (2 * tanY), 1e-3 * radius,
+                                    1e-6 * magnitude, 1e-3});
   c.target = centre + right * (0.5 * (hiX + loX)) + upAxis * (0.5 * (hiY + loY));
   c.eye = c.target + dir * distance;
   if (glm::length(glm::cross(forward, c.up)) < 1e-9) c.up = upAxis;

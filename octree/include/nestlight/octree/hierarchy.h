@@ -50,7 +50,7 @@ struct NodeRecord {
 // of the points drawn where this node is the finest drawn node (the node's own points and its
 // ancestors' points inside its cube), relative to the nominal spacing of its
 // level, in steps of 2^(1/16) (4.4%): code = 128 + round(16 log2(measured / nominal)), clamped to
-// [1, 255], so ratios from 1/240 to 240 are kept. 0 means not measured.
+// [1, 255], so ratios from 1/245 to 245 are kept. 0 means not measured.
 uint8_t encodeSpacing(double measured, double nominal);
 // The measured spacing in the units of `nominal`; 0 when `code` is 0.
 double decodeSpacing(uint8_t code, double nominal);

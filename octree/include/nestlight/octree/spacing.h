@@ -16,7 +16,7 @@ namespace nestlight {
 // The spacing of a point set on a surface: the side of the square of surface each point stands
 // for, sqrt(area / points), estimated locally from the distance r to the k-th nearest distinct
 // neighbour (k points within r: spacing = r sqrt(pi / k)) and taken as the median over the set.
-// It equals the step of a regular grid, and does not shrink for irregular sets as the
+// It is 1.02 times the step of a regular grid, and does not shrink for irregular sets as the
 // nearest-neighbour distance does (a jittered grid's nearest neighbours are closer than its step).
 // Positions are integers (x, y, z per point) in `xyz`; `indices` selects `n` of them (nullptr: the
 // first n), which must be in Morton order: the neighbour search looks at the `window` points on

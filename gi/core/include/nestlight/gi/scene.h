@@ -88,8 +88,8 @@ struct SceneOutput {
 // How `nestlight view scene.json` draws the scene's scans (the real-time point rendering; the
 // GI methods read `gi`). Names as `nestlight render` takes them.
 struct SceneDisplay {
-  std::string rasteriser = "points";  // points | compute
-  std::string splatting = "hqs";      // hqs | basic (points rasteriser)
+  std::optional<std::string> rasteriser;  // points | compute (none: the viewer's default)
+  std::optional<std::string> splatting;   // hqs | basic, points rasteriser (none: the viewer's default)
   std::optional<float> pointSize;     // splat diameter in measured spacings (none: the viewer's default)
   std::optional<float> edlStrength;   // eye-dome lighting (0: off; none: the viewer's default)
 };
