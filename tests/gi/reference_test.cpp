@@ -87,6 +87,40 @@ TEST(Reference, FurnaceDiscSphereCoversEveryDirection) {
   EXPECT_EQ(escaped, 0);
 }
 
+TEST(Reference, ClosedPoissonSampledBoxLeaksNoRay) {
+  // A closed unit box sampled evenly (Poisson-disk surfels, as `nestlight surfels` makes them),
+  // each point a disc facing its face's normal: no ray from inside may escape between discs,
+  // edges and corners included. With the radius rule of earlier versions (2/3 of today's) rays
+  // did escape, which shows the test can fail.
+  TriangleMesh box;
+  box.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  box.indices = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 2, 3, 7, 2, 7, 6, 1, 2, 6, 1, 6, 5, 3, 0, 4, 3, 4, 7};
+  SurfelOptions so;
+  so.method = SurfelSampling::PoissonDisk;
+  so.count = 12000;
+  const Surfels surfels = sampleSurfels(box, glm::mat4(1.0f), so);
+  auto leaks = [&](float radiusScale) {
+    DiscCloud c;
+    for (size_t i = 0; i < surfels.positions.size(); ++i) {
+      c.discs.emplace_back(surfels.positions[i], 0.0f);
+      c.normals.push_back(surfels.normals[i]);
+      c.colour.push_back(Rgb(1.0f));
+    }
+    assignDiscRadii(c.discs, radiusScale);
+    ReferenceScene s({std::move(c)}, {}, {}, {}, {}, EnvironmentMap());
+    Rng rng(7);
+    int escaped = 0;
+    for (int i = 0; i < 200000; ++i) {
+      SurfaceHit h;
+      const glm::vec3 o = glm::vec3(0.5f) + 0.4f * (glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f);
+      escaped += !s.intersect(o, sampleUniformSphere(rng.uniform2()), INFINITY, &h);
+    }
+    return escaped;
+  };
+  EXPECT_EQ(leaks(1.0f), 0);
+  EXPECT_GT(leaks(1.0f / 1.5f), 0);
+}
+
 TEST(Reference, RadianceCacheFurnaceReturnsAlbedoTimesL) {
   // Inside a closed sphere of discs emitting L, a Lambert receiver of albedo rho reflects rho*L.
   // Each sample is exact (cosine sampling cancels f*cos/pdf to rho, every ray finds L), so the

@@ -32,9 +32,10 @@ struct DiscCloudStats {
 
 // Loads whole levels of an octree, from the root down to `octree.maxLevel` or the deepest level
 // whose points fit in `octree.memoryBudget` (40 bytes per point here). A disc's radius follows
-// the local spacing of the loaded points: with d8 the distance to the 8th nearest neighbour,
-// r = radiusScale * d8 / 2, so that discs cover about twice the surface on average and leave
-// no holes on an evenly sampled surface (pi r^2 * density = 8 pi (d8/2)^2 / (pi d8^2) = 2).
+// the local spacing of the loaded points: with d8 the distance to the 8th nearest distinct
+// neighbour, r = radiusScale * 1.5 * d8 / 2, which closes an evenly sampled surface (Poisson
+// disk or grid: the derivation is at kDiscCoverage in reference_scene.cpp); discs then cover
+// about 4.5 times the surface on average.
 DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, DiscCloudStats* stats = nullptr);
 // Radii for `discs` from their neighbours as above (positions in .xyz; writes .w). With
 // `maxRadius` (one per disc), a radius never exceeds it: the loader passes the spacing of the
