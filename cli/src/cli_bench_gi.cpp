@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "cli.h"
-#include "cli_scene.h"
+#include "nestlight/gi/reference/render_scene.h"
 #include "nestlight/gi/metrics.h"
 #include "nestlight/gi/plot.h"
 #include "nestlight/gi/tone_map.h"
@@ -150,7 +150,7 @@ void addBenchGi(CLI::App& app, int& exitCode) {
     const fs::path sceneFile = fs::absolute(*scene);
     const fs::path dir = out->empty() ? sceneFile.parent_path() / "bench-gi" : fs::path(*out);
     fs::create_directories(dir);
-    SceneRenderOverrides base;
+    gi::SceneRenderOverrides base;
     if (*width) base.width = *width;
     if (*height) base.height = *height;
     base.quiet = true;
@@ -180,14 +180,14 @@ void addBenchGi(CLI::App& app, int& exitCode) {
       std::printf("bench gi: rendering the reference to %.4g relative error (at most %.0f s, %d spp)...\n", *refError,
                   *refTime, *refSpp);
       std::fflush(stdout);
-      SceneRenderOverrides ov = base;
+      gi::SceneRenderOverrides ov = base;
       ov.method = "reference";
       ov.targetError = *refError;
       ov.timeLimit = *refTime;
       ov.spp = *refSpp;
       ov.seed = 0x5eed;  // independent of the measured runs' seed
       ov.output = dir / "reference.exr.tmp.exr";
-      SceneRenderReport rep = renderSceneFile(sceneFile, ov);
+      gi::SceneRenderReport rep = gi::renderSceneFile(sceneFile, ov);
       reference = rep.result.image;
       // One that stopped short of the error target (time or sample limit) is kept for this run
       // but not reused: the next run tries again.
@@ -219,14 +219,14 @@ void addBenchGi(CLI::App& app, int& exitCode) {
         row.method = m;
         row.spp = s;
         for (int r = 0; r < *runs; ++r) {
-          SceneRenderOverrides ov = base;
+          gi::SceneRenderOverrides ov = base;
           ov.method = m;
           ov.spp = s;
           ov.targetError = 0.0;
           ov.timeLimit = 0.0;
           ov.seed = 1;
           ov.output = dir / (m + "_" + std::to_string(s) + ".exr");
-          SceneRenderReport rep = renderSceneFile(sceneFile, ov);
+          gi::SceneRenderReport rep = gi::renderSceneFile(sceneFile, ov);
           row.ms.push_back(rep.result.seconds * 1e3);
           if (r == 0) row.result = std::move(rep.result);
         }

@@ -13,7 +13,7 @@
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/converters/synthetic.h"
 #include "nestlight/converters/test_scenes.h"
-#include "cli_scene.h"
+#include "nestlight/gi/reference/render_scene.h"
 #include "nestlight/converters/verify.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
@@ -151,11 +151,11 @@ void addDemo(CLI::App& app, int& exitCode) {
       so.height = 150;
       so.quiet = true;
       const fs::path scene = makeTestScene(TestSceneKind::Cornell, work / "cornell", so);
-      SceneRenderOverrides ov;
+      gi::SceneRenderOverrides ov;
       ov.spp = 64;
       ov.quiet = true;
       ov.output = fs::path(*image).replace_extension("").string() + "-gi.exr";
-      SceneRenderReport gi = renderSceneFile(scene, ov);
+      gi::SceneRenderReport gi = gi::renderSceneFile(scene, ov);
       std::printf("  light     %s (+ .png): a scanned room lighting a glossy sphere, path traced (Embree), %d samples/pixel,\n"
                   "            %.2f s, %.2f M rays/s, estimated error %.1f%%\n",
                   gi.exr.c_str(), gi.result.samplesPerPixel, gi.result.seconds, gi.result.raysPerSecond() / 1e6,

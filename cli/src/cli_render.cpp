@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "cli.h"
-#include "cli_scene.h"
+#include "nestlight/gi/reference/render_scene.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/viewer/headless.h"
 
@@ -117,7 +117,7 @@ void addRender(CLI::App& app, int& exitCode) {
                 "Render each frame only once its cut is fully loaded (deterministic images)");
   cmd->add_option("--timeout", job->timeoutSeconds, "Seconds to wait for a complete cut")->capture_default_str();
   addRenderOptions(cmd, *job, text);
-  auto sc = std::make_shared<SceneRenderOverrides>();
+  auto sc = std::make_shared<gi::SceneRenderOverrides>();
   auto mode = std::make_shared<std::string>();
   std::string group = "Scene files";
   cmd->add_option("--method", sc->method, "Scenes: reference (path traced) or direct (one bounce)")
@@ -146,7 +146,7 @@ void addRender(CLI::App& app, int& exitCode) {
       }
       if (!mode->empty()) sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
       sc->output = job->output;
-      renderSceneFile(*octree, *sc);
+      gi::renderSceneFile(*octree, *sc);
       exitCode = 0;
       return;
     }

@@ -105,6 +105,30 @@ TEST(Scene, DisplaySettingsParse) {
   EXPECT_EQ(s.display.edlStrength.value_or(-1), 0.f);
 }
 
+TEST(Scene, CamerasOfAPathAreInterpolatedPerFrame) {
+  json j = minimal();
+  j["camera_path"] = json{{"fps", 2},
+                          {"keyframes", json::array({json{{"time", 0}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}},
+                                                     json{{"time", 1.5}, {"eye", {3, 0, 0}}, {"target", {4, 0, 0}}}})}};
+  Scene s = parseScene(j, "/scenes/test.json");
+  const auto cams = sceneCameras(s);
+  ASSERT_EQ(cams.size(), 4u);  // t = 0, 0.5, 1, 1.5
+  for (size_t f = 0; f < cams.size(); ++f) {
+    EXPECT_DOUBLE_EQ(cams[f].eye.x, 2.0 * f * 0.5);  // eye x runs 0 to 3 over 1.5 s
+    EXPECT_DOUBLE_EQ(cams[f].target.x, cams[f].eye.x + 1);
+  }
+  // `still` takes the scene's camera instead; without one it is an error naming the field.
+  EXPECT_EQ(sceneCameras(s, true).size(), 1u);
+  json noCamera = j;
+  noCamera.erase("camera");
+  try {
+    sceneCameras(parseScene(noCamera, "/scenes/test.json"), true);
+    ADD_FAILURE() << "no camera accepted";
+  } catch (const nestlight::Error& e) {
+    EXPECT_EQ(e.position(), "scene.camera");
+  }
+}
+
 TEST(Scene, ErrorsNameTheField) {
   auto with = [](const std::string& pointer, const json& v) {
     json j = minimal();

@@ -405,6 +405,42 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
   return s;
 }
 
+std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
+  const std::string file = scene.file.string();
+  std::vector<SceneCamera> cameras;
+  if (scene.cameraPath.empty() || still) {
+    if (!scene.cameraSet) throw Error(file, "scene.camera", "missing: a render needs a camera (or a camera_path)");
+    cameras.push_back(scene.camera);
+    return cameras;
+  }
+  const auto& keys = scene.cameraPath;
+  const double frameCount = std::floor(keys.back().time * scene.cameraPathFps + 1e-9) + 1;
+  constexpr double kMaxFrames = 1e6;
+  if (frameCount > kMaxFrames)
+    throw Error(file, "scene.camera_path",
+                "asks for " + std::to_string(frameCount) + " frames (at most " + std::to_string(int(kMaxFrames)) + ")");
+  const int frames = int(frameCount);
+  for (int f = 0; f < frames; ++f) {
+    const double t = f / scene.cameraPathFps;
+    size_t k = 0;
+    while (k + 1 < keys.size() && keys[k + 1].time <= t) ++k;
+    SceneCamera c = scene.camera;
+    if (k + 1 < keys.size() && t >= keys[k].time) {
+      const double a = (t - keys[k].time) / (keys[k + 1].time - keys[k].time);
+      c.eye = glm::mix(keys[k].eye, keys[k + 1].eye, a);
+      c.target = glm::mix(keys[k].target, keys[k + 1].target, a);
+    } else {
+      c.eye = keys[k].eye;
+      c.target = keys[k].target;
+    }
+    if (!viewIsValid(c.eye, c.target, c.up))
+      throw Error(file, "scene.camera_path",
+                  "frame " + std::to_string(f) + ": eye meets target or looks along \"up\" between keyframes");
+    cameras.push_back(c);
+  }
+  return cameras;
+}
+
 Scene loadScene(const std::filesystem::path& file) {
   std::ifstream in(file);
   if (!in) throw Error(file.string(), "", "cannot open scene file");

@@ -116,6 +116,12 @@ struct Scene {
   glm::mat4 localFromObject(const SceneMesh& m) const;
 };
 
+// The cameras a render of `scene` draws: one per frame of its camera path (eye and target
+// interpolated linearly between keyframes, sampled at the path's fps), or its camera alone when
+// it has no path or `still`. Throws nestlight::Error naming the scene file and field when there
+// is no camera, the path asks for more than a million frames, or a frame's view is degenerate.
+std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still = false);
+
 // Throws nestlight::Error("scene.json", "scene.meshes[0].transform.scale", reason) on any
 // fault. Relative paths resolve against the scene file's folder. Without "origin", the origin is
 // the centre of the first octree's bounds (its metadata is read), else 0.

@@ -1,5 +1,5 @@
-// Rendering scene files (the path-traced reference and direct lighting), shared by `render`
-// and `bench gi`.
+// Rendering a scene file with the path-traced reference (or direct lighting): the whole job of
+// `nestlight render scene.json`, shared with `bench gi` and the demo.
 #pragma once
 
 #include <filesystem>
@@ -9,13 +9,13 @@
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
 
-namespace nestlight::cli {
+namespace nestlight::gi {
 
 struct SceneRenderOverrides {
   std::optional<int> width, height;
   std::optional<double> fov;
   std::optional<std::string> method;
-  std::optional<gi::RadianceMode> mode;
+  std::optional<RadianceMode> mode;
   std::optional<int> bounces, spp;
   std::optional<double> targetError, timeLimit;
   std::optional<uint64_t> seed;
@@ -25,14 +25,18 @@ struct SceneRenderOverrides {
 };
 
 struct SceneRenderReport {
-  gi::Scene scene;
-  gi::ReferenceResult result;
+  Scene scene;
+  ReferenceResult result;
   std::filesystem::path exr;    // the last frame's
   int frames = 1;
   double loadSeconds = 0;
   uint64_t discs = 0, triangles = 0;
 };
 
+// Loads `file`, applies `overrides`, renders every frame (the camera, or each frame of the
+// camera path) with the method the scene names and writes linear EXR (plus the scene's PNG).
+// Progress and load lines go to stderr unless overrides.quiet. Throws nestlight::Error naming
+// the file and the field at fault.
 SceneRenderReport renderSceneFile(const std::filesystem::path& file, const SceneRenderOverrides& overrides);
 
-}  // namespace nestlight::cli
+}  // namespace nestlight::gi
