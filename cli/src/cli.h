@@ -41,9 +41,6 @@ void addCompare(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");
-// Converts a seeded synthetic scan of `points` points into `dir` (reused when it already holds
-// that many): the scans of `stress`, `bench stream` and `bench render`.
-std::filesystem::path generateStreamingOctree(uint64_t points, const std::filesystem::path& dir);
 // "1G", "512M", "64k", plain bytes.
 uint64_t parseBytes(const std::string& text);
 // Files as given; a directory stands for its supported point files, sorted by name.

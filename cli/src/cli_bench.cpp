@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "cli.h"
+#include "nestlight/converters/synthetic_octree.h"
 #include "nestlight/converters/synthetic.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
@@ -147,7 +148,7 @@ void addBenchStream(CLI::App* bench, int& exitCode) {
     fs::path octree = *dir;
     if (!generate->empty()) {
       const uint64_t n = parseCount(*generate, "--generate");
-      octree = generateStreamingOctree(n, fs::path(*work) / ("stream_" + *generate + ".octree"));
+      octree = ensureSyntheticOctree(n, fs::path(*work) / ("stream_" + *generate + ".octree"));
     }
     OctreeReader reader(octree);
     const Metadata& m = reader.metadata();

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "cli.h"
+#include "nestlight/converters/synthetic_octree.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/frame_renderer.h"
@@ -34,7 +35,7 @@ void addBenchRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--runs", *runs, "Timed frames per rasteriser (the median is reported)")->capture_default_str();
   cmd->add_option("--json", *json, "Where to write the results")->capture_default_str();
   cmd->callback([=, &exitCode]() {
-    const fs::path oct = octree->empty() ? generateStreamingOctree(parseCount(*generate, "--generate"),
+    const fs::path oct = octree->empty() ? ensureSyntheticOctree(parseCount(*generate, "--generate"),
                                                                    fs::path(*dir) / ("render_" + *generate + ".octree"))
                                          : fs::path(*octree);
     OctreeReader reader(oct);

@@ -12,8 +12,7 @@
 #include <fstream>
 
 #include "cli.h"
-#include "nestlight/converters/builder.h"
-#include "nestlight/converters/synthetic.h"
+#include "nestlight/converters/synthetic_octree.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/streaming/stress.h"
@@ -21,35 +20,6 @@
 namespace nestlight::cli {
 
 namespace fs = std::filesystem;
-
-// "20M", "1.5G", "64k", plain numbers.
-// Converts a synthetic scan of `points` points (the `generate` scene, seed 42) into `dir`
-// straight from the synthetic source; reuses an octree already there with that many points.
-fs::path generateStreamingOctree(uint64_t points, const fs::path& dir) {
-  if (fs::exists(dir / "metadata.json")) {
-    try {
-      if (OctreeReader(dir).metadata().points == points) return dir;
-    } catch (const Error&) {
-    }
-  }
-  SyntheticSpec spec;
-  spec.points = points;
-  spec.seed = 42;
-  spec.intensity = false;
-  BuildOptions o;
-  o.output = dir;
-  o.overwrite = true;
-  o.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> sources;
-  sources.push_back(openSynthetic(spec));
-  std::fprintf(stderr, "generating and converting %s synthetic points into %s\n",
-               humanCount(double(points)).c_str(), dir.c_str());
-  const auto t = std::chrono::steady_clock::now();
-  buildOctree(std::move(sources), o);
-  std::fprintf(stderr, "  converted in %.1f s\n",
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count());
-  return dir;
-}
 
 void addStress(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand("stress",
@@ -111,7 +81,7 @@ void addStress(CLI::App& app, int& exitCode) {
       temp = work->empty()
                  ? fs::temp_directory_path() / ("nestlight-stress-" + std::to_string(::getpid()))
                  : fs::path();
-      octree = generateStreamingOctree(parseCount(*generate, "--generate"),
+      octree = ensureSyntheticOctree(parseCount(*generate, "--generate"),
                                        work->empty() ? temp : fs::path(*work));
     }
     OctreeReader reader(octree);

@@ -1,6 +1,8 @@
 // Synthetic point source: determinism (batch sizes, rewind), counts, bounds, special shapes,
 // (its speed is measured by benchmarks, not tests).
 #include "nestlight/converters/synthetic.h"
+#include "nestlight/converters/synthetic_octree.h"
+#include "nestlight/octree/octree_reader.h"
 
 #include <time.h>
 
@@ -189,3 +191,15 @@ TEST(Synthetic, ParseShape) {
 
 }  // namespace
 }  // namespace nestlight
+
+TEST(SyntheticOctree, IsBuiltOnceAndRebuiltForAnotherSize) {
+  nestlight::test::TempDir tmp;
+  const auto dir = tmp.path() / "s.octree";
+  ASSERT_EQ(nestlight::ensureSyntheticOctree(20'000, dir, true), dir);
+  EXPECT_EQ(nestlight::OctreeReader(dir).metadata().points, 20'000u);
+  const auto stamp = std::filesystem::last_write_time(dir / "metadata.json");
+  nestlight::ensureSyntheticOctree(20'000, dir, true);  // reused: not written again
+  EXPECT_EQ(std::filesystem::last_write_time(dir / "metadata.json"), stamp);
+  nestlight::ensureSyntheticOctree(30'000, dir, true);
+  EXPECT_EQ(nestlight::OctreeReader(dir).metadata().points, 30'000u);
+}
