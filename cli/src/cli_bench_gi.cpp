@@ -159,8 +159,9 @@ void addBenchGi(CLI::App& app, int& exitCode) {
     // The reference, cached under a key of everything that changes it.
     gi::Scene probe = gi::loadScene(sceneFile);
     int W = *width ? *width : probe.camera.width, H = *height ? *height : probe.camera.height;
-    std::string key = fileHash(sceneFile) + ":" + assetStamp(probe) + ":" + std::to_string(W) + "x" +
-                      std::to_string(H) + ":" + std::to_string(*refError);
+    std::string key = "model" + std::to_string(gi::kReferenceModelVersion) + ":" + fileHash(sceneFile) + ":" +
+                      assetStamp(probe) + ":" + std::to_string(W) + "x" + std::to_string(H) + ":" +
+                      std::to_string(*refError);
     fs::path refPath = dir / "reference.exr";
     gi::HdrImage reference;
     json refInfo;

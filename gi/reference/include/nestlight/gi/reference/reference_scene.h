@@ -43,6 +43,11 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
 // disc metres wide.
 void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std::vector<float>* maxRadius = nullptr);
 
+// Changes whenever the same scene would render differently (the disc model, the integrator), so
+// that images cached under an older model (`bench gi`'s reference) are not taken for current.
+// 2: disc radius 1.5 x half the 8th-neighbour distance (evenly sampled surfaces closed).
+inline constexpr int kReferenceModelVersion = 2;
+
 struct SurfaceHit {
   enum class Kind { None, Disc, Triangle } kind = Kind::None;
   float t = 0;
