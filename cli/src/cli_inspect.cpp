@@ -1,5 +1,8 @@
 // `nestlight info` and `nestlight verify`.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "cli.h"
 #include "nestlight/converters/verify.h"
@@ -35,6 +38,23 @@ void addInfo(CLI::App& app, int& exitCode) {
                 m.offset.y, m.offset.z, m.scale, m.cubeSize, m.cubeWorldSize());
     std::printf("tree       %llu nodes, depth %u, root spacing %g\n", (unsigned long long)m.nodes, m.depth,
                 m.spacing);
+    if (m.version >= 2) {
+      // Per level, the median over its nodes of the measured spacing (docs/FORMAT.md, byte 3):
+      // how dense the scan really is where each level is the finest drawn. Reads the whole
+      // hierarchy (kilobytes per thousand nodes).
+      std::vector<std::vector<double>> perLevel(m.depth + 1);
+      for (const auto& [key, e] : r.allNodes())
+        if (e.spacingCode && key.level <= m.depth)
+          perLevel[key.level].push_back(decodeSpacing(e.spacingCode, std::ldexp(m.spacing, -int(key.level))));
+      std::printf("spacing    measured (median per level):");
+      for (size_t l = 0; l < perLevel.size(); ++l) {
+        auto& v = perLevel[l];
+        if (v.empty()) continue;
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        std::printf(" L%zu %.4g", l, v[v.size() / 2]);
+      }
+      std::printf("\n");
+    }
     std::printf("payload    %s (%.2f bytes/point), hierarchy %s, codec %s\n",
                 humanBytes(double(m.payloadBytes)).c_str(), m.points ? double(m.payloadBytes) / m.points : 0.0,
                 humanBytes(double(m.hierarchyBytes)).c_str(), m.build.value("codec", std::string("?")).c_str());

@@ -41,6 +41,10 @@ TEST(Cli, ConvertInfoVerifyExport) {
   EXPECT_EQ(j["accounting"]["kept"], 20000);
   EXPECT_EQ(j["accounting"]["duplicates_merged"], 0);
   EXPECT_TRUE(j["accounting"]["rejected"].is_object());
+  EXPECT_EQ(j["version"], 2);
+  // The text form names the measured spacing of the root level (20,000 points: one node).
+  ASSERT_EQ(runCli("info " + t.file("o"), &out), 0) << out;
+  EXPECT_NE(out.find("spacing    measured (median per level): L0 "), std::string::npos) << out;
   EXPECT_EQ(runCli("verify " + t.file("o"), &out), 0) << out;
   EXPECT_EQ(runCli("export " + t.file("o") + " -o " + t.file("back.las"), &out), 0) << out;
   EXPECT_NE(out.find("20000 points"), std::string::npos) << out;
