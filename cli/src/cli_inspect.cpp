@@ -1,12 +1,12 @@
 // `nestlight info` and `nestlight verify`.
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <vector>
 
 #include "cli.h"
 #include "nestlight/converters/verify.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/octree/spacing.h"
 
 namespace nestlight::cli {
 
@@ -38,14 +38,14 @@ void addInfo(CLI::App& app, int& exitCode) {
                 m.offset.y, m.offset.z, m.scale, m.cubeSize, m.cubeWorldSize());
     std::printf("tree       %llu nodes, depth %u, root spacing %g\n", (unsigned long long)m.nodes, m.depth,
                 m.spacing);
-    if (m.version >= 2) {
+    if (m.version >= 2) {  // version 1 measured nothing
       // Per level, the median over its nodes of the measured spacing (docs/FORMAT.md, byte 3):
       // how dense the scan really is where each level is the finest drawn. Reads the whole
       // hierarchy (kilobytes per thousand nodes).
       std::vector<std::vector<double>> perLevel(m.depth + 1);
       for (const auto& [key, e] : r.allNodes())
-        if (e.spacingCode && key.level <= m.depth)
-          perLevel[key.level].push_back(decodeSpacing(e.spacingCode, std::ldexp(m.spacing, -int(key.level))));
+        if (const double s = measuredSpacing(m, key.level, e); s > 0 && key.level <= m.depth)
+          perLevel[key.level].push_back(s);
       std::printf("spacing    measured (median per level):");
       for (size_t l = 0; l < perLevel.size(); ++l) {
         auto& v = perLevel[l];

@@ -291,6 +291,7 @@ class Builder {
     if (bounds.empty()) {
       meta_.offset = {0, 0, 0};
       meta_.cubeSize = 1;
+      meta_.spacing = meta_.cubeWorldSize() / 128.0;
       return;
     }
     // The integer grid keeps the input's: offsets step from the first LAS offset in whole scales,
@@ -308,6 +309,7 @@ class Builder {
     uint64_t cube = 1;
     while (cube < extent) cube <<= 1;
     meta_.cubeSize = static_cast<uint32_t>(cube);
+    meta_.spacing = meta_.cubeWorldSize() / 128.0;  // the root's; nodes measure theirs against it
   }
 
   // ---- the reading pipeline -------------------------------------------------------------------
@@ -1060,8 +1062,7 @@ class Builder {
       local.push(rel, pts.attrsOf(i));
     }
     const double measured = medianNeighbourSpacing(pts.pos.data(), drawnSet.data(), drawnSet.size()) * meta_.scale;
-    const double nominal = meta_.cubeWorldSize() / 128.0 / double(uint64_t(1) << key.level);
-    writer_->writeNode(key, local, encodeSpacing(measured, nominal));
+    writer_->writeNode(key, local, encodeSpacing(measured, meta_.levelSpacing(key.level)));
     stored_ += set.size();
   }
 
@@ -1139,7 +1140,6 @@ class Builder {
     meta_.layout = layout_;
     meta_.points = accounting_.kept;
     meta_.accounting = accounting_;
-    meta_.spacing = meta_.cubeWorldSize() / 128.0;
     meta_.hierarchyStep = kHierarchyStep;
     meta_.normalsEstimated = estimate_;
     if (estimate_)

@@ -47,4 +47,8 @@ double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size
   return *mid;
 }
 
+double measuredSpacing(const Metadata& meta, uint32_t level, const HierarchyEntry& e) {
+  return meta.version >= 2 ? decodeSpacing(e.spacingCode, meta.levelSpacing(level)) : 0.0;
+}
+
 }  // namespace nestlight

@@ -48,7 +48,7 @@ uint32_t NodeTable::addNode(const NodeKey& key, const HierarchyEntry& e, uint32_
     n.half[a] = 0.5 * (hi - lo);
   }
   n.radius = std::sqrt(n.half[0] * n.half[0] + n.half[1] * n.half[1] + n.half[2] * n.half[2]);
-  n.spacing = std::ldexp(meta_.spacing, -static_cast<int>(key.level));
+  n.spacing = meta_.levelSpacing(key.level);
   return idx;
 }
 

@@ -14,6 +14,7 @@
 #include "loaders.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/octree/spacing.h"
 #include "node_table.h"
 #include "residency.h"
 
@@ -187,7 +188,6 @@ void Streamer::Impl::upload(FrameStats& s) {
 }
 
 void Streamer::Impl::buildDrawList(FrameStats& s) {
-  const bool measuredSpacings = reader.metadata().version >= 2;
   drawList.clear();
   drawFrame.resize(table.size(), 0);
   for (uint32_t idx : cut.nodes) {
@@ -196,8 +196,7 @@ void Streamer::Impl::buildDrawList(FrameStats& s) {
     // The parent precedes its children in the cut: its drawFrame is already this frame's.
     if (n.parent != kNone && drawFrame[n.parent] != frame) continue;
     drawFrame[idx] = frame;
-    // Byte 3 was reserved in format version 1: only version 2 gives it a meaning.
-    const double measured = measuredSpacings ? decodeSpacing(n.entry.spacingCode, n.spacing) : 0.0;
+    const double measured = measuredSpacing(reader.metadata(), n.key.level, n.entry);
     drawList.push_back({n.key, n.handle, n.numPoints, table.cube(n.key), n.spacing, measured > 0 ? measured : n.spacing});
     s.drawPoints += n.numPoints;
   }

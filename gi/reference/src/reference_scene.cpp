@@ -27,12 +27,12 @@ constexpr int kRadiusNeighbours = 8;
 // point farther than r from a sample (else one more sample would fit), so discs of radius r close
 // it. Its density is about 0.7 / r^2 (random close packing of the r/2 exclusion discs covers
 // ~55% of the plane), so 9 samples (a point and its 8 neighbours) fill a disc of radius
-// sqrt(9 / (0.7 pi)) r = 2.0 r on average and half the 8th-neighbour distance is about r, with
-// local spread of 10-20%: with that alone, gaps open where the neighbours crowd. On a square
-// grid of step a the covering radius is a / sqrt(2), exactly half the 8th-neighbour distance.
-// A factor of 1.5 on half the 8th-neighbour distance covers both with a third to spare
-// (`Reference.ClosedPoissonSampledBoxLeaksNoRay`); the cost is overlap, which discs that
-// share a plane do not see.
+// sqrt(9 / (0.7 pi)) r = 2.0 r on average and half the 8th-neighbour distance is about r; it is
+// less where the neighbours crowd, and gaps open there. On a square grid of step a the covering
+// radius is a / sqrt(2), exactly half the 8th-neighbour distance. A factor of 1.5 on half the
+// 8th-neighbour distance leaves a margin of 50% over both (the test
+// `Reference.ClosedPoissonSampledBoxLeaksNoRay` checks the Poisson-disk case and that the old
+// factor leaks); the cost is overlap, which discs that share a plane do not see.
 constexpr float kDiscCoverage = 1.5f;
 
 struct DiscAdaptor {
@@ -128,7 +128,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
     stats.nodes++;
     // A node's sample keeps points at least its spacing apart, so it leaves no surface point
     // farther than that from a sample: no disc needs to be wider (with the same margin).
-    const float nodeSpacing = float(meta.spacing / double(1u << key.level)) * octree.radiusScale * kDiscCoverage;
+    const float nodeSpacing = float(meta.levelSpacing(key.level)) * octree.radiusScale * kDiscCoverage;
     for (size_t i = 0; i < pts.size(); ++i) {
       const uint32_t* p = &pts.pos[3 * i];
       glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) * meta.scale;

@@ -1,6 +1,8 @@
 // metadata.json: everything a reader needs before touching the hierarchy. See docs/FORMAT.md.
 #pragma once
 
+#include <cmath>
+
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -81,6 +83,8 @@ struct Metadata {
   uint64_t rootChunkChecksum = 0;
 
   double cubeWorldSize() const { return cubeSize * scale; }
+  // The nominal sample spacing of a level: the root's `spacing` halved per level.
+  double levelSpacing(uint32_t level) const { return std::ldexp(spacing, -static_cast<int>(level)); }
   // World bounds of a node's cube.
   Box3d nodeBounds(uint32_t level, uint32_t x, uint32_t y, uint32_t z) const;
 

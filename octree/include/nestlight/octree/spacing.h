@@ -11,6 +11,9 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "nestlight/octree/hierarchy.h"
+#include "nestlight/octree/metadata.h"
+
 namespace nestlight {
 
 // The spacing of a point set on a surface: the side of the square of surface each point stands
@@ -27,6 +30,11 @@ namespace nestlight {
 // Returns 0 when fewer than 8 queries find k distinct neighbours (too few points, or coincident
 // ones): the caller then keeps the nominal spacing.
 inline constexpr int kSpacingNeighbours = 6;
+
+// The measured spacing of the node at `level` with hierarchy entry `e`, in world units; 0 when
+// it was not measured (format version 1, whose byte 3 was reserved, or too few points).
+double measuredSpacing(const Metadata& meta, uint32_t level, const HierarchyEntry& e);
+
 double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size_t n, size_t maxQueries = 128,
                               size_t window = 32);
 
