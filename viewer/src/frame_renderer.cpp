@@ -48,9 +48,9 @@ FrameRenderer::FrameRenderer()
   glCreateVertexArrays(1, &vao_);
   if (epoxy_has_gl_extension("GL_NV_shader_atomic_int64") && epoxy_has_gl_extension("GL_ARB_gpu_shader_int64")) {
     try {
-      atomic64_ = std::make_unique<ShaderProgram>(std::vector<ShaderProgram::Stage>{
+      atomic64_ = std::make_unique<gl::ShaderProgram>(std::vector<gl::ShaderProgram::Stage>{
           {GL_COMPUTE_SHADER, "points/raster_atomic64.comp"}});
-      resolve64_ = std::make_unique<ShaderProgram>(std::vector<ShaderProgram::Stage>{
+      resolve64_ = std::make_unique<gl::ShaderProgram>(std::vector<gl::ShaderProgram::Stage>{
           {GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve64.frag"}});
     } catch (const Error& e) {
       // A driver that offers the extension but rejects the shader: the 32-bit path still works.
@@ -157,7 +157,7 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
     return glm::vec3(origin - camera.eye);  // the difference is small: float keeps it exact enough
   };
   // One compute pass over every node: a dispatch per node with its buffer and camera offset.
-  auto dispatchNodes = [&](const ShaderProgram& pass, bool countPoints) {
+  auto dispatchNodes = [&](const gl::ShaderProgram& pass, bool countPoints) {
     const GLuint p = pass.id();
     pass.use();
     setMat4(p, "uClipFromView", clipFromView);
@@ -189,7 +189,7 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
                                          camera.projection(double(fullW) / fullH);
     // One draw of every node with `prog`: the splat vertex shader's uniforms and each node's
     // buffer, offset and place in the draw tree.
-    auto drawSplats = [&](const ShaderProgram& prog, bool countPoints) {
+    auto drawSplats = [&](const gl::ShaderProgram& prog, bool countPoints) {
       const GLuint p = prog.id();
       prog.use();
       setMat4(p, "uClipFromView", splatClipFromView);

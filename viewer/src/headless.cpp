@@ -10,7 +10,7 @@
 
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
-#include "nestlight/viewer/gl_context.h"
+#include "nestlight/gl/context.h"
 
 namespace nestlight::viewer {
 
@@ -105,7 +105,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
   if (std::find(modes.begin(), modes.end(), mode) == modes.end())
     throw Error(job.octree.string(), "", std::string("the scan has no attribute for colour mode '") +
                                              colourModeName(mode) + "'");
-  auto context = createHeadlessContext();
+  auto context = gl::createHeadlessContext();
   if (!job.quiet) std::printf("render: %s\n", context->description().c_str());
   {
     GlNodeStore store(meta, mode);

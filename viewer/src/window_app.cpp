@@ -16,7 +16,7 @@
 
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
-#include "nestlight/viewer/gl_context.h"
+#include "nestlight/gl/context.h"
 
 namespace nestlight::viewer {
 
@@ -58,7 +58,7 @@ int runViewer(const ViewerOptions& opt) {
   const Metadata& meta = reader.metadata();
   const auto modes = availableColourModes(meta);
   ColourMode mode = opt.colour ? *opt.colour : modes.front();
-  WindowContext ctx(opt.width, opt.height, "nestlight view - " + opt.octree.filename().string());
+  gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + opt.octree.filename().string());
   std::printf("view: %s\n", ctx.description().c_str());
 
   IMGUI_CHECKVERSION();

@@ -15,7 +15,7 @@
 #include "nestlight/viewer/camera.h"
 #include "nestlight/viewer/gl_node_store.h"
 #include "nestlight/viewer/image.h"
-#include "nestlight/viewer/shader_library.h"
+#include "nestlight/gl/program.h"
 
 namespace nestlight::viewer {
 
@@ -84,8 +84,8 @@ class FrameRenderer {
   void drawTile(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store, const Camera& camera,
                 int fullW, int fullH, int x0, int y0, int w, int h, const RenderSettings& s, DrawTimings* t);
 
-  ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_, edl_;
-  std::unique_ptr<ShaderProgram> atomic64_, resolve64_;  // only with 64-bit atomics
+  gl::ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_, edl_;
+  std::unique_ptr<gl::ShaderProgram> atomic64_, resolve64_;  // only with 64-bit atomics
   GLuint packedSsbo_ = 0;
   GLuint vao_ = 0;
   GLuint gbuffer_ = 0, outputFbo_ = 0;

@@ -1,4 +1,4 @@
-#include "nestlight/viewer/gl_context.h"
+#include "nestlight/gl/context.h"
 
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
@@ -12,7 +12,7 @@
 
 #include "nestlight/octree/error.h"
 
-namespace nestlight::viewer {
+namespace nestlight::gl {
 
 namespace {
 
@@ -244,4 +244,4 @@ void enableGlDebugOutput() {
       nullptr);
 }
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::gl

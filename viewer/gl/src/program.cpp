@@ -1,4 +1,4 @@
-#include "nestlight/viewer/shader_library.h"
+#include "nestlight/gl/program.h"
 
 #include <algorithm>
 #include <cctype>
@@ -8,7 +8,7 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/shaders/embedded.h"
 
-namespace nestlight::viewer {
+namespace nestlight::gl {
 
 namespace {
 
@@ -221,4 +221,4 @@ ShaderProgram& ShaderProgram::operator=(ShaderProgram&& o) noexcept {
   return *this;
 }
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::gl

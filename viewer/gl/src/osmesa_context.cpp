@@ -1,7 +1,8 @@
 // The OSMesa fallback: an OpenGL 4.5 core context rendered by Mesa into client memory, for
 // systems whose libEGL lacks the surfaceless platform. libepoxy resolves GL functions only
-// through EGL or GLX, so once the context is current every function the viewer calls
-// (listed at build time by viewer/gl_functions.cmake) is pointed at OSMesa's own.
+// through EGL or GLX, so once the context is current every function pointer of epoxy's table
+// (all of them, listed at build time by viewer/gl/gl_functions.cmake, so a call from any library
+// works) that OSMesa provides is pointed at OSMesa's own.
 #include <epoxy/gl.h>
 #include <GL/osmesa.h>
 
@@ -11,9 +12,9 @@
 #include <vector>
 
 #include "nestlight/octree/error.h"
-#include "nestlight/viewer/gl_context.h"
+#include "nestlight/gl/context.h"
 
-namespace nestlight::viewer {
+namespace nestlight::gl {
 
 namespace {
 
@@ -24,9 +25,13 @@ class OsMesaContext : public GlContext {
   OsMesaContext(void* lib, OSMesaContext ctx) : lib_(lib), ctx_(ctx), pixels_(4, 0) {
     makeCurrent();
     const auto getProc = reinterpret_cast<GetProc>(dlsym(lib_, "OSMesaGetProcAddress"));
-#define NL_GL(name)                                                           \
-  saved_.push_back(reinterpret_cast<void*>(epoxy_##name));                    \
-  epoxy_##name = reinterpret_cast<decltype(epoxy_##name)>(getProc(#name));
+    // A function OSMesa lacks keeps epoxy's resolver, which reports it by name when called.
+#define NL_GL(name)                                                             \
+  saved_.push_back(reinterpret_cast<void*>(epoxy_##name));                      \
+  if (auto p = getProc(#name)) {                                                \
+    epoxy_##name = reinterpret_cast<decltype(epoxy_##name)>(p);                 \
+    ++resolved_;                                                                \
+  }
 #include "osmesa_gl_functions.inc"
 #undef NL_GL
     describe("OSMesa");
@@ -54,6 +59,7 @@ class OsMesaContext : public GlContext {
   OSMesaContext ctx_;
   std::vector<unsigned char> pixels_;
   std::vector<void*> saved_;
+  size_t resolved_ = 0;
 };
 
 }  // namespace
@@ -90,4 +96,4 @@ std::unique_ptr<GlContext> createOsMesaContext(std::string& why) {
   }
 }
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::gl

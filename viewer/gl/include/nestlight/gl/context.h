@@ -9,7 +9,7 @@
 
 struct GLFWwindow;
 
-namespace nestlight::viewer {
+namespace nestlight::gl {
 
 class GlContext {
  public:
@@ -46,4 +46,4 @@ class WindowContext : public GlContext {
 // Turns GL debug output into stderr lines (debug builds; also with NESTLIGHT_GL_DEBUG=1).
 void enableGlDebugOutput();
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::gl

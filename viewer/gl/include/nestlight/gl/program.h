@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-namespace nestlight::viewer {
+namespace nestlight::gl {
 
 struct PreprocessedSource {
   std::string text;                // ready for glShaderSource
@@ -51,4 +51,4 @@ class ShaderProgram {
   GLuint id_ = 0;
 };
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::gl

@@ -1,0 +1,158 @@
+#include "nestlight/gl/resources.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "nestlight/octree/error.h"
+
+namespace nestlight::gl {
+
+Buffer::Buffer(size_t bytes, const void* data, GLbitfield flags) {
+  GLuint id = 0;
+  glCreateBuffers(1, &id);
+  static_cast<Object&>(*this) = Object(id);
+  // Zero-sized storage is an error in GL; one byte keeps the name valid for empty content.
+  glNamedBufferStorage(id, GLsizeiptr(std::max<size_t>(bytes, 1)), data, flags);
+  bytes_ = bytes;
+}
+
+bool Buffer::reserve(size_t bytes, GLbitfield flags) {
+  if (*this && bytes <= bytes_) return false;
+  *this = Buffer(std::max(bytes, bytes_ + bytes_ / 2), nullptr, flags);
+  return true;
+}
+
+void Buffer::upload(const void* data, size_t bytes, size_t offset) const {
+  NL_CHECK(offset + bytes <= bytes_);
+  if (bytes) glNamedBufferSubData(id(), GLintptr(offset), GLsizeiptr(bytes), data);
+}
+
+void Buffer::bindRange(GLenum target, GLuint index, size_t offset, size_t size) const {
+  NL_CHECK(offset + size <= std::max<size_t>(bytes_, 1));
+  NL_CHECK(target != GL_SHADER_STORAGE_BUFFER || size <= kMaxSsboRange);
+  glBindBufferRange(target, index, id(), GLintptr(offset), GLsizeiptr(std::max<size_t>(size, 1)));
+}
+
+void Buffer::bindBase(GLenum target, GLuint index) const {
+  if (target == GL_SHADER_STORAGE_BUFFER && bytes_ > kMaxSsboRange)
+    throw Error("a " + std::to_string(bytes_ >> 20) + " MiB buffer bound whole as an SSBO (at most 128 MiB)");
+  glBindBufferBase(target, index, id());
+}
+
+Texture::Texture(GLenum internalFormat, int width, int height, int levels)
+    : width_(width), height_(height), format_(internalFormat) {
+  NL_CHECK(width > 0 && height > 0 && levels > 0);
+  GLuint id = 0;
+  glCreateTextures(GL_TEXTURE_2D, 1, &id);
+  static_cast<Object&>(*this) = Object(id);
+  glTextureStorage2D(id, levels, internalFormat, width, height);
+  glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  setFilter(GL_NEAREST, GL_NEAREST);
+}
+
+Texture Texture::cubeMap(GLenum internalFormat, int size) {
+  NL_CHECK(size > 0);
+  Texture t;
+  GLuint id = 0;
+  glCreateTextures(GL_TEXTURE_CUBE_MAP, 1, &id);
+  static_cast<Object&>(t) = Object(id);
+  glTextureStorage2D(id, 1, internalFormat, size, size);
+  t.width_ = t.height_ = size;
+  t.format_ = internalFormat;
+  for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R}) glTextureParameteri(id, w, GL_CLAMP_TO_EDGE);
+  t.setFilter(GL_NEAREST, GL_NEAREST);
+  return t;
+}
+
+Texture Texture::array2d(GLenum internalFormat, int width, int height, int layers) {
+  NL_CHECK(width > 0 && height > 0 && layers > 0);
+  Texture t;
+  GLuint id = 0;
+  glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
+  static_cast<Object&>(t) = Object(id);
+  glTextureStorage3D(id, 1, internalFormat, width, height, layers);
+  t.width_ = width;
+  t.height_ = height;
+  t.format_ = internalFormat;
+  glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  t.setFilter(GL_NEAREST, GL_NEAREST);
+  return t;
+}
+
+void Texture::setFilter(GLenum minFilter, GLenum magFilter) const {
+  glTextureParameteri(id(), GL_TEXTURE_MIN_FILTER, GLint(minFilter));
+  glTextureParameteri(id(), GL_TEXTURE_MAG_FILTER, GLint(magFilter));
+}
+
+void Texture::setDepthCompare(bool on) const {
+  glTextureParameteri(id(), GL_TEXTURE_COMPARE_MODE, on ? GL_COMPARE_REF_TO_TEXTURE : GL_NONE);
+  glTextureParameteri(id(), GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+}
+
+Framebuffer Framebuffer::create() {
+  GLuint id = 0;
+  glCreateFramebuffers(1, &id);
+  Framebuffer f;
+  static_cast<Object&>(f) = Object(id);
+  return f;
+}
+
+void Framebuffer::attach(GLenum attachment, const Texture& t, int level) const {
+  glNamedFramebufferTexture(id(), attachment, t.id(), level);
+}
+
+void Framebuffer::attachLayer(GLenum attachment, const Texture& t, int layer, int level) const {
+  glNamedFramebufferTextureLayer(id(), attachment, t.id(), level, layer);
+}
+
+void Framebuffer::finish(int colourAttachments, const std::string& what) const {
+  GLenum bufs[8];
+  NL_CHECK(colourAttachments >= 0 && colourAttachments <= 8);
+  for (int i = 0; i < colourAttachments; ++i) bufs[i] = GLenum(GL_COLOR_ATTACHMENT0 + i);
+  if (colourAttachments) glNamedFramebufferDrawBuffers(id(), colourAttachments, bufs);
+  else glNamedFramebufferDrawBuffer(id(), GL_NONE);
+  const GLenum status = glCheckNamedFramebufferStatus(id(), GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "0x%x", status);
+    throw Error(what + ": framebuffer incomplete (status " + buf + ")");
+  }
+}
+
+VertexArray VertexArray::create() {
+  GLuint id = 0;
+  glCreateVertexArrays(1, &id);
+  VertexArray v;
+  static_cast<Object&>(v) = Object(id);
+  return v;
+}
+
+GpuTimer::GpuTimer() {
+  GLuint id = 0;
+  glCreateQueries(GL_TIME_ELAPSED, 1, &id);
+  query_ = Object<QueryDeleter>(id);
+}
+
+void GpuTimer::begin() {
+  if (pending_) milliseconds();  // a query object holds one result: collect it before reuse
+  glBeginQuery(GL_TIME_ELAPSED, query_.id());
+}
+
+void GpuTimer::end() {
+  glEndQuery(GL_TIME_ELAPSED);
+  pending_ = true;
+}
+
+double GpuTimer::milliseconds() {
+  if (pending_) {
+    GLuint64 ns = 0;
+    glGetQueryObjectui64v(query_.id(), GL_QUERY_RESULT, &ns);
+    last_ = double(ns) * 1e-6;
+    pending_ = false;
+  }
+  return last_;
+}
+
+}  // namespace nestlight::gl
