@@ -12,7 +12,7 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/frame_renderer.h"
-#include "nestlight/viewer/gl_context.h"
+#include "nestlight/gl/context.h"
 
 namespace nestlight::cli {
 
@@ -41,12 +41,12 @@ void addBenchRender(CLI::App& app, int& exitCode) {
                                          : fs::path(*octree);
     OctreeReader reader(oct);
     const Metadata& meta = reader.metadata();
-    auto ctx = viewer::createHeadlessContext();
+    auto ctx = gl::createHeadlessContext();
     nlohmann::json out = {{"device", ctx->description()}, {"octree", oct.string()}, {"width", *width},
                           {"height", *height}, {"runs", *runs}};
     {
-      viewer::GlNodeStore store(meta, meta.layout.has(attr::kRgb) ? viewer::ColourMode::Rgb
-                                                                  : viewer::ColourMode::Elevation);
+      frame::GlNodeStore store(meta, meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb
+                                                                  : frame::ColourMode::Elevation);
       viewer::FrameRenderer renderer;
       streaming::Budgets budgets;
       budgets.points = 100'000'000;

@@ -86,7 +86,7 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   job.azimuth = view[0], job.elevation = view[1];
   job.settings.rasteriser = viewer::parseRasteriser(text.rasteriser);
   job.settings.splatting = viewer::parseSplatting(text.splatting);
-  if (!text.colour.empty()) job.colour = viewer::parseColourMode(text.colour);
+  if (!text.colour.empty()) job.colour = frame::parseColourMode(text.colour);
   job.budgets.points = parseCount(text.pointBudget, "--point-budget");
   job.budgets.gpuBytes = parseBytes(text.gpuBudget);
   job.budgets.uploadBytesPerFrame = parseBytes(text.uploadBudget);

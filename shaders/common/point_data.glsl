@@ -1,7 +1,7 @@
-// A node's points as the GL node store writes them (viewer/include/nestlight/viewer/gl_node_store.h):
-// 5 words per point: position (3 floats, relative to the node's cube origin, world units),
-// colour RGBA8, normal as 2 x 16-bit octahedral coordinates (0 when the scan has none).
-layout(std430, binding = 0) readonly buffer NodePoints { uint words[]; } node;
+// A node's points as the GL node store writes them (nestlight/frame/gl_node_store.h), in the
+// layout shaders/interface/frame_interface.glsl declares: NL_POINT_WORDS words per point.
+#include "../interface/frame_interface.glsl"
+layout(std430, binding = NL_SSBO_NODE_POINTS) readonly buffer NodePoints { uint words[]; } node;
 
 uniform vec3 uNodeOffset;      // node origin minus eye, computed in double on the CPU
 uniform mat4 uViewFromCamRel;  // rotation only: positions arrive relative to the eye
@@ -10,11 +10,11 @@ uniform uint uNumPoints;
 
 // Relative to the node's cube origin.
 vec3 pointLocal(uint i) {
-  return vec3(uintBitsToFloat(node.words[5u * i]), uintBitsToFloat(node.words[5u * i + 1u]),
-              uintBitsToFloat(node.words[5u * i + 2u]));
+  return vec3(uintBitsToFloat(node.words[NL_POINT_WORDS * i]), uintBitsToFloat(node.words[NL_POINT_WORDS * i + 1u]),
+              uintBitsToFloat(node.words[NL_POINT_WORDS * i + 2u]));
 }
 vec3 pointCamRel(uint i) { return uNodeOffset + pointLocal(i); }
-uint pointColour(uint i) { return node.words[5u * i + 3u]; }
-uint pointNormalWord(uint i) { return node.words[5u * i + 4u]; }
+uint pointColour(uint i) { return node.words[NL_POINT_WORDS * i + 3u]; }
+uint pointNormalWord(uint i) { return node.words[NL_POINT_WORDS * i + 4u]; }
 
 #include "octahedral.glsl"

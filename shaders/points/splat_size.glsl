@@ -15,7 +15,7 @@ struct DrawTreeNode {
   float spacing;  // world units
   float pad0, pad1, pad2;
 };
-layout(std430, binding = 5) readonly buffer DrawTree { DrawTreeNode nodes[]; } drawTree;
+layout(std430, binding = NL_SSBO_DRAW_TREE) readonly buffer DrawTree { DrawTreeNode nodes[]; } drawTree;
 
 uniform int uNodeIndex;   // this node's entry in the draw tree
 uniform float uNodeSize;  // its cube's edge, world units

@@ -45,7 +45,7 @@ uint64_t MemoryStore::upload(const PreparedNode& node) {
   const uint64_t h = nextHandle_++;
   Entry& e = live_[h];
   e.key = node.key;
-  e.size = node.bytes.size();
+  e.size = node.residentBytes();
   if (keepBytes_) e.bytes = node.bytes;
   liveBytes_ += e.size;
   maxLiveBytes_ = std::max(maxLiveBytes_, liveBytes_);

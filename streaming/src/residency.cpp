@@ -18,7 +18,7 @@ void ResidentSet::upload(NodeTable& t, uint32_t idx) {
   Node& n = t[idx];
   NL_CHECK(n.residency == Residency::Ready && n.prepared);
   n.handle = store_.upload(*n.prepared);
-  n.bytes = n.prepared->bytes.size();
+  n.bytes = n.prepared->residentBytes();
   n.bytesKnown = true;
   n.prepared.reset();
   n.residency = Residency::Resident;

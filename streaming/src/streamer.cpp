@@ -95,7 +95,7 @@ void Streamer::Impl::integrate(LoadResult& r, FrameStats& s) {
   }
   if (!r.prepared) return;
   Node& n = table[r.node];  // after integrate(): the table may have grown
-  n.bytes = r.prepared->bytes.size();
+  n.bytes = r.prepared->residentBytes();
   n.bytesKnown = true;
   preparedBytes += n.bytes;
   preparedPoints += r.prepared->numPoints;
@@ -168,7 +168,7 @@ void Streamer::Impl::upload(FrameStats& s) {
   for (uint32_t idx : uploadOrder) {
     if (!blocked) {
       Node& n = table[idx];
-      const uint64_t size = n.prepared->bytes.size();
+      const uint64_t size = n.prepared->residentBytes();
       // At least one node per frame, however big, so that no node starves behind the cap.
       if (s.uploads > 0 && s.uploadBytes + size > budgets.uploadBytesPerFrame) {
         blocked = true;

@@ -34,7 +34,7 @@ class CheckingStore : public NodeStore {
     mem.prepare(key, std::move(points), out);
   }
   uint64_t upload(const PreparedNode& node) override {
-    const uint64_t after = mem.liveBytes() + node.bytes.size();
+    const uint64_t after = mem.liveBytes() + node.residentBytes();
     if (after > budget) ++uploadsOverBudget;
     maxLive = std::max(maxLive, after);
     return mem.upload(node);

@@ -139,7 +139,9 @@ TEST(MeasuredSpacing, DrawListCarriesTheBuildersMeasurement) {
     EXPECT_DOUBLE_EQ(n.pointSpacing, decodeSpacing(e->spacingCode, n.spacing));
     // Inner nodes are Poisson-disk samples at the nominal spacing or wider (the builder widens
     // the radius until a node fits its point limit); leaves hold the scan at its own density.
-    if (e->childMask) EXPECT_GT(n.pointSpacing, 0.9 * n.spacing) << n.key.name();
+    if (e->childMask) {
+      EXPECT_GT(n.pointSpacing, 0.9 * n.spacing) << n.key.name();
+    }
   }
   EXPECT_GT(measured, s.drawList().size() / 2);
 }

@@ -10,7 +10,7 @@
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/synthetic.h"
 #include "nestlight/octree/octree_reader.h"
-#include "nestlight/viewer/gl_context.h"
+#include "nestlight/gl/context.h"
 #include "nestlight/viewer/headless.h"
 #include "test_support.h"
 
@@ -126,7 +126,7 @@ TEST(RenderGolden, AutzenElevation) {
   NL_REQUIRE_SHARED("scans/autzen_trim.las");
   test::TempDir tmp;
   RenderJob j = smallJob(convertShared("scans/autzen_trim.las", tmp), tmp.file("autzen.png"));
-  j.colour = ColourMode::Elevation;
+  j.colour = frame::ColourMode::Elevation;
   j.elevation = 50;
   renderHeadless(j);
   expectMatchesGolden(j.output, "autzen_elevation", 3.f / 255, 0.005);
@@ -290,7 +290,7 @@ TEST(Render, OsMesaFallbackMatchesEgl) {
 // The platform-by-platform failure report itself cannot be provoked on a machine that has Mesa.
 TEST(Render, UnknownGlPlatformIsRejectedWithTheChoices) {
   ::setenv("NESTLIGHT_GL_PLATFORM", "bogus", 1);
-  Error e = test::errorOf([] { createHeadlessContext(); });
+  Error e = test::errorOf([] { gl::createHeadlessContext(); });
   ::unsetenv("NESTLIGHT_GL_PLATFORM");
   EXPECT_NE(std::string(e.what()).find("device, surfaceless or osmesa"), std::string::npos) << e.what();
 }

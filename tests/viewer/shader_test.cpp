@@ -6,8 +6,8 @@
 
 #include "nestlight/shaders/embedded.h"
 #include "nestlight/viewer/frame_renderer.h"
-#include "nestlight/viewer/gl_context.h"
-#include "nestlight/viewer/shader_library.h"
+#include "nestlight/gl/context.h"
+#include "nestlight/gl/program.h"
 #include "test_support.h"
 
 using namespace nestlight;
@@ -22,15 +22,17 @@ TEST(Shaders, EveryFileIsEmbedded) {
 }
 
 TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
-  PreprocessedSource s = preprocessShader("points/raster_depth.comp", {{"TEST_DEFINE", "3"}});
+  gl::PreprocessedSource s = gl::preprocessShader("points/raster_depth.comp", {{"TEST_DEFINE", "3"}});
   EXPECT_EQ(s.text.rfind("#version 450 core\n", 0), 0u);
   EXPECT_NE(s.text.find("#define TEST_DEFINE 3\n"), std::string::npos);
-  // raster_depth includes raster_common, which includes point_data, which includes octahedral.
-  ASSERT_EQ(s.files.size(), 4u);
+  // raster_depth includes raster_common, which includes point_data, which includes the frame
+  // interface and octahedral.
+  ASSERT_EQ(s.files.size(), 5u);
   EXPECT_EQ(s.files[0], "points/raster_depth.comp");
   EXPECT_EQ(s.files[1], "points/raster_common.glsl");
   EXPECT_EQ(s.files[2], "common/point_data.glsl");
-  EXPECT_EQ(s.files[3], "common/octahedral.glsl");
+  EXPECT_EQ(s.files[3], "interface/frame_interface.glsl");
+  EXPECT_EQ(s.files[4], "common/octahedral.glsl");
   // The octahedral decoder appears once although two files could pull it in.
   size_t first = s.text.find("vec3 decodeNormal(");
   ASSERT_NE(first, std::string::npos);
@@ -40,22 +42,22 @@ TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
 }
 
 TEST(Shaders, MissingFileIsNamed) {
-  Error e = test::errorOf([] { preprocessShader("points/none.frag"); });
+  Error e = test::errorOf([] { gl::preprocessShader("points/none.frag"); });
   EXPECT_NE(std::string(e.what()).find("points/none.frag"), std::string::npos);
 }
 
 TEST(Shaders, LogsMapBackToFiles) {
   const std::vector<std::string> files = {"points/a.frag", "common/b.glsl"};
-  EXPECT_EQ(mapShaderLog("1:7(12): error: `x' undeclared\n", files),
+  EXPECT_EQ(gl::mapShaderLog("1:7(12): error: `x' undeclared\n", files),
             "shaders/common/b.glsl:7:12: error: `x' undeclared\n");
-  EXPECT_EQ(mapShaderLog("0(3) : error C1008: undefined variable", files),
+  EXPECT_EQ(gl::mapShaderLog("0(3) : error C1008: undefined variable", files),
             "shaders/points/a.frag:3 : error C1008: undefined variable");
 }
 
 TEST(Shaders, CompileErrorNamesFileAndLineOnThisDriver) {
-  auto ctx = createHeadlessContext();
+  auto ctx = gl::createHeadlessContext();
   // A real driver log for a broken include: line 2 of the second file.
-  PreprocessedSource src;
+  gl::PreprocessedSource src;
   src.files = {"points/main.frag", "common/broken.glsl"};
   src.text = "#version 450 core\n#line 1 0\nout vec4 c;\n#line 1 1\nfloat f() { return 1.0; }\nfloat g() { return undeclared_name; }\n#line 3 0\nvoid main() { c = vec4(f()); }\n";
   GLuint s = glCreateShader(GL_FRAGMENT_SHADER);
@@ -68,12 +70,12 @@ TEST(Shaders, CompileErrorNamesFileAndLineOnThisDriver) {
   char log[4096] = {};
   glGetShaderInfoLog(s, sizeof log, nullptr, log);
   glDeleteShader(s);
-  const std::string mapped = mapShaderLog(log, src.files);
+  const std::string mapped = gl::mapShaderLog(log, src.files);
   EXPECT_NE(mapped.find("shaders/common/broken.glsl:2"), std::string::npos) << log;
 }
 
 TEST(Shaders, EveryProgramCompilesAndLinks) {
-  auto ctx = createHeadlessContext();
+  auto ctx = gl::createHeadlessContext();
   EXPECT_NE(ctx->description().find("4.5"), std::string::npos) << ctx->description();
   EXPECT_NO_THROW(FrameRenderer renderer);
 }
@@ -90,7 +92,7 @@ TEST(Shaders, EveryStageValidatesWithGlslang) {
     const std::string ext = path.substr(path.rfind('.'));
     if (ext != ".vert" && ext != ".frag" && ext != ".comp") continue;
     const std::string file = tmp.file("stage" + std::to_string(checked++) + ext);
-    test::writeFile(file, preprocessShader(path).text);
+    test::writeFile(file, gl::preprocessShader(path).text);
     const std::string log = tmp.file("log.txt");
     const int rc = std::system(("glslangValidator " + file + " > " + log + " 2>&1").c_str());
     EXPECT_EQ(rc, 0) << path << ":\n" << test::readFile(log);

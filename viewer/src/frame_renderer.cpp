@@ -66,8 +66,8 @@ FrameRenderer::~FrameRenderer() {
   glDeleteFramebuffers(3, fbos);
   GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_};
   glDeleteTextures(6, tex);
-  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_, drawTreeSsbo_};
-  glDeleteBuffers(5, bufs);
+  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_};
+  glDeleteBuffers(4, bufs);
   glDeleteVertexArrays(1, &vao_);
 }
 
@@ -134,7 +134,7 @@ void FrameRenderer::ensureTargets(int w, int h, bool compute) {
   }
 }
 
-void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
                              const Camera& camera, int fullW, int fullH, int x0, int y0, int w, int h,
                              const RenderSettings& s, DrawTimings* t) {
   const bool compute = s.rasteriser == Rasteriser::Compute;
@@ -170,7 +170,7 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
       glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
       glProgramUniform1ui(p, nLoc, n.numPoints);
       glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
-                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
+                        GLsizeiptr(n.numPoints) * GLsizeiptr(frame::kGpuPointBytes));
       glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
       if (t && countPoints) t->points += n.numPoints;
     }
@@ -200,7 +200,7 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
       glProgramUniform1f(p, prog.uniform("uFixedSize"), s.fixedPointSize);
       const GLint offLoc = prog.uniform("uNodeOffset"), idxLoc = prog.uniform("uNodeIndex"),
                   sizeLoc = prog.uniform("uNodeSize"), nLoc = prog.uniform("uNumPoints");
-      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 5, drawTreeSsbo_, 0, GLsizeiptr(drawTreeBytes_));
+      drawTree_.bind();
       for (size_t k = 0; k < nodes.size(); ++k) {
         const auto& n = nodes[k];
         if (!n.numPoints) continue;
@@ -210,7 +210,7 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
         glProgramUniform1f(p, sizeLoc, float(n.worldBounds.max.x - n.worldBounds.min.x));
         glProgramUniform1ui(p, nLoc, n.numPoints);
         glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
-                          GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
+                          GLsizeiptr(n.numPoints) * GLsizeiptr(frame::kGpuPointBytes));
         glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
         if (t && countPoints) t->points += n.numPoints;
       }
@@ -311,37 +311,11 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
-void FrameRenderer::uploadDrawTree(const std::vector<streaming::DrawNode>& nodes) {
-  // 12 words per node: the drawn child in each octant (-1: none), the spacing, padding.
-  std::vector<int32_t> words(std::max<size_t>(nodes.size(), 1) * 12, -1);
-  std::unordered_map<NodeKey, int32_t, NodeKeyHash> index;
-  index.reserve(nodes.size());
-  for (size_t k = 0; k < nodes.size(); ++k) {
-    const auto& n = nodes[k];
-    index.emplace(n.key, int32_t(k));
-    const float spacing = float(n.pointSpacing > 0 ? n.pointSpacing : n.spacing);
-    std::memcpy(&words[12 * k + 8], &spacing, 4);
-    // The draw list puts parents first: a drawn node's parent is already indexed.
-    if (n.key.level == 0) continue;
-    auto parent = index.find(n.key.parent());
-    if (parent != index.end()) words[12 * size_t(parent->second) + n.key.childIndex()] = int32_t(k);
-  }
-  const size_t bytes = words.size() * 4;
-  if (bytes > drawTreeCapacity_) {
-    glDeleteBuffers(1, &drawTreeSsbo_);
-    glCreateBuffers(1, &drawTreeSsbo_);
-    drawTreeCapacity_ = std::max(bytes, size_t(4096));
-    glNamedBufferStorage(drawTreeSsbo_, GLsizeiptr(drawTreeCapacity_), nullptr, GL_DYNAMIC_STORAGE_BIT);
-  }
-  glNamedBufferSubData(drawTreeSsbo_, 0, GLsizeiptr(bytes), words.data());
-  drawTreeBytes_ = bytes;
-}
-
-GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
                                       const Camera& camera, int width, int height, const RenderSettings& s,
                                       DrawTimings* t) {
   const auto t0 = std::chrono::steady_clock::now();
-  uploadDrawTree(nodes);
+  drawTree_.upload(nodes);
   drawTile(nodes, store, camera, width, height, 0, 0, width, height, s, t);
   if (t) {
     glFinish();
@@ -350,12 +324,12 @@ GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& no
   return outputTex_;
 }
 
-Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
                             const Camera& camera, int width, int height, const RenderSettings& s, DrawTimings* t) {
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
     throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
   const auto t0 = std::chrono::steady_clock::now();
-  uploadDrawTree(nodes);
+  drawTree_.upload(nodes);
   Image img;
   img.width = width, img.height = height;
   img.rgba.assign(size_t(width) * height * 4, 0.f);

@@ -99,16 +99,16 @@ Camera CameraPath::at(int frame) const {
 std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
   OctreeReader reader(job.octree);  // before any GL work: a bad octree fails here
   const Metadata& meta = reader.metadata();
-  const ColourMode mode = job.colour ? *job.colour
-                                     : (meta.layout.has(attr::kRgb) ? ColourMode::Rgb : ColourMode::Elevation);
-  const auto modes = availableColourModes(meta);
+  const frame::ColourMode mode = job.colour ? *job.colour
+                                     : (meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb : frame::ColourMode::Elevation);
+  const auto modes = frame::availableColourModes(meta);
   if (std::find(modes.begin(), modes.end(), mode) == modes.end())
     throw Error(job.octree.string(), "", std::string("the scan has no attribute for colour mode '") +
-                                             colourModeName(mode) + "'");
+                                             frame::colourModeName(mode) + "'");
   auto context = gl::createHeadlessContext();
   if (!job.quiet) std::printf("render: %s\n", context->description().c_str());
   {
-    GlNodeStore store(meta, mode);
+    frame::GlNodeStore store(meta, mode);
     FrameRenderer renderer;
     std::vector<RenderedFrame> out;
     {

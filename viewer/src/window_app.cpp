@@ -56,8 +56,8 @@ struct CameraController {
 int runViewer(const ViewerOptions& opt) {
   OctreeReader reader(opt.octree);  // a bad octree fails before a window opens
   const Metadata& meta = reader.metadata();
-  const auto modes = availableColourModes(meta);
-  ColourMode mode = opt.colour ? *opt.colour : modes.front();
+  const auto modes = frame::availableColourModes(meta);
+  frame::ColourMode mode = opt.colour ? *opt.colour : modes.front();
   gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + opt.octree.filename().string());
   std::printf("view: %s\n", ctx.description().c_str());
 
@@ -69,7 +69,7 @@ int runViewer(const ViewerOptions& opt) {
 
   int exitCode = 0;
   {
-    auto store = std::make_unique<GlNodeStore>(meta, mode);
+    auto store = std::make_unique<frame::GlNodeStore>(meta, mode);
     FrameRenderer renderer;
     RenderSettings settings = opt.settings;
     streaming::Budgets budgets = opt.budgets;
@@ -161,7 +161,7 @@ int runViewer(const ViewerOptions& opt) {
       }
       int modeIndex = int(std::find(modes.begin(), modes.end(), mode) - modes.begin());
       std::string names;
-      for (ColourMode m : modes) names += std::string(colourModeName(m)) + '\0';
+      for (frame::ColourMode m : modes) names += std::string(frame::colourModeName(m)) + '\0';
       if (ImGui::Combo("colour", &modeIndex, names.c_str()) && modes[size_t(modeIndex)] != mode) {
         mode = modes[size_t(modeIndex)];
         // Colours are baked on upload: start the residency again with the new mode.

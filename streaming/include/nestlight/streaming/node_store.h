@@ -15,7 +15,16 @@ namespace nestlight::streaming {
 struct PreparedNode {
   NodeKey key;
   uint32_t numPoints = 0;
-  std::vector<uint8_t> bytes;  // what upload() copies; its size is the node's resident bytes
+  std::vector<uint8_t> bytes;  // the points as upload() copies them
+  // Further per-node data a store prepares beside the points (a GI method's hierarchy over the
+  // node, an HDR colour layer), each uploaded as a buffer of its own and freed with the node.
+  std::vector<std::vector<uint8_t>> layers;
+  // What the node costs resident: its points and every layer, counted against Budgets::gpuBytes.
+  uint64_t residentBytes() const {
+    uint64_t b = bytes.size();
+    for (const auto& l : layers) b += l.size();
+    return b;
+  }
 };
 
 class NodeStore {

@@ -13,7 +13,8 @@
 
 #include "nestlight/streaming/streamer.h"
 #include "nestlight/viewer/camera.h"
-#include "nestlight/viewer/gl_node_store.h"
+#include "nestlight/frame/draw_tree.h"
+#include "nestlight/frame/gl_node_store.h"
 #include "nestlight/viewer/image.h"
 #include "nestlight/gl/program.h"
 
@@ -65,11 +66,11 @@ class FrameRenderer {
   FrameRenderer& operator=(const FrameRenderer&) = delete;
 
   // Renders width x height (tiled when larger than settings.maxTile) and reads it back.
-  Image render(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store, const Camera& camera,
+  Image render(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store, const Camera& camera,
                int width, int height, const RenderSettings& settings, DrawTimings* timings = nullptr);
 
   // Renders into the output texture (no read-back, no tiling): for the window.
-  GLuint renderToTexture(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+  GLuint renderToTexture(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
                          const Camera& camera, int width, int height, const RenderSettings& settings,
                          DrawTimings* timings = nullptr);
   GLuint outputFramebuffer() const { return outputFbo_; }
@@ -79,9 +80,7 @@ class FrameRenderer {
  private:
   struct Targets;
   void ensureTargets(int w, int h, bool compute);
-  // The drawn nodes as a tree for the vertex shader's finest-node lookup (splat_size.glsl).
-  void uploadDrawTree(const std::vector<streaming::DrawNode>& nodes);
-  void drawTile(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store, const Camera& camera,
+  void drawTile(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store, const Camera& camera,
                 int fullW, int fullH, int x0, int y0, int w, int h, const RenderSettings& s, DrawTimings* t);
 
   gl::ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_, edl_;
@@ -91,8 +90,7 @@ class FrameRenderer {
   GLuint gbuffer_ = 0, outputFbo_ = 0;
   GLuint colourTex_ = 0, normalTex_ = 0, depthTex_ = 0, outputTex_ = 0;
   GLuint hqsFbo_ = 0, accColourTex_ = 0, accNormalTex_ = 0;  // HQS sums: rgb w, w | normal w, depth w
-  GLuint drawTreeSsbo_ = 0;
-  size_t drawTreeBytes_ = 0, drawTreeCapacity_ = 0;
+  frame::DrawTree drawTree_;  // the vertex shader's finest-node lookup (splat_size.glsl)
   GLuint depthSsbo_ = 0, accumSsbo_ = 0, normalSsbo_ = 0;
   int w_ = 0, h_ = 0;
   size_t ssboPixels_ = 0;

@@ -9,7 +9,7 @@
 #include "nestlight/streaming/streamer.h"
 #include "nestlight/viewer/camera.h"
 #include "nestlight/viewer/frame_renderer.h"
-#include "nestlight/viewer/gl_node_store.h"
+#include "nestlight/frame/gl_node_store.h"
 
 namespace nestlight::viewer {
 
@@ -42,7 +42,7 @@ struct RenderJob {
   int warmupFrames = 30;              // without waitComplete: streamer updates before a still
   RenderSettings settings;
   streaming::Budgets budgets;
-  std::optional<ColourMode> colour;   // none: rgb when the scan has it, else elevation
+  std::optional<frame::ColourMode> colour;   // none: rgb when the scan has it, else elevation
   bool quiet = false;
 };
 

@@ -16,7 +16,7 @@ struct ViewerOptions {
   double azimuth = 35, elevation = 30, fovYDegrees = 60;
   RenderSettings settings;
   streaming::Budgets budgets;
-  std::optional<ColourMode> colour;
+  std::optional<frame::ColourMode> colour;
   // Scripted runs (tests, demos): stop after this many frames (0: run until closed), turn the
   // orbit camera by this many degrees per frame, and save a screenshot at the end.
   int frames = 0;

@@ -1,4 +1,4 @@
-#include "nestlight/viewer/gl_node_store.h"
+#include "nestlight/frame/gl_node_store.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "nestlight/octree/error.h"
 
-namespace nestlight::viewer {
+namespace nestlight::frame {
 
 namespace {
 
@@ -101,12 +101,7 @@ GlNodeStore::GlNodeStore(const Metadata& meta, ColourMode mode) : meta_(meta), m
   classification_ = meta.layout.find(attr::kClassification);
 }
 
-GlNodeStore::~GlNodeStore() {
-  for (auto& [h, size] : live_) {
-    GLuint b = static_cast<GLuint>(h);
-    glDeleteBuffers(1, &b);
-  }
-}
+GlNodeStore::~GlNodeStore() = default;
 
 void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::PreparedNode& out) const {
   const size_t n = pts.size();
@@ -161,24 +156,73 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
     const uint32_t on = packNormal(nrm[0], nrm[1], nrm[2]);
     std::memcpy(o + 16, &on, 4);
   }
+  std::vector<std::shared_ptr<const NodeLayer>> layers;
+  {
+    std::lock_guard lock(layersMutex_);
+    layers = layers_;
+  }
+  out.layers.assign(layers.size(), {});
+  for (size_t l = 0; l < layers.size(); ++l) layers[l]->prepare(key, pts, out.bytes, out.layers[l]);
 }
 
 uint64_t GlNodeStore::upload(const streaming::PreparedNode& node) {
-  GLuint b = 0;
-  glCreateBuffers(1, &b);
-  NL_CHECK(b != 0);
-  glNamedBufferStorage(b, static_cast<GLsizeiptr>(std::max<size_t>(node.bytes.size(), 4)),
-                       node.bytes.empty() ? nullptr : node.bytes.data(), 0);
-  live_[b] = node.bytes.size();
-  return b;
+  Resident r;
+  auto add = [&](const std::vector<uint8_t>& bytes) {
+    // Immutable storage, never mapped: the driver may place it in device memory.
+    r.buffers.emplace_back(bytes.size(), bytes.empty() ? nullptr : bytes.data(), 0);
+    r.bytes.push_back(bytes.size());
+  };
+  add(node.bytes);
+  for (const auto& l : node.layers) add(l);
+  const uint64_t h = nextHandle_++;
+  live_.emplace(h, std::move(r));
+  return h;
 }
 
 void GlNodeStore::release(uint64_t handle) {
   auto it = live_.find(handle);
   NL_CHECK_MSG(it != live_.end(), "release of a handle that is not live");
-  GLuint b = static_cast<GLuint>(handle);
-  glDeleteBuffers(1, &b);
-  live_.erase(it);
+  live_.erase(it);  // the buffers delete themselves
 }
 
-}  // namespace nestlight::viewer
+GLuint GlNodeStore::layerBuffer(uint64_t handle, size_t layer) const {
+  auto it = live_.find(handle);
+  NL_CHECK_MSG(it != live_.end(), "a buffer of a handle that is not live");
+  return layer < it->second.buffers.size() ? it->second.buffers[layer].id() : 0;
+}
+
+size_t GlNodeStore::layerBytes(uint64_t handle, size_t layer) const {
+  auto it = live_.find(handle);
+  NL_CHECK_MSG(it != live_.end(), "a layer of a handle that is not live");
+  return layer < it->second.bytes.size() ? it->second.bytes[layer] : 0;
+}
+
+size_t GlNodeStore::addLayer(std::shared_ptr<const NodeLayer> layer) {
+  NL_CHECK(layer != nullptr);
+  std::lock_guard lock(layersMutex_);
+  if (layers_.size() + 1 >= NL_MAX_NODE_LAYERS)
+    throw Error("frame: node layer '" + layer->name() + "' is one too many (at most " +
+                std::to_string(NL_MAX_NODE_LAYERS - 1) + " besides the points)");
+  layers_.push_back(std::move(layer));
+  return layers_.size();
+}
+
+size_t GlNodeStore::layerCount() const {
+  std::lock_guard lock(layersMutex_);
+  return layers_.size();
+}
+
+uint64_t GlNodeStore::liveBuffers() const {
+  uint64_t n = 0;
+  for (const auto& [h, r] : live_) n += r.buffers.size();
+  return n;
+}
+
+uint64_t GlNodeStore::liveBytes() const {
+  uint64_t n = 0;
+  for (const auto& [h, r] : live_)
+    for (size_t b : r.bytes) n += b;
+  return n;
+}
+
+}  // namespace nestlight::frame

@@ -1,0 +1,76 @@
+// The GI frame's interface, read by C++ and GLSL alike (C++ includes it through
+// nestlight/frame/interface.h, which supplies the glm types first): buffer and texture bindings,
+// the G-buffer's output locations and encodings, the frame's uniform block, the point layout of
+// resident nodes. A binding or a field changed here changes on both sides.
+//
+// Kept to the preprocessor subset GLSL and C++ share: #define, #ifdef, no #include.
+
+// Uniform blocks.
+#define NL_UBO_FRAME 0           // FrameBlock, every pass of the frame
+#define NL_UBO_PASS 1            // a pass's own block
+
+// Shader storage. Each resident node's layers bind at NL_SSBO_NODE_POINTS + layer.
+#define NL_SSBO_NODE_POINTS 0    // the node's points (NL_POINT_WORDS words each)
+#define NL_SSBO_NODE_LAYER1 1    // first method layer of the node (a hierarchy, an HDR colour)
+#define NL_SSBO_NODE_LAYER2 2
+#define NL_SSBO_LIGHTS 4         // LightRecord[], the frame's lights
+#define NL_SSBO_DRAW_TREE 5      // drawn nodes' octants and spacings (points/splat_size.glsl)
+#define NL_SSBO_METHOD0 8        // free for GI methods (VPLs, hierarchies): 8..15
+#define NL_MAX_NODE_LAYERS 4
+
+// Points of a resident node: position (3 floats, relative to the node's cube origin), display
+// colour RGBA8, normal as 2 x 16-bit octahedral coordinates (0: the scan has none).
+#define NL_POINT_WORDS 5u
+
+// G-buffer colour outputs (fragment locations), linear HDR.
+#define NL_GBUFFER_BASE_COLOUR 0 // RGBA32F: linear base colour (scan: colour x colour_scale), a = 1 covered
+#define NL_GBUFFER_NORMAL 1      // RGBA16F: world (scene-local) unit normal, a = 1 when known
+#define NL_GBUFFER_MATERIAL 2    // RGBA8: type / 255, roughness, metallic, source / 255
+#define NL_GBUFFER_OUTPUTS 3
+
+// Material types (gi::MaterialType) and sources, as the material target stores them.
+#define NL_MATERIAL_LAMBERT 0
+#define NL_MATERIAL_GGX 1
+#define NL_MATERIAL_PRINCIPLED 2
+#define NL_SOURCE_NONE 0
+#define NL_SOURCE_SCAN 1
+#define NL_SOURCE_MESH 2
+
+// Light types (gi::LightType).
+#define NL_LIGHT_POINT 0
+#define NL_LIGHT_SPOT 1
+#define NL_LIGHT_DIRECTIONAL 2
+#define NL_MAX_LIGHTS 16
+
+#ifdef __cplusplus
+#define NL_UNIFORM_BLOCK(b, type) struct alignas(16) type
+#define NL_END_BLOCK(instance) ;
+#define NL_STRUCT(type) struct alignas(16) type
+#else
+#define NL_UNIFORM_BLOCK(b, type) layout(std140, binding = b) uniform type
+#define NL_END_BLOCK(instance) instance;
+#define NL_STRUCT(type) struct type
+#endif
+
+// Only vec4, ivec4 and mat4 members: their std140 and std430 layouts equal C++'s.
+NL_UNIFORM_BLOCK(NL_UBO_FRAME, FrameBlock) {
+  mat4 viewFromWorld;   // world = the scene's local frame (float, relative to its origin)
+  mat4 clipFromView;    // the tile's projection: the full image's, scaled and offset to the tile
+  mat4 clipFromWorld;
+  mat4 worldFromClip;   // inverse of clipFromWorld
+  vec4 eye;             // xyz: camera position (world), w: pixels per unit at distance 1 (full image)
+  vec4 tile;            // x0, y0 (GL pixels of the full image), width, height of this tile
+  vec4 image;           // full width, height, 1 / width, 1 / height
+  ivec4 counts;         // x: lights, y: mode (0 radiance cache, 1 albedo), z: frame number, w: unused
+}
+NL_END_BLOCK(frame)
+
+// One light of the frame (NL_SSBO_LIGHTS), as gi::Light with the shadow map that covers it.
+NL_STRUCT(LightRecord) {
+  vec4 position;        // xyz world, w: type (NL_LIGHT_*)
+  vec4 direction;       // xyz: spot axis or the direction light travels, w: unused
+  vec4 intensity;       // rgb: W/sr (point, spot) or W/m^2 (directional), w: unused
+  vec4 cone;            // x: cos(outer), y: cos(inner) (spot); z: shadow bias (world units); w: unused
+  mat4 shadowFromWorld; // spot and directional: clip of the light's view; point: unused (cube)
+  vec4 shadow;          // x: shadow-map layer (-1: none), y: texel angle or size, z: near, w: far
+};

@@ -1,0 +1,25 @@
+// The GI frame's interface for C++: shaders/interface/frame_interface.glsl, the one file GLSL
+// and C++ share, read with the glm types standing in for GLSL's.
+#pragma once
+
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+namespace nestlight::frame {
+
+namespace glsl {
+using vec4 = glm::vec4;
+using ivec4 = glm::ivec4;
+using mat4 = glm::mat4;
+#include "interface/frame_interface.glsl"
+}  // namespace glsl
+
+using FrameBlock = glsl::FrameBlock;
+using LightRecord = glsl::LightRecord;
+static_assert(sizeof(FrameBlock) == 4 * 64 + 4 * 16, "FrameBlock must keep std140's layout");
+static_assert(sizeof(LightRecord) == 4 * 16 + 64 + 16, "LightRecord must keep std430's layout");
+
+inline constexpr size_t kGpuPointBytes = NL_POINT_WORDS * 4;
+
+}  // namespace nestlight::frame

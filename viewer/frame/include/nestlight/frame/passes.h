@@ -1,0 +1,16 @@
+// Passes every method's frame can use.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "nestlight/frame/frame_graph.h"
+
+namespace nestlight::frame {
+
+// Linear HDR `input` (a tile target) -> display-referred `output` (RGBA8): gi/metrics' tone map
+// (2^exposureStops, clamp, sRGB), NaN as magenta. `exposureStops` is read at every run.
+void addToneMapPass(FrameGraph& graph, const std::string& input, const std::string& output,
+                    std::shared_ptr<const float> exposureStops, const std::string& name = "tone_map");
+
+}  // namespace nestlight::frame
