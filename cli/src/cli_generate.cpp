@@ -13,7 +13,7 @@
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/converters/synthetic.h"
 #include "nestlight/converters/test_scenes.h"
-#include "nestlight/gi/reference/render_scene.h"
+#include "nestlight/gi/render_scene.h"
 #include "nestlight/converters/verify.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"

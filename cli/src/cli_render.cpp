@@ -4,7 +4,8 @@
 #include <sstream>
 
 #include "cli.h"
-#include "nestlight/gi/reference/render_scene.h"
+#include "nestlight/gi/methods.h"
+#include "nestlight/gi/render_scene.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/viewer/headless.h"
 
@@ -99,10 +100,12 @@ void addRender(CLI::App& app, int& exitCode) {
       "Render an octree headless to PNG or EXR (EGL: an NVIDIA GPU, or Mesa's llvmpipe on the CPU).\n"
       "A still by default; --path renders a camera path (JSON keyframes) to an image sequence.\n"
       "Example: nestlight render scan.octree -o view.png --width 1920 --height 1080 --wait-complete\n\n"
-      "Given a scene file (.json, docs/SCENE.md) it renders the scene's GI instead: the Embree path-\n"
-      "traced reference (or direct lighting) of scans and inserted meshes, to linear EXR, progressive\n"
-      "until --target-error, --time-limit or --spp is reached.\n"
-      "Example: nestlight render cornell/scene.json --target-error 0.01 -o cornell.exr");
+      "Given a scene file (.json, docs/SCENE.md) it renders the scene's GI instead, with the method the\n"
+      "scene or --method names, to linear EXR: the Embree path-traced reference (progressive until\n"
+      "--target-error, --time-limit or --spp), `direct` (its first bounce), or `raster` (real-time\n"
+      "direct light with shadow maps through the GI frame, on the GPU or Mesa's llvmpipe).\n"
+      "Example: nestlight render cornell/scene.json --target-error 0.01 -o cornell.exr\n"
+      "         nestlight render cornell/scene.json --method raster -o cornell-raster.exr");
   auto job = std::make_shared<viewer::RenderJob>();
   auto text = std::make_shared<RenderOptionText>();
   auto octree = std::make_shared<std::string>();
@@ -120,8 +123,13 @@ void addRender(CLI::App& app, int& exitCode) {
   auto sc = std::make_shared<gi::SceneRenderOverrides>();
   auto mode = std::make_shared<std::string>();
   std::string group = "Scene files";
-  cmd->add_option("--method", sc->method, "Scenes: reference (path traced) or direct (one bounce)")
-      ->check(CLI::IsMember({"reference", "direct"}))->group(group);
+  std::string methodHelp = "Scenes: the GI method (default: the scene's gi.method):";
+  std::vector<std::string> names;
+  for (const auto& m : gi::registeredMethods()) {
+    methodHelp += "\n  " + m.name + ": " + m.summary;
+    names.push_back(m.name);
+  }
+  cmd->add_option("--method", sc->method, methodHelp)->check(CLI::IsMember(names))->group(group);
   cmd->add_option("--mode", *mode, "Scenes: radiance_cache (scan points emit their colour) or albedo (scan points "
                                    "reflect with their colour as albedo)")
       ->check(CLI::IsMember({"radiance_cache", "albedo"}))->group(group);

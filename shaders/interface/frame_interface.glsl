@@ -15,6 +15,8 @@
 #define NL_SSBO_NODE_LAYER2 2
 #define NL_SSBO_LIGHTS 4         // LightRecord[], the frame's lights
 #define NL_SSBO_DRAW_TREE 5      // drawn nodes' octants and spacings (points/splat_size.glsl)
+#define NL_SSBO_SHADOW_VIEWS 6   // mat4[]: clip of each shadow-map layer's view (light views)
+#define NL_SSBO_MATERIALS 7      // MaterialRecord[], the scene's materials
 #define NL_SSBO_METHOD0 8        // free for GI methods (VPLs, hierarchies): 8..15
 #define NL_MAX_NODE_LAYERS 4
 
@@ -23,9 +25,9 @@
 #define NL_POINT_WORDS 5u
 
 // G-buffer colour outputs (fragment locations), linear HDR.
-#define NL_GBUFFER_BASE_COLOUR 0 // RGBA32F: linear base colour (scan: colour x colour_scale), a = 1 covered
+#define NL_GBUFFER_BASE_COLOUR 0 // RGBA32F: linear base colour (scan: colour x colour_scale), a: splat radius (world; 0 meshes)
 #define NL_GBUFFER_NORMAL 1      // RGBA16F: world (scene-local) unit normal, a = 1 when known
-#define NL_GBUFFER_MATERIAL 2    // RGBA8: type / 255, roughness, metallic, source / 255
+#define NL_GBUFFER_MATERIAL 2    // RGBA16UI: type | source << 8, roughness and metallic (unorm16), material index
 #define NL_GBUFFER_OUTPUTS 3
 
 // Material types (gi::MaterialType) and sources, as the material target stores them.
@@ -35,6 +37,7 @@
 #define NL_SOURCE_NONE 0
 #define NL_SOURCE_SCAN 1
 #define NL_SOURCE_MESH 2
+#define NL_NO_MATERIAL 65535     // material index of scan points (their material is their colour)
 
 // Light types (gi::LightType).
 #define NL_LIGHT_POINT 0
@@ -71,6 +74,14 @@ NL_STRUCT(LightRecord) {
   vec4 direction;       // xyz: spot axis or the direction light travels, w: unused
   vec4 intensity;       // rgb: W/sr (point, spot) or W/m^2 (directional), w: unused
   vec4 cone;            // x: cos(outer), y: cos(inner) (spot); z: shadow bias (world units); w: unused
-  mat4 shadowFromWorld; // spot and directional: clip of the light's view; point: unused (cube)
-  vec4 shadow;          // x: shadow-map layer (-1: none), y: texel angle or size, z: near, w: far
+  vec4 shadow;          // x: first shadow-map layer (-1: none; point lights use 6), y: texel size at
+                        // distance 1 (perspective) or in world units (orthographic), z: near, w: far
+};
+
+// One material of the scene (gi::Material), for shading from the G-buffer's material index.
+NL_STRUCT(MaterialRecord) {
+  vec4 baseColor;       // rgb linear, w: type (NL_MATERIAL_*)
+  vec4 params;          // roughness, metallic, specular, specular tint
+  vec4 params2;         // sheen, sheen tint, clearcoat, clearcoat gloss
+  vec4 emission;        // rgb emitted radiance, w: unused
 };

@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "nestlight/gi/method.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 
@@ -73,11 +74,14 @@ class Field {
     return j_.get<std::string>();
   }
   std::string choice(std::initializer_list<const char*> options) const {
+    return choice(std::vector<std::string>(options.begin(), options.end()));
+  }
+  std::string choice(const std::vector<std::string>& options) const {
     std::string v = string();
     std::string list;
-    for (const char* o : options) {
+    for (const auto& o : options) {
       if (v == o) return v;
-      list += (list.empty() ? "" : ", ") + std::string(o);
+      list += (list.empty() ? "" : ", ") + o;
     }
     fail("'" + v + "' is not one of: " + list);
   }
@@ -372,7 +376,7 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
     Field g = root.at("gi");
     g.expectObject({"method", "mode", "max_bounces", "samples_per_pixel", "target_relative_error", "time_limit",
                     "seed", "parameters"});
-    if (g.has("method")) s.gi.method = g.at("method").choice({"reference", "direct"});
+    if (g.has("method")) s.gi.method = g.at("method").choice(methodNames());
     if (g.has("mode"))
       s.gi.mode = g.at("mode").choice({"radiance_cache", "albedo"}) == "albedo" ? RadianceMode::Albedo
                                                                                : RadianceMode::RadianceCache;

@@ -69,7 +69,7 @@ struct SceneCameraKey {
 enum class RadianceMode { RadianceCache, Albedo };
 
 struct GiSettings {
-  std::string method = "reference";  // reference | direct (more as GI methods land)
+  std::string method = "reference";  // one of methodNames() (nestlight/gi/method.h)
   RadianceMode mode = RadianceMode::RadianceCache;
   int maxBounces = 4;                // path length in bounces after the camera hit
   int samplesPerPixel = 256;         // upper bound on samples

@@ -17,8 +17,10 @@ using mat4 = glm::mat4;
 
 using FrameBlock = glsl::FrameBlock;
 using LightRecord = glsl::LightRecord;
+using MaterialRecord = glsl::MaterialRecord;
 static_assert(sizeof(FrameBlock) == 4 * 64 + 4 * 16, "FrameBlock must keep std140's layout");
-static_assert(sizeof(LightRecord) == 4 * 16 + 64 + 16, "LightRecord must keep std430's layout");
+static_assert(sizeof(LightRecord) == 5 * 16, "LightRecord must keep std430's layout");
+static_assert(sizeof(MaterialRecord) == 4 * 16, "MaterialRecord must keep std430's layout");
 
 inline constexpr size_t kGpuPointBytes = NL_POINT_WORDS * 4;
 

@@ -111,8 +111,9 @@ class VertexArray : public Object<VertexArrayDeleter> {
   static VertexArray create();
 };
 
-// GPU time of the commands between begin() and end() (GL_TIME_ELAPSED), read without a stall
-// when the result is ready, else after waiting for it.
+// GPU time of the commands between begin() and end(): two GL_TIMESTAMP queries (not
+// GL_TIME_ELAPSED, which cannot nest and which llvmpipe answered with nonsense for the first
+// query of a context). milliseconds() waits for the result.
 class GpuTimer {
  public:
   GpuTimer();
@@ -121,7 +122,7 @@ class GpuTimer {
   double milliseconds();  // of the last begin/end pair; 0 before one
 
  private:
-  Object<QueryDeleter> query_;
+  Object<QueryDeleter> start_, stop_;
   bool pending_ = false;
   double last_ = 0;
 };

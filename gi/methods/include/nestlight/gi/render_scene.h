@@ -1,4 +1,4 @@
-// Rendering a scene file with the path-traced reference (or direct lighting): the whole job of
+// Rendering a scene file with the method it names (or --method): the whole job of
 // `nestlight render scene.json`, shared with `bench gi` and the demo.
 #pragma once
 
@@ -6,7 +6,9 @@
 #include <optional>
 #include <string>
 
-#include "nestlight/gi/reference/path_tracer.h"
+#include <nlohmann/json.hpp>
+
+#include "nestlight/gi/method.h"
 #include "nestlight/gi/scene.h"
 
 namespace nestlight::gi {
@@ -19,6 +21,7 @@ struct SceneRenderOverrides {
   std::optional<int> bounces, spp;
   std::optional<double> targetError, timeLimit;
   std::optional<uint64_t> seed;
+  nlohmann::json parameters;     // merged into the scene's gi.parameters (method options)
   std::filesystem::path output;  // .exr; empty: the scene's output
   bool quiet = false;
   bool still = false;            // ignore the scene's camera path: one image from its camera
@@ -26,11 +29,10 @@ struct SceneRenderOverrides {
 
 struct SceneRenderReport {
   Scene scene;
-  ReferenceResult result;
+  MethodFrame result;           // the last frame's
   std::filesystem::path exr;    // the last frame's
   int frames = 1;
-  double loadSeconds = 0;
-  uint64_t discs = 0, triangles = 0;
+  double loadSeconds = 0;       // reading the scene and making the method
 };
 
 // Loads `file`, applies `overrides`, renders every frame (the camera, or each frame of the

@@ -1,0 +1,54 @@
+// A GI method: anything that renders a scene from a camera into a linear HDR image with the
+// reference's conventions (gi::cameraRay's pixels, scene-local frame, radiance per pixel). Made
+// by name from the registry (nestlight/gi/methods.h, after pbrt-v4's Integrator::Create), so
+// `nestlight render`, `nestlight view`, `bench gi` and the tests run every method the same way.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "nestlight/gi/hdr_image.h"
+#include "nestlight/gi/scene.h"
+
+namespace nestlight::gi {
+
+struct MethodFrame {
+  HdrImage image;
+  double seconds = 0;  // the frame's wall time, loading excluded (GPU work finished)
+  // GPU time per pass of the frame (GL methods), in the order the passes ran.
+  std::vector<std::pair<std::string, double>> passMs;
+  ImageAttributes attributes;  // for the EXR header: "nestlight:*"
+  std::string summary;         // one line for the log
+  // Sampling methods: samples per pixel, their own error estimate, rays traced.
+  int samplesPerPixel = 0;
+  double relativeError = 0;
+  uint64_t rays = 0;
+  uint64_t nonFiniteSamples = 0;
+  std::string stopReason;
+  double raysPerSecond() const { return seconds > 0 ? double(rays) / seconds : 0; }
+  double samplesPerSecond() const { return seconds > 0 ? double(samplesPerPixel) * double(image.pixels()) / seconds : 0; }
+};
+
+class Method {
+ public:
+  virtual ~Method() = default;
+  virtual std::string name() const = 0;
+  // One frame from `camera`. Throws nestlight::Error on failure.
+  virtual MethodFrame render(const SceneCamera& camera) = 0;
+};
+
+// How a method was asked for: progress lines (stderr) unless quiet; GL methods make a headless
+// context of their own unless the caller (the viewer's window) has one current.
+struct MethodContext {
+  bool quiet = false;
+  bool glContextCurrent = false;
+};
+
+// The names scene files may give as gi.method; the registry (gi/methods) creates exactly these
+// (a test keeps the two lists equal). Kept here so that gi/core checks scene files by itself.
+const std::vector<std::string>& methodNames();
+
+}  // namespace nestlight::gi

@@ -1,0 +1,10 @@
+#include "nestlight/gi/method.h"
+
+namespace nestlight::gi {
+
+const std::vector<std::string>& methodNames() {
+  static const std::vector<std::string> names = {"reference", "direct", "raster"};
+  return names;
+}
+
+}  // namespace nestlight::gi

@@ -1,0 +1,273 @@
+#include "nestlight/gi/bench_gi.h"
+
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <functional>
+
+#include "nestlight/gi/methods.h"
+#include "nestlight/gi/plot.h"
+#include "nestlight/gi/reference/reference_scene.h"
+#include "nestlight/gi/render_scene.h"
+#include "nestlight/gi/tone_map.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::gi {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+std::string fileHash(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return std::to_string(std::hash<std::string>{}(bytes));
+}
+
+// What the reference depends on besides the scene file: its octrees (metadata and payload),
+// meshes and environment map, by size and modification time, so an edited asset is noticed.
+std::string assetStamp(const Scene& s) {
+  std::string stamp;
+  auto add = [&](const fs::path& p) {
+    std::error_code ec;
+    auto size = fs::file_size(p, ec);
+    auto time = fs::last_write_time(p, ec).time_since_epoch().count();
+    stamp += p.string() + "=" + std::to_string(ec ? 0 : size) + "@" + std::to_string(ec ? 0 : time) + ";";
+  };
+  for (const auto& o : s.octrees) {
+    add(o.path / "metadata.json");
+    add(o.path / "octree.bin");
+  }
+  for (const auto& m : s.meshes) add(m.path);
+  if (s.environment && !s.environment->path.empty()) add(s.environment->path);
+  return std::to_string(std::hash<std::string>{}(stamp));
+}
+
+double medianOf(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string cpuModel() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("model name", 0) == 0) {
+      auto colon = line.find(':');
+      if (colon != std::string::npos) return line.substr(line.find_first_not_of(" \t", colon + 1));
+    }
+  return "unknown CPU";
+}
+
+// log-log interpolation of the time at which `rows` (in order of quality) reach `target`.
+json timeToError(const std::vector<const BenchGiRow*>& rows, double target) {
+  for (size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i]->relativeL2 <= target) {
+      if (i == 0) return {{"ms", rows[0]->medianMs}, {"how", "reached at the lowest setting"}};
+      const BenchGiRow &a = *rows[i - 1], &b = *rows[i];
+      double t = (std::log(target) - std::log(a.relativeL2)) / (std::log(b.relativeL2) - std::log(a.relativeL2));
+      return {{"ms", std::exp(std::log(a.medianMs) + t * (std::log(b.medianMs) - std::log(a.medianMs)))},
+              {"how", "interpolated between " + std::to_string(a.quality) + " and " + std::to_string(b.quality) + " " +
+                          a.qualityName}};
+    }
+  }
+  if (rows.empty() || !(rows.back()->relativeL2 > 0)) return {{"ms", nullptr}, {"how", "no data"}};
+  const BenchGiRow& b = *rows.back();
+  if (b.qualityName != "samples per pixel")
+    return {{"ms", nullptr}, {"how", "not reached (" + std::to_string(b.relativeL2) + " at the best setting)"}};
+  // Monte Carlo error falls as 1/sqrt(time): extrapolate from the best setting.
+  double ms = b.medianMs * std::pow(b.relativeL2 / target, 2);
+  return {{"ms", ms}, {"how", "extrapolated as error ~ time^-1/2 from " + std::to_string(b.quality) + " spp"}};
+}
+
+}  // namespace
+
+double relativeL2(const HdrImage& t, const HdrImage& r) {
+  NL_CHECK(t.rgb.size() == r.rgb.size());
+  double d = 0, n = 0;
+  for (size_t i = 0; i < t.rgb.size(); ++i) {
+    double e = double(t.rgb[i]) - r.rgb[i];
+    if (std::isfinite(e)) d += e * e, n += double(r.rgb[i]) * r.rgb[i];
+  }
+  return n > 0 ? std::sqrt(d / n) : (d > 0 ? INFINITY : 0);
+}
+
+BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
+  auto say = [&](const char* fmt, auto... args) {
+    if (!log) return;
+    std::fprintf(log, fmt, args...);
+    std::fflush(log);
+  };
+  // Options first: a typo must not cost a reference render.
+  std::vector<const MethodInfo*> methods;
+  if (o.methods.empty())
+    for (const auto& m : registeredMethods()) methods.push_back(&m);
+  for (const auto& name : o.methods) {
+    const MethodInfo* m = findMethod(name);
+    if (!m) throw Error("bench gi: unknown method '" + name + "' (" + methodList() + ")");
+    methods.push_back(m);
+  }
+  for (const auto& [name, levels] : o.qualities) {
+    if (!findMethod(name)) throw Error("bench gi: quality levels for unknown method '" + name + "' (" + methodList() + ")");
+    if (levels.empty()) throw Error("bench gi: no quality levels for '" + name + "'");
+  }
+  if (o.runs < 1) throw Error("bench gi: --runs must be at least 1");
+
+  const fs::path sceneFile = fs::absolute(o.scene);
+  BenchGiReport report;
+  report.dir = o.out.empty() ? sceneFile.parent_path() / "bench-gi" : o.out;
+  const fs::path& dir = report.dir;
+  fs::create_directories(dir);
+  Scene probe = loadScene(sceneFile);
+  const int W = o.width ? o.width : probe.camera.width, H = o.height ? o.height : probe.camera.height;
+  auto prepared = [&](const std::string& method) {
+    Scene s = probe;
+    s.gi.method = method;
+    s.camera.width = W;
+    s.camera.height = H;
+    return s;
+  };
+
+  // The reference, cached under a key of everything that changes it.
+  const std::string key = "model" + std::to_string(kReferenceModelVersion) + ":" + fileHash(sceneFile) + ":" +
+                          assetStamp(probe) + ":" + std::to_string(W) + "x" + std::to_string(H) + ":" +
+                          std::to_string(o.referenceError);
+  const fs::path refPath = dir / "reference.exr";
+  HdrImage reference;
+  json refInfo;
+  bool cached = false;
+  if (!o.forceReference && fs::exists(refPath)) {
+    ImageAttributes attrs;
+    HdrImage img = readHdrImage(refPath.string(), &attrs);
+    if (attrs["nestlight:cache_key"] == key) {
+      reference = std::move(img);
+      cached = true;
+      refInfo = {{"cached", true}, {"samples", attrs["nestlight:samples"]},
+                 {"relative_error_estimate", attrs["nestlight:relative_error_estimate"]}, {"seconds", attrs["nestlight:seconds"]}};
+    }
+  }
+  if (!cached) {
+    say("bench gi: rendering the reference to %.4g relative error (at most %.0f s, %d spp)...\n", o.referenceError,
+        o.referenceTimeLimit, o.referenceSpp);
+    Scene s = prepared("reference");
+    s.gi.targetRelativeError = o.referenceError;
+    s.gi.timeLimitSeconds = o.referenceTimeLimit;
+    s.gi.samplesPerPixel = o.referenceSpp;
+    s.gi.seed = 0x5eed;  // independent of the measured runs' seed
+    MethodFrame r = createMethod(s, {true, false})->render(s.camera);
+    reference = r.image;
+    // One that stopped short of the error target (time or sample limit) is kept for this run
+    // but not reused: the next run tries again.
+    ImageAttributes attrs{{"nestlight:cache_key", r.stopReason == "error target" ? key : "incomplete"},
+                          {"nestlight:samples", std::to_string(r.samplesPerPixel)},
+                          {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
+                          {"nestlight:seconds", std::to_string(r.seconds)},
+                          {"nestlight:stop", r.stopReason}};
+    writeExr(refPath.string(), reference, attrs);
+    refInfo = {{"cached", false}, {"samples", r.samplesPerPixel}, {"relative_error_estimate", r.relativeError},
+               {"seconds", r.seconds}, {"stop", r.stopReason}, {"rays_per_second", r.raysPerSecond()},
+               {"samples_per_second", r.samplesPerSecond()}};
+    say("  reference: %d spp, estimated error %.4f, %.1f s (%s)\n", r.samplesPerPixel, r.relativeError, r.seconds,
+        r.stopReason.c_str());
+    if (r.stopReason != "error target")
+      say("  warning: the reference stopped before %.4g error; errors below its own are not meaningful\n", o.referenceError);
+  }
+  writeToneMappedPng((dir / "reference.png").string(), reference, probe.output.exposure);
+
+  say("%-10s %8s %10s %12s %10s %10s %9s %7s %11s\n", "method", "quality", "median ms", "rays/s", "rel L2", "RMSE",
+      "PSNR dB", "SSIM", "SSIM (tm)");
+  for (const MethodInfo* m : methods) {
+    auto q = o.qualities.find(m->name);
+    const std::vector<int>& levels = q != o.qualities.end() ? q->second : m->defaultQualities;
+    for (int level : levels) {
+      Scene s = prepared(m->name);
+      s.gi.seed = 1;
+      m->applyQuality(s.gi, level);
+      std::unique_ptr<Method> method = createMethod(s, {true, false});
+      BenchGiRow row;
+      row.method = m->name;
+      row.qualityName = m->qualityName;
+      row.quality = level;
+      MethodFrame first;
+      for (int run = 0; run < o.runs; ++run) {
+        MethodFrame f = method->render(s.camera);
+        row.ms.push_back(f.seconds * 1e3);
+        if (run == 0) first = std::move(f);
+      }
+      row.medianMs = medianOf(row.ms);
+      row.raysPerSecond = first.raysPerSecond();
+      row.samplesPerSecond = first.samplesPerSecond();
+      row.passMs = first.passMs;
+      writeExr((dir / (m->name + "_" + std::to_string(level) + ".exr")).string(), first.image, first.attributes);
+      CompareOptions co;
+      co.testName = m->name + " " + std::to_string(level);
+      co.referenceName = refPath.string();
+      co.exposureStops = probe.output.exposure;
+      row.cmp = compareImages(first.image, reference, co);
+      row.relativeL2 = relativeL2(first.image, reference);
+      say("%-10s %8d %10.1f %12.3g %10.4f %10.4g %9.2f %7.4f %11.4f\n", m->name.c_str(), level, row.medianMs,
+          row.raysPerSecond, row.relativeL2, row.cmp.linear.rmse, row.cmp.linear.psnr, row.cmp.linear.ssim,
+          row.cmp.toneMapped.ssim);
+      report.rows.push_back(std::move(row));
+    }
+  }
+
+  // Files: CSV, JSON, SVG.
+  const std::string device = !o.device.empty() ? o.device
+                                               : cpuModel() + ", " + std::to_string(tbb::info::default_concurrency()) +
+                                                     " threads (CPU methods: Embree 3; GL methods: the context's device)";
+  std::ofstream csv(dir / "bench_gi.csv");
+  csv << "method,quality,quality_name,runs,median_ms,min_ms,max_ms,rays_per_second,samples_per_second,relative_l2,"
+         "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels\n";
+  json jrows = json::array();
+  std::vector<PlotSeries> series;
+  json timeTo1;
+  for (const MethodInfo* m : methods) {
+    PlotSeries ps;
+    ps.name = m->name;
+    std::vector<const BenchGiRow*> mine;
+    for (const BenchGiRow& r : report.rows) {
+      if (r.method != m->name) continue;
+      mine.push_back(&r);
+      auto [lo, hi] = std::minmax_element(r.ms.begin(), r.ms.end());
+      char line[640];
+      std::snprintf(line, sizeof line, "%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,%.6f,%llu\n",
+                    r.method.c_str(), r.quality, r.qualityName.c_str(), r.ms.size(), r.medianMs, *lo, *hi, r.raysPerSecond,
+                    r.samplesPerSecond, r.relativeL2, r.cmp.linear.rmse, r.cmp.linear.relativeMse, r.cmp.linear.psnr,
+                    r.cmp.linear.ssim, r.cmp.toneMapped.rmse, r.cmp.toneMapped.psnr, r.cmp.toneMapped.ssim,
+                    (unsigned long long)r.cmp.test.pixels);
+      csv << line;
+      json passes = json::object();
+      for (const auto& [name, ms] : r.passMs) passes[name] = ms;
+      jrows.push_back({{"method", r.method}, {"quality", r.quality}, {"quality_name", r.qualityName}, {"runs_ms", r.ms},
+                       {"median_ms", r.medianMs}, {"rays_per_second", r.raysPerSecond},
+                       {"samples_per_second", r.samplesPerSecond}, {"gpu_pass_ms", passes},
+                       {"relative_l2", r.relativeL2}, {"comparison", toJson(r.cmp)}});
+      ps.points.push_back({r.medianMs, r.relativeL2, std::to_string(r.quality)});
+    }
+    timeTo1[m->name] = timeToError(mine, 0.01);
+    series.push_back(std::move(ps));
+  }
+  report.json = {{"scene", sceneFile.string()}, {"device", device}, {"width", W}, {"height", H}, {"runs", o.runs},
+                 {"reference", refInfo}, {"rows", jrows}, {"time_to_1_percent", timeTo1},
+                 {"error_measure", "relative L2: sqrt(sum (t - r)^2 / sum r^2) over pixels and channels"}};
+  std::ofstream(dir / "bench_gi.json") << report.json.dump(2) << "\n";
+  writeSvgPlot((dir / "bench_gi.svg").string(), "GI speed against error: " + sceneFile.parent_path().filename().string(),
+               "time per frame (ms, " + device + ")", "relative L2 error against the reference", series, true, true);
+  for (const MethodInfo* m : methods) {
+    const json& t = timeTo1[m->name];
+    say("time to 1%% relative error, %s: %s ms (%s)\n", m->name.c_str(),
+        t["ms"].is_null() ? "-" : std::to_string(int64_t(t["ms"].get<double>())).c_str(),
+        t["how"].get<std::string>().c_str());
+  }
+  say("bench gi: wrote %s/bench_gi.{csv,json,svg} (device: %s)\n", dir.c_str(), device.c_str());
+  return report;
+}
+
+}  // namespace nestlight::gi

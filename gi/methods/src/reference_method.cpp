@@ -1,0 +1,72 @@
+// `reference` and `direct` as registered methods: the path tracer of gi/reference, all bounces or
+// one (nestlight/gi/reference/path_tracer.h).
+#include "reference_method.h"
+
+#include <cstdio>
+
+#include "nestlight/gi/reference/path_tracer.h"
+#include "nestlight/gi/reference/reference_scene.h"
+
+namespace nestlight::gi {
+
+namespace {
+
+void logLine(const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); }
+
+class ReferenceMethod : public Method {
+ public:
+  ReferenceMethod(const Scene& scene, const MethodContext& ctx)
+      : name_(scene.gi.method), quiet_(ctx.quiet), options_(referenceOptionsFrom(scene.gi)) {
+    scene_ = ReferenceScene::load(scene, quiet_ ? nullptr : &logLine);
+  }
+  std::string name() const override { return name_; }
+
+  MethodFrame render(const SceneCamera& camera) override {
+    int lastReported = 0;
+    auto progress = [&](const ReferenceProgress& p) {
+      if (!quiet_ && (p.samplesPerPixel >= 2 * lastReported || p.samplesPerPixel == options_.maxSamplesPerPixel)) {
+        lastReported = p.samplesPerPixel;
+        std::fprintf(stderr, "  %5d spp  %7.2f s  estimated error %.4f\n", p.samplesPerPixel, p.seconds, p.relativeError);
+      }
+      return true;
+    };
+    ReferenceResult r = renderReference(*scene_, camera, options_, progress);
+    MethodFrame f;
+    f.image = std::move(r.image);
+    f.seconds = r.seconds;
+    f.samplesPerPixel = r.samplesPerPixel;
+    f.relativeError = r.relativeError;
+    f.rays = r.rays;
+    f.nonFiniteSamples = r.nonFiniteSamples;
+    f.stopReason = r.stopReason;
+    f.attributes = {{"nestlight:samples", std::to_string(r.samplesPerPixel)},
+                    {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
+                    {"nestlight:seconds", std::to_string(r.seconds)},
+                    {"nestlight:rays", std::to_string(r.rays)},
+                    {"nestlight:max_bounces", std::to_string(options_.maxBounces)},
+                    {"nestlight:stop", r.stopReason}};
+    char line[256];
+    std::snprintf(line, sizeof line, "%d samples/pixel in %.2f s (%s), estimated relative error %.4f, %.2f M rays/s, %.0f k samples/s",
+                  f.samplesPerPixel, f.seconds, f.stopReason.c_str(), f.relativeError, f.raysPerSecond() / 1e6,
+                  f.samplesPerSecond() / 1e3);
+    f.summary = line;
+    if (f.nonFiniteSamples) f.summary += ", " + std::to_string(f.nonFiniteSamples) + " non-finite samples dropped";
+    return f;
+  }
+
+  uint64_t discs() const { return scene_->discs(); }
+
+ private:
+  std::string name_;
+  bool quiet_;
+  ReferenceOptions options_;
+  std::unique_ptr<ReferenceScene> scene_;
+};
+
+}  // namespace
+
+std::unique_ptr<Method> createReferenceMethod(const Scene& scene, const MethodContext& ctx) {
+  return std::make_unique<ReferenceMethod>(scene, ctx);
+}
+
+}  // namespace nestlight::gi

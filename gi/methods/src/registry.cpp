@@ -1,0 +1,52 @@
+#include <algorithm>
+
+#include "nestlight/gi/methods.h"
+#include "nestlight/gi/raster/raster_method.h"
+#include "nestlight/octree/error.h"
+#include "reference_method.h"
+
+namespace nestlight::gi {
+
+const std::vector<MethodInfo>& registeredMethods() {
+  static const std::vector<MethodInfo> methods = [] {
+    auto spp = [](GiSettings& g, int q) {
+      g.samplesPerPixel = q;
+      g.targetRelativeError = 0;
+      g.timeLimitSeconds = 0;
+    };
+    std::vector<MethodInfo> m;
+    m.push_back({"reference", "path-traced ground truth (Embree, CPU): all bounces", false, "samples per pixel",
+                 {1, 4, 16, 64}, spp, createReferenceMethod});
+    m.push_back({"direct", "the reference's path tracer stopped after one bounce: direct light (CPU)", false,
+                 "samples per pixel", {1, 4, 16, 64}, spp, createReferenceMethod});
+    m.push_back({"raster", "real-time direct light through the GI frame: G-buffer, shadow maps (GL)", true,
+                 "shadow-map texels", {256, 512, 1024, 2048},
+                 [](GiSettings& g, int q) {
+                   if (!g.parameters.is_object()) g.parameters = nlohmann::json::object();
+                   g.parameters["shadow_map_size"] = q;
+                 },
+                 createRasterMethod});
+    return m;
+  }();
+  return methods;
+}
+
+const MethodInfo* findMethod(const std::string& name) {
+  for (const auto& m : registeredMethods())
+    if (m.name == name) return &m;
+  return nullptr;
+}
+
+std::string methodList() {
+  std::string s;
+  for (const auto& m : registeredMethods()) s += (s.empty() ? "" : ", ") + m.name;
+  return s;
+}
+
+std::unique_ptr<Method> createMethod(const Scene& scene, const MethodContext& ctx) {
+  const MethodInfo* m = findMethod(scene.gi.method);
+  if (!m) throw Error(scene.file.string(), "gi.method", "unknown method '" + scene.gi.method + "' (" + methodList() + ")");
+  return m->create(scene, ctx);
+}
+
+}  // namespace nestlight::gi

@@ -1,0 +1,31 @@
+// `raster`: a scene in real time through the GI frame, direct light only. Scans stream under the
+// budgets and are drawn as splats sized by their measured spacing, meshes as triangles, both into
+// the linear HDR G-buffer; every light renders a shadow map of the resident cut and the meshes
+// (spot: one perspective view; point: six; directional: one orthographic view over the scene's
+// bounds) once per frame; a deferred pass shades each pixel with gi/core's BSDFs. The frame every
+// GI method builds on, and the real-time counterpart of the reference's `direct`.
+#pragma once
+
+#include <memory>
+
+#include "nestlight/gi/method.h"
+
+namespace nestlight::gi {
+
+struct RasterParameters {
+  int shadowMapSize = 2048;    // texels per side of each shadow-map layer
+  float splatScale = 2.25f;    // splat diameter in measured spacings (the viewer's default)
+  int maxTile = 2048;          // larger images render in tiles
+  uint64_t pointBudget = 5'000'000;  // points of each scan's resident cut
+  uint64_t gpuBytes = 1ull << 30;    // resident bytes of each scan
+  double streamTimeoutSeconds = 300; // waiting for a view's cut to load completely
+};
+
+// From the scene's gi.parameters ("shadow_map_size", "splat_scale", "point_budget",
+// "gpu_budget_mb"); throws nestlight::Error naming the scene file and the field.
+RasterParameters rasterParameters(const Scene& scene);
+
+// Opens the scene's scans and meshes and, unless ctx says one is current, a headless GL context.
+std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx);
+
+}  // namespace nestlight::gi

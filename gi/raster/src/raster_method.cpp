@@ -1,0 +1,565 @@
+// The `raster` method: direct light through the GI frame (nestlight/gi/raster/raster_method.h).
+// Shadow maps are the classic technique (Williams 1978, "Casting Curved Shadows on Curved
+// Surfaces") with normal-offset lookups and percentage-closer filtering (Reeves, Salesin and Cook
+// 1987, "Rendering Antialiased Shadows with Depth Maps"); the environment's irradiance on diffuse
+// lobes is order-2 spherical harmonics (Ramamoorthi and Hanrahan 2001, "An Efficient
+// Representation for Irradiance Environment Maps").
+#include "nestlight/gi/raster/raster_method.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <thread>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "nestlight/frame/draw_tree.h"
+#include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/gl_node_store.h"
+#include "nestlight/frame/interface.h"
+#include "nestlight/frame/passes.h"
+#include "nestlight/gi/environment_map.h"
+#include "nestlight/gi/mesh.h"
+#include "nestlight/gl/context.h"
+#include "nestlight/gl/program.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
+#include "nestlight/streaming/streamer.h"
+
+namespace nestlight::gi {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr double kPiD = 3.14159265358979323846;
+
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// A box in the scene's local frame.
+struct LocalBox {
+  glm::vec3 lo{INFINITY}, hi{-INFINITY};
+  void add(const glm::vec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  bool empty() const { return !(lo.x <= hi.x); }
+  glm::vec3 centre() const { return 0.5f * (lo + hi); }
+  float radius() const { return 0.5f * glm::length(hi - lo); }
+};
+
+// Order-2 SH irradiance of a lat-long map (Ramamoorthi and Hanrahan 2001, eq. 10-12): the nine
+// coefficients L_lm, each times the cosine lobe's A_l and its basis constant, in the order
+// shaders/gi/raster/direct_light.frag evaluates them.
+std::array<glm::vec3, 9> irradianceSh(const EnvironmentMap& env) {
+  std::array<glm::dvec3, 9> L{};
+  const HdrImage& img = env.image();
+  const double rot = double(env.rotationDegrees()) * kPiD / 180;
+  for (int y = 0; y < img.height; ++y) {
+    const double theta = kPiD * (y + 0.5) / img.height;
+    const double dOmega = (2 * kPiD / img.width) * (kPiD / img.height) * std::sin(theta);
+    for (int x = 0; x < img.width; ++x) {
+      const double phi = 2 * kPiD * (x + 0.5) / img.width + rot;
+      const double dx = std::sin(theta) * std::cos(phi), dy = std::sin(theta) * std::sin(phi), dz = std::cos(theta);
+      const Rgb c = img.get(x, y);
+      const glm::dvec3 v = glm::dvec3(c.r, c.g, c.b) * double(env.scale()) * dOmega;
+      if (!std::isfinite(v.x + v.y + v.z)) continue;
+      const double Y[9] = {0.282095, 0.488603 * dy, 0.488603 * dz, 0.488603 * dx, 1.092548 * dx * dy,
+                           1.092548 * dy * dz, 0.315392 * (3 * dz * dz - 1), 1.092548 * dx * dz,
+                           0.546274 * (dx * dx - dy * dy)};
+      for (int k = 0; k < 9; ++k) L[k] += v * Y[k];
+    }
+  }
+  const double A[9] = {kPiD, 2 * kPiD / 3, 2 * kPiD / 3, 2 * kPiD / 3, kPiD / 4, kPiD / 4, kPiD / 4, kPiD / 4, kPiD / 4};
+  const double C[9] = {0.282095, 0.488603, 0.488603, 0.488603, 1.092548, 1.092548, 0.315392, 1.092548, 0.546274};
+  std::array<glm::vec3, 9> out;
+  for (int k = 0; k < 9; ++k) out[k] = glm::vec3(L[k] * A[k] * C[k]);
+  return out;
+}
+
+struct GpuMesh {
+  gl::Buffer vertices, indices;
+  gl::VertexArray vao;
+  GLsizei indexCount = 0;
+  uint32_t material = 0;
+};
+
+struct GpuScan {
+  std::unique_ptr<OctreeReader> reader;
+  std::unique_ptr<frame::GlNodeStore> store;
+  std::unique_ptr<streaming::Streamer> streamer;
+  frame::DrawTree tree;
+  float colourScale = 1;
+};
+
+class RasterMethod : public Method {
+ public:
+  RasterMethod(const Scene& scene, const MethodContext& mc) : scene_(scene), quiet_(mc.quiet) {
+    params_ = rasterParameters(scene);
+    if (!mc.glContextCurrent) {
+      context_ = gl::createHeadlessContext();
+      if (!quiet_) std::fprintf(stderr, "raster: %s\n", context_->description().c_str());
+    }
+    loadScans();
+    loadMeshes();
+    setUpLights();
+    setUpEnvironment();
+    uploadMaterials();
+    buildGraph();
+  }
+
+  ~RasterMethod() override {
+    // Streamers release their nodes into the stores while the context lives.
+    scans_.clear();
+  }
+
+  std::string name() const override { return "raster"; }
+
+  MethodFrame render(const SceneCamera& camera) override {
+    const int W = camera.width, H = camera.height;
+    if (W <= 0 || H <= 0) throw Error(scene_.file.string(), "camera", "the image size must be positive");
+    const glm::vec3 eye = scene_.local(camera.eye), target = scene_.local(camera.target);
+    const glm::vec3 up = glm::vec3(camera.up);
+    // Clip planes around everything there is, so depth precision is spent on the scene.
+    float nearZ = 1e30f, farZ = 0;
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec3 p((c & 1) ? bounds_.hi.x : bounds_.lo.x, (c & 2) ? bounds_.hi.y : bounds_.lo.y,
+                        (c & 4) ? bounds_.hi.z : bounds_.lo.z);
+      farZ = std::max(farZ, glm::length(p - eye));
+    }
+    const glm::vec3 nearest = glm::clamp(eye, bounds_.lo, bounds_.hi);
+    nearZ = std::max(0.95f * glm::length(nearest - eye), 1e-4f * farZ);
+    farZ = std::max(farZ * 1.01f, nearZ * 2);
+    const double fovY = glm::radians(camera.fovYDegrees);
+
+    // The resident cut of each scan for this view, loaded completely (a still is judged against
+    // the reference; the viewer's real-time path draws whatever is resident instead).
+    const auto tStream = Clock::now();
+    uint64_t drawPoints = 0;
+    for (auto& s : scans_) {
+      const streaming::View view = streaming::perspectiveView(camera.eye, camera.target, camera.up, fovY, W, H,
+                                                              double(nearZ), double(farZ));
+      streaming::FrameStats st = s.streamer->update(view);
+      while (!st.complete) {
+        if (secondsSince(tStream) > params_.streamTimeoutSeconds)
+          throw Error(s.reader->dir().string(), "", "the view's cut did not load within " +
+                                                        std::to_string(params_.streamTimeoutSeconds) + " s");
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        st = s.streamer->update(view);
+      }
+      s.tree.upload(s.streamer->drawList());
+      drawPoints += st.drawPoints;
+    }
+    const double streamSeconds = secondsSince(tStream);
+
+    frame::FrameBlock& u = graph_.uniforms();
+    u.viewFromWorld = glm::lookAt(eye, target, up);
+    u.clipFromView = glm::perspective(float(fovY), float(W) / float(H), nearZ, farZ);
+    u.eye = glm::vec4(eye, float(H) / (2.0f * std::tan(float(fovY) / 2)));
+    u.counts = glm::ivec4(int(lightRecords_.size()), scene_.gi.mode == RadianceMode::Albedo ? 1 : 0, frameNumber_++, 0);
+
+    const auto t0 = Clock::now();
+    std::vector<float> rgba = graph_.execute(W, H, params_.maxTile);
+    MethodFrame f;
+    f.seconds = secondsSince(t0);
+    f.image = HdrImage(W, H);
+    for (size_t p = 0; p < size_t(W) * H; ++p)
+      for (int k = 0; k < 3; ++k) f.image.rgb[3 * p + k] = rgba[4 * p + k];
+    for (const auto& t : graph_.timings()) f.passMs.emplace_back(t.name, t.gpuMs);
+    f.attributes = {{"nestlight:method", "raster"},
+                    {"nestlight:shadow_map_size", std::to_string(params_.shadowMapSize)},
+                    {"nestlight:splat_scale", std::to_string(params_.splatScale)},
+                    {"nestlight:points", std::to_string(drawPoints)},
+                    {"nestlight:seconds", std::to_string(f.seconds)}};
+    std::string passes;
+    for (const auto& [name, ms] : f.passMs) {
+      passes += (passes.empty() ? "" : ", ") + name + " " + std::to_string(ms).substr(0, 6) + " ms";
+      f.attributes["nestlight:pass_ms:" + name] = std::to_string(ms);
+    }
+    char line[256];
+    std::snprintf(line, sizeof line, "%llu points, %zu lights, %d px shadow maps, %.1f ms (stream %.2f s)",
+                  (unsigned long long)drawPoints, lightRecords_.size(), params_.shadowMapSize, f.seconds * 1e3,
+                  streamSeconds);
+    f.summary = std::string(line) + "; GPU: " + passes;
+    return f;
+  }
+
+ private:
+  void loadScans() {
+    for (const auto& o : scene_.octrees) {
+      GpuScan s;
+      s.reader = std::make_unique<OctreeReader>(o.path);
+      const Metadata& meta = s.reader->metadata();
+      const frame::ColourMode mode = meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb : frame::ColourMode::Elevation;
+      if (!meta.layout.has(attr::kRgb) && !quiet_)
+        std::fprintf(stderr, "raster: %s has no colour; drawn by elevation\n", o.path.c_str());
+      s.store = std::make_unique<frame::GlNodeStore>(meta, mode);
+      streaming::Budgets b;
+      b.points = params_.pointBudget;
+      b.gpuBytes = params_.gpuBytes;
+      b.uploadBytesPerFrame = params_.gpuBytes;  // a still waits for its cut anyway
+      b.spacingPixels = 1.0;
+      s.streamer = std::make_unique<streaming::Streamer>(*s.reader, *s.store, b);
+      s.colourScale = o.colourScale;
+      for (int c = 0; c < 8; ++c)
+        bounds_.add(scene_.local({(c & 1) ? meta.bounds.max.x : meta.bounds.min.x,
+                                  (c & 2) ? meta.bounds.max.y : meta.bounds.min.y,
+                                  (c & 4) ? meta.bounds.max.z : meta.bounds.min.z}));
+      scans_.push_back(std::move(s));
+    }
+  }
+
+  void loadMeshes() {
+    for (const auto& m : scene_.meshes) {
+      TriangleMesh mesh = readMesh(m.path.string());
+      const glm::mat4 localFromObject = scene_.localFromObject(m);
+      const glm::mat3 normalFrom = glm::transpose(glm::inverse(glm::mat3(localFromObject)));
+      std::vector<float> v;
+      v.reserve(mesh.positions.size() * 9);
+      for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        const glm::vec3 p = glm::vec3(localFromObject * glm::vec4(mesh.positions[i], 1.0f));
+        glm::vec3 n(0.0f);
+        if (!mesh.normals.empty()) {
+          n = normalFrom * mesh.normals[i];
+          const float len = glm::length(n);
+          n = len > 0 && std::isfinite(len) ? n / len : glm::vec3(0.0f);
+        }
+        const Rgb c = mesh.colors.empty() ? Rgb(1.0f) : mesh.colors[i];
+        v.insert(v.end(), {p.x, p.y, p.z, n.x, n.y, n.z, c.r, c.g, c.b});
+        if (std::isfinite(p.x + p.y + p.z)) bounds_.add(p);
+      }
+      GpuMesh g;
+      g.vertices = gl::Buffer(v.size() * 4, v.data(), 0);
+      g.indices = gl::Buffer(mesh.indices.size() * 4, mesh.indices.data(), 0);
+      g.indexCount = GLsizei(mesh.indices.size());
+      g.material = m.material;
+      g.vao = gl::VertexArray::create();
+      const GLuint vao = g.vao.id();
+      glVertexArrayVertexBuffer(vao, 0, g.vertices.id(), 0, 9 * sizeof(float));
+      glVertexArrayElementBuffer(vao, g.indices.id());
+      for (GLuint a = 0; a < 3; ++a) {
+        glEnableVertexArrayAttrib(vao, a);
+        glVertexArrayAttribFormat(vao, a, 3, GL_FLOAT, GL_FALSE, a * 3 * sizeof(float));
+        glVertexArrayAttribBinding(vao, a, 0);
+      }
+      meshes_.push_back(std::move(g));
+    }
+    if (bounds_.empty()) bounds_.add(glm::vec3(0.0f));
+  }
+
+  // One record per light; shadow-map layers: spot and directional one, point six (cube faces in
+  // the order shadowLayer() in shaders/gi/common/lights.glsl picks them).
+  void setUpLights() {
+    if (scene_.lights.size() > NL_MAX_LIGHTS)
+      throw Error(scene_.file.string(), "lights", "the raster method takes at most " + std::to_string(NL_MAX_LIGHTS) +
+                                                      " lights; the scene has " + std::to_string(scene_.lights.size()));
+    const glm::vec3 centre = bounds_.centre();
+    const float R = std::max(bounds_.radius(), 1e-3f);
+    const int S = params_.shadowMapSize;
+    for (const Light& l : scene_.lights) {
+      frame::LightRecord r{};
+      const glm::vec3 pos = scene_.local(l.position);
+      const glm::vec3 dir = glm::length(l.direction) > 0 ? glm::normalize(l.direction) : glm::vec3(0, 0, -1);
+      const int type = l.type == LightType::Point ? NL_LIGHT_POINT : l.type == LightType::Spot ? NL_LIGHT_SPOT : NL_LIGHT_DIRECTIONAL;
+      r.position = glm::vec4(pos, float(type));
+      r.direction = glm::vec4(dir, 0.0f);
+      r.intensity = glm::vec4(l.intensity.r, l.intensity.g, l.intensity.b, 0.0f);
+      r.cone = glm::vec4(std::cos(glm::radians(l.outerAngleDegrees)), std::cos(glm::radians(l.innerAngleDegrees)), 0, 0);
+      auto upFor = [](const glm::vec3& d) { return std::abs(d.z) < 0.9f ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0); };
+      const float farL = glm::length(pos - centre) + R * 1.01f;
+      const float nearL = std::max(farL * 1e-4f, 1e-4f);
+      r.shadow = glm::vec4(float(shadowViews_.size()), 0.0f, nearL, farL);
+      if (type == NL_LIGHT_DIRECTIONAL) {
+        const glm::mat4 view = glm::lookAt(centre - dir * (R * 1.05f), centre, upFor(dir));
+        shadowViews_.push_back(glm::ortho(-R, R, -R, R, 0.0f, 2.1f * R) * view);
+        shadowViewFromWorld_.push_back(view);
+        r.shadow.y = 2 * R / float(S);
+        r.shadow.z = 0, r.shadow.w = 2.1f * R;
+      } else if (type == NL_LIGHT_SPOT) {
+        // The outer cone plus a texel of margin, at most 170 degrees (beyond that a point light's
+        // six views would serve better; the falloff still cuts the light at the cone).
+        const float half = std::min(glm::radians(l.outerAngleDegrees) * 1.02f, glm::radians(85.0f));
+        const glm::mat4 view = glm::lookAt(pos, pos + dir, upFor(dir));
+        shadowViews_.push_back(glm::perspective(2 * half, 1.0f, nearL, farL) * view);
+        shadowViewFromWorld_.push_back(view);
+        r.shadow.y = 2 * std::tan(half) / float(S);
+      } else {
+        const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        for (const auto& a : axes) {
+          const glm::mat4 view = glm::lookAt(pos, pos + a, upFor(a));
+          shadowViews_.push_back(glm::perspective(glm::radians(90.0f), 1.0f, nearL, farL) * view);
+          shadowViewFromWorld_.push_back(view);
+        }
+        r.shadow.y = 2.0f / float(S);
+      }
+      lightRecords_.push_back(r);
+    }
+    lightsBuffer_ = gl::Buffer(std::max<size_t>(lightRecords_.size(), 1) * sizeof(frame::LightRecord),
+                               lightRecords_.empty() ? nullptr : lightRecords_.data(), 0);
+    std::vector<glm::mat4> views = shadowViews_;
+    if (views.empty()) views.emplace_back(1.0f);
+    shadowViewsBuffer_ = gl::Buffer(views.size() * sizeof(glm::mat4), views.data(), 0);
+  }
+
+  void setUpEnvironment() {
+    if (!scene_.environment) return;
+    const SceneEnvironment& e = *scene_.environment;
+    EnvironmentMap env = e.constant ? EnvironmentMap::constant(*e.constant)
+                                    : EnvironmentMap::load(e.path.string(), e.rotationDegrees, e.scale);
+    hasEnvironment_ = !env.black();
+    envRotation_ = glm::radians(env.rotationDegrees());
+    envScale_ = env.scale();
+    sh_ = irradianceSh(env);
+    const HdrImage& img = env.image();
+    std::vector<float> rgba(img.pixels() * 4, 1.0f);
+    for (size_t p = 0; p < img.pixels(); ++p)
+      for (int k = 0; k < 3; ++k) rgba[4 * p + k] = img.rgb[3 * p + k];
+    environment_ = gl::Texture(GL_RGBA32F, img.width, img.height);
+    glTextureSubImage2D(environment_.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT, rgba.data());
+  }
+
+  void uploadMaterials() {
+    std::vector<frame::MaterialRecord> recs;
+    for (const Material& m : scene_.materials) {
+      frame::MaterialRecord r{};
+      const int type = m.type == MaterialType::Lambert ? NL_MATERIAL_LAMBERT : m.type == MaterialType::GGX ? NL_MATERIAL_GGX : NL_MATERIAL_PRINCIPLED;
+      r.baseColor = glm::vec4(m.baseColor.r, m.baseColor.g, m.baseColor.b, float(type));
+      r.params = glm::vec4(m.roughness, m.metallic, m.specular, m.specularTint);
+      r.params2 = glm::vec4(m.sheen, m.sheenTint, m.clearcoat, m.clearcoatGloss);
+      r.emission = glm::vec4(m.emission.r, m.emission.g, m.emission.b, 0.0f);
+      recs.push_back(r);
+    }
+    if (recs.empty()) recs.emplace_back();
+    materialsBuffer_ = gl::Buffer(recs.size() * sizeof(frame::MaterialRecord), recs.data(), 0);
+  }
+
+  // Draws every scan's drawn nodes with `program` (shaders/gi/raster/scan.vert).
+  void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
+                 float pixelsPerUnit, bool orthographic) {
+    program.use();
+    glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
+    glUniformMatrix4fv(program.uniform("uViewFromWorld"), 1, GL_FALSE, &viewFromWorld[0][0]);
+    glUniform1f(program.uniform("uPixelsPerUnit"), pixelsPerUnit);
+    glUniform1i(program.uniform("uOrthographic"), orthographic ? 1 : 0);
+    glUniform1f(program.uniform("uSizeScale"), params_.splatScale);
+    // Up to 64 px as the viewer; at least 1 px (shadow maps of far scans still occlude).
+    glUniform2f(program.uniform("uSizeRange"), 1.0f, 64.0f);
+    const GLint nodeOrigin = program.uniform("uNodeOrigin"), nodeIndex = program.uniform("uNodeIndex"),
+                nodeSize = program.uniform("uNodeSize"), colourScale = program.uniform("uColourScale");
+    glBindVertexArray(emptyVao_.id());
+    for (auto& s : scans_) {
+      s.tree.bind();
+      glUniform1f(colourScale, s.colourScale);
+      const auto& nodes = s.streamer->drawList();
+      for (size_t k = 0; k < nodes.size(); ++k) {
+        const auto& n = nodes[k];
+        if (n.numPoints == 0) continue;
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, s.store->buffer(n.handle), 0,
+                          GLsizeiptr(size_t(n.numPoints) * frame::kGpuPointBytes));
+        const glm::vec3 origin = scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});
+        glUniform3f(nodeOrigin, origin.x, origin.y, origin.z);
+        glUniform1i(nodeIndex, int(k));
+        glUniform1f(nodeSize, float(n.worldBounds.max.x - n.worldBounds.min.x));
+        glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
+      }
+    }
+  }
+
+  void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, bool materials) {
+    program.use();
+    glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
+    for (const auto& m : meshes_) {
+      if (materials) {
+        const Material& mat = scene_.materials.at(m.material);
+        glUniform3f(program.uniform("uBaseColor"), mat.baseColor.r, mat.baseColor.g, mat.baseColor.b);
+        glUniform1i(program.uniform("uMaterialType"), mat.type == MaterialType::Lambert ? NL_MATERIAL_LAMBERT
+                                                      : mat.type == MaterialType::GGX   ? NL_MATERIAL_GGX
+                                                                                        : NL_MATERIAL_PRINCIPLED);
+        glUniform1f(program.uniform("uRoughness"), mat.roughness);
+        glUniform1f(program.uniform("uMetallic"), mat.metallic);
+        glUniform1ui(program.uniform("uMaterialIndex"), m.material);
+      }
+      glBindVertexArray(m.vao.id());
+      glDrawElements(GL_TRIANGLES, m.indexCount, GL_UNSIGNED_INT, nullptr);
+    }
+  }
+
+  void buildGraph() {
+    using gl::ShaderProgram;
+    meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
+    scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
+    meshShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
+    scanShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}});
+    directLight_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/direct_light.frag"}});
+    emptyVao_ = gl::VertexArray::create();
+    shadowFbo_ = gl::Framebuffer::create();
+
+    const int S = params_.shadowMapSize;
+    const int layers = std::max<int>(int(shadowViews_.size()), 1);
+    graph_.addTarget("shadow_maps", {GL_DEPTH_COMPONENT32F, true, S, S, layers});
+    graph_.addTarget("depth", {GL_DEPTH_COMPONENT32F});
+    graph_.addTarget("base_colour", {GL_RGBA32F});
+    graph_.addTarget("normal", {GL_RGBA16F});
+    graph_.addTarget("material", {GL_RGBA16UI});
+    graph_.addTarget("radiance", {GL_RGBA32F});
+    graph_.addTarget("display", {GL_RGBA8});
+
+    graph_.addPass(
+        "shadow_maps", frame::Scope::Frame, [](frame::PassBuilder& b) { b.write("shadow_maps"); },
+        [this, S](const frame::PassContext& ctx) {
+          const gl::Texture& maps = ctx.target("shadow_maps");
+          glEnable(GL_DEPTH_TEST);
+          glDepthFunc(GL_LESS);
+          glEnable(GL_PROGRAM_POINT_SIZE);
+          glDisable(GL_BLEND);
+          glDisable(GL_CULL_FACE);
+          glViewport(0, 0, S, S);
+          // Slope-scaled offset for triangles (points take theirs in the lookup).
+          glEnable(GL_POLYGON_OFFSET_FILL);
+          glPolygonOffset(1.5f, 2.0f);
+          for (size_t layer = 0; layer < shadowViews_.size(); ++layer) {
+            shadowFbo_.attachLayer(GL_DEPTH_ATTACHMENT, maps, int(layer));
+            if (layer == 0) shadowFbo_.finish(0, "shadow map");
+            glBindFramebuffer(GL_FRAMEBUFFER, shadowFbo_.id());
+            const float one = 1.0f;
+            glClearBufferfv(GL_DEPTH, 0, &one);
+            const glm::mat4& clip = shadowViews_[layer];
+            drawMeshes(meshShadow_, clip, false);
+            // Which light owns the layer: its projection sizes the splats.
+            const frame::LightRecord* owner = nullptr;
+            for (const auto& r : lightRecords_)
+              if (size_t(r.shadow.x) <= layer) owner = &r;
+            NL_CHECK(owner != nullptr);
+            const bool ortho = int(owner->position.w) == NL_LIGHT_DIRECTIONAL;
+            // Texels per world unit (orthographic) or per unit at distance 1 (perspective).
+            drawScans(scanShadow_, clip, shadowViewFromWorld_[layer], 1.0f / owner->shadow.y, ortho);
+          }
+          glDisable(GL_POLYGON_OFFSET_FILL);
+        });
+
+    auto gbufferWrites = [](frame::PassBuilder& b) {
+      b.write("depth");
+      b.write("base_colour");
+      b.write("normal");
+      b.write("material");
+    };
+    graph_.addPass("gbuffer_meshes", frame::Scope::Tile, gbufferWrites, [this](const frame::PassContext& ctx) {
+      ctx.bindFramebuffer();
+      glEnable(GL_DEPTH_TEST);
+      glDepthFunc(GL_LESS);
+      glDisable(GL_BLEND);
+      glDisable(GL_CULL_FACE);
+      const float zero[4] = {0, 0, 0, 0}, one = 1.0f;
+      const GLuint noMaterial[4] = {0, 0, 0, NL_NO_MATERIAL};
+      glClearBufferfv(GL_DEPTH, 0, &one);
+      glClearBufferfv(GL_COLOR, 0, zero);
+      glClearBufferfv(GL_COLOR, 1, zero);
+      glClearBufferuiv(GL_COLOR, 2, noMaterial);
+      drawMeshes(meshGBuffer_, ctx.uniforms().clipFromWorld, true);
+    });
+    graph_.addPass("gbuffer_scans", frame::Scope::Tile, gbufferWrites, [this](const frame::PassContext& ctx) {
+      ctx.bindFramebuffer();
+      glEnable(GL_DEPTH_TEST);
+      glEnable(GL_PROGRAM_POINT_SIZE);
+      const auto& u = ctx.uniforms();
+      drawScans(scanGBuffer_, u.clipFromWorld, u.viewFromWorld, u.eye.w, false);
+    });
+    graph_.addPass(
+        "direct_light", frame::Scope::Tile,
+        [](frame::PassBuilder& b) {
+          for (const char* t : {"depth", "base_colour", "normal", "material", "shadow_maps"}) b.read(t);
+          b.write("radiance");
+        },
+        [this](const frame::PassContext& ctx) {
+          ctx.bindFramebuffer();
+          glDisable(GL_DEPTH_TEST);
+          directLight_.use();
+          ctx.bindTexture("depth", 0);
+          ctx.bindTexture("base_colour", 1);
+          ctx.bindTexture("normal", 2);
+          ctx.bindTexture("material", 3);
+          const gl::Texture& maps = ctx.target("shadow_maps");
+          maps.setFilter(GL_LINEAR, GL_LINEAR);
+          maps.setDepthCompare(true);
+          glBindTextureUnit(4, maps.id());
+          glBindTextureUnit(5, environment_ ? environment_.id() : 0);
+          glUniform1i(directLight_.uniform("uHasEnvironment"), hasEnvironment_ ? 1 : 0);
+          glUniform1f(directLight_.uniform("uEnvRotation"), envRotation_);
+          glUniform1f(directLight_.uniform("uEnvScale"), envScale_);
+          glUniform3fv(directLight_.uniform("uEnvSh"), 9, &sh_[0].x);
+          lightsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_LIGHTS);
+          shadowViewsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SHADOW_VIEWS);
+          materialsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_MATERIALS);
+          glBindVertexArray(emptyVao_.id());
+          glDrawArrays(GL_TRIANGLES, 0, 3);
+        });
+    frame::addToneMapPass(graph_, "radiance", "display", exposure_);
+    graph_.compile("radiance");
+  }
+
+  Scene scene_;
+  bool quiet_ = false;
+  RasterParameters params_;
+  std::unique_ptr<gl::GlContext> context_;
+  LocalBox bounds_;
+  std::vector<GpuScan> scans_;
+  std::vector<GpuMesh> meshes_;
+  std::vector<frame::LightRecord> lightRecords_;
+  std::vector<glm::mat4> shadowViews_;         // clip from world, per shadow-map layer
+  std::vector<glm::mat4> shadowViewFromWorld_;  // the view alone (splat sizes)
+  gl::Buffer lightsBuffer_, shadowViewsBuffer_, materialsBuffer_;
+  gl::Texture environment_;
+  bool hasEnvironment_ = false;
+  float envRotation_ = 0, envScale_ = 1;
+  std::array<glm::vec3, 9> sh_{};
+  gl::ShaderProgram meshGBuffer_, scanGBuffer_, meshShadow_, scanShadow_, directLight_;
+  gl::VertexArray emptyVao_;
+  gl::Framebuffer shadowFbo_;
+  frame::FrameGraph graph_;
+  std::shared_ptr<float> exposure_ = std::make_shared<float>(0.0f);
+  int frameNumber_ = 0;
+};
+
+}  // namespace
+
+RasterParameters rasterParameters(const Scene& scene) {
+  RasterParameters p;
+  const nlohmann::json& j = scene.gi.parameters;
+  if (j.is_null()) return p;
+  const std::string file = scene.file.string();
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string key = it.key(), field = "gi.parameters." + key;
+    auto number = [&](double lo, double hi) {
+      if (!it->is_number()) throw Error(file, field, "expected a number, got " + it->dump());
+      const double v = it->get<double>();
+      if (!(v >= lo && v <= hi))
+        throw Error(file, field, "expected a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + it->dump());
+      return v;
+    };
+    if (key == "shadow_map_size") {
+      const double v = number(16, 16384);
+      if (v != std::floor(v)) throw Error(file, field, "expected an integer, got " + it->dump());
+      p.shadowMapSize = int(v);
+    } else if (key == "splat_scale") {
+      p.splatScale = float(number(0.1, 16));
+    } else if (key == "point_budget") {
+      p.pointBudget = uint64_t(number(1, 1e10));
+    } else if (key == "gpu_budget_mb") {
+      p.gpuBytes = uint64_t(number(1, 1 << 20)) << 20;
+    } else if (key == "max_tile") {
+      p.maxTile = int(number(16, 16384));
+    } else if (key == "stream_timeout") {
+      p.streamTimeoutSeconds = number(0.1, 1e6);
+    } else {
+      throw Error(file, field, "unknown parameter of the raster method (shadow_map_size, splat_scale, point_budget, "
+                               "gpu_budget_mb, max_tile, stream_timeout)");
+    }
+  }
+  return p;
+}
+
+std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx) {
+  return std::make_unique<RasterMethod>(scene, ctx);
+}
+
+}  // namespace nestlight::gi

@@ -1,0 +1,3 @@
+// The sRGB transfer functions (IEC 61966-2-1), as gi/core's srgb.h.
+float srgbDecode(float v) { return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4); }
+vec3 srgbDecode(vec3 c) { return vec3(srgbDecode(c.r), srgbDecode(c.g), srgbDecode(c.b)); }

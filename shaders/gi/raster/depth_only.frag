@@ -1,0 +1,2 @@
+// Depth only (meshes into shadow maps).
+void main() {}

@@ -1,0 +1,97 @@
+// Direct light from the G-buffer (the `raster` method): every light with its shadow map, the
+// BSDF of gi/core's materials, the environment seen behind the scene and, on diffuse lobes, its
+// unshadowed irradiance (order-2 spherical harmonics, Ramamoorthi and Hanrahan 2001, "An
+// Efficient Representation for Irradiance Environment Maps"). Scan points emit their colour in
+// the radiance-cache mode and are Lambert reflectors of it in the albedo mode, as in gi/reference.
+#include "../../interface/frame_interface.glsl"
+#include "../common/brdf.glsl"
+#include "../common/lights.glsl"
+layout(std430, binding = NL_SSBO_MATERIALS) readonly buffer Materials { MaterialRecord materials[]; };
+layout(binding = 0) uniform sampler2D uDepth;
+layout(binding = 1) uniform sampler2D uBaseColour;
+layout(binding = 2) uniform sampler2D uNormal;
+layout(binding = 3) uniform usampler2D uMaterial;
+layout(binding = 5) uniform sampler2D uEnvironment;  // lat-long, as gi::EnvironmentMap
+uniform bool uHasEnvironment;
+uniform float uEnvRotation;   // radians
+uniform float uEnvScale;
+uniform vec3 uEnvSh[9];       // irradiance SH coefficients (already convolved, times scale)
+layout(location = 0) out vec4 outRadiance;
+
+vec3 environment(vec3 d) {
+  if (!uHasEnvironment) return vec3(0.0);
+  float theta = atan(length(d.xy), d.z);
+  float u = (atan(d.y, d.x) - uEnvRotation) / (2.0 * kPi);
+  u -= floor(u);
+  float v = clamp(theta / kPi, 0.0, 1.0);
+  ivec2 size = textureSize(uEnvironment, 0);
+  ivec2 texel = min(ivec2(vec2(u, v) * vec2(size)), size - 1);
+  return texelFetch(uEnvironment, texel, 0).rgb * uEnvScale;
+}
+
+vec3 irradiance(vec3 n) {
+  return max(uEnvSh[0] + uEnvSh[1] * n.y + uEnvSh[2] * n.z + uEnvSh[3] * n.x + uEnvSh[4] * n.x * n.y +
+                 uEnvSh[5] * n.y * n.z + uEnvSh[6] * (3.0 * n.z * n.z - 1.0) + uEnvSh[7] * n.x * n.z +
+                 uEnvSh[8] * (n.x * n.x - n.y * n.y),
+             vec3(0.0));
+}
+
+void main() {
+  ivec2 px = ivec2(gl_FragCoord.xy);
+  float depth = texelFetch(uDepth, px, 0).r;
+  // The pixel's position in the full image's clip space, then the world.
+  vec2 ndc = (gl_FragCoord.xy / frame.tile.zw) * 2.0 - 1.0;
+  vec4 far = frame.worldFromClip * vec4(ndc, 1.0, 1.0);
+  vec3 viewDir = normalize(far.xyz / far.w - frame.eye.xyz);
+  if (depth >= 1.0) {
+    outRadiance = vec4(environment(viewDir), 1.0);
+    return;
+  }
+  vec4 w = frame.worldFromClip * vec4(ndc, depth * 2.0 - 1.0, 1.0);
+  vec3 p = w.xyz / w.w;
+  vec4 baseAndRadius = texelFetch(uBaseColour, px, 0);
+  vec3 base = baseAndRadius.rgb;
+  vec4 nn = texelFetch(uNormal, px, 0);
+  uvec4 m = texelFetch(uMaterial, px, 0);
+  int source = int(m.x >> 8);
+  vec3 wo = -viewDir;
+  if (source == NL_SOURCE_SCAN && frame.counts.y == 0) {  // radiance cache: the colour is the radiance
+    outRadiance = vec4(base, 1.0);
+    return;
+  }
+  MaterialParams mat;
+  mat.type = int(m.x & 255u);
+  mat.baseColor = source == NL_SOURCE_SCAN ? min(base, vec3(1.0)) : base;
+  mat.roughness = float(m.y) / 65535.0;
+  mat.metallic = float(m.z) / 65535.0;
+  mat.specular = 0.5, mat.specularTint = 0.0, mat.sheen = 0.0, mat.sheenTint = 0.5;
+  mat.clearcoat = 0.0, mat.clearcoatGloss = 1.0;
+  vec3 L = vec3(0.0);
+  if (m.w != uint(NL_NO_MATERIAL)) {
+    MaterialRecord r = materials[m.w];
+    mat.specular = r.params.z, mat.specularTint = r.params.w;
+    mat.sheen = r.params2.x, mat.sheenTint = r.params2.y, mat.clearcoat = r.params2.z, mat.clearcoatGloss = r.params2.w;
+    L += r.emission.rgb;
+  }
+  // Two-sided shading, as the reference: the normal faces the viewer; a point without a normal
+  // is a disc facing the ray.
+  vec3 n = nn.w > 0.0 ? normalize(nn.xyz) : wo;
+  if (dot(n, wo) < 0.0) n = -n;
+  mat3 frameFromLocal = frameFromNormal(n);
+  vec3 woL = wo * frameFromLocal;
+  for (int i = 0; i < frame.counts.x; ++i) {
+    LightSample s = sampleLight(i, p);
+    if (all(lessThanEqual(s.radiance, vec3(0.0)))) continue;
+    vec3 wiL = s.wi * frameFromLocal;
+    if (wiL.z <= 0.0) continue;
+    vec3 f = evalBsdf(mat, woL, wiL);
+    if (all(lessThanEqual(f, vec3(0.0)))) continue;
+    L += f * s.radiance * wiL.z * visibility(i, p, n, baseAndRadius.a, s);
+  }
+  if (uHasEnvironment) {
+    // The diffuse lobe's share only: Lambert's albedo, the (1 - metallic) part of the others.
+    vec3 diffuseAlbedo = mat.type == NL_MATERIAL_LAMBERT ? mat.baseColor : (1.0 - mat.metallic) * mat.baseColor;
+    L += diffuseAlbedo * kInvPi * irradiance(n);
+  }
+  outRadiance = vec4(L, 1.0);
+}
