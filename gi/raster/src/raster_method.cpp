@@ -469,6 +469,7 @@ class RasterMethod : public Method {
         [](frame::PassBuilder& b) {
           for (const char* t : {"depth", "base_colour", "normal", "material", "shadow_maps"}) b.read(t);
           b.write("radiance");
+          b.margin(1);  // pin-hole filling reads the 3 x 3 neighbourhood
         },
         [this](const frame::PassContext& ctx) {
           ctx.bindFramebuffer();
