@@ -14,8 +14,10 @@ namespace {
 // what the command line says explicitly wins over the file (`given`: an option was on it).
 void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
                 const std::function<bool(const char*)>& given) {
-  const gi::Scene scene = gi::loadScene(file);
+  auto loaded = std::make_shared<gi::Scene>(gi::loadScene(file));
+  const gi::Scene& scene = *loaded;
   if (scene.octrees.empty()) throw Error(file.string(), "scene.octrees", "the viewer needs a scan to show");
+  opt.scene = loaded;
   opt.octree = scene.octrees.front().path;
   if (scene.cameraSet && !given("--camera")) {
     viewer::Camera c;
@@ -40,8 +42,10 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
 void addView(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
       "view",
-      "Open an octree (or a scene file's first scan, with the scene's camera and \"display\" settings) "
-      "in a window and fly through it; nodes stream in under the budgets.\n"
+      "Open an octree in a window and fly through it; nodes stream in under the budgets. Given a scene file,\n"
+      "the scene is lit in real time through the GI frame by its gi.method (raster where the scene names an\n"
+      "offline method), with the method's parameters and per-pass GPU timings in the panel; the scene's first\n"
+      "scan is also shown as points with its camera and \"display\" settings.\n"
       "Orbit: drag (rotate), middle-drag (pan), wheel (zoom). Fly: WASD, Q/E down/up, shift faster.\n"
       "The panel sets rasteriser, splatting, colouring, point size, eye-dome lighting and budgets, and takes "
       "screenshots.");
@@ -53,6 +57,9 @@ void addView(CLI::App& app, int& exitCode) {
   cmd->add_option("--frames", opt->frames, "Close after this many frames (scripted runs; 0: when closed)");
   cmd->add_option("--orbit", opt->orbitDegreesPerFrame, "Turn the camera by this many degrees per frame");
   cmd->add_option("--screenshot", opt->screenshot, "Save the last frame to this PNG/EXR (with --frames)");
+  auto show = std::make_shared<std::string>("gi");
+  cmd->add_option("--show", *show, "Scene files: open on the GI method's frame (gi) or the scan's points (points)")
+      ->check(CLI::IsMember({"gi", "points"}))->capture_default_str();
   addRenderOptions(cmd, *job, text);
   cmd->callback([=, &exitCode]() {
     job->octree = *input;
@@ -67,6 +74,7 @@ void addView(CLI::App& app, int& exitCode) {
     opt->colour = job->colour;
     if (std::filesystem::path(*input).extension() == ".json")
       applyScene(*input, *opt, [cmd](const char* name) { return cmd->count(name) > 0; });
+    opt->startWithPoints = *show == "points";
     exitCode = viewer::runViewer(*opt);
   });
 }

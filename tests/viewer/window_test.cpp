@@ -66,7 +66,7 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
   }
   const std::string shot = tmp.file("shot.png");
   const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
-                          tmp.file("scene.json") + " --width 160 --height 120 --frames 20 --screenshot " + shot;
+                          tmp.file("scene.json") + " --show points --width 160 --height 120 --frames 20 --screenshot " + shot;
   const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
   const std::string out = test::readFile(tmp.file("log.txt"));
   ASSERT_EQ(rc, 0) << out;
@@ -86,7 +86,7 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
   }
   const std::string away = tmp.file("away.png");
   ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
-                         tmp.file("away.json") + " --width 160 --height 120 --frames 5 --screenshot " + away +
+                         tmp.file("away.json") + " --show points --width 160 --height 120 --frames 5 --screenshot " + away +
                          " > " + tmp.file("away.txt") + " 2>&1").c_str()),
             0)
       << test::readFile(tmp.file("away.txt"));
@@ -98,6 +98,22 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
       seen += std::fabs(p[0] - 0.08f) + std::fabs(p[1] - 0.08f) + std::fabs(p[2] - 0.10f) > 0.05f;
     }
   EXPECT_EQ(seen, 0u);
+  // By default a scene opens on its GI method (raster here: the scene names none that runs in
+  // real time): the scan's recorded colour as radiance on a black background (no environment),
+  // and the panel's method line in the log.
+  const std::string gi = tmp.file("gi.png");
+  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+                         tmp.file("scene.json") + " --width 160 --height 120 --frames 20 --screenshot " + gi + " > " +
+                         tmp.file("gi.txt") + " 2>&1").c_str()),
+            0)
+      << test::readFile(tmp.file("gi.txt"));
+  EXPECT_NE(test::readFile(tmp.file("gi.txt")).find("raster through the GI frame"), std::string::npos)
+      << test::readFile(tmp.file("gi.txt"));
+  viewer::Image lit = viewer::readImage(gi);
+  size_t nonBlack = 0;
+  for (int y = 0; y < lit.height; ++y)
+    for (int x = 0; x < lit.width; ++x) nonBlack += lit.at(x, y)[0] + lit.at(x, y)[1] + lit.at(x, y)[2] > 0.02f;
+  EXPECT_GT(double(nonBlack) / (160.0 * 120.0), 0.1);
   // A scene that names an unknown splatting stops with the file and the field.
   {
     std::ofstream f(tmp.file("bad.json"));

@@ -14,9 +14,12 @@
 #include <ctime>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "nestlight/gi/methods.h"
+#include "nestlight/gi/tone_map.h"
+#include "nestlight/gl/context.h"
+#include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
-#include "nestlight/gl/context.h"
 
 namespace nestlight::viewer {
 
@@ -69,6 +72,26 @@ int runViewer(const ViewerOptions& opt) {
 
   int exitCode = 0;
   {
+    // The scene's GI method, when the viewer was given a scene: made here, in the window's context.
+    std::unique_ptr<gi::Method> method;
+    std::string methodNote;
+    gl::Framebuffer methodFbo;
+    bool showMethod = false;
+    float exposure = opt.scene ? float(opt.scene->output.exposure) : 0.0f;
+    gi::MethodFrame methodStats;
+    if (opt.scene) {
+      gi::Scene s = *opt.scene;
+      const gi::MethodInfo* info = gi::findMethod(s.gi.method);
+      if (!info || !info->gpu) {
+        methodNote = s.gi.method + " renders offline (nestlight render); shown: raster";
+        s.gi.method = "raster";
+      }
+      method = gi::createMethod(s, {false, true});
+      methodFbo = gl::Framebuffer::create();
+      showMethod = !opt.startWithPoints;
+      std::printf("view: %s through the GI frame%s\n", method->name().c_str(),
+                  methodNote.empty() ? "" : (" (" + methodNote + ")").c_str());
+    }
     auto store = std::make_unique<frame::GlNodeStore>(meta, mode);
     FrameRenderer renderer;
     RenderSettings settings = opt.settings;
@@ -137,12 +160,20 @@ int runViewer(const ViewerOptions& opt) {
       cam.fitClipPlanes(meta.bounds);
       // Near the scan, near/far from the box alone would clip what is in front of the eye.
       cam.nearPlane = std::max(std::min(cam.nearPlane, cc.distance * 0.01), cam.farPlane * 1e-5);
+      gi::SceneCamera sceneCam;
+      sceneCam.eye = cam.eye, sceneCam.target = cam.target, sceneCam.up = cam.up;
+      sceneCam.fovYDegrees = cam.fovYDegrees, sceneCam.width = fbw, sceneCam.height = fbh;
       const streaming::FrameStats& st = streamer->update(cam.view(fbw, fbh));
       DrawTimings timings;
-      GLuint tex = renderer.renderToTexture(streamer->drawList(), *store, cam, fbw, fbh, settings, &timings);
-      (void)tex;
-      glBlitNamedFramebuffer(renderer.outputFramebuffer(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh, GL_COLOR_BUFFER_BIT,
-                             GL_NEAREST);
+      if (showMethod) {
+        const GLuint tex = method->renderInteractive(sceneCam, exposure, &methodStats);
+        methodFbo.attachRaw(GL_COLOR_ATTACHMENT0, tex);
+        glBlitNamedFramebuffer(methodFbo.id(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+      } else {
+        renderer.renderToTexture(streamer->drawList(), *store, cam, fbw, fbh, settings, &timings);
+        glBlitNamedFramebuffer(renderer.outputFramebuffer(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh, GL_COLOR_BUFFER_BIT,
+                               GL_NEAREST);
+      }
 
       // The panel.
       ImGui_ImplOpenGL3_NewFrame();
@@ -151,6 +182,26 @@ int runViewer(const ViewerOptions& opt) {
       ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
       ImGui::Begin("nestlight");
       ImGui::Text("%s", opt.octree.filename().string().c_str());
+      if (method) {
+        int view = showMethod ? 0 : 1;
+        const std::string views = method->name() + " (GI frame)" + '\0' + "points" + '\0';
+        if (ImGui::Combo("view", &view, views.c_str())) showMethod = view == 0;
+        if (!methodNote.empty()) ImGui::TextUnformatted(methodNote.c_str());
+        if (showMethod) {
+          ImGui::SliderFloat("exposure (EV)", &exposure, -10.f, 10.f);
+          if (ImGui::TreeNode("parameters")) {
+            for (const auto& [k, v] : method->parameters()) ImGui::Text("%s = %s", k.c_str(), v.c_str());
+            ImGui::TreePop();
+          }
+          double total = 0;
+          for (const auto& [name, ms] : methodStats.passMs) {
+            ImGui::Text("%-16s %7.2f ms", name.c_str(), ms);
+            total += ms;
+          }
+          ImGui::Text("%-16s %7.2f ms (frame %.1f ms)", "GPU total", total, methodStats.seconds * 1e3);
+        }
+        ImGui::Separator();
+      }
       int camMode = cc.mode == CameraController::Mode::Orbit ? 0 : 1;
       if (ImGui::Combo("camera", &camMode, "orbit (drag, wheel)\0fly (WASD QE, drag)\0"))
         cc.mode = camMode == 0 ? CameraController::Mode::Orbit : CameraController::Mode::Fly;
@@ -212,8 +263,15 @@ int runViewer(const ViewerOptions& opt) {
           std::snprintf(buf, sizeof buf, "nestlight-%ld.png", long(std::time(nullptr)));
           file = buf;
         }
-        Image img = renderer.render(streamer->drawList(), *store, cam, fbw, fbh, settings);
-        writeImage(img, file);
+        if (showMethod) {
+          // The method's linear frame: EXR as rendered, PNG through the panel's exposure.
+          const gi::MethodFrame f = method->render(sceneCam);
+          if (std::filesystem::path(file).extension() == ".exr") gi::writeExr(file, f.image, f.attributes);
+          else gi::writeToneMappedPng(file, f.image, exposure);
+        } else {
+          Image img = renderer.render(streamer->drawList(), *store, cam, fbw, fbh, settings);
+          writeImage(img, file);
+        }
         status = "saved " + file;
         std::printf("view: %s (%dx%d, %llu points drawn)\n", status.c_str(), fbw, fbh,
                     (unsigned long long)st.drawPoints);
@@ -222,6 +280,7 @@ int runViewer(const ViewerOptions& opt) {
       if (last) break;
     }
     streamer.reset();
+    method.reset();  // its GL objects go while the context lives
   }
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();

@@ -116,8 +116,55 @@ class RasterMethod : public Method {
   std::string name() const override { return "raster"; }
 
   MethodFrame render(const SceneCamera& camera) override {
+    setOutput("radiance");
     const int W = camera.width, H = camera.height;
     if (W <= 0 || H <= 0) throw Error(scene_.file.string(), "camera", "the image size must be positive");
+    const auto tStream = Clock::now();
+    const uint64_t drawPoints = stream(camera, true);
+    const double streamSeconds = secondsSince(tStream);
+    const auto t0 = Clock::now();
+    std::vector<float> rgba = graph_.execute(W, H, params_.maxTile);
+    MethodFrame f;
+    f.seconds = secondsSince(t0);
+    f.image = HdrImage(W, H);
+    for (size_t p = 0; p < size_t(W) * H; ++p)
+      for (int k = 0; k < 3; ++k) f.image.rgb[3 * p + k] = rgba[4 * p + k];
+    describe(f, drawPoints, streamSeconds);
+    return f;
+  }
+
+  unsigned renderInteractive(const SceneCamera& camera, float exposureStops, MethodFrame* stats) override {
+    setOutput("display");
+    *exposure_ = exposureStops;
+    const auto t0 = Clock::now();
+    const uint64_t drawPoints = stream(camera, false);
+    graph_.executeToTarget(camera.width, camera.height);
+    if (stats) {
+      stats->seconds = secondsSince(t0);
+      describe(*stats, drawPoints, 0);
+    }
+    return graph_.target("display").id();
+  }
+
+  std::vector<std::pair<std::string, std::string>> parameters() const override {
+    return {{"shadow_map_size", std::to_string(params_.shadowMapSize)},
+            {"splat_scale", std::to_string(params_.splatScale).substr(0, 4)},
+            {"point_budget", std::to_string(params_.pointBudget)},
+            {"gpu_budget_mb", std::to_string(params_.gpuBytes >> 20)},
+            {"max_tile", std::to_string(params_.maxTile)}};
+  }
+
+ private:
+  void setOutput(const std::string& output) {
+    if (output_ == output) return;
+    graph_.compile(output);
+    output_ = output;
+  }
+
+  // Sets the frame's camera and brings each scan's cut for it in: completely (a still, judged
+  // against the reference) or one streaming step (interactive). Returns the points drawn.
+  uint64_t stream(const SceneCamera& camera, bool complete) {
+    const int W = camera.width, H = camera.height;
     const glm::vec3 eye = scene_.local(camera.eye), target = scene_.local(camera.target);
     const glm::vec3 up = glm::vec3(camera.up);
     // Clip planes around everything there is, so depth precision is spent on the scene.
@@ -132,15 +179,13 @@ class RasterMethod : public Method {
     farZ = std::max(farZ * 1.01f, nearZ * 2);
     const double fovY = glm::radians(camera.fovYDegrees);
 
-    // The resident cut of each scan for this view, loaded completely (a still is judged against
-    // the reference; the viewer's real-time path draws whatever is resident instead).
     const auto tStream = Clock::now();
     uint64_t drawPoints = 0;
     for (auto& s : scans_) {
       const streaming::View view = streaming::perspectiveView(camera.eye, camera.target, camera.up, fovY, W, H,
                                                               double(nearZ), double(farZ));
       streaming::FrameStats st = s.streamer->update(view);
-      while (!st.complete) {
+      while (complete && !st.complete) {
         if (secondsSince(tStream) > params_.streamTimeoutSeconds)
           throw Error(s.reader->dir().string(), "", "the view's cut did not load within " +
                                                         std::to_string(params_.streamTimeoutSeconds) + " s");
@@ -150,21 +195,17 @@ class RasterMethod : public Method {
       s.tree.upload(s.streamer->drawList());
       drawPoints += st.drawPoints;
     }
-    const double streamSeconds = secondsSince(tStream);
 
     frame::FrameBlock& u = graph_.uniforms();
     u.viewFromWorld = glm::lookAt(eye, target, up);
     u.clipFromView = glm::perspective(float(fovY), float(W) / float(H), nearZ, farZ);
     u.eye = glm::vec4(eye, float(H) / (2.0f * std::tan(float(fovY) / 2)));
     u.counts = glm::ivec4(int(lightRecords_.size()), scene_.gi.mode == RadianceMode::Albedo ? 1 : 0, frameNumber_++, 0);
+    return drawPoints;
+  }
 
-    const auto t0 = Clock::now();
-    std::vector<float> rgba = graph_.execute(W, H, params_.maxTile);
-    MethodFrame f;
-    f.seconds = secondsSince(t0);
-    f.image = HdrImage(W, H);
-    for (size_t p = 0; p < size_t(W) * H; ++p)
-      for (int k = 0; k < 3; ++k) f.image.rgb[3 * p + k] = rgba[4 * p + k];
+  void describe(MethodFrame& f, uint64_t drawPoints, double streamSeconds) const {
+    f.passMs.clear();
     for (const auto& t : graph_.timings()) f.passMs.emplace_back(t.name, t.gpuMs);
     f.attributes = {{"nestlight:method", "raster"},
                     {"nestlight:shadow_map_size", std::to_string(params_.shadowMapSize)},
@@ -181,10 +222,8 @@ class RasterMethod : public Method {
                   (unsigned long long)drawPoints, lightRecords_.size(), params_.shadowMapSize, f.seconds * 1e3,
                   streamSeconds);
     f.summary = std::string(line) + "; GPU: " + passes;
-    return f;
   }
 
- private:
   void loadScans() {
     for (const auto& o : scene_.octrees) {
       GpuScan s;
@@ -495,7 +534,6 @@ class RasterMethod : public Method {
           glDrawArrays(GL_TRIANGLES, 0, 3);
         });
     frame::addToneMapPass(graph_, "radiance", "display", exposure_);
-    graph_.compile("radiance");
   }
 
   Scene scene_;
@@ -519,6 +557,7 @@ class RasterMethod : public Method {
   frame::FrameGraph graph_;
   std::shared_ptr<float> exposure_ = std::make_shared<float>(0.0f);
   int frameNumber_ = 0;
+  std::string output_;  // the target the graph was compiled for
 };
 
 }  // namespace

@@ -103,6 +103,10 @@ void Framebuffer::attach(GLenum attachment, const Texture& t, int level) const {
   glNamedFramebufferTexture(id(), attachment, t.id(), level);
 }
 
+void Framebuffer::attachRaw(GLenum attachment, GLuint texture, int level) const {
+  glNamedFramebufferTexture(id(), attachment, texture, level);
+}
+
 void Framebuffer::attachLayer(GLenum attachment, const Texture& t, int layer, int level) const {
   glNamedFramebufferTextureLayer(id(), attachment, t.id(), level, layer);
 }

@@ -2,8 +2,11 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
+
+#include "nestlight/gi/scene.h"
 
 #include "nestlight/viewer/headless.h"
 
@@ -17,6 +20,11 @@ struct ViewerOptions {
   RenderSettings settings;
   streaming::Budgets budgets;
   std::optional<frame::ColourMode> colour;
+  // A scene file (`nestlight view scene.json`): its GI method renders the window (the scene's
+  // gi.method when it has an interactive GL mode, else `raster`), with the method, its
+  // parameters and per-pass GPU timings in the panel; the point view stays one click away.
+  std::shared_ptr<const gi::Scene> scene;
+  bool startWithPoints = false;  // with a scene: open on the point view instead of the method
   // Scripted runs (tests, demos): stop after this many frames (0: run until closed), turn the
   // orbit camera by this many degrees per frame, and save a screenshot at the end.
   int frames = 0;

@@ -38,6 +38,17 @@ class Method {
   virtual std::string name() const = 0;
   // One frame from `camera`. Throws nestlight::Error on failure.
   virtual MethodFrame render(const SceneCamera& camera) = 0;
+
+  // Interactive frames (GL methods, in the viewer's window): renders `camera` in the current GL
+  // context with whatever is resident (streaming goes on, nothing waits) and returns the GL name
+  // of an RGBA8 texture holding the tone-mapped frame (gi/metrics' tone map at exposureStops);
+  // `stats` receives the pass timings and summary. 0: the method has no interactive mode.
+  virtual unsigned renderInteractive(const SceneCamera& camera, float exposureStops, MethodFrame* stats) {
+    (void)camera, (void)exposureStops, (void)stats;
+    return 0;
+  }
+  // The method's parameters as it resolved them (defaults included), for panels and logs.
+  virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
 };
 
 // How a method was asked for: progress lines (stderr) unless quiet; GL methods make a headless

@@ -101,6 +101,8 @@ class Framebuffer : public Object<FramebufferDeleter> {
   static Framebuffer create();
   void attach(GLenum attachment, const Texture& t, int level = 0) const;
   void attachLayer(GLenum attachment, const Texture& t, int layer, int level = 0) const;
+  // A texture owned elsewhere (another library's target), by name.
+  void attachRaw(GLenum attachment, GLuint texture, int level = 0) const;
   // Sets the draw buffers to GL_COLOR_ATTACHMENT0..n-1 and throws nestlight::Error naming
   // `what` when the framebuffer is incomplete.
   void finish(int colourAttachments, const std::string& what) const;
