@@ -35,6 +35,7 @@ void addRender(CLI::App& app, int& exitCode);
 void addView(CLI::App& app, int& exitCode);
 void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 void addBenchGi(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
+void addBenchFrame(CLI::App& app, int& exitCode);   // after addBench: a sub-command of `bench`
 void addMakeScene(CLI::App& app, int& exitCode);
 void addSurfels(CLI::App& app, int& exitCode);
 void addCompare(CLI::App& app, int& exitCode);

@@ -37,6 +37,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addView(app, code);
   nestlight::cli::addBenchRender(app, code);
   nestlight::cli::addBenchGi(app, code);
+  nestlight::cli::addBenchFrame(app, code);
   nestlight::cli::addMakeScene(app, code);
   nestlight::cli::addSurfels(app, code);
   nestlight::cli::addCompare(app, code);
