@@ -161,7 +161,7 @@ void addRender(CLI::App& app, int& exitCode) {
     if (job->output.empty()) throw Error("render: -o/--output is required for an octree");
     job->octree = *octree;
     applyRenderOptions(*job, *text);
-    if (!path->empty()) job->path = viewer::CameraPath::load(*path);
+    if (!path->empty()) job->path = gi::loadCameraPath(*path);
     auto frames = viewer::renderHeadless(*job);
     bool complete = true;
     for (auto& f : frames) complete = complete && f.complete;

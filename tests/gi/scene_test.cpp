@@ -82,7 +82,8 @@ TEST(Scene, FullSceneParses) {
   EXPECT_NEAR(s.lights[2].direction.z, -1.0f, 1e-7);  // normalised
   EXPECT_EQ(s.environment->path, "/scenes/sky.hdr");
   EXPECT_EQ(s.camera.width, 64);
-  EXPECT_EQ(s.cameraPath.size(), 2u);
+  EXPECT_EQ(s.cameraPath.keys.size(), 2u);
+  EXPECT_EQ(s.cameraPath.fps, 24);
   EXPECT_EQ(s.gi.method, "direct");
   EXPECT_EQ(s.gi.mode, RadianceMode::Albedo);
   EXPECT_EQ(s.output.exr, "/scenes/out/a.exr");

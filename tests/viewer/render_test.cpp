@@ -251,7 +251,7 @@ TEST(Render, CameraPathWritesSequenceAndStats) {
                   R"({"fps": 4, "fov": 50, "keyframes": [{"time": 0, "eye": [150, -50, 80], "target": [50, 50, 0]},
                       {"time": 1, "eye": [50, -100, 60], "target": [50, 50, 0]}]})");
   RenderJob j = smallJob(oct, tmp.file("f_%04d.png"));
-  j.path = CameraPath::load(tmp.file("path.json"));
+  j.path = gi::loadCameraPath(tmp.file("path.json"));
   j.statsCsv = tmp.file("stats.csv");
   auto frames = renderHeadless(j);
   ASSERT_EQ(frames.size(), 5u);
@@ -267,7 +267,7 @@ TEST(Render, CameraPathWritesSequenceAndStats) {
   while (std::getline(csv, line)) ++lines;
   EXPECT_EQ(lines, 6);  // header + 5 frames
   test::writeFile(tmp.file("bad.json"), R"({"keyframes": [{"time": 0, "eye": [1, 2], "target": [0, 0, 0]}]})");
-  Error e = test::errorOf([&] { CameraPath::load(tmp.file("bad.json")); });
+  Error e = test::errorOf([&] { gi::loadCameraPath(tmp.file("bad.json")); });
   EXPECT_NE(std::string(e.what()).find("keyframes[0].eye"), std::string::npos) << e.what();
 }
 

@@ -18,12 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-glm::dvec3 vec3Field(const nlohmann::json& j, const std::string& file, const std::string& field) {
-  if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
-    throw Error(file, field, "expected an array of three numbers");
-  return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
-}
-
 std::string frameFile(const std::string& pattern, int frame) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%04d", frame);
@@ -34,67 +28,6 @@ std::string frameFile(const std::string& pattern, int frame) {
 }
 
 }  // namespace
-
-CameraPath CameraPath::load(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path, "", "cannot open camera path");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw Error(path, Error::atByte(e.byte), "invalid JSON");
-  }
-  CameraPath p;
-  if (j.contains("fps")) {
-    if (!j["fps"].is_number() || !(j["fps"].get<double>() > 0)) throw Error(path, "fps", "must be a positive number");
-    p.fps = j["fps"].get<double>();
-  }
-  if (j.contains("fov")) {
-    if (!j["fov"].is_number() || !(j["fov"].get<double>() > 0 && j["fov"].get<double>() < 180))
-      throw Error(path, "fov", "must be a number of degrees in (0, 180)");
-    p.fovYDegrees = j["fov"].get<double>();
-  }
-  if (!j.contains("keyframes") || !j["keyframes"].is_array() || j["keyframes"].empty())
-    throw Error(path, "keyframes", "a non-empty array of {time, eye, target} is required");
-  for (size_t i = 0; i < j["keyframes"].size(); ++i) {
-    const auto& k = j["keyframes"][i];
-    const std::string f = "keyframes[" + std::to_string(i) + "]";
-    if (!k.is_object()) throw Error(path, f, "expected an object");
-    Key key;
-    if (!k.contains("time") || !k["time"].is_number()) throw Error(path, f + ".time", "a number of seconds is required");
-    key.time = k["time"].get<double>();
-    if (!p.keys.empty() && !(key.time > p.keys.back().time))
-      throw Error(path, f + ".time", "times must increase");
-    if (!k.contains("eye")) throw Error(path, f + ".eye", "required");
-    if (!k.contains("target")) throw Error(path, f + ".target", "required");
-    key.eye = vec3Field(k["eye"], path, f + ".eye");
-    key.target = vec3Field(k["target"], path, f + ".target");
-    if (glm::length(key.eye - key.target) <= 0) throw Error(path, f, "eye and target coincide");
-    p.keys.push_back(key);
-  }
-  return p;
-}
-
-int CameraPath::frames() const {
-  if (keys.size() < 2) return 1;
-  return static_cast<int>(std::floor((keys.back().time - keys.front().time) * fps)) + 1;
-}
-
-Camera CameraPath::at(int frame) const {
-  Camera c;
-  c.fovYDegrees = fovYDegrees;
-  const double t = keys.front().time + frame / fps;
-  size_t i = 0;
-  while (i + 2 < keys.size() && t > keys[i + 1].time) ++i;
-  if (keys.size() == 1) {
-    c.eye = keys[0].eye, c.target = keys[0].target;
-    return c;
-  }
-  const double u = std::clamp((t - keys[i].time) / (keys[i + 1].time - keys[i].time), 0.0, 1.0);
-  c.eye = glm::mix(keys[i].eye, keys[i + 1].eye, u);
-  c.target = glm::mix(keys[i].target, keys[i + 1].target, u);
-  return c;
-}
 
 std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
   OctreeReader reader(job.octree);  // before any GL work: a bad octree fails here
@@ -124,7 +57,11 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
       const int frames = job.path ? job.path->frames() : 1;
       for (int f = 0; f < frames; ++f) {
         Camera cam;
-        if (job.path) cam = job.path->at(f);
+        if (job.path) {
+          const gi::CameraKey k = job.path->at(f);
+          cam.eye = k.eye, cam.target = k.target;
+          cam.fovYDegrees = job.path->fovYDegrees.value_or(job.fovYDegrees);
+        }
         else if (job.camera) cam = *job.camera;
         else cam = Camera::framing(meta.bounds, job.fovYDegrees, double(job.width) / job.height, job.azimuth, job.elevation);
         cam.fitClipPlanes(meta.bounds);

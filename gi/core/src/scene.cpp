@@ -11,6 +11,7 @@
 
 #include "nestlight/gi/method.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/json_field.h"
 #include "nestlight/octree/octree_reader.h"
 
 namespace nestlight::gi {
@@ -18,80 +19,21 @@ namespace {
 
 using json = nlohmann::json;
 
-// A JSON value and its path, for messages.
-class Field {
+// The shared validator (nestlight/octree/json_field.h) with the scene's own value types.
+class Field : public JsonField {
  public:
-  Field(const json& j, std::string path, const std::string& file) : j_(j), path_(std::move(path)), file_(file) {}
+  Field(const json& j, std::string path, const std::string& file) : JsonField(j, std::move(path), file) {}
+  explicit Field(const JsonField& f) : JsonField(f) {}
+  Field at(const std::string& key) const { return Field(JsonField::at(key)); }
+  Field at(size_t i) const { return Field(JsonField::at(i)); }
 
-  [[noreturn]] void fail(const std::string& why) const { throw Error(file_, path_, why); }
-  const json& value() const { return j_; }
-  const std::string& path() const { return path_; }
-
-  Field at(const std::string& key) const { return Field(j_.at(key), path_ + "." + key, file_); }
-  Field at(size_t i) const { return Field(j_.at(i), path_ + "[" + std::to_string(i) + "]", file_); }
-  bool has(const std::string& key) const { return j_.is_object() && j_.contains(key); }
-
-  void expectObject(std::initializer_list<const char*> allowed) const {
-    if (!j_.is_object()) fail("expected an object, got " + std::string(j_.type_name()));
-    std::set<std::string> ok(allowed.begin(), allowed.end());
-    for (auto it = j_.begin(); it != j_.end(); ++it) {
-      if (!ok.count(it.key())) {
-        std::string list;
-        for (const auto& k : ok) list += (list.empty() ? "" : ", ") + k;
-        Field(it.value(), path_ + "." + it.key(), file_).fail("unknown field (expected one of: " + list + ")");
-      }
-    }
-  }
-  size_t arraySize() const {
-    if (!j_.is_array()) fail("expected an array, got " + std::string(j_.type_name()));
-    return j_.size();
-  }
-
-  double number(double lo = -INFINITY, double hi = INFINITY) const {
-    if (!j_.is_number()) fail("expected a number, got " + std::string(j_.type_name()));
-    double v = j_.get<double>();
-    if (!std::isfinite(v) || v < lo || v > hi) {
-      std::ostringstream s;
-      s << "expected a number in [" << lo << ", " << hi << "], got " << v;
-      fail(s.str());
-    }
-    return v;
-  }
-  int64_t integer(int64_t lo, int64_t hi) const {
-    if (!j_.is_number_integer() && !j_.is_number_unsigned())
-      fail("expected an integer, got " + std::string(j_.type_name()) + " " + j_.dump());
-    int64_t v = j_.get<int64_t>();
-    if (v < lo || v > hi)
-      fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(v));
-    return v;
-  }
-  bool boolean() const {
-    if (!j_.is_boolean()) fail("expected true or false, got " + std::string(j_.type_name()));
-    return j_.get<bool>();
-  }
-  std::string string() const {
-    if (!j_.is_string()) fail("expected a string, got " + std::string(j_.type_name()));
-    return j_.get<std::string>();
-  }
-  std::string choice(std::initializer_list<const char*> options) const {
-    return choice(std::vector<std::string>(options.begin(), options.end()));
-  }
-  std::string choice(const std::vector<std::string>& options) const {
-    std::string v = string();
-    std::string list;
-    for (const auto& o : options) {
-      if (v == o) return v;
-      list += (list.empty() ? "" : ", ") + o;
-    }
-    fail("'" + v + "' is not one of: " + list);
-  }
   glm::dvec3 vec3(double lo = -INFINITY, double hi = INFINITY) const {
-    if (!j_.is_array() || j_.size() != 3) fail("expected an array of 3 numbers, got " + j_.dump());
-    return {at(size_t(0)).number(lo, hi), at(size_t(1)).number(lo, hi), at(size_t(2)).number(lo, hi)};
+    const auto v = JsonField::vec3(lo, hi);
+    return {v[0], v[1], v[2]};
   }
   // A colour: [r, g, b] or a single number for grey.
   Rgb colour(double lo = 0, double hi = INFINITY) const {
-    if (j_.is_number()) return Rgb(float(number(lo, hi)));
+    if (value().is_number()) return Rgb(float(number(lo, hi)));
     return Rgb(vec3(lo, hi));
   }
   glm::dvec3 direction() const {
@@ -101,7 +43,7 @@ class Field {
     return d / len;
   }
   uint64_t bytes() const {
-    if (j_.is_number()) return uint64_t(number(1, 1e18));
+    if (value().is_number()) return uint64_t(number(1, 1e18));
     std::string s = string();
     char* end = nullptr;
     double v = std::strtod(s.c_str(), &end);
@@ -116,10 +58,6 @@ class Field {
     return uint64_t(v * mul);
   }
 
- private:
-  const json& j_;
-  std::string path_;
-  const std::string& file_;
 };
 
 std::filesystem::path resolvePath(const Field& f, const std::filesystem::path& sceneFile) {
@@ -353,24 +291,11 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
     s.cameraSet = true;
   }
   if (root.has("camera_path")) {
-    Field p = root.at("camera_path");
-    p.expectObject({"fps", "keyframes"});
-    if (p.has("fps")) s.cameraPathFps = p.at("fps").number(0.001, 10000);
-    if (!p.has("keyframes")) p.fail("missing \"keyframes\"");
-    Field keys = p.at("keyframes");
-    double last = -INFINITY;
-    for (size_t i = 0; i < keys.arraySize(); ++i) {
-      Field k = keys.at(i);
-      k.expectObject({"time", "eye", "target"});
-      if (!k.has("time") || !k.has("eye") || !k.has("target")) k.fail("a key needs \"time\", \"eye\" and \"target\"");
-      SceneCameraKey key{k.at("time").number(0, 1e6), k.at("eye").vec3(), k.at("target").vec3()};
-      if (!viewIsValid(key.eye, key.target, s.camera.up))
-        k.fail("eye equals target, or the view is parallel to \"up\"");
-      if (key.time <= last) k.at("time").fail("key times must increase");
-      last = key.time;
-      s.cameraPath.push_back(key);
-    }
-    if (s.cameraPath.empty()) keys.fail("a camera path needs at least one key");
+    s.cameraPath = parseCameraPath(root.at("camera_path"), false);
+    const Field keys = root.at("camera_path").at("keyframes");
+    for (size_t i = 0; i < s.cameraPath.keys.size(); ++i)
+      if (!viewIsValid(s.cameraPath.keys[i].eye, s.cameraPath.keys[i].target, s.camera.up))
+        keys.at(i).fail("eye equals target, or the view is parallel to \"up\"");
   }
   if (root.has("gi")) {
     Field g = root.at("gi");
@@ -417,26 +342,12 @@ std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
     cameras.push_back(scene.camera);
     return cameras;
   }
-  const auto& keys = scene.cameraPath;
-  const double frameCount = std::floor(keys.back().time * scene.cameraPathFps + 1e-9) + 1;
-  constexpr double kMaxFrames = 1e6;
-  if (frameCount > kMaxFrames)
-    throw Error(file, "scene.camera_path",
-                "asks for " + std::to_string(frameCount) + " frames (at most " + std::to_string(int(kMaxFrames)) + ")");
-  const int frames = int(frameCount);
+  const int frames = scene.cameraPath.frames();
   for (int f = 0; f < frames; ++f) {
-    const double t = f / scene.cameraPathFps;
-    size_t k = 0;
-    while (k + 1 < keys.size() && keys[k + 1].time <= t) ++k;
+    const CameraKey k = scene.cameraPath.at(f);
     SceneCamera c = scene.camera;
-    if (k + 1 < keys.size() && t >= keys[k].time) {
-      const double a = (t - keys[k].time) / (keys[k + 1].time - keys[k].time);
-      c.eye = glm::mix(keys[k].eye, keys[k + 1].eye, a);
-      c.target = glm::mix(keys[k].target, keys[k + 1].target, a);
-    } else {
-      c.eye = keys[k].eye;
-      c.target = keys[k].target;
-    }
+    c.eye = k.eye;
+    c.target = k.target;
     if (!viewIsValid(c.eye, c.target, c.up))
       throw Error(file, "scene.camera_path",
                   "frame " + std::to_string(f) + ": eye meets target or looks along \"up\" between keyframes");
@@ -446,14 +357,7 @@ std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
 }
 
 Scene loadScene(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw Error(file.string(), "", "cannot open scene file");
-  json j;
-  try {
-    j = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw Error(file.string(), Error::atByte(e.byte), std::string("not valid JSON: ") + e.what());
-  }
+  const json j = readJsonFile(file);
   Scene s = parseScene(j, std::filesystem::absolute(file));
   resolveOrigin(s);
   return s;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/gi/camera_path.h"
 #include "nestlight/streaming/streamer.h"
 #include "nestlight/viewer/camera.h"
 #include "nestlight/viewer/frame_renderer.h"
@@ -13,29 +14,13 @@
 
 namespace nestlight::viewer {
 
-// A camera path: keyframes at times (seconds), eye and target linearly interpolated, sampled at
-// `fps`. JSON: {"fps": 30, "fov": 60, "keyframes": [{"time": 0, "eye": [x,y,z], "target": [x,y,z]}, ...]}
-struct CameraPath {
-  struct Key {
-    double time = 0;
-    glm::dvec3 eye{0}, target{0};
-  };
-  double fps = 30;
-  double fovYDegrees = 60;
-  std::vector<Key> keys;
-  // Throws nestlight::Error naming the file and the field at fault.
-  static CameraPath load(const std::string& path);
-  int frames() const;
-  Camera at(int frame) const;
-};
-
 struct RenderJob {
   std::filesystem::path octree;
   std::string output;                 // .png or .exr; with a path, "%04d" (or _NNNN appended)
   int width = 1280, height = 720;
   std::optional<Camera> camera;       // none: framing the scan from azimuth/elevation
   double azimuth = 35, elevation = 30, fovYDegrees = 60;
-  std::optional<CameraPath> path;
+  std::optional<gi::CameraPath> path;  // a `--path` file (gi::loadCameraPath); its "fov" wins over fovYDegrees
   std::string statsCsv;               // per-frame stats, optional
   bool waitComplete = false;          // render a frame only once its cut is fully resident
   double timeoutSeconds = 120;        // for waitComplete

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/gi/camera_path.h"
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/sampling.h"
@@ -61,10 +62,6 @@ struct SceneCamera {
   int width = 640, height = 480;
 };
 
-struct SceneCameraKey {
-  double time = 0;
-  glm::dvec3 eye{0.0}, target{0.0};
-};
 
 enum class RadianceMode { RadianceCache, Albedo };
 
@@ -105,8 +102,7 @@ struct Scene {
   std::optional<SceneEnvironment> environment;
   SceneCamera camera;
   bool cameraSet = false;            // the file has "camera" (renders need it or a camera path)
-  double cameraPathFps = 30;
-  std::vector<SceneCameraKey> cameraPath;  // optional; replaces `camera`'s eye/target per frame
+  CameraPath cameraPath;              // optional (empty: none); replaces `camera`'s eye/target per frame
   GiSettings gi;
   SceneDisplay display;
   SceneOutput output;
@@ -116,8 +112,8 @@ struct Scene {
   glm::mat4 localFromObject(const SceneMesh& m) const;
 };
 
-// The cameras a render of `scene` draws: one per frame of its camera path (eye and target
-// interpolated linearly between keyframes, sampled at the path's fps), or its camera alone when
+// The cameras a render of `scene` draws: one per frame of its camera path (CameraPath::at), or
+// its camera alone when
 // it has no path or `still`. Throws nestlight::Error naming the scene file and field when there
 // is no camera, the path asks for more than a million frames, or a frame's view is degenerate.
 std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still = false);
