@@ -1,14 +1,11 @@
 #include "nestlight/viewer/image.h"
 
-#include <ImfArray.h>
-#include <ImfRgbaFile.h>
-#include <stb/stb_image.h>
-#include <stb/stb_image_write.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 
+#include "nestlight/gi/hdr_image.h"
+#include "nestlight/gi/srgb.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::viewer {
@@ -21,71 +18,34 @@ std::string extensionOf(const std::string& path) {
 }
 }  // namespace
 
-float srgbToLinear(float v) {
-  return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-}
-float linearToSrgb(float v) {
-  return v <= 0.0031308f ? v * 12.92f : 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
-}
-
+// The files are gi's (nestlight/gi/hdr_image.h): one EXR, PNG and sRGB implementation for the
+// whole program. This frame's pixels are display-referred, so EXR gets their linear values.
 void writeImage(const Image& img, const std::string& path) {
   const std::string ext = extensionOf(path);
   if (img.width <= 0 || img.height <= 0) throw Error(path, "", "cannot write an empty image");
-  if (ext == ".png") {
-    std::vector<uint8_t> px(size_t(img.width) * img.height * 4);
-    for (size_t i = 0; i < px.size(); ++i)
-      px[i] = static_cast<uint8_t>(std::lround(std::clamp(img.rgba[i], 0.f, 1.f) * 255.f));
-    if (!stbi_write_png(path.c_str(), img.width, img.height, 4, px.data(), img.width * 4))
-      throw Error(path, "", "cannot write PNG");
-  } else if (ext == ".exr") {
-    try {
-      std::vector<Imf::Rgba> px(size_t(img.width) * img.height);
-      for (size_t i = 0; i < px.size(); ++i)
-        px[i] = Imf::Rgba(srgbToLinear(img.rgba[4 * i]), srgbToLinear(img.rgba[4 * i + 1]),
-                          srgbToLinear(img.rgba[4 * i + 2]), img.rgba[4 * i + 3]);
-      Imf::RgbaOutputFile out(path.c_str(), img.width, img.height, Imf::WRITE_RGBA);
-      out.setFrameBuffer(px.data(), 1, img.width);
-      out.writePixels(img.height);
-    } catch (const std::exception& e) {
-      throw Error(path, "", std::string("cannot write EXR: ") + e.what());
+  if (ext != ".png" && ext != ".exr") throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
+  gi::HdrImage out(img.width, img.height);
+  for (size_t p = 0; p < out.pixels(); ++p)
+    for (int k = 0; k < 3; ++k) {
+      const float v = img.rgba[4 * p + k];
+      out.rgb[3 * p + k] = ext == ".exr" ? gi::srgbDecode(v) : v;
     }
-  } else {
-    throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
-  }
+  if (ext == ".png") gi::writePng(path, out);
+  else gi::writeExr(path, out, {{"nestlight:content", "point view, linear from display-referred sRGB"}});
 }
 
 Image readImage(const std::string& path) {
   const std::string ext = extensionOf(path);
+  if (ext != ".png" && ext != ".exr") throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
+  const gi::HdrImage in = ext == ".png" ? gi::readPng(path) : gi::readHdrImage(path);
   Image img;
-  if (ext == ".png") {
-    int w = 0, h = 0, n = 0;
-    uint8_t* data = stbi_load(path.c_str(), &w, &h, &n, 4);
-    if (!data) throw Error(path, "", std::string("cannot read PNG: ") + stbi_failure_reason());
-    img.width = w, img.height = h;
-    img.rgba.resize(size_t(w) * h * 4);
-    for (size_t i = 0; i < img.rgba.size(); ++i) img.rgba[i] = data[i] / 255.f;
-    stbi_image_free(data);
-  } else if (ext == ".exr") {
-    try {
-      Imf::RgbaInputFile in(path.c_str());
-      const Imath::Box2i dw = in.dataWindow();
-      img.width = dw.max.x - dw.min.x + 1, img.height = dw.max.y - dw.min.y + 1;
-      std::vector<Imf::Rgba> px(size_t(img.width) * img.height);
-      in.setFrameBuffer(px.data() - dw.min.x - size_t(dw.min.y) * img.width, 1, img.width);
-      in.readPixels(dw.min.y, dw.max.y);
-      img.rgba.resize(px.size() * 4);
-      for (size_t i = 0; i < px.size(); ++i) {
-        img.rgba[4 * i] = linearToSrgb(px[i].r);
-        img.rgba[4 * i + 1] = linearToSrgb(px[i].g);
-        img.rgba[4 * i + 2] = linearToSrgb(px[i].b);
-        img.rgba[4 * i + 3] = px[i].a;
-      }
-    } catch (const std::exception& e) {
-      throw Error(path, "", std::string("cannot read EXR: ") + e.what());
+  img.width = in.width, img.height = in.height;
+  img.rgba.assign(in.pixels() * 4, 1.0f);
+  for (size_t p = 0; p < in.pixels(); ++p)
+    for (int k = 0; k < 3; ++k) {
+      const float v = in.rgb[3 * p + k];
+      img.rgba[4 * p + k] = ext == ".exr" ? gi::srgbEncode(v) : v;
     }
-  } else {
-    throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
-  }
   return img;
 }
 

@@ -8,7 +8,10 @@
 #include <ImfStandardAttributes.h>
 #include <ImfStringAttribute.h>
 #include <stb_image.h>
+#include <stb_image_write.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -110,6 +113,53 @@ void writeExr(const std::string& path, const HdrImage& image, const ImageAttribu
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
   if (ec) throw Error(path, "", "cannot rename " + tmp + ": " + ec.message());
+}
+
+void writePng(const std::string& path, const HdrImage& display) {
+  if (display.width <= 0 || display.height <= 0 || display.rgb.size() != display.pixels() * 3)
+    throw Error(path, "", "cannot write an empty image as PNG");
+  std::vector<uint8_t> bytes(display.rgb.size());
+  for (size_t p = 0; p < display.pixels(); ++p) {
+    const float* c = &display.rgb[3 * p];
+    if (std::isnan(c[0]) || std::isnan(c[1]) || std::isnan(c[2])) {
+      bytes[3 * p] = 255, bytes[3 * p + 1] = 0, bytes[3 * p + 2] = 255;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k)
+      bytes[3 * p + k] = uint8_t(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255.0f));
+  }
+  const std::string tmp = path + ".partial";
+  if (!stbi_write_png(tmp.c_str(), display.width, display.height, 3, bytes.data(),
+                      display.width * 3)) {
+    std::remove(tmp.c_str());
+    throw Error(path, "", "cannot write PNG");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::remove(tmp.c_str());
+    throw Error(path, "", "cannot rename " + tmp + ": " + ec.message());
+  }
+}
+
+HdrImage readPng(const std::string& path) {
+  int w = 0, h = 0, n = 0;
+  const bool sixteen = stbi_is_16_bit(path.c_str());
+  HdrImage img;
+  if (sixteen) {
+    stbi_us* data = stbi_load_16(path.c_str(), &w, &h, &n, 3);
+    if (!data) throw Error(path, "", std::string("cannot read PNG: ") + stbi_failure_reason());
+    img = HdrImage(w, h);
+    for (size_t i = 0; i < img.rgb.size(); ++i) img.rgb[i] = data[i] / 65535.0f;
+    stbi_image_free(data);
+  } else {
+    stbi_uc* data = stbi_load(path.c_str(), &w, &h, &n, 3);
+    if (!data) throw Error(path, "", std::string("cannot read PNG: ") + stbi_failure_reason());
+    img = HdrImage(w, h);
+    for (size_t i = 0; i < img.rgb.size(); ++i) img.rgb[i] = data[i] / 255.0f;
+    stbi_image_free(data);
+  }
+  return img;
 }
 
 }  // namespace nestlight::gi

@@ -34,33 +34,6 @@ HdrImage toneMap(const HdrImage& linear, double exposureStops) {
   return out;
 }
 
-void writePng(const std::string& path, const HdrImage& display) {
-  if (display.width <= 0 || display.height <= 0 || display.rgb.size() != display.pixels() * 3)
-    throw Error(path, "", "cannot write an empty image as PNG");
-  std::vector<uint8_t> bytes(display.rgb.size());
-  for (size_t p = 0; p < display.pixels(); ++p) {
-    const float* c = &display.rgb[3 * p];
-    if (std::isnan(c[0]) || std::isnan(c[1]) || std::isnan(c[2])) {
-      bytes[3 * p] = 255, bytes[3 * p + 1] = 0, bytes[3 * p + 2] = 255;
-      continue;
-    }
-    for (int k = 0; k < 3; ++k)
-      bytes[3 * p + k] = uint8_t(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255.0f));
-  }
-  const std::string tmp = path + ".partial";
-  if (!stbi_write_png(tmp.c_str(), display.width, display.height, 3, bytes.data(),
-                      display.width * 3)) {
-    std::remove(tmp.c_str());
-    throw Error(path, "", "cannot write PNG");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw Error(path, "", "cannot rename " + tmp + ": " + ec.message());
-  }
-}
-
 void writeToneMappedPng(const std::string& path, const HdrImage& linear, double exposureStops) {
   writePng(path, toneMap(linear, exposureStops));
 }

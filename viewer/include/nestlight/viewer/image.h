@@ -1,5 +1,6 @@
-// Images the renderer returns and the files it writes. Pixels are RGBA floats, top row first,
-// display-referred (the scan's recorded sRGB colour); EXR files get linear values.
+// The point view's frames: RGBA floats, top row first, display-referred (the scan's recorded sRGB
+// colour). Files go through gi's image library (nestlight/gi/hdr_image.h); EXR files get linear
+// values.
 #pragma once
 
 #include <cstdint>
@@ -19,9 +20,6 @@ struct Image {
 void writeImage(const Image& img, const std::string& path);
 // .png or .exr, back to display-referred floats. Throws nestlight::Error naming the file.
 Image readImage(const std::string& path);
-
-float srgbToLinear(float v);
-float linearToSrgb(float v);
 
 // Per-pixel comparison for image tests: a pixel differs when any channel differs by more than
 // `channelTolerance` (0..1). The diff image shows differing pixels in red over a dimmed `a`.

@@ -1,5 +1,9 @@
-// Linear HDR images: what the path tracer writes, what metrics compare and where environment
-// maps come from. Three float channels per pixel, top row first, scene-referred (no tone map).
+// The image library of Nestlight: linear HDR images (what every GI method writes, what metrics
+// compare, where environment maps come from) and their files, EXR and Radiance HDR, plus 8-bit
+// PNG for display-referred pixels (tone-mapped renders, the point view's frames, goldens). Three
+// float channels per pixel, top row first. The sRGB transfer functions are in srgb.h, the tone
+// map and the error metrics in gi/metrics; the point view's RGBA frames convert to and from
+// these (nestlight/viewer/image.h).
 #pragma once
 
 #include <map>
@@ -36,5 +40,12 @@ HdrImage readHdrImage(const std::string& path, ImageAttributes* attributes = nul
 // 32-bit float RGB EXR (ZIP): full range, values above half-float's 65504 survive. Written to a
 // temporary name and renamed, so a killed render leaves no file that looks complete.
 void writeExr(const std::string& path, const HdrImage& image, const ImageAttributes& attributes = {});
+
+// 8-bit RGB PNG of display-referred values in [0, 1] (clamped), rounded to nearest. A pixel with a
+// NaN channel is written magenta (255, 0, 255) so that it shows instead of turning silently
+// black. Written to a temporary name and renamed. Throws nestlight::Error naming `path`.
+void writePng(const std::string& path, const HdrImage& display);
+// A PNG (8 or 16 bits, grey or colour, alpha dropped) as display-referred values in [0, 1].
+HdrImage readPng(const std::string& path);
 
 }  // namespace nestlight::gi

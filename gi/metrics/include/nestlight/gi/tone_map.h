@@ -27,11 +27,6 @@ float toneMapValue(float linear, float scale);
 // Display-referred image (values in [0, 1] or NaN) of a linear one.
 HdrImage toneMap(const HdrImage& linear, double exposureStops);
 
-// 8-bit RGB PNG of display-referred values, rounded to nearest. A pixel with a NaN channel is
-// written magenta (255, 0, 255) so that it shows instead of turning silently black. Written to a
-// temporary name and renamed. Throws nestlight::Error naming `path` on failure.
-void writePng(const std::string& path, const HdrImage& display);
-
 // toneMap then writePng: what renders write beside their EXR.
 void writeToneMappedPng(const std::string& path, const HdrImage& linear, double exposureStops);
 
