@@ -1,6 +1,8 @@
 // Compute rasteriser, the one-pass 64-bit variant of Schütz, Kerbl, Wimmer 2021 for GPUs with
 // 64-bit atomics: each pixel keeps min((depth bits << 32) | colour), so the nearest point's
-// colour wins in one atomicMin. Compiled only where GL_NV_shader_atomic_int64 exists.
+// colour wins in one atomicMin, and likewise min((depth bits << 32) | normal) in a second buffer,
+// so the G-buffer gets the nearest point's normal too (the GI passes shade with it). Compiled only
+// where GL_NV_shader_atomic_int64 exists.
 #extension GL_ARB_gpu_shader_int64 : require
 #extension GL_NV_shader_atomic_int64 : require
 
@@ -9,6 +11,7 @@
 layout(local_size_x = 128) in;
 
 layout(std430, binding = 4) buffer Packed { uint64_t packed[]; } fb64;
+layout(std430, binding = 6) buffer PackedNormals { uint64_t packed[]; } nb64;
 
 uniform ivec2 uViewport;
 
@@ -22,6 +25,7 @@ void main() {
   if (any(lessThan(ndc, vec3(-1.0))) || any(greaterThanEqual(ndc, vec3(1.0)))) return;
   ivec2 p = clamp(ivec2((ndc.xy * 0.5 + 0.5) * vec2(uViewport)), ivec2(0), uViewport - 1);
   uint pixel = uint(p.y * uViewport.x + p.x);
-  uint64_t value = (uint64_t(floatBitsToUint(-view.z)) << 32) | uint64_t(pointColour(i));
-  atomicMin(fb64.packed[pixel], value);
+  uint64_t depthBits = uint64_t(floatBitsToUint(-view.z)) << 32;
+  atomicMin(fb64.packed[pixel], depthBits | uint64_t(pointColour(i)));
+  atomicMin(nb64.packed[pixel], depthBits | uint64_t(pointNormalWord(i)));
 }

@@ -2,19 +2,26 @@
 #extension GL_ARB_gpu_shader_int64 : require
 
 layout(std430, binding = 4) readonly buffer Packed { uint64_t packed[]; } fb64;
+layout(std430, binding = 6) readonly buffer PackedNormals { uint64_t packed[]; } nb64;
+
+#include "../common/octahedral.glsl"
 
 uniform ivec2 uViewport;
 uniform mat4 uClipFromView;
+uniform mat4 uViewFromCamRel;
 
 layout(location = 0) out vec4 outColour;
 layout(location = 1) out vec4 outNormal;
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
-  uint64_t v = fb64.packed[uint(p.y * uViewport.x + p.x)];
+  uint pixel = uint(p.y * uViewport.x + p.x);
+  uint64_t v = fb64.packed[pixel];
   if (v == 0xffffffffffffffffUL) discard;
   outColour = vec4(unpackUnorm4x8(uint(v & 0xffffffffUL)).rgb, 1.0);
-  outNormal = vec4(0.0);  // this variant keeps colour only; GI passes take normals from the points path
+  // The nearest point's normal (ties at equal depth: the smaller code, a point at that depth too).
+  vec3 n = mat3(uViewFromCamRel) * decodeNormal(uint(nb64.packed[pixel] & 0xffffffffUL));
+  outNormal = vec4(n, dot(n, n) > 0.0 ? 1.0 : 0.0);
   float d = uintBitsToFloat(uint(v >> 32));
   vec4 clip = uClipFromView * vec4(0.0, 0.0, -d, 1.0);
   gl_FragDepth = clamp(clip.z / clip.w * 0.5 + 0.5, 0.0, 1.0);

@@ -66,8 +66,8 @@ FrameRenderer::~FrameRenderer() {
   glDeleteFramebuffers(3, fbos);
   GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_};
   glDeleteTextures(6, tex);
-  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_};
-  glDeleteBuffers(4, bufs);
+  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_, packedNormalSsbo_};
+  glDeleteBuffers(5, bufs);
   glDeleteVertexArrays(1, &vao_);
 }
 
@@ -117,18 +117,20 @@ void FrameRenderer::ensureTargets(int w, int h, bool compute) {
   const size_t pixels = size_t(w) * h;
   if (compute && pixels > ssboPixels_) {
     NL_CHECK(pixels * 16 <= kMaxSsboBytes);
-    GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_};
-    glDeleteBuffers(4, bufs);
+    GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_, packedNormalSsbo_};
+    glDeleteBuffers(5, bufs);
     glCreateBuffers(1, &depthSsbo_);
     glNamedBufferStorage(depthSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
     glCreateBuffers(1, &accumSsbo_);
     glNamedBufferStorage(accumSsbo_, pixels * 16, nullptr, GL_DYNAMIC_STORAGE_BIT);
     glCreateBuffers(1, &normalSsbo_);
     glNamedBufferStorage(normalSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
-    packedSsbo_ = 0;
+    packedSsbo_ = packedNormalSsbo_ = 0;
     if (atomic64_) {
       glCreateBuffers(1, &packedSsbo_);
       glNamedBufferStorage(packedSsbo_, pixels * 8, nullptr, GL_DYNAMIC_STORAGE_BIT);
+      glCreateBuffers(1, &packedNormalSsbo_);
+      glNamedBufferStorage(packedNormalSsbo_, pixels * 8, nullptr, GL_DYNAMIC_STORAGE_BIT);
     }
     ssboPixels_ = pixels;
   }
@@ -260,11 +262,14 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
     const size_t pixels = size_t(w) * h;
     const uint32_t empty[2] = {0xffffffffu, 0xffffffffu};
     glClearNamedBufferSubData(packedSsbo_, GL_RG32UI, 0, pixels * 8, GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
+    glClearNamedBufferSubData(packedNormalSsbo_, GL_RG32UI, 0, pixels * 8, GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
     glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 4, packedSsbo_, 0, GLsizeiptr(pixels * 8));
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 6, packedNormalSsbo_, 0, GLsizeiptr(pixels * 8));
     dispatchNodes(*atomic64_, true);
     const GLuint r = resolve64_->id();
     resolve64_->use();
     setMat4(r, "uClipFromView", clipFromView);
+    setMat4(r, "uViewFromCamRel", viewFromCamRel);
     glProgramUniform2i(r, resolve64_->uniform("uViewport"), w, h);
     glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
     glEnable(GL_DEPTH_TEST);

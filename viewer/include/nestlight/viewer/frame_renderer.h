@@ -92,6 +92,7 @@ class FrameRenderer {
   GLuint hqsFbo_ = 0, accColourTex_ = 0, accNormalTex_ = 0;  // HQS sums: rgb w, w | normal w, depth w
   frame::DrawTree drawTree_;  // the vertex shader's finest-node lookup (splat_size.glsl)
   GLuint depthSsbo_ = 0, accumSsbo_ = 0, normalSsbo_ = 0;
+  GLuint packedNormalSsbo_ = 0;  // 64-bit path: min(depth << 32 | normal) per pixel
   int w_ = 0, h_ = 0;
   size_t ssboPixels_ = 0;
 };
