@@ -2,7 +2,9 @@
 // one (nestlight/gi/reference/path_tracer.h).
 #include "reference_method.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <limits>
 
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/reference/reference_scene.h"
@@ -15,8 +17,9 @@ void logLine(const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_st
 
 class ReferenceMethod : public Method {
  public:
-  ReferenceMethod(const Scene& scene, const MethodContext& ctx)
+  ReferenceMethod(const Scene& scene, const MethodContext& ctx, int maxBounces)
       : name_(scene.gi.method), quiet_(ctx.quiet), options_(referenceOptionsFrom(scene.gi)) {
+    options_.maxBounces = std::min(options_.maxBounces, maxBounces);
     scene_ = ReferenceScene::load(scene, quiet_ ? nullptr : &logLine);
   }
   std::string name() const override { return name_; }
@@ -66,7 +69,11 @@ class ReferenceMethod : public Method {
 }  // namespace
 
 std::unique_ptr<Method> createReferenceMethod(const Scene& scene, const MethodContext& ctx) {
-  return std::make_unique<ReferenceMethod>(scene, ctx);
+  return std::make_unique<ReferenceMethod>(scene, ctx, std::numeric_limits<int>::max());
+}
+
+std::unique_ptr<Method> createDirectMethod(const Scene& scene, const MethodContext& ctx) {
+  return std::make_unique<ReferenceMethod>(scene, ctx, 1);
 }
 
 }  // namespace nestlight::gi

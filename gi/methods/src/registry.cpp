@@ -18,7 +18,7 @@ const std::vector<MethodInfo>& registeredMethods() {
     m.push_back({"reference", "path-traced ground truth (Embree, CPU): all bounces", false, "samples per pixel",
                  {1, 4, 16, 64}, spp, createReferenceMethod});
     m.push_back({"direct", "the reference's path tracer stopped after one bounce: direct light (CPU)", false,
-                 "samples per pixel", {1, 4, 16, 64}, spp, createReferenceMethod});
+                 "samples per pixel", {1, 4, 16, 64}, spp, createDirectMethod});
     m.push_back({"raster", "real-time direct light through the GI frame: G-buffer, shadow maps (GL)", true,
                  "shadow-map texels", {256, 512, 1024, 2048},
                  [](GiSettings& g, int q) {

@@ -101,6 +101,12 @@ class RasterMethod : public Method {
       if (!quiet_) std::fprintf(stderr, "raster: %s\n", context_->description().c_str());
     }
     loadScans();
+    if (params_.computeRasteriser)
+      for (const auto& o : scene_.octrees)
+        if (o.colourScale != scene_.octrees.front().colourScale)
+          throw Error(scene_.file.string(), "gi.parameters.rasteriser",
+                      "the compute rasteriser averages the scans' colours before scaling them: give every octree the "
+                      "same colour_scale, or use \"points\"");
     loadMeshes();
     setUpLights();
     setUpEnvironment();
@@ -148,6 +154,7 @@ class RasterMethod : public Method {
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
     return {{"shadow_map_size", std::to_string(params_.shadowMapSize)},
+            {"rasteriser", params_.computeRasteriser ? "compute" : "points"},
             {"splat_scale", std::to_string(params_.splatScale).substr(0, 4)},
             {"point_budget", std::to_string(params_.pointBudget)},
             {"gpu_budget_mb", std::to_string(params_.gpuBytes >> 20)},
@@ -423,6 +430,63 @@ class RasterMethod : public Method {
     }
   }
 
+  // The compute rasteriser's three passes for every scan, into the tile's G-buffer.
+  void computeScans(const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    const size_t pixels = size_t(tile.width) * tile.height;
+    NL_CHECK(pixels * 16 <= gl::kMaxSsboRange);
+    if (scanDepth_.reserve(pixels * 4)) {
+      scanAccum_ = gl::Buffer(scanDepth_.bytes() * 4);
+      scanNormal_ = gl::Buffer(scanDepth_.bytes());
+      scanRadius_ = gl::Buffer(scanDepth_.bytes());
+    }
+    const uint32_t far = 0xffffffffu, zero = 0;
+    glClearNamedBufferSubData(scanDepth_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
+    glClearNamedBufferSubData(scanAccum_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(scanNormal_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(scanRadius_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    scanDepth_.bindRange(GL_SHADER_STORAGE_BUFFER, 8, 0, pixels * 4);
+    scanAccum_.bindRange(GL_SHADER_STORAGE_BUFFER, 9, 0, pixels * 16);
+    scanNormal_.bindRange(GL_SHADER_STORAGE_BUFFER, 10, 0, pixels * 4);
+    scanRadius_.bindRange(GL_SHADER_STORAGE_BUFFER, 11, 0, pixels * 4);
+    const auto& u = ctx.uniforms();
+    auto dispatch = [&](const gl::ShaderProgram& prog) {
+      prog.use();
+      glUniformMatrix4fv(prog.uniform("uClipFromWorld"), 1, GL_FALSE, &u.clipFromWorld[0][0]);
+      glUniformMatrix4fv(prog.uniform("uViewFromWorld"), 1, GL_FALSE, &u.viewFromWorld[0][0]);
+      glUniform2i(prog.uniform("uViewport"), tile.width, tile.height);
+      glUniform1f(prog.uniform("uSizeScale"), params_.splatScale);
+      for (auto& s : scans_) {
+        s.tree.bind();
+        const auto& nodes = s.streamer->drawList();
+        for (size_t k = 0; k < nodes.size(); ++k) {
+          const auto& n = nodes[k];
+          if (n.numPoints == 0) continue;
+          glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, s.store->buffer(n.handle), 0,
+                            GLsizeiptr(size_t(n.numPoints) * frame::kGpuPointBytes));
+          const glm::vec3 origin = scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});
+          glUniform3f(prog.uniform("uNodeOrigin"), origin.x, origin.y, origin.z);
+          glUniform1ui(prog.uniform("uNumPoints"), n.numPoints);
+          glUniform1i(prog.uniform("uNodeIndex"), int(k));
+          glUniform1f(prog.uniform("uNodeSize"), float(n.worldBounds.max.x - n.worldBounds.min.x));
+          glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
+        }
+      }
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    };
+    dispatch(computeDepth_);
+    dispatch(computeColour_);
+    ctx.bindFramebuffer();
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    computeResolve_.use();
+    glUniform2i(computeResolve_.uniform("uViewport"), tile.width, tile.height);
+    glUniformMatrix4fv(computeResolve_.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
+    glUniform1f(computeResolve_.uniform("uColourScale"), scans_.empty() ? 1.0f : scans_.front().colourScale);
+    glBindVertexArray(emptyVao_.id());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+
   void buildGraph() {
     using gl::ShaderProgram;
     meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
@@ -430,6 +494,12 @@ class RasterMethod : public Method {
     meshShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
     scanShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}});
     directLight_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/direct_light.frag"}});
+    if (params_.computeRasteriser) {
+      computeDepth_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_depth.comp"}});
+      computeColour_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_colour.comp"}});
+      computeResolve_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                                       {GL_FRAGMENT_SHADER, "gi/raster/scan_compute_resolve.frag"}});
+    }
     emptyVao_ = gl::VertexArray::create();
     shadowFbo_ = gl::Framebuffer::create();
 
@@ -497,10 +567,14 @@ class RasterMethod : public Method {
       drawMeshes(meshGBuffer_, ctx.uniforms().clipFromWorld, true);
     });
     graph_.addPass("gbuffer_scans", frame::Scope::Tile, gbufferWrites, [this](const frame::PassContext& ctx) {
+      const auto& u = ctx.uniforms();
+      if (params_.computeRasteriser) {
+        computeScans(ctx);
+        return;
+      }
       ctx.bindFramebuffer();
       glEnable(GL_DEPTH_TEST);
       glEnable(GL_PROGRAM_POINT_SIZE);
-      const auto& u = ctx.uniforms();
       drawScans(scanGBuffer_, u.clipFromWorld, u.viewFromWorld, u.eye.w, false);
     });
     graph_.addPass(
@@ -552,6 +626,8 @@ class RasterMethod : public Method {
   float envRotation_ = 0, envScale_ = 1;
   std::array<glm::vec3, 9> sh_{};
   gl::ShaderProgram meshGBuffer_, scanGBuffer_, meshShadow_, scanShadow_, directLight_;
+  gl::ShaderProgram computeDepth_, computeColour_, computeResolve_;  // rasteriser "compute"
+  gl::Buffer scanDepth_, scanAccum_, scanNormal_, scanRadius_;          // its per-pixel buffers
   gl::VertexArray emptyVao_;
   gl::Framebuffer shadowFbo_;
   frame::FrameGraph graph_;
@@ -580,6 +656,10 @@ RasterParameters rasterParameters(const Scene& scene) {
       const double v = number(16, 16384);
       if (v != std::floor(v)) throw Error(file, field, "expected an integer, got " + it->dump());
       p.shadowMapSize = int(v);
+    } else if (key == "rasteriser") {
+      if (!it->is_string() || (*it != "points" && *it != "compute"))
+        throw Error(file, field, "expected \"points\" or \"compute\", got " + it->dump());
+      p.computeRasteriser = *it == "compute";
     } else if (key == "splat_scale") {
       p.splatScale = float(number(0.1, 16));
     } else if (key == "point_budget") {
@@ -591,8 +671,8 @@ RasterParameters rasterParameters(const Scene& scene) {
     } else if (key == "stream_timeout") {
       p.streamTimeoutSeconds = number(0.1, 1e6);
     } else {
-      throw Error(file, field, "unknown parameter of the raster method (shadow_map_size, splat_scale, point_budget, "
-                               "gpu_budget_mb, max_tile, stream_timeout)");
+      throw Error(file, field, "unknown parameter of the raster method (shadow_map_size, rasteriser, splat_scale, "
+                               "point_budget, gpu_budget_mb, max_tile, stream_timeout)");
     }
   }
   return p;

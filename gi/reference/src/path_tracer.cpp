@@ -196,7 +196,7 @@ double halfBufferRelativeError(const HdrImage& a, const HdrImage& b) {
 ReferenceOptions referenceOptionsFrom(const GiSettings& gi) {
   ReferenceOptions o;
   o.mode = gi.mode;
-  o.maxBounces = gi.method == "direct" ? std::min(gi.maxBounces, 1) : gi.maxBounces;
+  o.maxBounces = gi.maxBounces;
   o.maxSamplesPerPixel = gi.samplesPerPixel;
   o.targetRelativeError = gi.targetRelativeError;
   o.timeLimitSeconds = gi.timeLimitSeconds;

@@ -14,6 +14,10 @@ namespace nestlight::gi {
 
 struct RasterParameters {
   int shadowMapSize = 2048;    // texels per side of each shadow-map layer
+  // The scans' G-buffer: GL_POINTS splats sized by the measured spacing, or the compute
+  // rasteriser (one pixel per point, the points within 1% of the nearest depth averaged). Shadow
+  // maps always take splats: a light's view needs closed surfaces.
+  bool computeRasteriser = false;
   float splatScale = 2.25f;    // splat diameter in measured spacings (the viewer's default)
   int maxTile = 2048;          // larger images render in tiles
   uint64_t pointBudget = 5'000'000;  // points of each scan's resident cut
@@ -21,8 +25,9 @@ struct RasterParameters {
   double streamTimeoutSeconds = 300; // waiting for a view's cut to load completely
 };
 
-// From the scene's gi.parameters ("shadow_map_size", "splat_scale", "point_budget",
-// "gpu_budget_mb"); throws nestlight::Error naming the scene file and the field.
+// From the scene's gi.parameters ("shadow_map_size", "rasteriser", "splat_scale",
+// "point_budget", "gpu_budget_mb", "max_tile", "stream_timeout"); throws nestlight::Error naming
+// the scene file and the field.
 RasterParameters rasterParameters(const Scene& scene);
 
 // Opens the scene's scans and meshes and, unless ctx says one is current, a headless GL context.
