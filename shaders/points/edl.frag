@@ -1,6 +1,5 @@
 // Eye-dome lighting (Boucheny 2009, as in Potree): shade each pixel by how much nearer it is
 // than its neighbours in log depth, which shows shape on scans without normals.
-in vec2 vUv;
 uniform sampler2D uColour;
 uniform sampler2D uDepth;
 uniform float uNear;
@@ -8,8 +7,12 @@ uniform float uFar;
 uniform float uStrength;     // 0 disables
 uniform float uRadius;       // pixels
 uniform vec3 uBackground;
+uniform vec2 uViewport;      // the tile's pixels, at the targets' lower left (targets may be larger)
 
 out vec4 outColour;
+
+// A pixel position to texture coordinates, clamped to the tile as clamp-to-edge would be.
+vec2 texUv(vec2 px) { return clamp(px, vec2(0.5), uViewport - 0.5) / vec2(textureSize(uDepth, 0)); }
 
 // log2 of the linear depth, which is negative closer than one world unit: background is told
 // apart by the depth buffer's clear value, never by the sign.
@@ -20,14 +23,14 @@ float logDepth(vec2 uv) {
 }
 
 void main() {
-  bool isScan = covered(vUv);
-  float centre = isScan ? logDepth(vUv) : 0.0;
-  vec2 texel = uRadius / vec2(textureSize(uDepth, 0));
+  vec2 here = texUv(gl_FragCoord.xy);
+  bool isScan = covered(here);
+  float centre = isScan ? logDepth(here) : 0.0;
   float response = 0.0;
   int neighbours = 0;
   for (int k = 0; k < 8; ++k) {
     float a = float(k) * 0.78539816;
-    vec2 uv = vUv + vec2(cos(a), sin(a)) * texel;
+    vec2 uv = texUv(gl_FragCoord.xy + vec2(cos(a), sin(a)) * uRadius);
     if (!covered(uv)) continue;  // background neighbours say nothing about shape
     ++neighbours;
     if (isScan) response += max(0.0, centre - logDepth(uv));
@@ -38,7 +41,7 @@ void main() {
     outColour = vec4(uBackground * (1.0 - outline), 1.0);
     return;
   }
-  vec3 colour = texture(uColour, vUv).rgb;
+  vec3 colour = texture(uColour, here).rgb;
   if (uStrength > 0.0) colour *= exp(-response / 8.0 * 300.0 * uStrength);
   outColour = vec4(colour, 1.0);
 }

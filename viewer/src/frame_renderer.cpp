@@ -12,10 +12,6 @@
 namespace nestlight::viewer {
 
 namespace {
-// llvmpipe (and the issue) limit SSBO bindings to 128 MiB; the compute rasteriser's largest
-// buffer is 16 bytes per pixel, so a tile holds at most 8M pixels.
-constexpr size_t kMaxSsboBytes = size_t(128) << 20;
-
 void setMat4(GLuint prog, const char* name, const glm::dmat4& m) {
   const glm::mat4 f(m);
   glProgramUniformMatrix4fv(prog, glGetUniformLocation(prog, name), 1, GL_FALSE, glm::value_ptr(f));
@@ -45,7 +41,53 @@ FrameRenderer::FrameRenderer()
       colourPass_({{GL_COMPUTE_SHADER, "points/raster_colour.comp"}}),
       resolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve.frag"}}),
       edl_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}}) {
-  glCreateVertexArrays(1, &vao_);
+  vao_ = gl::VertexArray::create();
+  gbufferFbo_ = gl::Framebuffer::create();
+  hqsFbo_ = gl::Framebuffer::create();
+  outputFbo_ = gl::Framebuffer::create();
+  // GPU timers would stall every pass; the point view reports its wall time instead.
+  graph_.setTiming(false);
+  graph_.addTarget("depth", {GL_DEPTH_COMPONENT32F});
+  graph_.addTarget("colour", {GL_RGBA8});       // display-referred scan colour
+  graph_.addTarget("normal", {GL_RGBA16F});     // view-space normal, a = 1 when known
+  graph_.addTarget("hqs_colour", {GL_RGBA32F}); // HQS sums: rgb w, w
+  graph_.addTarget("hqs_normal", {GL_RGBA32F}); // HQS sums: normal w, depth w
+  graph_.addTarget("output", {GL_RGBA16F});
+  graph_.addPass(
+      "points", frame::Scope::Tile,
+      [](frame::PassBuilder& b) {
+        for (const char* t : {"depth", "colour", "normal", "hqs_colour", "hqs_normal"}) b.write(t);
+      },
+      [this](const frame::PassContext& ctx) { rasterise(ctx); });
+  graph_.addPass(
+      "eye_dome_lighting", frame::Scope::Tile,
+      [](frame::PassBuilder& b) {
+        b.read("colour");
+        b.read("depth");
+        b.write("output");
+        b.margin(int(std::ceil(RenderSettings::kMaxEdlRadius)) + 2);
+      },
+      [this](const frame::PassContext& ctx) {
+        const RenderSettings& s = settings_;
+        const GLuint e = edl_.id();
+        edl_.use();
+        ctx.bindTexture("colour", 0);
+        ctx.bindTexture("depth", 1);
+        glProgramUniform1i(e, edl_.uniform("uColour"), 0);
+        glProgramUniform1i(e, edl_.uniform("uDepth"), 1);
+        glProgramUniform1f(e, edl_.uniform("uNear"), float(camera_.nearPlane));
+        glProgramUniform1f(e, edl_.uniform("uFar"), float(camera_.farPlane));
+        glProgramUniform1f(e, edl_.uniform("uStrength"), s.edlStrength);
+        glProgramUniform1f(e, edl_.uniform("uRadius"), std::min(s.edlRadius, RenderSettings::kMaxEdlRadius));
+        glProgramUniform3f(e, edl_.uniform("uBackground"), s.background.x, s.background.y, s.background.z);
+        glProgramUniform2f(e, edl_.uniform("uViewport"), float(ctx.tile().width), float(ctx.tile().height));
+        ctx.bindFramebuffer();
+        glDisable(GL_DEPTH_TEST);
+        glBindVertexArray(vao_.id());
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      });
+  graph_.compile("output");
   if (epoxy_has_gl_extension("GL_NV_shader_atomic_int64") && epoxy_has_gl_extension("GL_ARB_gpu_shader_int64")) {
     try {
       atomic64_ = std::make_unique<gl::ShaderProgram>(std::vector<gl::ShaderProgram::Stage>{
@@ -61,86 +103,28 @@ FrameRenderer::FrameRenderer()
   }
 }
 
-FrameRenderer::~FrameRenderer() {
-  GLuint fbos[] = {gbuffer_, outputFbo_, hqsFbo_};
-  glDeleteFramebuffers(3, fbos);
-  GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_};
-  glDeleteTextures(6, tex);
-  GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_, packedNormalSsbo_};
-  glDeleteBuffers(5, bufs);
-  glDeleteVertexArrays(1, &vao_);
-}
+FrameRenderer::~FrameRenderer() = default;
 
-void FrameRenderer::ensureTargets(int w, int h, bool compute) {
-  if (w != w_ || h != h_) {
-    GLuint fbos[] = {gbuffer_, outputFbo_, hqsFbo_};
-    glDeleteFramebuffers(3, fbos);
-    GLuint tex[] = {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_};
-    glDeleteTextures(6, tex);
-    glCreateTextures(GL_TEXTURE_2D, 1, &colourTex_);
-    glTextureStorage2D(colourTex_, 1, GL_RGBA8, w, h);
-    glCreateTextures(GL_TEXTURE_2D, 1, &normalTex_);
-    glTextureStorage2D(normalTex_, 1, GL_RGBA16F, w, h);
-    glCreateTextures(GL_TEXTURE_2D, 1, &depthTex_);
-    glTextureStorage2D(depthTex_, 1, GL_DEPTH_COMPONENT32F, w, h);
-    glCreateTextures(GL_TEXTURE_2D, 1, &outputTex_);
-    glTextureStorage2D(outputTex_, 1, GL_RGBA16F, w, h);
-    // HQS sums in 32-bit float: hundreds of weighted colours per pixel at close range.
-    glCreateTextures(GL_TEXTURE_2D, 1, &accColourTex_);
-    glTextureStorage2D(accColourTex_, 1, GL_RGBA32F, w, h);
-    glCreateTextures(GL_TEXTURE_2D, 1, &accNormalTex_);
-    glTextureStorage2D(accNormalTex_, 1, GL_RGBA32F, w, h);
-    for (GLuint t : {colourTex_, normalTex_, depthTex_, outputTex_, accColourTex_, accNormalTex_}) {
-      glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-      glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    }
-    glCreateFramebuffers(1, &gbuffer_);
-    glNamedFramebufferTexture(gbuffer_, GL_COLOR_ATTACHMENT0, colourTex_, 0);
-    glNamedFramebufferTexture(gbuffer_, GL_COLOR_ATTACHMENT1, normalTex_, 0);
-    glNamedFramebufferTexture(gbuffer_, GL_DEPTH_ATTACHMENT, depthTex_, 0);
-    const GLenum draw[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glNamedFramebufferDrawBuffers(gbuffer_, 2, draw);
-    glCreateFramebuffers(1, &outputFbo_);
-    glNamedFramebufferTexture(outputFbo_, GL_COLOR_ATTACHMENT0, outputTex_, 0);
-    glCreateFramebuffers(1, &hqsFbo_);
-    glNamedFramebufferTexture(hqsFbo_, GL_COLOR_ATTACHMENT0, accColourTex_, 0);
-    glNamedFramebufferTexture(hqsFbo_, GL_COLOR_ATTACHMENT1, accNormalTex_, 0);
-    glNamedFramebufferTexture(hqsFbo_, GL_DEPTH_ATTACHMENT, depthTex_, 0);
-    glNamedFramebufferDrawBuffers(hqsFbo_, 2, draw);
-    for (GLuint f : {gbuffer_, outputFbo_, hqsFbo_})
-      if (glCheckNamedFramebufferStatus(f, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-        throw Error("the G-buffer framebuffer is incomplete (" + std::to_string(w) + "x" + std::to_string(h) + ")");
-    w_ = w, h_ = h;
-  }
-  const size_t pixels = size_t(w) * h;
-  if (compute && pixels > ssboPixels_) {
-    NL_CHECK(pixels * 16 <= kMaxSsboBytes);
-    GLuint bufs[] = {depthSsbo_, accumSsbo_, normalSsbo_, packedSsbo_, packedNormalSsbo_};
-    glDeleteBuffers(5, bufs);
-    glCreateBuffers(1, &depthSsbo_);
-    glNamedBufferStorage(depthSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
-    glCreateBuffers(1, &accumSsbo_);
-    glNamedBufferStorage(accumSsbo_, pixels * 16, nullptr, GL_DYNAMIC_STORAGE_BIT);
-    glCreateBuffers(1, &normalSsbo_);
-    glNamedBufferStorage(normalSsbo_, pixels * 4, nullptr, GL_DYNAMIC_STORAGE_BIT);
-    packedSsbo_ = packedNormalSsbo_ = 0;
-    if (atomic64_) {
-      glCreateBuffers(1, &packedSsbo_);
-      glNamedBufferStorage(packedSsbo_, pixels * 8, nullptr, GL_DYNAMIC_STORAGE_BIT);
-      glCreateBuffers(1, &packedNormalSsbo_);
-      glNamedBufferStorage(packedNormalSsbo_, pixels * 8, nullptr, GL_DYNAMIC_STORAGE_BIT);
-    }
-    ssboPixels_ = pixels;
-  }
-}
-
-void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
-                             const Camera& camera, int fullW, int fullH, int x0, int y0, int w, int h,
-                             const RenderSettings& s, DrawTimings* t) {
+void FrameRenderer::rasterise(const frame::PassContext& ctx) {
+  const std::vector<streaming::DrawNode>& nodes = *nodes_;
+  const frame::GlNodeStore& store = *store_;
+  const Camera& camera = camera_;
+  const RenderSettings& s = settings_;
+  DrawTimings* t = timings_;
+  const frame::Tile& tile = ctx.tile();
+  const int fullW = tile.fullWidth, fullH = tile.fullHeight, x0 = tile.x0, y0 = tile.y0, w = tile.width, h = tile.height;
   const bool compute = s.rasteriser == Rasteriser::Compute;
-  ensureTargets(w, h, compute);
+  if (compute) ensureSsbos(size_t(w) * h);
+  // The G-buffer and the HQS sums, on this run's targets (the graph reallocates them with size).
+  gbufferFbo_.attach(GL_COLOR_ATTACHMENT0, ctx.target("colour"));
+  gbufferFbo_.attach(GL_COLOR_ATTACHMENT1, ctx.target("normal"));
+  gbufferFbo_.attach(GL_DEPTH_ATTACHMENT, ctx.target("depth"));
+  gbufferFbo_.finish(2, "the point view's G-buffer");
+  hqsFbo_.attach(GL_COLOR_ATTACHMENT0, ctx.target("hqs_colour"));
+  hqsFbo_.attach(GL_COLOR_ATTACHMENT1, ctx.target("hqs_normal"));
+  hqsFbo_.attach(GL_DEPTH_ATTACHMENT, ctx.target("depth"));
+  hqsFbo_.finish(2, "the point view's HQS sums");
+  const GLuint gbuffer_ = gbufferFbo_.id(), hqsFbo = hqsFbo_.id();
   const glm::dmat4 clipFromView =
       tileFromClip(fullW, fullH, x0, y0, w, h) * camera.projection(double(fullW) / fullH);
   const glm::dmat4 viewFromCamRel = camera.viewRotation();
@@ -149,10 +133,11 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
   glViewport(0, 0, w, h);
   const float clearColour[4] = {0, 0, 0, 0}, clearNormal[4] = {0, 0, 0, 0};
   const float clearDepth = 1.0f;
+  glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
   glClearNamedFramebufferfv(gbuffer_, GL_COLOR, 0, clearColour);
   glClearNamedFramebufferfv(gbuffer_, GL_COLOR, 1, clearNormal);
   glClearNamedFramebufferfv(gbuffer_, GL_DEPTH, 0, &clearDepth);
-  glBindVertexArray(vao_);
+  glBindVertexArray(vao_.id());
 
   auto nodeOffset = [&](const streaming::DrawNode& n) {
     const glm::dvec3 origin(n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z);
@@ -230,13 +215,13 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
       // Pass 1: depth pushed back by epsilon. Pass 2: weighted sums of what lies in front of it.
       glProgramUniform1f(hqsDepth_.id(), hqsDepth_.uniform("uDepthEpsilon"), s.hqsDepthEpsilon);
       glDepthFunc(GL_LESS);
-      glBindFramebuffer(GL_FRAMEBUFFER, hqsFbo_);
+      glBindFramebuffer(GL_FRAMEBUFFER, hqsFbo);
       glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
       drawSplats(hqsDepth_, true);
       glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
       const float zero[4] = {0, 0, 0, 0};
-      glClearNamedFramebufferfv(hqsFbo_, GL_COLOR, 0, zero);
-      glClearNamedFramebufferfv(hqsFbo_, GL_COLOR, 1, zero);
+      glClearNamedFramebufferfv(hqsFbo, GL_COLOR, 0, zero);
+      glClearNamedFramebufferfv(hqsFbo, GL_COLOR, 1, zero);
       glDepthFunc(GL_LEQUAL);
       glDepthMask(GL_FALSE);
       glEnable(GL_BLEND);
@@ -250,8 +235,8 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
       const GLuint r = hqsResolve_.id();
       hqsResolve_.use();
       setMat4(r, "uClipFromView", clipFromView);
-      glBindTextureUnit(0, accColourTex_);
-      glBindTextureUnit(1, accNormalTex_);
+      glBindTextureUnit(0, ctx.target("hqs_colour").id());
+      glBindTextureUnit(1, ctx.target("hqs_normal").id());
       glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
       glDepthFunc(GL_ALWAYS);
       glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -261,10 +246,11 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
     // One pass: min over (depth << 32 | colour); all ones is "empty".
     const size_t pixels = size_t(w) * h;
     const uint32_t empty[2] = {0xffffffffu, 0xffffffffu};
-    glClearNamedBufferSubData(packedSsbo_, GL_RG32UI, 0, pixels * 8, GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
-    glClearNamedBufferSubData(packedNormalSsbo_, GL_RG32UI, 0, pixels * 8, GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
-    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 4, packedSsbo_, 0, GLsizeiptr(pixels * 8));
-    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 6, packedNormalSsbo_, 0, GLsizeiptr(pixels * 8));
+    glClearNamedBufferSubData(packedSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8), GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
+    glClearNamedBufferSubData(packedNormalSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8), GL_RG_INTEGER, GL_UNSIGNED_INT,
+                              empty);
+    packedSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 4, 0, pixels * 8);
+    packedNormalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 6, 0, pixels * 8);
     dispatchNodes(*atomic64_, true);
     const GLuint r = resolve64_->id();
     resolve64_->use();
@@ -279,12 +265,12 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
   } else {
     const size_t pixels = size_t(w) * h;
     const uint32_t far = 0xffffffffu, zero = 0;
-    glClearNamedBufferSubData(depthSsbo_, GL_R32UI, 0, pixels * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
-    glClearNamedBufferSubData(accumSsbo_, GL_R32UI, 0, pixels * 16, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    glClearNamedBufferSubData(normalSsbo_, GL_R32UI, 0, pixels * 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, depthSsbo_, 0, GLsizeiptr(pixels * 4));
-    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, accumSsbo_, 0, GLsizeiptr(pixels * 16));
-    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 3, normalSsbo_, 0, GLsizeiptr(pixels * 4));
+    glClearNamedBufferSubData(depthSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
+    glClearNamedBufferSubData(accumSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(normalSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    depthSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 1, 0, pixels * 4);
+    accumSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 2, 0, pixels * 16);
+    normalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 3, 0, pixels * 4);
     dispatchNodes(depthPass_, true);
     dispatchNodes(colourPass_, false);
     const GLuint r = resolve_.id();
@@ -298,35 +284,48 @@ void FrameRenderer::drawTile(const std::vector<streaming::DrawNode>& nodes, cons
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glDisable(GL_DEPTH_TEST);
   }
+  glViewport(0, 0, w, h);
+}
 
-  // Eye-dome lighting into the output.
-  const GLuint e = edl_.id();
-  edl_.use();
-  glBindTextureUnit(0, colourTex_);
-  glBindTextureUnit(1, depthTex_);
-  glProgramUniform1i(e, edl_.uniform("uColour"), 0);
-  glProgramUniform1i(e, edl_.uniform("uDepth"), 1);
-  glProgramUniform1f(e, edl_.uniform("uNear"), float(camera.nearPlane));
-  glProgramUniform1f(e, edl_.uniform("uFar"), float(camera.farPlane));
-  glProgramUniform1f(e, edl_.uniform("uStrength"), s.edlStrength);
-  glProgramUniform1f(e, edl_.uniform("uRadius"), s.edlRadius);
-  glProgramUniform3f(e, edl_.uniform("uBackground"), s.background.x, s.background.y, s.background.z);
-  glBindFramebuffer(GL_FRAMEBUFFER, outputFbo_);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+void FrameRenderer::ensureSsbos(size_t pixels) {
+  if (pixels <= ssboPixels_) return;
+  NL_CHECK(pixels * 16 <= gl::kMaxSsboRange);
+  depthSsbo_ = gl::Buffer(pixels * 4);
+  accumSsbo_ = gl::Buffer(pixels * 16);
+  normalSsbo_ = gl::Buffer(pixels * 4);
+  if (atomic64_) {
+    packedSsbo_ = gl::Buffer(pixels * 8);
+    packedNormalSsbo_ = gl::Buffer(pixels * 8);
+  }
+  ssboPixels_ = pixels;
+}
+
+void FrameRenderer::begin(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
+                          const Camera& camera, const RenderSettings& s, DrawTimings* t) {
+  nodes_ = &nodes;
+  store_ = &store;
+  camera_ = camera;
+  settings_ = s;
+  timings_ = t;
+  drawTree_.upload(nodes);
+}
+
+GLuint FrameRenderer::outputFramebuffer() {
+  outputFbo_.attach(GL_COLOR_ATTACHMENT0, graph_.target("output"));
+  return outputFbo_.id();
 }
 
 GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
                                       const Camera& camera, int width, int height, const RenderSettings& s,
                                       DrawTimings* t) {
   const auto t0 = std::chrono::steady_clock::now();
-  drawTree_.upload(nodes);
-  drawTile(nodes, store, camera, width, height, 0, 0, width, height, s, t);
+  begin(nodes, store, camera, s, t);
+  graph_.executeToTarget(width, height);
   if (t) {
     glFinish();
     t->msDraw += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
-  return outputTex_;
+  return graph_.target("output").id();
 }
 
 Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
@@ -334,37 +333,15 @@ Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
     throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
   const auto t0 = std::chrono::steady_clock::now();
-  drawTree_.upload(nodes);
+  begin(nodes, store, camera, s, t);
+  // Tiles no larger than the compute path's buffers allow (16 bytes per pixel within an SSBO
+  // range), margins included.
+  const int margin = int(std::ceil(RenderSettings::kMaxEdlRadius)) + 2;
+  int tile = std::max(64, s.maxTile);
+  while (size_t(tile + 2 * margin) * (tile + 2 * margin) * 16 > gl::kMaxSsboRange) tile /= 2;
   Image img;
   img.width = width, img.height = height;
-  img.rgba.assign(size_t(width) * height * 4, 0.f);
-  // Tiles overlap by a margin so eye-dome lighting sees its neighbours across tile borders.
-  const int margin = int(std::ceil(s.edlRadius)) + 2;
-  int tile = std::max(64, s.maxTile);
-  while (size_t(tile + 2 * margin) * (tile + 2 * margin) * 16 > kMaxSsboBytes) tile /= 2;
-  std::vector<float> px;
-  for (int ty = 0; ty < height; ty += tile)
-    for (int tx = 0; tx < width; tx += tile) {
-      const int w = std::min(tile, width - tx), h = std::min(tile, height - ty);
-      const bool single = w == width && h == height;
-      const int mx0 = single ? 0 : std::max(0, tx - margin), my0 = single ? 0 : std::max(0, ty - margin);
-      const int mx1 = single ? width : std::min(width, tx + w + margin),
-                my1 = single ? height : std::min(height, ty + h + margin);
-      const int mw = mx1 - mx0, mh = my1 - my0;
-      // GL's rows go up; image rows go down: the tile's GL y range is flipped.
-      const int glY0 = height - my1;
-      drawTile(nodes, store, camera, width, height, mx0, glY0, mw, mh, s, t);
-      px.resize(size_t(w_) * h_ * 4);
-      glGetTextureImage(outputTex_, 0, GL_RGBA, GL_FLOAT, GLsizei(px.size() * sizeof(float)), px.data());
-      for (int y = 0; y < h; ++y) {
-        const int imgY = ty + y;
-        const int glRow = (height - 1 - imgY) - glY0;
-        for (int x = 0; x < w; ++x) {
-          const float* src = &px[4 * (size_t(glRow) * w_ + (tx + x - mx0))];
-          std::copy(src, src + 4, img.at(tx + x, imgY));
-        }
-      }
-    }
+  img.rgba = graph_.execute(width, height, tile);
   if (t) t->msDraw += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return img;
 }

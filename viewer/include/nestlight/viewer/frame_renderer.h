@@ -1,6 +1,7 @@
-// One frame of the resident cut: points into a G-buffer (colour, view-space normal, depth) by
-// either rasteriser, then eye-dome lighting into the output. The GI passes of later issues read
-// the same G-buffer and the same draw list.
+// The point view: the resident cut drawn through the GI frame's graph (nestlight/frame/frame_graph.h)
+// as two tile passes: "points" (either rasteriser into a G-buffer of display colour, view-space
+// normal and depth) and "eye_dome_lighting" (into the output, with a margin so tiles see their
+// neighbours). The graph renders large images in tiles and owns the targets.
 #pragma once
 
 #include <epoxy/gl.h>
@@ -14,6 +15,7 @@
 #include "nestlight/streaming/streamer.h"
 #include "nestlight/viewer/camera.h"
 #include "nestlight/frame/draw_tree.h"
+#include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
 #include "nestlight/viewer/image.h"
 #include "nestlight/gl/program.h"
@@ -47,7 +49,8 @@ struct RenderSettings {
   float fixedPointSize = 0.0f;   // > 0: every splat this many pixels (the compute path draws 1)
   bool roundPoints = true;
   float edlStrength = 1.0f;      // 0 disables eye-dome lighting
-  float edlRadius = 1.4f;
+  float edlRadius = 1.4f;        // pixels, at most kMaxEdlRadius (tiles overlap by that much)
+  static constexpr float kMaxEdlRadius = 6.0f;
   glm::vec3 background{0.08f, 0.08f, 0.10f};
   int maxTile = 2048;            // larger images render in tiles (SSBO and FBO limits)
   bool allowAtomic64 = true;     // compute path: one 64-bit pass where the GPU has 64-bit atomics
@@ -73,28 +76,33 @@ class FrameRenderer {
   GLuint renderToTexture(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
                          const Camera& camera, int width, int height, const RenderSettings& settings,
                          DrawTimings* timings = nullptr);
-  GLuint outputFramebuffer() const { return outputFbo_; }
+  // A framebuffer with the output texture attached (the window blits from it).
+  GLuint outputFramebuffer();
   // "one-pass 64-bit" where GL_NV_shader_atomic_int64 compiled, else "two-pass 32-bit".
   const char* computeVariant() const { return atomic64_ ? "one-pass 64-bit" : "two-pass 32-bit"; }
 
  private:
-  struct Targets;
-  void ensureTargets(int w, int h, bool compute);
-  void drawTile(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store, const Camera& camera,
-                int fullW, int fullH, int x0, int y0, int w, int h, const RenderSettings& s, DrawTimings* t);
+  // The "points" pass: every node of nodes_ into the tile's G-buffer with settings_.
+  void rasterise(const frame::PassContext& ctx);
+  void ensureSsbos(size_t pixels);
+  void begin(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store, const Camera& camera,
+             const RenderSettings& settings, DrawTimings* timings);
 
   gl::ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_, edl_;
   std::unique_ptr<gl::ShaderProgram> atomic64_, resolve64_;  // only with 64-bit atomics
-  GLuint packedSsbo_ = 0;
-  GLuint vao_ = 0;
-  GLuint gbuffer_ = 0, outputFbo_ = 0;
-  GLuint colourTex_ = 0, normalTex_ = 0, depthTex_ = 0, outputTex_ = 0;
-  GLuint hqsFbo_ = 0, accColourTex_ = 0, accNormalTex_ = 0;  // HQS sums: rgb w, w | normal w, depth w
+  frame::FrameGraph graph_;
+  gl::VertexArray vao_;
+  gl::Framebuffer gbufferFbo_, hqsFbo_, outputFbo_;  // attachments set from the graph's targets per run
   frame::DrawTree drawTree_;  // the vertex shader's finest-node lookup (splat_size.glsl)
-  GLuint depthSsbo_ = 0, accumSsbo_ = 0, normalSsbo_ = 0;
-  GLuint packedNormalSsbo_ = 0;  // 64-bit path: min(depth << 32 | normal) per pixel
-  int w_ = 0, h_ = 0;
+  gl::Buffer depthSsbo_, accumSsbo_, normalSsbo_;  // compute path, 32-bit: per pixel of a tile
+  gl::Buffer packedSsbo_, packedNormalSsbo_;       // compute path, 64-bit: min(depth << 32 | colour, normal)
   size_t ssboPixels_ = 0;
+  // What the passes draw this frame (set by render()/renderToTexture() before the graph runs).
+  const std::vector<streaming::DrawNode>* nodes_ = nullptr;
+  const frame::GlNodeStore* store_ = nullptr;
+  Camera camera_;
+  RenderSettings settings_;
+  DrawTimings* timings_ = nullptr;
 };
 
 }  // namespace nestlight::viewer
