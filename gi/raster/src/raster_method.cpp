@@ -155,6 +155,7 @@ class RasterMethod : public Method {
   std::vector<std::pair<std::string, std::string>> parameters() const override {
     return {{"shadow_map_size", std::to_string(params_.shadowMapSize)},
             {"rasteriser", params_.computeRasteriser ? "compute" : "points"},
+            {"splatting", params_.hqs ? "hqs" : "basic"},
             {"splat_scale", std::to_string(params_.splatScale).substr(0, 4)},
             {"point_budget", std::to_string(params_.pointBudget)},
             {"gpu_budget_mb", std::to_string(params_.gpuBytes >> 20)},
@@ -389,7 +390,7 @@ class RasterMethod : public Method {
     glUniform1i(program.uniform("uOrthographic"), orthographic ? 1 : 0);
     glUniform1f(program.uniform("uSizeScale"), params_.splatScale);
     // Up to 64 px as the viewer; at least 1 px (shadow maps of far scans still occlude).
-    glUniform2f(program.uniform("uSizeRange"), 1.0f, 64.0f);
+    glUniform2f(program.uniform("uSizeRange"), 1.0f, kMaxSplatPixels);
     const GLint nodeOrigin = program.uniform("uNodeOrigin"), nodeIndex = program.uniform("uNodeIndex"),
                 nodeSize = program.uniform("uNodeSize"), colourScale = program.uniform("uColourScale");
     glBindVertexArray(emptyVao_.id());
@@ -428,6 +429,81 @@ class RasterMethod : public Method {
       glBindVertexArray(m.vao.id());
       glDrawElements(GL_TRIANGLES, m.indexCount, GL_UNSIGNED_INT, nullptr);
     }
+  }
+
+  // The G-buffer alone (the scan pass also writes its own HQS targets, which
+  // PassContext::bindFramebuffer would attach too).
+  void bindGBuffer(const frame::PassContext& ctx) {
+    gbufferFbo_.attach(GL_COLOR_ATTACHMENT0, ctx.target("base_colour"));
+    gbufferFbo_.attach(GL_COLOR_ATTACHMENT1, ctx.target("normal"));
+    gbufferFbo_.attach(GL_COLOR_ATTACHMENT2, ctx.target("material"));
+    gbufferFbo_.attach(GL_DEPTH_ATTACHMENT, ctx.target("depth"));
+    gbufferFbo_.finish(3, "G-buffer");
+    glBindFramebuffer(GL_FRAMEBUFFER, gbufferFbo_.id());
+    glViewport(0, 0, ctx.tile().width, ctx.tile().height);
+  }
+
+  // GL drops a point whose centre lies outside the viewport, so splats centred just beyond the
+  // tile (in the next tile, or beyond the image) would leave their part inside uncovered. Splats
+  // are drawn into a viewport larger by half the largest splat on every side, with the projection
+  // narrowed to match: pixels inside the tile map exactly as before. Returns the guarded clip.
+  glm::mat4 guardBand(const frame::PassContext& ctx) const {
+    const frame::Tile& t = ctx.tile();
+    const int g = kGuardPixels;
+    glm::mat4 narrow(1.0f);
+    narrow[0][0] = float(t.width) / float(t.width + 2 * g);
+    narrow[1][1] = float(t.height) / float(t.height + 2 * g);
+    glViewport(-g, -g, t.width + 2 * g, t.height + 2 * g);
+    return narrow * ctx.uniforms().clipFromWorld;
+  }
+  static constexpr float kMaxSplatPixels = 64.0f;
+  static constexpr int kGuardPixels = int(kMaxSplatPixels / 2) + 1;
+
+  // High-quality splatting's three passes for every scan, into the tile's G-buffer.
+  void hqsScans(const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    const auto& u = ctx.uniforms();
+    // The splats' depth starts as the meshes' so that splats behind a mesh take no part.
+    glCopyImageSubData(ctx.target("depth").id(), GL_TEXTURE_2D, 0, 0, 0, 0, ctx.target("scan_depth").id(), GL_TEXTURE_2D,
+                       0, 0, 0, 0, tile.width, tile.height, 1);
+    hqsDepthFbo_.attach(GL_DEPTH_ATTACHMENT, ctx.target("scan_depth"));
+    hqsDepthFbo_.finish(0, "HQS depth");
+    hqsSumFbo_.attach(GL_COLOR_ATTACHMENT0, ctx.target("scan_sum_colour"));
+    hqsSumFbo_.attach(GL_COLOR_ATTACHMENT1, ctx.target("scan_sum_normal"));
+    hqsSumFbo_.attach(GL_COLOR_ATTACHMENT2, ctx.target("scan_sum_radius"));
+    hqsSumFbo_.attach(GL_DEPTH_ATTACHMENT, ctx.target("scan_depth"));
+    hqsSumFbo_.finish(3, "HQS sums");
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glEnable(GL_DEPTH_TEST);
+    // Pass 1: depth pushed back by epsilon splat radii.
+    glBindFramebuffer(GL_FRAMEBUFFER, hqsDepthFbo_.id());
+    const glm::mat4 guarded = guardBand(ctx);
+    glDepthFunc(GL_LESS);
+    hqsDepth_.use();
+    glUniformMatrix4fv(hqsDepth_.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
+    glUniform1f(hqsDepth_.uniform("uDepthEpsilon"), params_.hqsDepthEpsilon);
+    drawScans(hqsDepth_, guarded, u.viewFromWorld, u.eye.w, false);
+    // Pass 2: weighted sums of what lies in front of it.
+    glBindFramebuffer(GL_FRAMEBUFFER, hqsSumFbo_.id());
+    const float zero[4] = {0, 0, 0, 0};
+    for (int k = 0; k < 3; ++k) glClearBufferfv(GL_COLOR, k, zero);
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_ONE, GL_ONE);
+    drawScans(hqsAccum_, guarded, u.viewFromWorld, u.eye.w, false);
+    glDisable(GL_BLEND);
+    glDepthMask(GL_TRUE);
+    // Pass 3: the means into the G-buffer, behind whatever mesh is nearer.
+    bindGBuffer(ctx);
+    glDepthFunc(GL_LESS);
+    hqsResolve_.use();
+    glUniformMatrix4fv(hqsResolve_.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
+    ctx.bindTexture("scan_sum_colour", 0);
+    ctx.bindTexture("scan_sum_normal", 1);
+    ctx.bindTexture("scan_sum_radius", 2);
+    glBindVertexArray(emptyVao_.id());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
   }
 
   // The compute rasteriser's three passes for every scan, into the tile's G-buffer.
@@ -476,7 +552,7 @@ class RasterMethod : public Method {
     };
     dispatch(computeDepth_);
     dispatch(computeColour_);
-    ctx.bindFramebuffer();
+    bindGBuffer(ctx);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     computeResolve_.use();
@@ -494,6 +570,13 @@ class RasterMethod : public Method {
     meshShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
     scanShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}});
     directLight_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/direct_light.frag"}});
+    hqsDepth_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_depth.frag"}});
+    hqsAccum_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_accum.frag"}});
+    hqsResolve_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                                 {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_resolve.frag"}});
+    hqsDepthFbo_ = gl::Framebuffer::create();
+    hqsSumFbo_ = gl::Framebuffer::create();
+    gbufferFbo_ = gl::Framebuffer::create();
     if (params_.computeRasteriser) {
       computeDepth_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_depth.comp"}});
       computeColour_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_colour.comp"}});
@@ -511,6 +594,11 @@ class RasterMethod : public Method {
     graph_.addTarget("normal", {GL_RGBA16F});
     graph_.addTarget("material", {GL_RGBA16UI});
     graph_.addTarget("radiance", {GL_RGBA32F});
+    // High-quality splatting's own: the splats' depth over the meshes', and the weighted sums.
+    graph_.addTarget("scan_depth", {GL_DEPTH_COMPONENT32F});
+    graph_.addTarget("scan_sum_colour", {GL_RGBA32F});
+    graph_.addTarget("scan_sum_normal", {GL_RGBA32F});
+    graph_.addTarget("scan_sum_radius", {GL_RGBA32F});
     graph_.addTarget("display", {GL_RGBA8});
 
     graph_.addPass(
@@ -552,6 +640,10 @@ class RasterMethod : public Method {
       b.write("normal");
       b.write("material");
     };
+    auto scanWrites = [gbufferWrites](frame::PassBuilder& b) {
+      gbufferWrites(b);
+      for (const char* t : {"scan_depth", "scan_sum_colour", "scan_sum_normal", "scan_sum_radius"}) b.write(t);
+    };
     graph_.addPass("gbuffer_meshes", frame::Scope::Tile, gbufferWrites, [this](const frame::PassContext& ctx) {
       ctx.bindFramebuffer();
       glEnable(GL_DEPTH_TEST);
@@ -566,16 +658,21 @@ class RasterMethod : public Method {
       glClearBufferuiv(GL_COLOR, 2, noMaterial);
       drawMeshes(meshGBuffer_, ctx.uniforms().clipFromWorld, true);
     });
-    graph_.addPass("gbuffer_scans", frame::Scope::Tile, gbufferWrites, [this](const frame::PassContext& ctx) {
+    graph_.addPass("gbuffer_scans", frame::Scope::Tile, scanWrites, [this](const frame::PassContext& ctx) {
       const auto& u = ctx.uniforms();
       if (params_.computeRasteriser) {
         computeScans(ctx);
         return;
       }
-      ctx.bindFramebuffer();
+      if (params_.hqs) {
+        hqsScans(ctx);
+        return;
+      }
+      bindGBuffer(ctx);
       glEnable(GL_DEPTH_TEST);
       glEnable(GL_PROGRAM_POINT_SIZE);
-      drawScans(scanGBuffer_, u.clipFromWorld, u.viewFromWorld, u.eye.w, false);
+      drawScans(scanGBuffer_, guardBand(ctx), u.viewFromWorld, u.eye.w, false);
+      glViewport(0, 0, ctx.tile().width, ctx.tile().height);
     });
     graph_.addPass(
         "direct_light", frame::Scope::Tile,
@@ -627,6 +724,8 @@ class RasterMethod : public Method {
   std::array<glm::vec3, 9> sh_{};
   gl::ShaderProgram meshGBuffer_, scanGBuffer_, meshShadow_, scanShadow_, directLight_;
   gl::ShaderProgram computeDepth_, computeColour_, computeResolve_;  // rasteriser "compute"
+  gl::ShaderProgram hqsDepth_, hqsAccum_, hqsResolve_;               // splatting "hqs"
+  gl::Framebuffer hqsDepthFbo_, hqsSumFbo_, gbufferFbo_;
   gl::Buffer scanDepth_, scanAccum_, scanNormal_, scanRadius_;          // its per-pixel buffers
   gl::VertexArray emptyVao_;
   gl::Framebuffer shadowFbo_;
@@ -660,6 +759,10 @@ RasterParameters rasterParameters(const Scene& scene) {
       if (!it->is_string() || (*it != "points" && *it != "compute"))
         throw Error(file, field, "expected \"points\" or \"compute\", got " + it->dump());
       p.computeRasteriser = *it == "compute";
+    } else if (key == "splatting") {
+      if (!it->is_string() || (*it != "hqs" && *it != "basic"))
+        throw Error(file, field, "expected \"hqs\" or \"basic\", got " + it->dump());
+      p.hqs = *it == "hqs";
     } else if (key == "splat_scale") {
       p.splatScale = float(number(0.1, 16));
     } else if (key == "point_budget") {
@@ -671,7 +774,7 @@ RasterParameters rasterParameters(const Scene& scene) {
     } else if (key == "stream_timeout") {
       p.streamTimeoutSeconds = number(0.1, 1e6);
     } else {
-      throw Error(file, field, "unknown parameter of the raster method (shadow_map_size, rasteriser, splat_scale, "
+      throw Error(file, field, "unknown parameter of the raster method (shadow_map_size, rasteriser, splatting, splat_scale, "
                                "point_budget, gpu_budget_mb, max_tile, stream_timeout)");
     }
   }

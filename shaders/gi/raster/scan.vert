@@ -14,7 +14,8 @@ uniform vec2 uSizeRange;         // min, max diameter in pixels
 uniform float uColourScale;      // the scene's colour_scale of this scan
 out vec3 vColour;
 out vec3 vNormal;
-out float vRadius;        // the splat's radius, world units
+flat out float vRadius;   // the splat's radius, world units
+flat out vec3 vViewPos;   // its centre in view space (high-quality splatting)
 void main() {
   uint i = uint(gl_VertexID);
   vec3 local = pointLocal(i);
@@ -23,6 +24,7 @@ void main() {
   float depth = uOrthographic ? 1.0 : max(-(uViewFromWorld * vec4(world, 1.0)).z, 1e-6);
   gl_PointSize = clamp(finestSpacing(local) * uSizeScale * uPixelsPerUnit / depth, uSizeRange.x, uSizeRange.y);
   vRadius = 0.5 * gl_PointSize * depth / uPixelsPerUnit;
+  vViewPos = (uViewFromWorld * vec4(world, 1.0)).xyz;
   vColour = srgbDecode(unpackUnorm4x8(pointColour(i)).rgb) * uColourScale;
   vNormal = decodeNormal(pointNormalWord(i));
 }

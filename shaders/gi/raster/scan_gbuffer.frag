@@ -3,7 +3,7 @@
 #include "../common/gbuffer_out.glsl"
 in vec3 vColour;
 in vec3 vNormal;
-in float vRadius;
+flat in float vRadius;
 void main() {
   vec2 d = gl_PointCoord * 2.0 - 1.0;
   if (dot(d, d) > 1.0) discard;

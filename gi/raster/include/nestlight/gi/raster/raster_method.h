@@ -18,6 +18,11 @@ struct RasterParameters {
   // rasteriser (one pixel per point, the points within 1% of the nearest depth averaged). Shadow
   // maps always take splats: a light's view needs closed surfaces.
   bool computeRasteriser = false;
+  // GL_POINTS splats into the G-buffer: high-quality splatting (the kernel-weighted mean of the
+  // splats within a splat radius of the front surface, Botsch et al. 2005) or basic (the nearest
+  // splat wins). HQS averages a pixel's points as the reference's discs average its area.
+  bool hqs = true;
+  float hqsDepthEpsilon = 1.0f;  // blend splats within this many splat radii of the front
   float splatScale = 2.25f;    // splat diameter in measured spacings (the viewer's default)
   int maxTile = 2048;          // larger images render in tiles
   uint64_t pointBudget = 5'000'000;  // points of each scan's resident cut
