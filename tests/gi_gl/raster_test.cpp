@@ -330,9 +330,10 @@ Agreement rasterAgainstDirect(TestSceneKind kind, bool dropEnvironment, const st
 
 TEST(Raster, AgreesWithDirectOnGeneratedScenes) {
   test::TempDir t;
-  // Measured on llvmpipe at 64 x 48 (docs/SCENE.md, "raster against direct"): cornell energy
-  // ratio 1.09, lit 8 x 8 blocks 0.87 to 1.28; object 0.94. Per pixel they differ more (relative L2
-  // 0.3 and 0.9): the reference averages each pixel's area where raster shades one splat (the
+  // Measured on llvmpipe at 64 x 48 (docs/SCENE.md, "raster against direct"), high-quality
+  // splatting: cornell energy ratio 1.07, lit 8 x 8 blocks 0.89 to 1.29; object 0.95. Per pixel
+  // they differ more (relative L2 0.24 and 0.95): the reference averages each pixel's area where
+  // raster blends the splats at its centre (the
   // scans' colour is noisy per point), and edges of splats and discs fall differently. What makes
   // the blocks differ: raster's shadow lookups move off the surface by a splat radius, removing
   // self-shadowing of relief finer than a splat; the reference's discs leave about 1% of a
