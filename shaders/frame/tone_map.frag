@@ -1,14 +1,10 @@
 // The tone map of gi/metrics (nestlight/gi/tone_map.h), on the GPU: 2^exposure, clamp to [0, 1],
 // the sRGB transfer function (IEC 61966-2-1). NaN shows as magenta, as the PNG writer does.
 #include "../interface/frame_interface.glsl"
+#include "../common/srgb.glsl"
 layout(binding = 0) uniform sampler2D uLinear;
 uniform float uScale;  // 2^exposure
 layout(location = 0) out vec4 outDisplay;
-
-float srgbEncode(float v) {
-  v = clamp(v, 0.0, 1.0);
-  return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
-}
 
 void main() {
   vec3 c = texelFetch(uLinear, ivec2(gl_FragCoord.xy), 0).rgb;

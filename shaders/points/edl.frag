@@ -1,12 +1,15 @@
 // Eye-dome lighting (Boucheny 2009, as in Potree): shade each pixel by how much nearer it is
-// than its neighbours in log depth, which shows shape on scans without normals.
+// than its neighbours in log depth, which shows shape on scans without normals. Reads the linear
+// G-buffer colour and writes linear light; the shading factor applies to the displayed (sRGB)
+// value, as Potree's does, so the tone-map pass after it shows what it always showed.
+#include "../common/srgb.glsl"
 uniform sampler2D uColour;
 uniform sampler2D uDepth;
 uniform float uNear;
 uniform float uFar;
 uniform float uStrength;     // 0 disables
 uniform float uRadius;       // pixels
-uniform vec3 uBackground;
+uniform vec3 uBackground;   // display-referred
 uniform vec2 uViewport;      // the tile's pixels, at the targets' lower left (targets may be larger)
 
 out vec4 outColour;
@@ -38,10 +41,10 @@ void main() {
   if (!isScan) {
     // Background next to the scan: a dark outline around silhouettes (as Potree does).
     float outline = uStrength > 0.0 && neighbours > 0 ? 1.0 - exp(-float(neighbours) * uStrength) : 0.0;
-    outColour = vec4(uBackground * (1.0 - outline), 1.0);
+    outColour = vec4(srgbDecode(uBackground * (1.0 - outline)), 1.0);
     return;
   }
   vec3 colour = texture(uColour, here).rgb;
-  if (uStrength > 0.0) colour *= exp(-response / 8.0 * 300.0 * uStrength);
+  if (uStrength > 0.0) colour = srgbDecode(srgbEncode(colour) * exp(-response / 8.0 * 300.0 * uStrength));
   outColour = vec4(colour, 1.0);
 }

@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "nestlight/frame/passes.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::viewer {
@@ -48,11 +49,12 @@ FrameRenderer::FrameRenderer()
   // GPU timers would stall every pass; the point view reports its wall time instead.
   graph_.setTiming(false);
   graph_.addTarget("depth", {GL_DEPTH_COMPONENT32F});
-  graph_.addTarget("colour", {GL_RGBA8});       // display-referred scan colour
+  graph_.addTarget("colour", {GL_RGBA16F});     // linear scan colour (recorded sRGB decoded)
   graph_.addTarget("normal", {GL_RGBA16F});     // view-space normal, a = 1 when known
   graph_.addTarget("hqs_colour", {GL_RGBA32F}); // HQS sums: rgb w, w
   graph_.addTarget("hqs_normal", {GL_RGBA32F}); // HQS sums: normal w, depth w
-  graph_.addTarget("output", {GL_RGBA16F});
+  graph_.addTarget("lit", {GL_RGBA16F});        // linear, eye-dome lit
+  graph_.addTarget("output", {GL_RGBA16F});     // display-referred (sRGB)
   graph_.addPass(
       "points", frame::Scope::Tile,
       [](frame::PassBuilder& b) {
@@ -64,7 +66,7 @@ FrameRenderer::FrameRenderer()
       [](frame::PassBuilder& b) {
         b.read("colour");
         b.read("depth");
-        b.write("output");
+        b.write("lit");
         b.margin(int(std::ceil(RenderSettings::kMaxEdlRadius)) + 2);
       },
       [this](const frame::PassContext& ctx) {
@@ -87,6 +89,8 @@ FrameRenderer::FrameRenderer()
         glDrawArrays(GL_TRIANGLES, 0, 3);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
       });
+  // The point view shows recorded colour as recorded: exposure 0, no highlights to compress.
+  frame::addToneMapPass(graph_, "lit", "output", std::make_shared<const float>(0.0f));
   graph_.compile("output");
   if (epoxy_has_gl_extension("GL_NV_shader_atomic_int64") && epoxy_has_gl_extension("GL_ARB_gpu_shader_int64")) {
     try {

@@ -3,7 +3,7 @@
 // frame. Used for the camera's G-buffer and for the lights' shadow maps.
 #include "../../common/point_data.glsl"
 #include "../../points/splat_size.glsl"
-#include "../common/srgb.glsl"
+#include "../../common/srgb.glsl"
 uniform vec3 uNodeOrigin;        // the node's cube origin in the scene's local frame
 uniform mat4 uClipFromWorld;
 uniform mat4 uViewFromWorld;

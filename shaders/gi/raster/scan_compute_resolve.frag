@@ -2,7 +2,7 @@
 // scan's colour scale), the normal and the nearest depth into the G-buffer; the depth test
 // against the meshes already there keeps whichever is nearer.
 #include "../common/gbuffer_out.glsl"
-#include "../common/srgb.glsl"
+#include "../../common/srgb.glsl"
 #include "../../common/octahedral.glsl"
 layout(std430, binding = 8) readonly buffer ScanDepth { uint depth[]; } sd;
 layout(std430, binding = 9) readonly buffer ScanAccum { uint accum[]; } sa;

@@ -1,7 +1,8 @@
 // The point view: the resident cut drawn through the GI frame's graph (nestlight/frame/frame_graph.h)
-// as two tile passes: "points" (either rasteriser into a G-buffer of display colour, view-space
-// normal and depth) and "eye_dome_lighting" (into the output, with a margin so tiles see their
-// neighbours). The graph renders large images in tiles and owns the targets.
+// as three tile passes: "points" (either rasteriser into a linear G-buffer: colour, view-space
+// normal, depth), "eye_dome_lighting" (with a margin so tiles see their neighbours) and
+// "tone_map" (into the display-referred output). The graph renders large images in tiles and
+// owns the targets.
 #pragma once
 
 #include <epoxy/gl.h>
