@@ -17,8 +17,23 @@
 #define NL_SSBO_DRAW_TREE 5      // drawn nodes' octants and spacings (points/splat_size.glsl)
 #define NL_SSBO_SHADOW_VIEWS 6   // mat4[]: clip of each shadow-map layer's view (light views)
 #define NL_SSBO_MATERIALS 7      // MaterialRecord[], the scene's materials
-#define NL_SSBO_METHOD0 8        // free for GI methods (VPLs, hierarchies): 8..15
+#define NL_SSBO_METHOD0 8        // free for GI methods (VPLs, hierarchies): 8..15 (contexts with fewer
+                                 // than 16 bindings are refused, nestlight/gl/context.h)
 #define NL_MAX_NODE_LAYERS 4
+
+// The point view's compute rasteriser (points/raster_*.comp): per-pixel buffers. They reuse the
+// node-layer and light slots, which the point view does not bind.
+#define NL_SSBO_RASTER_DEPTH 1
+#define NL_SSBO_RASTER_ACCUM 2
+#define NL_SSBO_RASTER_NORMAL 3
+#define NL_SSBO_RASTER_PACKED 4         // 64-bit: min(depth << 32 | colour)
+#define NL_SSBO_RASTER_PACKED_NORMAL 6  // 64-bit: min(depth << 32 | normal)
+
+// The raster method's compute rasteriser (gi/raster/scan_compute_*): per-pixel buffers.
+#define NL_SSBO_SCAN_DEPTH (NL_SSBO_METHOD0 + 0)
+#define NL_SSBO_SCAN_ACCUM (NL_SSBO_METHOD0 + 1)
+#define NL_SSBO_SCAN_NORMAL (NL_SSBO_METHOD0 + 2)
+#define NL_SSBO_SCAN_RADIUS (NL_SSBO_METHOD0 + 3)
 
 // Points of a resident node: position (3 floats, relative to the node's cube origin), display
 // colour RGBA8, normal as 2 x 16-bit octahedral coordinates (0: the scan has none).

@@ -10,8 +10,8 @@
 
 layout(local_size_x = 128) in;
 
-layout(std430, binding = 4) buffer Packed { uint64_t packed[]; } fb64;
-layout(std430, binding = 6) buffer PackedNormals { uint64_t packed[]; } nb64;
+layout(std430, binding = NL_SSBO_RASTER_PACKED) buffer Packed { uint64_t packed[]; } fb64;
+layout(std430, binding = NL_SSBO_RASTER_PACKED_NORMAL) buffer PackedNormals { uint64_t packed[]; } nb64;
 
 uniform ivec2 uViewport;
 

@@ -7,9 +7,9 @@
 
 layout(local_size_x = 128) in;
 
-layout(std430, binding = 1) buffer Depth { uint depth[]; } fb;
-layout(std430, binding = 2) buffer Accum { uint accum[]; } acc;  // r, g, b, count per pixel
-layout(std430, binding = 3) buffer Normals { uint normal[]; } nb;
+layout(std430, binding = NL_SSBO_RASTER_DEPTH) buffer Depth { uint depth[]; } fb;
+layout(std430, binding = NL_SSBO_RASTER_ACCUM) buffer Accum { uint accum[]; } acc;  // r, g, b, count per pixel
+layout(std430, binding = NL_SSBO_RASTER_NORMAL) buffer Normals { uint normal[]; } nb;
 
 uniform ivec2 uViewport;
 

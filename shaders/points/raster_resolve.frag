@@ -1,7 +1,8 @@
 // Pass 3 of the compute rasteriser: average colour and nearest depth into the G-buffer.
-layout(std430, binding = 1) readonly buffer Depth { uint depth[]; } fb;
-layout(std430, binding = 2) readonly buffer Accum { uint accum[]; } acc;
-layout(std430, binding = 3) readonly buffer Normals { uint normal[]; } nb;
+#include "../interface/frame_interface.glsl"
+layout(std430, binding = NL_SSBO_RASTER_DEPTH) readonly buffer Depth { uint depth[]; } fb;
+layout(std430, binding = NL_SSBO_RASTER_ACCUM) readonly buffer Accum { uint accum[]; } acc;
+layout(std430, binding = NL_SSBO_RASTER_NORMAL) readonly buffer Normals { uint normal[]; } nb;
 
 #include "../common/octahedral.glsl"
 #include "../common/srgb.glsl"

@@ -1,8 +1,9 @@
 // Resolve of the 64-bit compute rasteriser: the nearest point's colour and depth per pixel.
 #extension GL_ARB_gpu_shader_int64 : require
 
-layout(std430, binding = 4) readonly buffer Packed { uint64_t packed[]; } fb64;
-layout(std430, binding = 6) readonly buffer PackedNormals { uint64_t packed[]; } nb64;
+#include "../interface/frame_interface.glsl"
+layout(std430, binding = NL_SSBO_RASTER_PACKED) readonly buffer Packed { uint64_t packed[]; } fb64;
+layout(std430, binding = NL_SSBO_RASTER_PACKED_NORMAL) readonly buffer PackedNormals { uint64_t packed[]; } nb64;
 
 #include "../common/octahedral.glsl"
 #include "../common/srgb.glsl"

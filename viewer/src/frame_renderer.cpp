@@ -160,7 +160,7 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
       const glm::vec3 off = nodeOffset(n);
       glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
       glProgramUniform1ui(p, nLoc, n.numPoints);
-      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
+      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, store.buffer(n.handle), 0,
                         GLsizeiptr(n.numPoints) * GLsizeiptr(frame::kGpuPointBytes));
       glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
       if (t && countPoints) t->points += n.numPoints;
@@ -200,7 +200,7 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
         glProgramUniform1i(p, idxLoc, GLint(k));
         glProgramUniform1f(p, sizeLoc, float(n.worldBounds.max.x - n.worldBounds.min.x));
         glProgramUniform1ui(p, nLoc, n.numPoints);
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 0, store.buffer(n.handle), 0,
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, store.buffer(n.handle), 0,
                           GLsizeiptr(n.numPoints) * GLsizeiptr(frame::kGpuPointBytes));
         glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
         if (t && countPoints) t->points += n.numPoints;
@@ -253,8 +253,8 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     glClearNamedBufferSubData(packedSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8), GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
     glClearNamedBufferSubData(packedNormalSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8), GL_RG_INTEGER, GL_UNSIGNED_INT,
                               empty);
-    packedSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 4, 0, pixels * 8);
-    packedNormalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 6, 0, pixels * 8);
+    packedSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_PACKED, 0, pixels * 8);
+    packedNormalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_PACKED_NORMAL, 0, pixels * 8);
     dispatchNodes(*atomic64_, true);
     const GLuint r = resolve64_->id();
     resolve64_->use();
@@ -272,9 +272,9 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     glClearNamedBufferSubData(depthSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
     glClearNamedBufferSubData(accumSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     glClearNamedBufferSubData(normalSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    depthSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 1, 0, pixels * 4);
-    accumSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 2, 0, pixels * 16);
-    normalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, 3, 0, pixels * 4);
+    depthSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_DEPTH, 0, pixels * 4);
+    accumSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_ACCUM, 0, pixels * 16);
+    normalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_NORMAL, 0, pixels * 4);
     dispatchNodes(depthPass_, true);
     dispatchNodes(colourPass_, false);
     const GLuint r = resolve_.id();

@@ -521,10 +521,10 @@ class RasterMethod : public Method {
     glClearNamedBufferSubData(scanAccum_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     glClearNamedBufferSubData(scanNormal_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     glClearNamedBufferSubData(scanRadius_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    scanDepth_.bindRange(GL_SHADER_STORAGE_BUFFER, 8, 0, pixels * 4);
-    scanAccum_.bindRange(GL_SHADER_STORAGE_BUFFER, 9, 0, pixels * 16);
-    scanNormal_.bindRange(GL_SHADER_STORAGE_BUFFER, 10, 0, pixels * 4);
-    scanRadius_.bindRange(GL_SHADER_STORAGE_BUFFER, 11, 0, pixels * 4);
+    scanDepth_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_DEPTH, 0, pixels * 4);
+    scanAccum_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_ACCUM, 0, pixels * 16);
+    scanNormal_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_NORMAL, 0, pixels * 4);
+    scanRadius_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_RADIUS, 0, pixels * 4);
     const auto& u = ctx.uniforms();
     auto dispatch = [&](const gl::ShaderProgram& prog) {
       prog.use();

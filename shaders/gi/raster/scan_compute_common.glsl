@@ -8,10 +8,10 @@
 
 layout(local_size_x = 128) in;
 
-layout(std430, binding = 8) buffer ScanDepth { uint depth[]; } sd;
-layout(std430, binding = 9) buffer ScanAccum { uint accum[]; } sa;    // r, g, b, count
-layout(std430, binding = 10) buffer ScanNormal { uint normal[]; } sn;
-layout(std430, binding = 11) buffer ScanRadius { float radius[]; } sr;
+layout(std430, binding = NL_SSBO_SCAN_DEPTH) buffer ScanDepth { uint depth[]; } sd;
+layout(std430, binding = NL_SSBO_SCAN_ACCUM) buffer ScanAccum { uint accum[]; } sa;    // r, g, b, count
+layout(std430, binding = NL_SSBO_SCAN_NORMAL) buffer ScanNormal { uint normal[]; } sn;
+layout(std430, binding = NL_SSBO_SCAN_RADIUS) buffer ScanRadius { float radius[]; } sr;
 
 uniform ivec2 uViewport;         // the tile
 uniform vec3 uNodeOrigin;        // the node's cube origin, scene-local

@@ -4,10 +4,10 @@
 #include "../common/gbuffer_out.glsl"
 #include "../../common/srgb.glsl"
 #include "../../common/octahedral.glsl"
-layout(std430, binding = 8) readonly buffer ScanDepth { uint depth[]; } sd;
-layout(std430, binding = 9) readonly buffer ScanAccum { uint accum[]; } sa;
-layout(std430, binding = 10) readonly buffer ScanNormal { uint normal[]; } sn;
-layout(std430, binding = 11) readonly buffer ScanRadius { float radius[]; } sr;
+layout(std430, binding = NL_SSBO_SCAN_DEPTH) readonly buffer ScanDepth { uint depth[]; } sd;
+layout(std430, binding = NL_SSBO_SCAN_ACCUM) readonly buffer ScanAccum { uint accum[]; } sa;
+layout(std430, binding = NL_SSBO_SCAN_NORMAL) readonly buffer ScanNormal { uint normal[]; } sn;
+layout(std430, binding = NL_SSBO_SCAN_RADIUS) readonly buffer ScanRadius { float radius[]; } sr;
 uniform ivec2 uViewport;
 uniform mat4 uClipFromView;      // the tile's
 uniform float uColourScale;

@@ -120,6 +120,14 @@ void GlContext::describe(const std::string& platform) {
   int64Atomics_ = epoxy_has_gl_extension("GL_NV_shader_atomic_int64");
   if (epoxy_gl_version() < 45)
     throw Error(platform + " gave OpenGL " + (version ? version : "?") + "; Nestlight needs 4.5 core");
+  // GL 4.5 promises 8 shader-storage bindings; the GI frame's interface numbers 16
+  // (shaders/interface/frame_interface.glsl). Every driver Nestlight runs on has more (llvmpipe
+  // and NVIDIA 32 or more); a context with fewer is refused here rather than failing a pass.
+  GLint ssboBindings = 0;
+  glGetIntegerv(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS, &ssboBindings);
+  if (ssboBindings < 16)
+    throw Error(platform + " offers " + std::to_string(ssboBindings) +
+                " shader-storage buffer bindings; Nestlight needs 16");
 #ifndef NDEBUG
   enableGlDebugOutput();
 #else
