@@ -36,6 +36,7 @@ void addView(CLI::App& app, int& exitCode);
 void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 void addBenchGi(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 void addBenchFrame(CLI::App& app, int& exitCode);   // after addBench: a sub-command of `bench`
+void addBenchStream(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 void addMakeScene(CLI::App& app, int& exitCode);
 void addSurfels(CLI::App& app, int& exitCode);
 void addCompare(CLI::App& app, int& exitCode);

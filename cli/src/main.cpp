@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addBenchRender(app, code);
   nestlight::cli::addBenchGi(app, code);
   nestlight::cli::addBenchFrame(app, code);
+  nestlight::cli::addBenchStream(app, code);
   nestlight::cli::addMakeScene(app, code);
   nestlight::cli::addSurfels(app, code);
   nestlight::cli::addCompare(app, code);
