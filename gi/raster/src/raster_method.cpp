@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <thread>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -391,9 +392,17 @@ class RasterMethod : public Method {
     glUniform1f(program.uniform("uSizeScale"), params_.splatScale);
     // Up to 64 px as the viewer; at least 1 px (shadow maps of far scans still occlude).
     glUniform2f(program.uniform("uSizeRange"), 1.0f, kMaxSplatPixels);
-    const GLint nodeOrigin = program.uniform("uNodeOrigin"), nodeIndex = program.uniform("uNodeIndex"),
-                nodeSize = program.uniform("uNodeSize"), colourScale = program.uniform("uColourScale");
     glBindVertexArray(emptyVao_.id());
+    forEachNode(program, [](const streaming::DrawNode& n) { glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints)); });
+  }
+
+  // Every drawn node of every scan with `program` current: its points bound at
+  // NL_SSBO_NODE_POINTS, its uniforms (origin, place in the draw tree, cube size, point count,
+  // the scan's colour scale) set; `draw` issues the draw or dispatch.
+  void forEachNode(const gl::ShaderProgram& program, const std::function<void(const streaming::DrawNode&)>& draw) {
+    const GLint nodeOrigin = program.uniform("uNodeOrigin"), nodeIndex = program.uniform("uNodeIndex"),
+                nodeSize = program.uniform("uNodeSize"), numPoints = program.uniform("uNumPoints"),
+                colourScale = program.uniform("uColourScale");
     for (auto& s : scans_) {
       s.tree.bind();
       glUniform1f(colourScale, s.colourScale);
@@ -407,7 +416,8 @@ class RasterMethod : public Method {
         glUniform3f(nodeOrigin, origin.x, origin.y, origin.z);
         glUniform1i(nodeIndex, int(k));
         glUniform1f(nodeSize, float(n.worldBounds.max.x - n.worldBounds.min.x));
-        glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
+        glUniform1ui(numPoints, n.numPoints);
+        draw(n);
       }
     }
   }
@@ -532,22 +542,7 @@ class RasterMethod : public Method {
       glUniformMatrix4fv(prog.uniform("uViewFromWorld"), 1, GL_FALSE, &u.viewFromWorld[0][0]);
       glUniform2i(prog.uniform("uViewport"), tile.width, tile.height);
       glUniform1f(prog.uniform("uSizeScale"), params_.splatScale);
-      for (auto& s : scans_) {
-        s.tree.bind();
-        const auto& nodes = s.streamer->drawList();
-        for (size_t k = 0; k < nodes.size(); ++k) {
-          const auto& n = nodes[k];
-          if (n.numPoints == 0) continue;
-          glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, s.store->buffer(n.handle), 0,
-                            GLsizeiptr(size_t(n.numPoints) * frame::kGpuPointBytes));
-          const glm::vec3 origin = scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});
-          glUniform3f(prog.uniform("uNodeOrigin"), origin.x, origin.y, origin.z);
-          glUniform1ui(prog.uniform("uNumPoints"), n.numPoints);
-          glUniform1i(prog.uniform("uNodeIndex"), int(k));
-          glUniform1f(prog.uniform("uNodeSize"), float(n.worldBounds.max.x - n.worldBounds.min.x));
-          glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
-        }
-      }
+      forEachNode(prog, [](const streaming::DrawNode& n) { glDispatchCompute((n.numPoints + 127) / 128, 1, 1); });
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     };
     dispatch(computeDepth_);

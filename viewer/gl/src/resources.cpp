@@ -39,46 +39,31 @@ void Buffer::bindBase(GLenum target, GLuint index) const {
   glBindBufferBase(target, index, id());
 }
 
-Texture::Texture(GLenum internalFormat, int width, int height, int levels)
-    : width_(width), height_(height), format_(internalFormat) {
-  NL_CHECK(width > 0 && height > 0 && levels > 0);
-  GLuint id = 0;
-  glCreateTextures(GL_TEXTURE_2D, 1, &id);
-  static_cast<Object&>(*this) = Object(id);
-  glTextureStorage2D(id, levels, internalFormat, width, height);
-  glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  setFilter(GL_NEAREST, GL_NEAREST);
-}
-
-Texture Texture::cubeMap(GLenum internalFormat, int size) {
-  NL_CHECK(size > 0);
+Texture Texture::make(GLenum target, GLenum internalFormat, int width, int height, int depth, int levels) {
+  NL_CHECK(width > 0 && height > 0 && depth > 0 && levels > 0);
   Texture t;
   GLuint id = 0;
-  glCreateTextures(GL_TEXTURE_CUBE_MAP, 1, &id);
+  glCreateTextures(target, 1, &id);
   static_cast<Object&>(t) = Object(id);
-  glTextureStorage2D(id, 1, internalFormat, size, size);
-  t.width_ = t.height_ = size;
+  if (target == GL_TEXTURE_2D_ARRAY) glTextureStorage3D(id, levels, internalFormat, width, height, depth);
+  else glTextureStorage2D(id, levels, internalFormat, width, height);
+  t.width_ = width;
+  t.height_ = height;
   t.format_ = internalFormat;
+  // Clamped, nearest: passes fetch texels; a pass that wants filtering sets it.
   for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R}) glTextureParameteri(id, w, GL_CLAMP_TO_EDGE);
   t.setFilter(GL_NEAREST, GL_NEAREST);
   return t;
 }
 
+Texture::Texture(GLenum internalFormat, int width, int height, int levels) {
+  *this = make(GL_TEXTURE_2D, internalFormat, width, height, 1, levels);
+}
+
+Texture Texture::cubeMap(GLenum internalFormat, int size) { return make(GL_TEXTURE_CUBE_MAP, internalFormat, size, size, 1, 1); }
+
 Texture Texture::array2d(GLenum internalFormat, int width, int height, int layers) {
-  NL_CHECK(width > 0 && height > 0 && layers > 0);
-  Texture t;
-  GLuint id = 0;
-  glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
-  static_cast<Object&>(t) = Object(id);
-  glTextureStorage3D(id, 1, internalFormat, width, height, layers);
-  t.width_ = width;
-  t.height_ = height;
-  t.format_ = internalFormat;
-  glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  t.setFilter(GL_NEAREST, GL_NEAREST);
-  return t;
+  return make(GL_TEXTURE_2D_ARRAY, internalFormat, width, height, layers, 1);
 }
 
 void Texture::setFilter(GLenum minFilter, GLenum magFilter) const {

@@ -82,6 +82,8 @@ class Texture : public Object<TextureDeleter> {
  public:
   Texture() = default;
   Texture(GLenum internalFormat, int width, int height, int levels = 1);
+  Texture(Texture&&) noexcept = default;
+  Texture& operator=(Texture&&) noexcept = default;
   static Texture cubeMap(GLenum internalFormat, int size);
   static Texture array2d(GLenum internalFormat, int width, int height, int layers);
   int width() const { return width_; }
@@ -92,6 +94,7 @@ class Texture : public Object<TextureDeleter> {
   void setDepthCompare(bool on) const;
 
  private:
+  static Texture make(GLenum target, GLenum internalFormat, int width, int height, int depth, int levels);
   int width_ = 0, height_ = 0;
   GLenum format_ = 0;
 };
