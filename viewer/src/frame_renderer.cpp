@@ -7,7 +7,6 @@
 #include <unordered_map>
 #include <glm/gtc/type_ptr.hpp>
 
-#include "nestlight/frame/passes.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::viewer {
@@ -53,7 +52,6 @@ FrameRenderer::FrameRenderer()
   graph_.addTarget("normal", {GL_RGBA16F});     // view-space normal, a = 1 when known
   graph_.addTarget("hqs_colour", {GL_RGBA32F}); // HQS sums: rgb w, w
   graph_.addTarget("hqs_normal", {GL_RGBA32F}); // HQS sums: normal w, depth w
-  graph_.addTarget("lit", {GL_RGBA16F});        // linear, eye-dome lit
   graph_.addTarget("output", {GL_RGBA16F});     // display-referred (sRGB)
   graph_.addPass(
       "points", frame::Scope::Tile,
@@ -66,7 +64,7 @@ FrameRenderer::FrameRenderer()
       [](frame::PassBuilder& b) {
         b.read("colour");
         b.read("depth");
-        b.write("lit");
+        b.write("output");
         b.margin(int(std::ceil(RenderSettings::kMaxEdlRadius)) + 2);
       },
       [this](const frame::PassContext& ctx) {
@@ -89,8 +87,6 @@ FrameRenderer::FrameRenderer()
         glDrawArrays(GL_TRIANGLES, 0, 3);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
       });
-  // The point view shows recorded colour as recorded: exposure 0, no highlights to compress.
-  frame::addToneMapPass(graph_, "lit", "output", std::make_shared<const float>(0.0f));
   graph_.compile("output");
   if (epoxy_has_gl_extension("GL_NV_shader_atomic_int64") && epoxy_has_gl_extension("GL_ARB_gpu_shader_int64")) {
     try {

@@ -1,8 +1,8 @@
 // The point view: the resident cut drawn through the GI frame's graph (nestlight/frame/frame_graph.h)
-// as three tile passes: "points" (either rasteriser into a linear G-buffer: colour, view-space
-// normal, depth), "eye_dome_lighting" (with a margin so tiles see their neighbours) and
-// "tone_map" (into the display-referred output). The graph renders large images in tiles and
-// owns the targets.
+// as two tile passes: "points" (either rasteriser into a linear G-buffer: colour, view-space
+// normal, depth) and "eye_dome_lighting" (with a margin so tiles see their neighbours; it encodes
+// for display itself, the point view's tone map being exposure 0 and the sRGB curve). The graph
+// renders large images in tiles and owns the targets.
 #pragma once
 
 #include <epoxy/gl.h>
