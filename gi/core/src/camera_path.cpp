@@ -54,7 +54,8 @@ CameraPath parseCameraPath(const JsonField& f, bool allowFov) {
     p.keys.push_back(key);
   }
   if (p.keys.empty()) keys.fail("a camera path needs at least one key");
-  if (double(p.frames()) > kMaxFrames || (p.keys.size() > 1 && (p.keys.back().time - p.keys.front().time) * p.fps > kMaxFrames))
+  // The product first: frames() converts it to int, which more than a million frames would overflow.
+  if ((p.keys.back().time - p.keys.front().time) * p.fps >= kMaxFrames)
     f.fail("asks for more than " + std::to_string(int(kMaxFrames)) + " frames");
   return p;
 }

@@ -88,8 +88,14 @@ struct GpuMesh {
 struct GpuScan {
   std::unique_ptr<OctreeReader> reader;
   std::unique_ptr<frame::GlNodeStore> store;
-  std::unique_ptr<streaming::Streamer> streamer;
+  std::unique_ptr<streaming::Streamer> streamer;  // the camera's cut
   frame::DrawTree tree;
+  // The lights' cut: the whole scan seen from outside its bounds at about a shadow map's
+  // resolution, so occluders out of the camera's view still cast shadows. Its nodes share the
+  // store (and are counted in their own budget).
+  std::unique_ptr<streaming::Streamer> shadowStreamer;
+  frame::DrawTree shadowTree;
+  streaming::View shadowView;
   float colourScale = 1;
 };
 
@@ -116,6 +122,7 @@ class RasterMethod : public Method {
   }
 
   ~RasterMethod() override {
+    if (context_) context_->makeCurrent();
     // Streamers release their nodes into the stores while the context lives.
     scans_.clear();
   }
@@ -123,6 +130,7 @@ class RasterMethod : public Method {
   std::string name() const override { return "raster"; }
 
   MethodFrame render(const SceneCamera& camera) override {
+    if (context_) context_->makeCurrent();
     setOutput("radiance");
     const int W = camera.width, H = camera.height;
     if (W <= 0 || H <= 0) throw Error(scene_.file.string(), "camera", "the image size must be positive");
@@ -130,7 +138,12 @@ class RasterMethod : public Method {
     const uint64_t drawPoints = stream(camera, true);
     const double streamSeconds = secondsSince(tStream);
     const auto t0 = Clock::now();
-    std::vector<float> rgba = graph_.execute(W, H, params_.maxTile);
+    // The compute rasteriser's per-pixel buffers hold 16 bytes a pixel within one SSBO range:
+    // tiles (margins included) stay below it.
+    int tile = params_.maxTile;
+    if (params_.computeRasteriser)
+      while (tile > 64 && size_t(tile + 2) * size_t(tile + 2) * 16 > gl::kMaxSsboRange) tile /= 2;
+    std::vector<float> rgba = graph_.execute(W, H, tile);
     MethodFrame f;
     f.seconds = secondsSince(t0);
     f.image = HdrImage(W, H);
@@ -141,6 +154,11 @@ class RasterMethod : public Method {
   }
 
   unsigned renderInteractive(const SceneCamera& camera, float exposureStops, MethodFrame* stats) override {
+    if (context_) context_->makeCurrent();
+    if (params_.computeRasteriser && size_t(camera.width) * camera.height * 16 > gl::kMaxSsboRange)
+      throw Error(scene_.file.string(), "gi.parameters.rasteriser",
+                  "a " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                      " window is too large for the compute rasteriser's per-pixel buffers (128 MiB); use \"points\"");
     setOutput("display");
     *exposure_ = exposureStops;
     const auto t0 = Clock::now();
@@ -203,6 +221,15 @@ class RasterMethod : public Method {
       }
       s.tree.upload(s.streamer->drawList());
       drawPoints += st.drawPoints;
+      streaming::FrameStats sst = s.shadowStreamer->update(s.shadowView);
+      while (complete && !sst.complete) {
+        if (secondsSince(tStream) > params_.streamTimeoutSeconds)
+          throw Error(s.reader->dir().string(), "", "the lights' cut did not load within " +
+                                                        std::to_string(params_.streamTimeoutSeconds) + " s");
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        sst = s.shadowStreamer->update(s.shadowView);
+      }
+      s.shadowTree.upload(s.shadowStreamer->drawList());
     }
 
     frame::FrameBlock& u = graph_.uniforms();
@@ -249,6 +276,19 @@ class RasterMethod : public Method {
       b.spacingPixels = 1.0;
       s.streamer = std::make_unique<streaming::Streamer>(*s.reader, *s.store, b);
       s.colourScale = o.colourScale;
+      // The lights' cut: the whole bounds from outside them, in a square view of a shadow map's
+      // size (60 degrees, from twice the bounding radius along a diagonal).
+      const glm::dvec3 lo(meta.bounds.min.x, meta.bounds.min.y, meta.bounds.min.z),
+          hi(meta.bounds.max.x, meta.bounds.max.y, meta.bounds.max.z);
+      const glm::dvec3 centre = 0.5 * (lo + hi);
+      const double radius = std::max(0.5 * glm::length(hi - lo), 1e-3);
+      const glm::dvec3 eye = centre + glm::normalize(glm::dvec3(1, 0.7, 1.3)) * (2.0 * radius);
+      s.shadowView = streaming::perspectiveView(eye, centre, {0, 0, 1}, glm::radians(60.0), params_.shadowMapSize,
+                                                params_.shadowMapSize, radius * 0.5, radius * 3.5);
+      streaming::Budgets sb = b;
+      sb.points = std::max<uint64_t>(params_.pointBudget / 2, 1);
+      sb.gpuBytes = std::max<uint64_t>(params_.gpuBytes / 2, 1 << 20);
+      s.shadowStreamer = std::make_unique<streaming::Streamer>(*s.reader, *s.store, sb);
       for (int c = 0; c < 8; ++c)
         bounds_.add(scene_.local({(c & 1) ? meta.bounds.max.x : meta.bounds.min.x,
                                   (c & 2) ? meta.bounds.max.y : meta.bounds.min.y,
@@ -383,7 +423,7 @@ class RasterMethod : public Method {
 
   // Draws every scan's drawn nodes with `program` (shaders/gi/raster/scan.vert).
   void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
-                 float pixelsPerUnit, bool orthographic) {
+                 float pixelsPerUnit, bool orthographic, bool lightsCut = false) {
     program.use();
     glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
     glUniformMatrix4fv(program.uniform("uViewFromWorld"), 1, GL_FALSE, &viewFromWorld[0][0]);
@@ -393,20 +433,22 @@ class RasterMethod : public Method {
     // Up to 64 px as the viewer; at least 1 px (shadow maps of far scans still occlude).
     glUniform2f(program.uniform("uSizeRange"), 1.0f, kMaxSplatPixels);
     glBindVertexArray(emptyVao_.id());
-    forEachNode(program, [](const streaming::DrawNode& n) { glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints)); });
+    forEachNode(program, [](const streaming::DrawNode& n) { glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints)); },
+                lightsCut);
   }
 
   // Every drawn node of every scan with `program` current: its points bound at
   // NL_SSBO_NODE_POINTS, its uniforms (origin, place in the draw tree, cube size, point count,
   // the scan's colour scale) set; `draw` issues the draw or dispatch.
-  void forEachNode(const gl::ShaderProgram& program, const std::function<void(const streaming::DrawNode&)>& draw) {
+  void forEachNode(const gl::ShaderProgram& program, const std::function<void(const streaming::DrawNode&)>& draw,
+                   bool lightsCut = false) {
     const GLint nodeOrigin = program.uniform("uNodeOrigin"), nodeIndex = program.uniform("uNodeIndex"),
                 nodeSize = program.uniform("uNodeSize"), numPoints = program.uniform("uNumPoints"),
                 colourScale = program.uniform("uColourScale");
     for (auto& s : scans_) {
-      s.tree.bind();
+      (lightsCut ? s.shadowTree : s.tree).bind();
       glUniform1f(colourScale, s.colourScale);
-      const auto& nodes = s.streamer->drawList();
+      const auto& nodes = (lightsCut ? s.shadowStreamer : s.streamer)->drawList();
       for (size_t k = 0; k < nodes.size(); ++k) {
         const auto& n = nodes[k];
         if (n.numPoints == 0) continue;
@@ -520,7 +562,9 @@ class RasterMethod : public Method {
   void computeScans(const frame::PassContext& ctx) {
     const frame::Tile& tile = ctx.tile();
     const size_t pixels = size_t(tile.width) * tile.height;
-    NL_CHECK(pixels * 16 <= gl::kMaxSsboRange);
+    if (pixels * 16 > gl::kMaxSsboRange)
+      throw Error("raster: a " + std::to_string(tile.width) + "x" + std::to_string(tile.height) +
+                  " tile is too large for the compute rasteriser's per-pixel buffers (128 MiB)");
     if (scanDepth_.reserve(pixels * 4)) {
       scanAccum_ = gl::Buffer(scanDepth_.bytes() * 4);
       scanNormal_ = gl::Buffer(scanDepth_.bytes());
@@ -624,7 +668,7 @@ class RasterMethod : public Method {
             NL_CHECK(owner != nullptr);
             const bool ortho = int(owner->position.w) == NL_LIGHT_DIRECTIONAL;
             // Texels per world unit (orthographic) or per unit at distance 1 (perspective).
-            drawScans(scanShadow_, clip, shadowViewFromWorld_[layer], 1.0f / owner->shadow.y, ortho);
+            drawScans(scanShadow_, clip, shadowViewFromWorld_[layer], 1.0f / owner->shadow.y, ortho, true);
           }
           glDisable(GL_POLYGON_OFFSET_FILL);
         });
@@ -765,7 +809,9 @@ RasterParameters rasterParameters(const Scene& scene) {
     } else if (key == "gpu_budget_mb") {
       p.gpuBytes = uint64_t(number(1, 1 << 20)) << 20;
     } else if (key == "max_tile") {
-      p.maxTile = int(number(16, 16384));
+      // Larger tiles would pass GL's viewport limit with the splats' guard band, and a tile's
+      // read-back its 2 GiB limit.
+      p.maxTile = int(number(16, 8192));
     } else if (key == "stream_timeout") {
       p.streamTimeoutSeconds = number(0.1, 1e6);
     } else {

@@ -1,6 +1,7 @@
 #include "nestlight/frame/frame_graph.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <set>
 
 #include "nestlight/octree/error.h"
@@ -132,7 +133,8 @@ void FrameGraph::compile(const std::string& output) {
                std::none_of(p.decl.writes_.begin(), p.decl.writes_.end(), [&](const std::string& w) { return needed.count(w) > 0; });
     if (!p.culled) {
       needed.insert(p.decl.reads_.begin(), p.decl.reads_.end());
-      if (p.scope == Scope::Tile) margin_ = std::max(margin_, p.decl.margin_);
+      // Chained neighbourhood passes widen what a tile needs: their margins add up.
+      if (p.scope == Scope::Tile) margin_ += p.decl.margin_;
     }
   }
   output_ = output;
@@ -253,6 +255,9 @@ std::vector<float> FrameGraph::execute(int width, int height, int maxTile) {
       uploadUniforms(t);
       runPasses(Scope::Tile, t);
       px.resize(size_t(t.width) * t.height * 4);
+      if (px.size() * sizeof(float) > size_t(INT32_MAX))
+        throw Error("frame: a tile of " + std::to_string(t.width) + "x" + std::to_string(t.height) +
+                    " pixels is too large to read back; use smaller tiles");
       glGetTextureSubImage(target(output_).id(), 0, 0, 0, 0, t.width, t.height, 1, GL_RGBA, GL_FLOAT,
                            GLsizei(px.size() * sizeof(float)), px.data());
       for (int y = 0; y < h; ++y) {

@@ -47,10 +47,16 @@ bool hasExtension(const char* list, const char* name) {
 class EglContext : public GlContext {
  public:
   EglContext(EGLDisplay d, EGLContext c, const std::string& platform) : display_(d), context_(c) {
-    makeCurrent();
-    describe(platform);
+    try {
+      makeCurrent();
+      describe(platform);  // throws for a context Nestlight cannot use
+    } catch (...) {
+      release();  // the destructor does not run for a constructor that throws
+      throw;
+    }
   }
-  ~EglContext() override {
+  ~EglContext() override { release(); }
+  void release() {
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
     eglTerminate(display_);
@@ -171,7 +177,13 @@ std::unique_ptr<GlContext> createHeadlessContext() {
       std::string w;
       EGLContext c = createEglContext(display, w);
       if (c != EGL_NO_CONTEXT) {
-        auto ctx = std::make_unique<EglContext>(display, c, "EGL device");
+        std::unique_ptr<EglContext> ctx;
+        try {
+          ctx = std::make_unique<EglContext>(display, c, "EGL device");
+        } catch (const Error& e) {
+          why += (why.empty() ? "" : "; ") + std::string(e.what());
+          continue;
+        }
         if (!ctx->isSoftware() || only == "device") return ctx;
         // Mesa's software device works, but the surfaceless platform below names itself
         // better; keep this one only if that fails.
@@ -191,7 +203,13 @@ std::unique_ptr<GlContext> createHeadlessContext() {
     std::string why = "eglGetPlatformDisplayEXT failed";
     if (display != EGL_NO_DISPLAY) {
       EGLContext c = createEglContext(display, why);
-      if (c != EGL_NO_CONTEXT) return std::make_unique<EglContext>(display, c, "EGL surfaceless");
+      if (c != EGL_NO_CONTEXT) {
+        try {
+          return std::make_unique<EglContext>(display, c, "EGL surfaceless");
+        } catch (const Error& e) {
+          why = e.what();
+        }
+      }
     }
     report += "  EGL surfaceless platform: " + why + "\n";
   } else {

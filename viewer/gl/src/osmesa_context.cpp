@@ -34,9 +34,15 @@ class OsMesaContext : public GlContext {
   }
 #include "osmesa_gl_functions.inc"
 #undef NL_GL
-    describe("OSMesa");
+    try {
+      describe("OSMesa");
+    } catch (...) {
+      release();  // the destructor does not run for a constructor that throws
+      throw;
+    }
   }
-  ~OsMesaContext() override {
+  ~OsMesaContext() override { release(); }
+  void release() {
     // Give epoxy its own resolvers back: a later EGL or GLX context must not call into OSMesa.
     size_t i = 0;
 #define NL_GL(name) epoxy_##name = reinterpret_cast<decltype(epoxy_##name)>(saved_[i++]);

@@ -9,7 +9,8 @@
 //   fixed-size targets;
 // - Tile passes (G-buffer, shading, eye-dome lighting, tone mapping) run once per tile and write
 //   targets of the tile's size. A pass that reads neighbours declares a margin; tiles overlap by
-//   the largest so every tile equals the same pixels of an untiled frame.
+//   the sum of the live passes' margins (chained neighbourhood passes widen the need), so every
+//   tile equals the same pixels of an untiled frame.
 //
 // The graph owns the frame's uniform block (shaders/interface/frame_interface.glsl): the method
 // fills the camera, the graph writes each tile's projection into it and binds it at NL_UBO_FRAME.
