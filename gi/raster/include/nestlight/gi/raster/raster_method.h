@@ -1,6 +1,7 @@
 // `raster`: a scene in real time through the GI frame, direct light only. Scans stream under the
 // budgets and are drawn as splats sized by their measured spacing, meshes as triangles, both into
-// the linear HDR G-buffer; every light renders a shadow map of the resident cut and the meshes
+// the linear HDR G-buffer; every light renders a shadow map of the meshes and of the lights' cut
+// (the whole scan at about a shadow map's resolution, streamed beside the camera's)
 // (spot: one perspective view; point: six; directional: one orthographic view over the scene's
 // bounds) once per frame; a deferred pass shades each pixel with gi/core's BSDFs. The frame every
 // GI method builds on, and the real-time counterpart of the reference's `direct`.
