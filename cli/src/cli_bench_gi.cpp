@@ -62,6 +62,7 @@ void addBenchGi(CLI::App& app, int& exitCode) {
   cmd->add_flag("--force-reference", o->forceReference, "Render the reference again even when a cached one matches");
   cmd->callback([=, &exitCode]() {
     gi::BenchGiOptions opt = *o;
+    opt.device = cpuName();
     opt.scene = *scene;
     opt.out = *out;
     std::stringstream ss(*methodText);

@@ -230,6 +230,14 @@ TEST(Methods, RegistryMakesEveryNameSceneFilesAccept) {
   Error e = test::errorOf([&] { createMethod(s); });
   EXPECT_NE(std::string(e.what()).find("gi.method"), std::string::npos) << e.what();
   EXPECT_NE(std::string(e.what()).find("reference, direct, raster"), std::string::npos) << e.what();
+  // A method's parameters go through the same validator: the error names the field.
+  s.gi.method = "raster";
+  s.gi.parameters = json{{"shadow_map_size", 5}};
+  Error bad = test::errorOf([&] { createMethod(s); });
+  EXPECT_NE(std::string(bad.what()).find("scene.gi.parameters.shadow_map_size"), std::string::npos) << bad.what();
+  s.gi.parameters = json{{"shadow_map_sise", 1024}};
+  Error typo = test::errorOf([&] { createMethod(s); });
+  EXPECT_NE(std::string(typo.what()).find("unknown field"), std::string::npos) << typo.what();
 }
 
 // pbrt-v4's integrator tests: one analytic scene, every registered method. A point light over a

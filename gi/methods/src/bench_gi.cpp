@@ -54,17 +54,6 @@ double medianOf(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-std::string cpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("model name", 0) == 0) {
-      auto colon = line.find(':');
-      if (colon != std::string::npos) return line.substr(line.find_first_not_of(" \t", colon + 1));
-    }
-  return "unknown CPU";
-}
-
 // log-log interpolation of the time at which `rows` (in order of quality) reach `target`.
 json timeToError(const std::vector<const BenchGiRow*>& rows, double target) {
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -219,9 +208,9 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   }
 
   // Files: CSV, JSON, SVG.
-  const std::string device = !o.device.empty() ? o.device
-                                               : cpuModel() + ", " + std::to_string(tbb::info::default_concurrency()) +
-                                                     " threads (CPU methods: Embree 3; GL methods: the context's device)";
+  const std::string device = (o.device.empty() ? std::string("unknown CPU") : o.device) + ", " +
+                             std::to_string(tbb::info::default_concurrency()) +
+                             " threads (CPU methods: Embree 3; GL methods: the context's device)";
   std::ofstream csv(dir / "bench_gi.csv");
   csv << "method,quality,quality_name,runs,median_ms,min_ms,max_ms,rays_per_second,samples_per_second,relative_l2,"
          "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels\n";

@@ -25,6 +25,7 @@
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/json_field.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/streaming/streamer.h"
 
@@ -778,47 +779,21 @@ class RasterMethod : public Method {
 
 RasterParameters rasterParameters(const Scene& scene) {
   RasterParameters p;
-  const nlohmann::json& j = scene.gi.parameters;
-  if (j.is_null()) return p;
-  const std::string file = scene.file.string();
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    const std::string key = it.key(), field = "gi.parameters." + key;
-    auto number = [&](double lo, double hi) {
-      if (!it->is_number()) throw Error(file, field, "expected a number, got " + it->dump());
-      const double v = it->get<double>();
-      if (!(v >= lo && v <= hi))
-        throw Error(file, field, "expected a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + it->dump());
-      return v;
-    };
-    if (key == "shadow_map_size") {
-      const double v = number(16, 16384);
-      if (v != std::floor(v)) throw Error(file, field, "expected an integer, got " + it->dump());
-      p.shadowMapSize = int(v);
-    } else if (key == "rasteriser") {
-      if (!it->is_string() || (*it != "points" && *it != "compute"))
-        throw Error(file, field, "expected \"points\" or \"compute\", got " + it->dump());
-      p.computeRasteriser = *it == "compute";
-    } else if (key == "splatting") {
-      if (!it->is_string() || (*it != "hqs" && *it != "basic"))
-        throw Error(file, field, "expected \"hqs\" or \"basic\", got " + it->dump());
-      p.hqs = *it == "hqs";
-    } else if (key == "splat_scale") {
-      p.splatScale = float(number(0.1, 16));
-    } else if (key == "point_budget") {
-      p.pointBudget = uint64_t(number(1, 1e10));
-    } else if (key == "gpu_budget_mb") {
-      p.gpuBytes = uint64_t(number(1, 1 << 20)) << 20;
-    } else if (key == "max_tile") {
-      // Larger tiles would pass GL's viewport limit with the splats' guard band, and a tile's
-      // read-back its 2 GiB limit.
-      p.maxTile = int(number(16, 8192));
-    } else if (key == "stream_timeout") {
-      p.streamTimeoutSeconds = number(0.1, 1e6);
-    } else {
-      throw Error(file, field, "unknown parameter of the raster method (shadow_map_size, rasteriser, splatting, splat_scale, "
-                               "point_budget, gpu_budget_mb, max_tile, stream_timeout)");
-    }
-  }
+  if (scene.gi.parameters.is_null()) return p;
+  // The project's one validator: errors name the scene file and "scene.gi.parameters.<key>".
+  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+  f.expectObject({"shadow_map_size", "rasteriser", "splatting", "splat_scale", "point_budget", "gpu_budget_mb",
+                  "max_tile", "stream_timeout"});
+  if (f.has("shadow_map_size")) p.shadowMapSize = int(f.at("shadow_map_size").integer(16, 16384));
+  if (f.has("rasteriser")) p.computeRasteriser = f.at("rasteriser").choice({"points", "compute"}) == "compute";
+  if (f.has("splatting")) p.hqs = f.at("splatting").choice({"hqs", "basic"}) == "hqs";
+  if (f.has("splat_scale")) p.splatScale = float(f.at("splat_scale").number(0.1, 16));
+  if (f.has("point_budget")) p.pointBudget = uint64_t(f.at("point_budget").number(1, 1e10));
+  if (f.has("gpu_budget_mb")) p.gpuBytes = uint64_t(f.at("gpu_budget_mb").number(1, 1 << 20)) << 20;
+  // Larger tiles would pass GL's viewport limit with the splats' guard band, and a tile's
+  // read-back its 2 GiB limit.
+  if (f.has("max_tile")) p.maxTile = int(f.at("max_tile").integer(16, 8192));
+  if (f.has("stream_timeout")) p.streamTimeoutSeconds = f.at("stream_timeout").number(0.1, 1e6);
   return p;
 }
 

@@ -30,7 +30,7 @@ struct BenchGiOptions {
   // takes its registered defaults.
   std::map<std::string, std::vector<int>> qualities;
   int width = 0, height = 0;           // 0: the scene camera's
-  std::string device;                  // for the report; empty: the CPU's name
+  std::string device;                  // the CPU's name, for the report (the CLI reads /proc/cpuinfo)
 };
 
 struct BenchGiRow {
