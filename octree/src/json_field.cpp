@@ -25,6 +25,10 @@ JsonField JsonField::at(size_t i) const {
 }
 
 void JsonField::expectObject(std::initializer_list<const char*> allowed) const {
+  expectObject(std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+
+void JsonField::expectObject(const std::vector<std::string>& allowed) const {
   if (!j_->is_object()) fail("expected an object, got " + std::string(j_->type_name()));
   const std::set<std::string> ok(allowed.begin(), allowed.end());
   for (auto it = j_->begin(); it != j_->end(); ++it) {

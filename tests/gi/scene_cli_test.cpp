@@ -57,7 +57,7 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
   ASSERT_EQ(test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out), 0) << out;
   ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
-                             " --runs 1 --spp 1,4 --quality raster=64,256 --reference-error 0.05 --reference-spp 256 -o " +
+                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 --reference-error 0.05 --reference-spp 256 -o " +
                              dir.file("b"),
                          &out),
             0)
@@ -68,9 +68,14 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   EXPECT_EQ(header.rfind("method,quality,quality_name", 0), 0u);
   int rows = 0;
   while (std::getline(csv, line)) rows++;
-  EXPECT_EQ(rows, 6);  // every registered method: reference and direct at 1 and 4 spp, raster at 2 shadow-map sizes
+  // Every registered method: reference and direct at 1 and 4 spp, raster at 2 shadow-map sizes,
+  // vpl at 16 VPLs.
+  EXPECT_EQ(rows, 7);
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 6u);
+  ASSERT_EQ(j["rows"].size(), 7u);
+  EXPECT_EQ(j["rows"][6]["method"], "vpl");
+  EXPECT_EQ(j["rows"][6]["quality_name"], "VPLs");
+  EXPECT_TRUE(j["rows"][6]["gpu_pass_ms"].contains("ism")) << j["rows"][6].dump();
   EXPECT_EQ(j["rows"][4]["method"], "raster");
   EXPECT_EQ(j["rows"][4]["quality"], 64);
   EXPECT_EQ(j["rows"][5]["quality_name"], "shadow-map texels");

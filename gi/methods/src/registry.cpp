@@ -2,6 +2,7 @@
 
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/raster/raster_method.h"
+#include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/octree/error.h"
 #include "reference_method.h"
 
@@ -25,7 +26,14 @@ const std::vector<MethodInfo>& registeredMethods() {
                    if (!g.parameters.is_object()) g.parameters = nlohmann::json::object();
                    g.parameters["shadow_map_size"] = q;
                  },
-                 createRasterMethod});
+                 [](const Scene& s, const MethodContext& c) { return createRasterMethod(s, c); }});
+    m.push_back({"vpl", "real-time GI: importance-warped VPLs with imperfect shadow maps on the resident cut (GL)", true,
+                 "VPLs", {64, 256, 1024, 4096},
+                 [](GiSettings& g, int q) {
+                   if (!g.parameters.is_object()) g.parameters = nlohmann::json::object();
+                   g.parameters["vpls"] = q;
+                 },
+                 createVplMethod});
     return m;
   }();
   return methods;

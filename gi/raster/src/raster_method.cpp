@@ -6,6 +6,8 @@
 // Representation for Irradiance Environment Maps").
 #include "nestlight/gi/raster/raster_method.h"
 
+#include <unordered_map>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -22,6 +24,7 @@
 #include "nestlight/frame/passes.h"
 #include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/mesh.h"
+#include "nestlight/gi/raster/raster_frame.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/octree/error.h"
@@ -100,10 +103,11 @@ struct GpuScan {
   float colourScale = 1;
 };
 
-class RasterMethod : public Method {
+class RasterMethod : public Method, public RasterFrame {
  public:
-  RasterMethod(const Scene& scene, const MethodContext& mc) : scene_(scene), quiet_(mc.quiet) {
-    params_ = rasterParameters(scene);
+  RasterMethod(const Scene& scene, const MethodContext& mc, std::unique_ptr<RasterExtension> extension)
+      : scene_(scene), quiet_(mc.quiet), extension_(std::move(extension)) {
+    params_ = parseRasterParameters(scene, extension_ ? extension_->parameterKeys() : std::vector<std::string>{});
     if (!mc.glContextCurrent) {
       context_ = gl::createHeadlessContext();
       if (!quiet_) std::fprintf(stderr, "raster: %s\n", context_->description().c_str());
@@ -124,15 +128,35 @@ class RasterMethod : public Method {
 
   ~RasterMethod() override {
     if (context_) context_->makeCurrent();
-    // Streamers release their nodes into the stores while the context lives.
+    // Streamers release their nodes into the stores while the context lives; the extension's GL
+    // objects go first.
+    extension_.reset();
     scans_.clear();
   }
 
-  std::string name() const override { return "raster"; }
+  std::string name() const override { return extension_ ? extension_->name() : "raster"; }
+
+  // RasterFrame, for the extension.
+  const Scene& scene() const override { return scene_; }
+  const RasterParameters& rasterParameters() const override { return params_; }
+  frame::FrameGraph& graph() override { return graph_; }
+  glm::vec3 boundsLo() const override { return bounds_.lo; }
+  glm::vec3 boundsHi() const override { return bounds_.hi; }
+  const std::vector<frame::LightRecord>& lights() const override { return lightRecords_; }
+  const std::vector<glm::mat4>& lightClipFromWorld() const override { return shadowViews_; }
+  const std::vector<glm::mat4>& lightViewFromWorld() const override { return shadowViewFromWorld_; }
+  void bindSceneBuffers() const override {
+    lightsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_LIGHTS);
+    shadowViewsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SHADOW_VIEWS);
+    materialsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_MATERIALS);
+  }
+  const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
+  uint64_t cutGeneration() const override { return cutGeneration_; }
+  bool quiet() const override { return quiet_; }
 
   MethodFrame render(const SceneCamera& camera) override {
     if (context_) context_->makeCurrent();
-    setOutput("radiance");
+    setOutput(radianceTarget_);
     const int W = camera.width, H = camera.height;
     if (W <= 0 || H <= 0) throw Error(scene_.file.string(), "camera", "the image size must be positive");
     const auto tStream = Clock::now();
@@ -151,6 +175,7 @@ class RasterMethod : public Method {
     for (size_t p = 0; p < size_t(W) * H; ++p)
       for (int k = 0; k < 3; ++k) f.image.rgb[3 * p + k] = rgba[4 * p + k];
     describe(f, drawPoints, streamSeconds);
+    if (extension_) extension_->afterReadBack(rgba, f);
     return f;
   }
 
@@ -173,13 +198,16 @@ class RasterMethod : public Method {
   }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
-    return {{"shadow_map_size", std::to_string(params_.shadowMapSize)},
+    std::vector<std::pair<std::string, std::string>> p = {{"shadow_map_size", std::to_string(params_.shadowMapSize)},
             {"rasteriser", params_.computeRasteriser ? "compute" : "points"},
             {"splatting", params_.hqs ? "hqs" : "basic"},
             {"splat_scale", std::to_string(params_.splatScale).substr(0, 4)},
             {"point_budget", std::to_string(params_.pointBudget)},
             {"gpu_budget_mb", std::to_string(params_.gpuBytes >> 20)},
             {"max_tile", std::to_string(params_.maxTile)}};
+    if (extension_)
+      for (auto& kv : extension_->parameters()) p.push_back(kv);
+    return p;
   }
 
  private:
@@ -232,13 +260,44 @@ class RasterMethod : public Method {
       }
       s.shadowTree.upload(s.shadowStreamer->drawList());
     }
+    updateLightsCut();
 
     frame::FrameBlock& u = graph_.uniforms();
     u.viewFromWorld = glm::lookAt(eye, target, up);
     u.clipFromView = glm::perspective(float(fovY), float(W) / float(H), nearZ, farZ);
     u.eye = glm::vec4(eye, float(H) / (2.0f * std::tan(float(fovY) / 2)));
     u.counts = glm::ivec4(int(lightRecords_.size()), scene_.gi.mode == RadianceMode::Albedo ? 1 : 0, frameNumber_++, 0);
+    if (extension_) extension_->beforeFrame(*this);
     return drawPoints;
+  }
+
+  // The lights' cuts as one list for the extension; a new generation when any node changed.
+  void updateLightsCut() {
+    std::vector<CutNode> cut;
+    for (const auto& s : scans_) {
+      const auto& nodes = s.shadowStreamer->drawList();
+      std::unordered_map<NodeKey, int, NodeKeyHash> index;
+      for (const auto& n : nodes) {
+        CutNode c;
+        c.buffer = s.store->buffer(n.handle);
+        c.numPoints = n.numPoints;
+        c.origin = scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});
+        c.size = float(n.worldBounds.max.x - n.worldBounds.min.x);
+        c.spacing = float(n.spacing);
+        c.colourScale = s.colourScale;
+        if (n.key.level > 0) {
+          auto it = index.find(n.key.parent());
+          if (it != index.end()) c.parent = it->second;
+        }
+        index[n.key] = int(cut.size());
+        cut.push_back(c);
+      }
+    }
+    auto same = [](const CutNode& a, const CutNode& b) { return a.buffer == b.buffer && a.numPoints == b.numPoints; };
+    if (cut.size() != lightsCut_.size() || !std::equal(cut.begin(), cut.end(), lightsCut_.begin(), same)) {
+      lightsCut_ = std::move(cut);
+      ++cutGeneration_;
+    }
   }
 
   void describe(MethodFrame& f, uint64_t drawPoints, double streamSeconds) const {
@@ -254,11 +313,13 @@ class RasterMethod : public Method {
       passes += (passes.empty() ? "" : ", ") + name + " " + std::to_string(ms).substr(0, 6) + " ms";
       f.attributes["nestlight:pass_ms:" + name] = std::to_string(ms);
     }
+    if (extension_) f.attributes["nestlight:method"] = extension_->name();
     char line[256];
     std::snprintf(line, sizeof line, "%llu points, %zu lights, %d px shadow maps, %.1f ms (stream %.2f s)",
                   (unsigned long long)drawPoints, lightRecords_.size(), params_.shadowMapSize, f.seconds * 1e3,
                   streamSeconds);
     f.summary = std::string(line) + "; GPU: " + passes;
+    if (extension_) extension_->describe(*this, f);
   }
 
   void loadScans() {
@@ -424,7 +485,7 @@ class RasterMethod : public Method {
 
   // Draws every scan's drawn nodes with `program` (shaders/gi/raster/scan.vert).
   void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
-                 float pixelsPerUnit, bool orthographic, bool lightsCut = false) {
+                 float pixelsPerUnit, bool orthographic, bool lightsCut = false) override {
     program.use();
     glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
     glUniformMatrix4fv(program.uniform("uViewFromWorld"), 1, GL_FALSE, &viewFromWorld[0][0]);
@@ -465,7 +526,7 @@ class RasterMethod : public Method {
     }
   }
 
-  void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, bool materials) {
+  void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, bool materials) override {
     program.use();
     glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
     for (const auto& m : meshes_) {
@@ -744,11 +805,16 @@ class RasterMethod : public Method {
           glBindVertexArray(emptyVao_.id());
           glDrawArrays(GL_TRIANGLES, 0, 3);
         });
-    frame::addToneMapPass(graph_, "radiance", "display", exposure_);
+    if (extension_) radianceTarget_ = extension_->setUp(*this);
+    frame::addToneMapPass(graph_, radianceTarget_, "display", exposure_);
   }
 
   Scene scene_;
   bool quiet_ = false;
+  std::unique_ptr<RasterExtension> extension_;
+  std::string radianceTarget_ = "radiance";  // what the tone map and the read-back take
+  std::vector<CutNode> lightsCut_;
+  uint64_t cutGeneration_ = 0;
   RasterParameters params_;
   std::unique_ptr<gl::GlContext> context_;
   LocalBox bounds_;
@@ -777,13 +843,15 @@ class RasterMethod : public Method {
 
 }  // namespace
 
-RasterParameters rasterParameters(const Scene& scene) {
+RasterParameters parseRasterParameters(const Scene& scene, const std::vector<std::string>& otherKeys) {
   RasterParameters p;
   if (scene.gi.parameters.is_null()) return p;
   // The project's one validator: errors name the scene file and "scene.gi.parameters.<key>".
   const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
-  f.expectObject({"shadow_map_size", "rasteriser", "splatting", "splat_scale", "point_budget", "gpu_budget_mb",
-                  "max_tile", "stream_timeout"});
+  std::vector<std::string> keys = {"shadow_map_size", "rasteriser", "splatting", "splat_scale", "point_budget",
+                                   "gpu_budget_mb", "max_tile", "stream_timeout"};
+  keys.insert(keys.end(), otherKeys.begin(), otherKeys.end());
+  f.expectObject(keys);
   if (f.has("shadow_map_size")) p.shadowMapSize = int(f.at("shadow_map_size").integer(16, 16384));
   if (f.has("rasteriser")) p.computeRasteriser = f.at("rasteriser").choice({"points", "compute"}) == "compute";
   if (f.has("splatting")) p.hqs = f.at("splatting").choice({"hqs", "basic"}) == "hqs";
@@ -797,8 +865,15 @@ RasterParameters rasterParameters(const Scene& scene) {
   return p;
 }
 
+RasterParameters rasterParameters(const Scene& scene) { return parseRasterParameters(scene, {}); }
+
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx) {
-  return std::make_unique<RasterMethod>(scene, ctx);
+  return std::make_unique<RasterMethod>(scene, ctx, nullptr);
+}
+
+std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx,
+                                           std::unique_ptr<RasterExtension> extension) {
+  return std::make_unique<RasterMethod>(scene, ctx, std::move(extension));
 }
 
 }  // namespace nestlight::gi

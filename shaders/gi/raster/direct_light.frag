@@ -4,9 +4,8 @@
 // Efficient Representation for Irradiance Environment Maps"). Scan points emit their colour in
 // the radiance-cache mode and are Lambert reflectors of it in the albedo mode, as in gi/reference.
 #include "../../interface/frame_interface.glsl"
-#include "../common/brdf.glsl"
+#include "../common/gbuffer_in.glsl"
 #include "../common/lights.glsl"
-layout(std430, binding = NL_SSBO_MATERIALS) readonly buffer Materials { MaterialRecord materials[]; };
 layout(binding = 0) uniform sampler2D uDepth;
 layout(binding = 1) uniform sampler2D uBaseColour;
 layout(binding = 2) uniform sampler2D uNormal;
@@ -79,26 +78,14 @@ void main() {
   vec3 base = baseAndRadius.rgb;
   vec4 nn = texelFetch(uNormal, px, 0);
   uvec4 m = texelFetch(uMaterial, px, 0);
-  int source = int(m.x >> 8);
+  int source = gbufferSource(m);
   vec3 wo = -viewDir;
   if (source == NL_SOURCE_SCAN && frame.counts.y == 0) {  // radiance cache: the colour is the radiance
     outRadiance = vec4(base, 1.0);
     return;
   }
-  MaterialParams mat;
-  mat.type = int(m.x & 255u);
-  mat.baseColor = source == NL_SOURCE_SCAN ? min(base, vec3(1.0)) : base;
-  mat.roughness = float(m.y) / 65535.0;
-  mat.metallic = float(m.z) / 65535.0;
-  mat.specular = 0.5, mat.specularTint = 0.0, mat.sheen = 0.0, mat.sheenTint = 0.5;
-  mat.clearcoat = 0.0, mat.clearcoatGloss = 1.0;
-  vec3 L = vec3(0.0);
-  if (m.w != uint(NL_NO_MATERIAL)) {
-    MaterialRecord r = materials[m.w];
-    mat.specular = r.params.z, mat.specularTint = r.params.w;
-    mat.sheen = r.params2.x, mat.sheenTint = r.params2.y, mat.clearcoat = r.params2.z, mat.clearcoatGloss = r.params2.w;
-    L += r.emission.rgb;
-  }
+  vec3 L;
+  MaterialParams mat = gbufferMaterial(base, m, L);
   // Two-sided shading, as the reference: the normal faces the viewer; a point without a normal
   // is a disc facing the ray.
   vec3 n = nn.w > 0.0 ? normalize(nn.xyz) : wo;
@@ -115,9 +102,8 @@ void main() {
     L += f * s.radiance * wiL.z * visibility(i, p, n, baseAndRadius.a, s);
   }
   if (uHasEnvironment) {
-    // The diffuse lobe's share only: Lambert's albedo, the (1 - metallic) part of the others.
-    vec3 diffuseAlbedo = mat.type == NL_MATERIAL_LAMBERT ? mat.baseColor : (1.0 - mat.metallic) * mat.baseColor;
-    L += diffuseAlbedo * kInvPi * irradiance(n);
+    // The diffuse lobe's share only.
+    L += diffuseAlbedo(mat) * kInvPi * irradiance(n);
   }
   outRadiance = vec4(L, 1.0);
 }

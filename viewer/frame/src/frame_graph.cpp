@@ -52,6 +52,7 @@ void PassContext::bindFramebuffer() const {
     for (const auto& name : p.decl.writes()) {
       const auto& t = *graph_->targets_.at(name);
       if (t.desc.layers > 0 || t.desc.cube) continue;  // attached by the pass itself, per layer
+      if (t.desc.format == GL_NONE) continue;           // a buffer the pass owns
       if (isDepthFormat(t.desc.format)) p.fbo.attach(GL_DEPTH_ATTACHMENT, t.texture);
       else p.fbo.attach(GLenum(GL_COLOR_ATTACHMENT0 + colour++), t.texture);
     }
@@ -59,7 +60,7 @@ void PassContext::bindFramebuffer() const {
   }
   for (const auto& name : p.decl.writes()) {
     const auto& t = *graph_->targets_.at(name);
-    if (t.desc.fixedSize && !t.desc.layers && !t.desc.cube) w = t.desc.width, h = t.desc.height;
+    if (t.desc.fixedSize && !t.desc.layers && !t.desc.cube && t.desc.format != GL_NONE) w = t.desc.width, h = t.desc.height;
   }
   glBindFramebuffer(GL_FRAMEBUFFER, p.fbo.id());
   glViewport(0, 0, w, h);
@@ -79,6 +80,15 @@ void FrameGraph::addTarget(const std::string& name, const TargetDesc& desc) {
   auto t = std::make_unique<Target>();
   t->desc = desc;
   if (desc.cube || desc.layers) t->desc.fixedSize = true;
+  targets_[name] = std::move(t);
+  compiled_ = false;
+}
+
+void FrameGraph::addBuffer(const std::string& name) {
+  if (targets_.count(name)) throw Error("frame: target '" + name + "' is declared twice");
+  auto t = std::make_unique<Target>();
+  t->desc.format = GL_NONE;
+  t->desc.fixedSize = true;
   targets_[name] = std::move(t);
   compiled_ = false;
 }
@@ -173,6 +183,7 @@ const gl::Texture& FrameGraph::target(const std::string& name) const {
 void FrameGraph::allocate(int tw, int th) {
   for (auto& [name, t] : targets_) {
     const TargetDesc& d = t->desc;
+    if (d.format == GL_NONE) continue;  // a buffer: its passes own it
     if (t->texture && (d.fixedSize || (tw == allocW_ && th == allocH_))) continue;
     if (d.cube) t->texture = gl::Texture::cubeMap(d.format, d.width);
     else if (d.layers) t->texture = gl::Texture::array2d(d.format, d.width, d.height, d.layers);

@@ -32,6 +32,7 @@ class JsonField {
   JsonField at(size_t i) const;
   // Fails on a member not in `allowed` (a typo must not be ignored) or a value that is no object.
   void expectObject(std::initializer_list<const char*> allowed) const;
+  void expectObject(const std::vector<std::string>& allowed) const;
   size_t arraySize() const;
 
   double number(double lo = -INFINITY, double hi = INFINITY) const;  // finite, in [lo, hi]

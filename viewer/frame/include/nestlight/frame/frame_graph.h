@@ -110,6 +110,10 @@ class FrameGraph {
   FrameGraph& operator=(const FrameGraph&) = delete;
 
   void addTarget(const std::string& name, const TargetDesc& desc);
+  // A buffer the passes that write it own (VPLs, shadow-map atlases in SSBOs): declared so that
+  // passes order and cull by it like a fixed target (frame passes write it, any pass reads it);
+  // the graph allocates nothing and PassContext::target() refuses it.
+  void addBuffer(const std::string& name);
   void addPass(const std::string& name, Scope scope, const SetupFn& setup, RunFn run);
   // Checks the declarations and culls, working back from `output` (a tile target). Throws
   // nestlight::Error naming the pass and the target at fault.

@@ -8,6 +8,8 @@
 #pragma once
 
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "nestlight/gi/method.h"
 
@@ -35,6 +37,8 @@ struct RasterParameters {
 // "point_budget", "gpu_budget_mb", "max_tile", "stream_timeout"); throws nestlight::Error naming
 // the scene file and the field.
 RasterParameters rasterParameters(const Scene& scene);
+// The same, accepting `otherKeys` too (a method built on the raster frame reads those).
+RasterParameters parseRasterParameters(const Scene& scene, const std::vector<std::string>& otherKeys);
 
 // Opens the scene's scans and meshes and, unless ctx says one is current, a headless GL context.
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx);

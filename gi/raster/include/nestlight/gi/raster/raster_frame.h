@@ -1,0 +1,90 @@
+// The raster frame as a base for other real-time GI methods: `raster` loads the scene (scans
+// streamed under budgets, meshes, lights with their shadow maps, materials) and builds the GI
+// frame's passes for the camera's G-buffer and direct light; a method that adds indirect light
+// (VPLs, hierarchies) is a RasterExtension that adds its own passes to the same frame graph and
+// reads what the frame offers through RasterFrame. The method is made by
+// createRasterMethod(scene, ctx, extension).
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/interface.h"
+#include "nestlight/gi/method.h"
+#include "nestlight/gi/raster/raster_method.h"
+#include "nestlight/gl/program.h"
+
+namespace nestlight::gi {
+
+// One drawn node of the lights' cut (the whole scan at about a shadow map's resolution, the
+// same for every camera): its points buffer in the GPU point layout (NL_POINT_WORDS words).
+struct CutNode {
+  unsigned buffer = 0;        // GL buffer name of its points
+  uint32_t numPoints = 0;
+  glm::vec3 origin{0.0f};     // the node's cube origin, scene-local
+  float size = 0;             // the cube's edge
+  float spacing = 0;          // nominal spacing of its level
+  int parent = -1;            // index of its parent in the same list (-1: a root)
+  float colourScale = 1;      // its scan's colour_scale
+};
+
+class RasterFrame {
+ public:
+  virtual ~RasterFrame() = default;
+  virtual const Scene& scene() const = 0;
+  virtual const RasterParameters& rasterParameters() const = 0;
+  virtual frame::FrameGraph& graph() = 0;
+  // The scene's bounds in its local frame (scans and meshes).
+  virtual glm::vec3 boundsLo() const = 0;
+  virtual glm::vec3 boundsHi() const = 0;
+  // The lights, and per shadow-map layer its clip-from-world and view-from-world (spot: one
+  // perspective layer, point: six cube faces, directional: one orthographic layer).
+  virtual const std::vector<frame::LightRecord>& lights() const = 0;
+  virtual const std::vector<glm::mat4>& lightClipFromWorld() const = 0;
+  virtual const std::vector<glm::mat4>& lightViewFromWorld() const = 0;
+  // Binds the lights (NL_SSBO_LIGHTS), light views (NL_SSBO_SHADOW_VIEWS) and materials
+  // (NL_SSBO_MATERIALS).
+  virtual void bindSceneBuffers() const = 0;
+  // Draws the scans' splats (shaders/gi/raster/scan.vert with `program`'s fragment stage): the
+  // camera's cut or the lights' cut.
+  virtual void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
+                         float pixelsPerUnit, bool orthographic, bool lightsCut) = 0;
+  // Draws the meshes (shaders/gi/raster/mesh.vert), with their materials' uniforms or without.
+  virtual void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, bool materials) = 0;
+  // The lights' cut of every scan, parents before children; changes only when the cut does
+  // (cutGeneration() counts the changes).
+  virtual const std::vector<CutNode>& lightsCut() const = 0;
+  virtual uint64_t cutGeneration() const = 0;
+  virtual bool quiet() const = 0;
+};
+
+class RasterExtension {
+ public:
+  virtual ~RasterExtension() = default;
+  virtual std::string name() const = 0;
+  // gi.parameters keys the extension reads (beside raster's); parse them in setUp.
+  virtual std::vector<std::string> parameterKeys() const = 0;
+  // Called once the scene is loaded: validates the extension's parameters, adds its passes after
+  // direct light (the "radiance" target holds direct light and what the camera sees of the
+  // environment) and returns the target to tone map and read back.
+  virtual std::string setUp(RasterFrame& frame) = 0;
+  // Before each frame executes, after the cuts are streamed.
+  virtual void beforeFrame(RasterFrame& frame) { (void)frame; }
+  // After each frame: attributes and a summary of the extension's own (appended to raster's).
+  virtual void describe(const RasterFrame& frame, MethodFrame& f) const { (void)frame, (void)f; }
+  // After a still's read-back (`rgba`: the output target's pixels, alpha included).
+  virtual void afterReadBack(const std::vector<float>& rgba, MethodFrame& f) { (void)rgba, (void)f; }
+  virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
+};
+
+// `raster` with `extension`'s passes (nullptr: raster alone); the method takes its name.
+std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx,
+                                           std::unique_ptr<RasterExtension> extension);
+
+}  // namespace nestlight::gi

@@ -1,0 +1,690 @@
+// The `vpl` method (nestlight/gi/vpl/vpl_method.h): Preiner, "Real-Time Global Illumination in
+// Point Clouds" (light G-buffer, Halton VPLs with hierarchical warping, imperfect shadow maps
+// with parabolic projection and pull-push, interleaved shading with a geometry-aware filter,
+// multiple bounces), on the raster frame. ISMs: Ritschel, Grosch, Kim, Seidel, Dachsbacher and
+// Kautz 2008, "Imperfect Shadow Maps for Efficient Computation of Indirect Illumination".
+// Warping: Clarberg, Jarosz, Akenine-Moeller and Jensen 2005, "Wavelet Importance Sampling".
+// Interleaved sampling: Keller and Heidrich 2001, "Interleaved Sampling".
+#include "nestlight/gi/vpl/vpl_method.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <glm/gtc/packing.hpp>
+
+#include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/interface.h"
+#include "nestlight/gi/mesh.h"
+#include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gl/program.h"
+#include "nestlight/gl/resources.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/json_field.h"
+
+namespace nestlight::gi {
+
+namespace vplglsl {
+using vec4 = glm::vec4;
+using ivec4 = glm::ivec4;
+using uvec4 = glm::uvec4;
+using mat4 = glm::mat4;
+#include "interface/frame_interface.glsl"
+#include "gi/vpl/vpl_interface.glsl"
+}  // namespace vplglsl
+
+namespace {
+
+using vplglsl::LightView;
+using vplglsl::PoolNode;
+using vplglsl::PoolPoint;
+using vplglsl::VplRecord;
+using vplglsl::WarpSample;
+static_assert(sizeof(VplRecord) == 5 * 16, "VplRecord must keep std430's layout");
+static_assert(sizeof(WarpSample) == 2 * 16, "WarpSample must keep std430's layout");
+static_assert(sizeof(PoolPoint) == 2 * 16, "PoolPoint must keep std430's layout");
+static_assert(sizeof(PoolNode) == 3 * 16, "PoolNode must keep std430's layout");
+static_assert(sizeof(LightView) == 5 * 16, "LightView must keep std430's layout");
+
+int log2Exact(int v) {
+  int l = 0;
+  while ((1 << l) < v) ++l;
+  return l;
+}
+
+size_t pyramidLayerFloats(int size) {
+  size_t n = 0;
+  for (int s = size; s >= 1; s >>= 1) n += size_t(s) * size_t(s);
+  return n;
+}
+
+size_t ismPyramidFloats(int size) {
+  size_t n = 0;
+  for (int s = size >> 1; s >= 1; s >>= 1) n += size_t(s) * size_t(s);
+  return n;
+}
+
+float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+
+// Importance pyramid and warping: shared by the method and warpImportanceOnGpu.
+class ImportanceWarp {
+ public:
+  ImportanceWarp()
+      : pyramid_({{GL_COMPUTE_SHADER, "gi/vpl/vpl_pyramid.comp"}}), warp_({{GL_COMPUTE_SHADER, "gi/vpl/vpl_warp.comp"}}) {}
+
+  // `levels` holds level 0 of every layer (pyramidLayerFloats(size) floats per layer): fills the
+  // levels above, then warps `count` Halton points into `samples`.
+  void run(const gl::Buffer& levels, int size, int layers, int count, gl::Buffer& samples) const {
+    levels.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_PYRAMID, 0, levels.bytes());
+    pyramid_.use();
+    glUniform1i(pyramid_.uniform("uSize"), size);
+    for (int level = 1; (size >> level) >= 1; ++level) {
+      glUniform1i(pyramid_.uniform("uLevel"), level);
+      const GLuint g = GLuint(((size >> level) + 7) / 8);
+      glDispatchCompute(g, g, GLuint(layers));
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    samples.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, size_t(count) * sizeof(WarpSample));
+    warp_.use();
+    glUniform1i(warp_.uniform("uSize"), size);
+    glUniform1i(warp_.uniform("uLayers"), layers);
+    glUniform1i(warp_.uniform("uCount"), count);
+    glUniform1i(warp_.uniform("uFirstIndex"), 1);
+    glDispatchCompute(GLuint((count + 63) / 64), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+
+ private:
+  gl::ShaderProgram pyramid_, warp_;
+};
+
+class VplExtension : public RasterExtension {
+ public:
+  explicit VplExtension(const Scene& scene) : params_(vplParameters(scene)) {}
+
+  std::string name() const override { return "vpl"; }
+  std::vector<std::string> parameterKeys() const override { return vplParameterKeys(); }
+
+  std::vector<std::pair<std::string, std::string>> parameters() const override {
+    return {{"vpls", std::to_string(params_.count)},
+            {"bounces", std::to_string(bounces_)},
+            {"light_resolution", std::to_string(params_.lightResolution)},
+            {"ism_size", std::to_string(params_.ismSize)},
+            {"ism_points", std::to_string(params_.ismPoints)},
+            {"pull_push", std::to_string(params_.pullPushLevels)},
+            {"interleave", std::to_string(params_.interleave)},
+            {"clamp", std::to_string(params_.clampFraction).substr(0, 6)},
+            {"energy_stop", std::to_string(params_.energyStop).substr(0, 6)},
+            {"visibility", params_.visibility ? "ism" : "none"}};
+  }
+
+  std::string setUp(RasterFrame& f) override {
+    const Scene& scene = f.scene();
+    bounces_ = std::max(scene.gi.maxBounces, 1);
+    generations_ = bounces_ - 1;
+    const size_t atlasBytes = size_t(params_.count) * size_t(std::max(generations_, 1)) * size_t(params_.ismSize) *
+                              size_t(params_.ismSize) * 4;
+    if (params_.visibility && atlasBytes > gl::kMaxSsboRange)
+      throw Error(scene.file.string(), "gi.parameters.ism_size",
+                  "the ISM atlas (vpls x (bounces - 1) x ism_size^2 x 4 bytes = " + std::to_string(atlasBytes >> 20) +
+                      " MiB) exceeds one 128 MiB buffer range: lower vpls, bounces or ism_size");
+    radius_ = 0.5f * glm::length(f.boundsHi() - f.boundsLo());
+    clampDistance_ = std::max(params_.clampFraction * radius_, 1e-6f);
+    layers_ = int(f.lightClipFromWorld().size());
+    setUpLightViews(f);
+    setUpSurfels(f);
+    compile();
+    addPasses(f);
+    return "radiance_gi";
+  }
+
+  void beforeFrame(RasterFrame& f) override {
+    if (f.cutGeneration() != poolGeneration_) {
+      buildPool(f);
+      poolGeneration_ = f.cutGeneration();
+    }
+  }
+
+  void describe(const RasterFrame& f, MethodFrame& out) const override {
+    (void)f;
+    out.attributes["nestlight:vpls"] = std::to_string(params_.count);
+    out.attributes["nestlight:vpl_generations"] = std::to_string(generationsRun_);
+    out.attributes["nestlight:ism_size"] = std::to_string(params_.ismSize);
+    out.attributes["nestlight:interleave"] = std::to_string(params_.interleave);
+    out.attributes["nestlight:clamp_distance"] = std::to_string(clampDistance_);
+    char line[320];
+    std::snprintf(line, sizeof line,
+                  "; vpl: %d VPLs x %d generation(s) of %d bounce(s)%s, %d^2 ISMs from %llu pool points%s, "
+                  "interleave %dx%d, clamp %.3g",
+                  params_.count, generationsRun_, bounces_, stopNote_.c_str(), params_.ismSize,
+                  (unsigned long long)poolPoints_, poolNote_.c_str(), params_.interleave, params_.interleave,
+                  double(clampDistance_));
+    out.summary += line;
+  }
+
+  void afterReadBack(const std::vector<float>& rgba, MethodFrame& out) override {
+    // Alpha holds the luminance the clamp removed (vpl_filter.frag): its share of the indirect
+    // light is the clamp's measured bias.
+    double loss = 0, total = 0;
+    for (size_t p = 0; p + 3 < rgba.size(); p += 4) {
+      loss += rgba[p + 3];
+      total += luminance({rgba[p], rgba[p + 1], rgba[p + 2]});
+    }
+    const double ratio = total > 0 ? loss / total : 0;
+    out.attributes["nestlight:clamp_loss"] = std::to_string(ratio);
+    char line[96];
+    std::snprintf(line, sizeof line, "; clamp removed %.3g%% of the image's light", 100 * ratio);
+    out.summary += line;
+  }
+
+ private:
+  void setUpLightViews(RasterFrame& f) {
+    const auto& clips = f.lightClipFromWorld();
+    const int S = f.rasterParameters().shadowMapSize;
+    std::vector<LightView> views;
+    for (size_t layer = 0; layer < clips.size(); ++layer) {
+      int owner = -1;
+      for (size_t i = 0; i < f.lights().size(); ++i)
+        if (size_t(f.lights()[i].shadow.x) <= layer) owner = int(i);
+      NL_CHECK(owner >= 0);
+      const frame::LightRecord& l = f.lights()[size_t(owner)];
+      LightView v{};
+      v.worldFromClip = glm::inverse(clips[layer]);
+      const bool ortho = int(l.position.w) == NL_LIGHT_DIRECTIONAL;
+      // shadow.y is a shadow-map texel at distance 1 (or in world units): half the view's width.
+      v.info = glm::vec4(float(owner), l.shadow.y * float(S) * 0.5f, ortho ? 1.0f : 0.0f, 0.0f);
+      views.push_back(v);
+      layerOwner_.push_back(owner);
+    }
+    if (views.empty()) views.emplace_back();
+    lightViews_ = gl::Buffer(views.size() * sizeof(LightView), views.data(), 0);
+  }
+
+  // The meshes' surfels join the ISM occluders (and the bounces' hit points) as nodes of their own.
+  void setUpSurfels(RasterFrame& f) {
+    const Scene& scene = f.scene();
+    for (const auto& m : scene.meshes) {
+      TriangleMesh mesh = readMesh(m.path.string());
+      SurfelOptions o;
+      o.method = m.surfelMethod;
+      o.count = m.surfelCount;
+      o.material = m.material;
+      const Material& mat = scene.materials.at(m.material);
+      o.baseColor = mat.baseColor;
+      Surfels s = sampleSurfels(mesh, scene.localFromObject(m), o);
+      if (s.positions.empty()) continue;
+      double area = 0;
+      glm::vec3 lo(INFINITY), hi(-INFINITY);
+      for (size_t i = 0; i < s.positions.size(); ++i) {
+        area += s.area[i];
+        lo = glm::min(lo, s.positions[i]);
+        hi = glm::max(hi, s.positions[i]);
+      }
+      const float spacing = float(std::sqrt(area / double(s.positions.size())));
+      PoolNode n{};
+      n.box = glm::vec4(0.5f * (lo + hi), 0.5f * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+      n.lod = glm::vec4(spacing, 1e30f, spacing, 0.0f);
+      n.range = glm::ivec4(int(surfelPoints_.size()), int(s.positions.size()), 0, 0);
+      surfelNodes_.push_back(n);
+      for (size_t i = 0; i < s.positions.size(); ++i) {
+        PoolPoint q{};
+        q.position = glm::vec4(s.positions[i], 0.5f * spacing);
+        const glm::vec3 nn = s.normals[i];
+        q.surface = glm::uvec4(packNormalWord(nn), packHalf2(s.albedo[i].r, s.albedo[i].g),
+                               packHalf2(s.albedo[i].b, 0.0f) | (s.material[i] << 16), 0u);
+        surfelPoints_.push_back(q);
+      }
+    }
+  }
+
+  static uint32_t packNormalWord(const glm::vec3& n) {
+    const float l1 = std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z);
+    if (!(l1 > 0) || !std::isfinite(l1)) return 0;
+    float u = n.x / l1, v = n.y / l1;
+    if (n.z < 0) {
+      const float ou = u;
+      u = (1 - std::fabs(v)) * (ou >= 0 ? 1.f : -1.f);
+      v = (1 - std::fabs(ou)) * (v >= 0 ? 1.f : -1.f);
+    }
+    auto q = [](float a) { return uint32_t(std::lround((std::clamp(a, -1.f, 1.f) * 0.5f + 0.5f) * 65535.f)); };
+    return q(u) | (q(v) << 16);
+  }
+
+  static uint32_t packHalf2(float a, float b) { return uint32_t(glm::packHalf1x16(std::min(a, 65504.f))) |
+                                                      (uint32_t(glm::packHalf1x16(std::min(b, 65504.f))) << 16); }
+
+  void compile() {
+    using gl::ShaderProgram;
+    scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
+    meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
+    importance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_importance.comp"}});
+    generate_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_generate.comp"}});
+    bounce_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_bounce.comp"}});
+    gather_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_gather.comp"}});
+    splat_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_splat.comp"}});
+    pull_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_pull.comp"}});
+    push_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_push.comp"}});
+    shade_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/vpl/vpl_shade.frag"}});
+    filter_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/vpl/vpl_filter.frag"}});
+    warp_ = std::make_unique<ImportanceWarp>();
+    lightFbo_ = gl::Framebuffer::create();
+    emptyVao_ = gl::VertexArray::create();
+    const int G = params_.lightResolution;
+    const int layers = std::max(layers_, 1);
+    pyramid_ = gl::Buffer(pyramidLayerFloats(G) * size_t(layers) * 4);
+    samples_ = gl::Buffer(size_t(params_.count) * sizeof(WarpSample));
+    records_ = gl::Buffer(size_t(params_.count) * size_t(std::max(bounces_ - 1, 1)) * sizeof(VplRecord));
+    if (params_.visibility) {
+      const size_t isms = size_t(params_.count) * size_t(std::max(generations_, 1));
+      ism_ = gl::Buffer(isms * size_t(params_.ismSize) * size_t(params_.ismSize) * 4);
+      ismLevels_ = gl::Buffer(std::max<size_t>(isms * ismPyramidFloats(params_.ismSize) * 4, 16));
+    }
+  }
+
+  void bindCommon(RasterFrame& f) const {
+    f.bindSceneBuffers();
+    lightViews_.bindBase(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_LIGHT_VIEWS);
+    records_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_RECORDS, 0, records_.bytes());
+  }
+
+  void setPoolUniforms(const gl::ShaderProgram& p) const {
+    glUniform1i(p.uniform("uNodeCount"), int(poolNodeCount_));
+    glUniform1i(p.uniform("uIsmSize"), params_.ismSize);
+    glUniform1f(p.uniform("uLodScale"), params_.lodScale);
+    glUniform1ui(p.uniform("uPointBudget"), GLuint(params_.ismPoints));
+    if (pool_.bytes()) pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
+    if (poolNodes_.bytes()) poolNodes_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL_NODES, 0, poolNodes_.bytes());
+  }
+
+  // The ISM pool: the lights' cut's points (gathered on the GPU from the nodes' buffers) and the
+  // meshes' surfels, with a node table for the level-of-detail choice.
+  void buildPool(RasterFrame& f) {
+    const auto& cut = f.lightsCut();
+    std::vector<PoolNode> nodes;
+    std::vector<char> hasChild(cut.size(), 0);
+    for (const auto& c : cut)
+      if (c.parent >= 0) hasChild[size_t(c.parent)] = 1;
+    const size_t maxPoints = gl::kMaxSsboRange / sizeof(PoolPoint) - surfelPoints_.size();
+    uint64_t points = 0, dropped = 0;
+    std::vector<size_t> taken;
+    for (size_t i = 0; i < cut.size(); ++i) {
+      const CutNode& c = cut[i];
+      if (c.numPoints == 0) continue;
+      if (points + c.numPoints > maxPoints) {  // the finest nodes come last in the list
+        dropped += c.numPoints;
+        continue;
+      }
+      PoolNode n{};
+      n.box = glm::vec4(c.origin + glm::vec3(0.5f * c.size), 0.5f * c.size);
+      const float parentSpacing = c.parent >= 0 ? cut[size_t(c.parent)].spacing : 1e30f;
+      n.lod = glm::vec4(c.spacing, parentSpacing, hasChild[i] ? 0.0f : c.spacing, 0.0f);
+      n.range = glm::ivec4(int(points), int(c.numPoints), 0, 0);
+      nodes.push_back(n);
+      taken.push_back(i);
+      points += c.numPoints;
+    }
+    const uint64_t scanPoints = points;
+    for (PoolNode n : surfelNodes_) {
+      n.range.x += int(scanPoints);
+      nodes.push_back(n);
+    }
+    points += surfelPoints_.size();
+    poolPoints_ = points;
+    poolNote_ = dropped ? " (" + std::to_string(dropped) + " points of the finest nodes left out: 128 MiB)" : "";
+    poolNodeCount_ = nodes.size();
+    pool_ = points ? gl::Buffer(points * sizeof(PoolPoint)) : gl::Buffer();
+    poolNodes_ = nodes.empty() ? gl::Buffer() : gl::Buffer(nodes.size() * sizeof(PoolNode), nodes.data(), 0);
+    if (!surfelPoints_.empty())
+      pool_.upload(surfelPoints_.data(), surfelPoints_.size() * sizeof(PoolPoint), scanPoints * sizeof(PoolPoint));
+    if (scanPoints == 0) return;
+    pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
+    gather_.use();
+    const float splat = f.rasterParameters().splatScale;
+    for (size_t j = 0; j < taken.size(); ++j) {
+      const CutNode& c = cut[taken[j]];
+      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, c.buffer, 0,
+                        GLsizeiptr(size_t(c.numPoints) * frame::kGpuPointBytes));
+      glUniform3f(gather_.uniform("uNodeOrigin"), c.origin.x, c.origin.y, c.origin.z);
+      glUniform1i(gather_.uniform("uFirst"), nodes[j].range.x);
+      glUniform1ui(gather_.uniform("uNumPoints"), c.numPoints);
+      glUniform1f(gather_.uniform("uRadius"), 0.5f * c.spacing * splat * 0.5f);
+      glUniform1f(gather_.uniform("uColourScale"), c.colourScale);
+      glDispatchCompute((c.numPoints + 127) / 128, 1, 1);
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+
+  void addPasses(RasterFrame& f) {
+    frame::FrameGraph& g = f.graph();
+    const int G = params_.lightResolution, layers = std::max(layers_, 1);
+    g.addTarget("light_depth", {GL_DEPTH_COMPONENT32F, true, G, G, layers});
+    g.addTarget("light_base", {GL_RGBA32F, true, G, G, layers});
+    g.addTarget("light_normal", {GL_RGBA16F, true, G, G, layers});
+    g.addTarget("light_material", {GL_RGBA16UI, true, G, G, layers});
+    g.addBuffer("vpl_samples");
+    g.addBuffer("vpls");
+    g.addBuffer("ism_raw");
+    g.addBuffer("ism");
+    g.addTarget("vpl_indirect", {GL_RGBA32F});
+    g.addTarget("vpl_clamp_loss", {GL_RGBA32F});
+    g.addTarget("radiance_gi", {GL_RGBA32F});
+    const char* lightTargets[] = {"light_depth", "light_base", "light_normal", "light_material"};
+
+    // The light G-buffer: every light's views (the shadow maps' projections) of the meshes and
+    // the lights' cut, with the camera G-buffer's shaders and encoding.
+    g.addPass(
+        "light_gbuffer", frame::Scope::Frame,
+        [&](frame::PassBuilder& b) {
+          for (const char* t : lightTargets) b.write(t);
+        },
+        [this, &f, G](const frame::PassContext& ctx) {
+          glEnable(GL_DEPTH_TEST);
+          glDepthFunc(GL_LESS);
+          glEnable(GL_PROGRAM_POINT_SIZE);
+          glDisable(GL_BLEND);
+          glDisable(GL_CULL_FACE);
+          glViewport(0, 0, G, G);
+          const int S = f.rasterParameters().shadowMapSize;
+          for (int layer = 0; layer < layers_; ++layer) {
+            lightFbo_.attachLayer(GL_COLOR_ATTACHMENT0, ctx.target("light_base"), layer);
+            lightFbo_.attachLayer(GL_COLOR_ATTACHMENT1, ctx.target("light_normal"), layer);
+            lightFbo_.attachLayer(GL_COLOR_ATTACHMENT2, ctx.target("light_material"), layer);
+            lightFbo_.attachLayer(GL_DEPTH_ATTACHMENT, ctx.target("light_depth"), layer);
+            lightFbo_.finish(3, "light G-buffer");
+            glBindFramebuffer(GL_FRAMEBUFFER, lightFbo_.id());
+            const float zero[4] = {0, 0, 0, 0}, one = 1.0f;
+            const GLuint noMaterial[4] = {0, 0, 0, NL_NO_MATERIAL};
+            glClearBufferfv(GL_DEPTH, 0, &one);
+            glClearBufferfv(GL_COLOR, 0, zero);
+            glClearBufferfv(GL_COLOR, 1, zero);
+            glClearBufferuiv(GL_COLOR, 2, noMaterial);
+            const glm::mat4& clip = f.lightClipFromWorld()[size_t(layer)];
+            f.drawMeshes(meshGBuffer_, clip, true);
+            const frame::LightRecord& l = f.lights()[size_t(layerOwner_[size_t(layer)])];
+            const bool ortho = int(l.position.w) == NL_LIGHT_DIRECTIONAL;
+            // Texels per unit at distance 1 (or per world unit): the shadow map's, rescaled.
+            const float pixelsPerUnit = float(G) / (l.shadow.y * float(S));
+            f.drawScans(scanGBuffer_, clip, f.lightViewFromWorld()[size_t(layer)], pixelsPerUnit, ortho, true);
+          }
+        });
+
+    // Importance, its pyramid and the warped Halton samples.
+    g.addPass(
+        "vpl_warp", frame::Scope::Frame,
+        [&](frame::PassBuilder& b) {
+          for (const char* t : lightTargets) b.read(t);
+          b.write("vpl_samples");
+        },
+        [this, &f, G, layers](const frame::PassContext& ctx) {
+          bindCommon(f);
+          bindLightTextures(ctx);
+          pyramid_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_PYRAMID, 0, pyramid_.bytes());
+          importance_.use();
+          glUniform1i(importance_.uniform("uLayerStride"), int(pyramidLayerFloats(G)));
+          if (layers_ > 0) {
+            glDispatchCompute(GLuint((G + 7) / 8), GLuint((G + 7) / 8), GLuint(layers_));
+          } else {
+            const float zero = 0;
+            glClearNamedBufferData(pyramid_.id(), GL_R32F, GL_RED, GL_FLOAT, &zero);
+          }
+          glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+          warp_->run(pyramid_, G, layers, params_.count, samples_);
+        });
+
+    // VPLs: the first generation from the samples, then one generation per further bounce
+    // while each still re-emits at least energy_stop of what came before.
+    g.addPass(
+        "vpl_generate", frame::Scope::Frame,
+        [&](frame::PassBuilder& b) {
+          for (const char* t : lightTargets) b.read(t);
+          b.read("vpl_samples");
+          b.write("vpls");
+        },
+        [this, &f](const frame::PassContext& ctx) {
+          bindCommon(f);
+          bindLightTextures(ctx);
+          generationsRun_ = 0;
+          stopNote_.clear();
+          if (generations_ == 0) return;
+          samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
+          generate_.use();
+          glUniform1i(generate_.uniform("uCount"), params_.count);
+          glDispatchCompute(GLuint((params_.count + 63) / 64), 1, 1);
+          glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+          generationsRun_ = 1;
+          double emitted = emittedFlux(0);
+          for (int gen = 1; gen < generations_; ++gen) {
+            bounce_.use();
+            setPoolUniforms(bounce_);
+            glUniform1i(bounce_.uniform("uParentFirst"), (gen - 1) * params_.count);
+            glUniform1i(bounce_.uniform("uChildFirst"), gen * params_.count);
+            glUniform1i(bounce_.uniform("uCount"), params_.count);
+            if (poolNodeCount_ == 0) {
+              // Nothing to hit: the generation is dark.
+              std::vector<VplRecord> dark(size_t(params_.count));
+              records_.upload(dark.data(), dark.size() * sizeof(VplRecord), size_t(gen) * params_.count * sizeof(VplRecord));
+            } else {
+              glDispatchCompute(GLuint(params_.count), 1, 1);
+              glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+            }
+            generationsRun_ = gen + 1;
+            const double e = emittedFlux(gen);
+            if (!(e >= params_.energyStop * emitted)) {
+              char note[96];
+              std::snprintf(note, sizeof note, " (stopped: generation %d re-emits %.2g%% of the ones before)", gen + 1,
+                            emitted > 0 ? 100 * e / emitted : 0.0);
+              stopNote_ = note;
+              // Its light is still counted (it is computed); the next is not made.
+              break;
+            }
+            emitted += e;
+          }
+        });
+
+    if (params_.visibility) {
+      g.addPass(
+          "ism", frame::Scope::Frame,
+          [](frame::PassBuilder& b) {
+            b.read("vpls");
+            b.write("ism_raw");
+          },
+          [this, &f](const frame::PassContext&) {
+            bindCommon(f);
+            const GLuint far = VPL_FAR_BITS;
+            glClearNamedBufferData(ism_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
+            if (poolNodeCount_ == 0 || generationsRun_ == 0) return;
+            ism_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM, 0, ism_.bytes());
+            splat_.use();
+            setPoolUniforms(splat_);
+            glUniform1i(splat_.uniform("uFirstVpl"), 0);
+            glDispatchCompute(GLuint(params_.count * generationsRun_), 1, 1);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+          });
+      g.addPass(
+          "pull_push", frame::Scope::Frame,
+          [](frame::PassBuilder& b) {
+            b.read("ism_raw");
+            b.write("ism");
+          },
+          [this](const frame::PassContext&) {
+            const int S = params_.ismSize;
+            const int levels = std::min(params_.pullPushLevels, log2Exact(S));
+            if (levels == 0 || generationsRun_ == 0) return;
+            ism_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM, 0, ism_.bytes());
+            ismLevels_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM_PYRAMID, 0, ismLevels_.bytes());
+            const GLuint isms = GLuint(params_.count * generationsRun_);
+            auto run = [&](const gl::ShaderProgram& p, int level) {
+              p.use();
+              glUniform1i(p.uniform("uIsmSize"), S);
+              glUniform1i(p.uniform("uLevel"), level);
+              glUniform1i(p.uniform("uFirstVpl"), 0);
+              const GLuint n = GLuint(((S >> level) + 7) / 8);
+              glDispatchCompute(n, n, isms);
+              glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            };
+            for (int l = 1; l <= levels; ++l) run(pull_, l);
+            for (int l = levels - 1; l >= 0; --l) run(push_, l);
+          });
+    }
+
+    g.addPass(
+        "vpl_shade", frame::Scope::Tile,
+        [this](frame::PassBuilder& b) {
+          for (const char* t : {"depth", "base_colour", "normal", "material", "vpls"}) b.read(t);
+          if (params_.visibility) b.read("ism");
+          b.write("vpl_indirect");
+          b.write("vpl_clamp_loss");
+        },
+        [this, &f](const frame::PassContext& ctx) {
+          ctx.bindFramebuffer();
+          glDisable(GL_DEPTH_TEST);
+          glDisable(GL_BLEND);
+          shade_.use();
+          bindCommon(f);
+          ctx.bindTexture("depth", 0);
+          ctx.bindTexture("base_colour", 1);
+          ctx.bindTexture("normal", 2);
+          ctx.bindTexture("material", 3);
+          if (params_.visibility) ism_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM, 0, ism_.bytes());
+          glUniform1i(shade_.uniform("uVplCount"), params_.count * generationsRun_);
+          glUniform1i(shade_.uniform("uInterleave"), params_.interleave);
+          glUniform1i(shade_.uniform("uIsmSize"), params_.ismSize);
+          glUniform1f(shade_.uniform("uClampDistance"), clampDistance_);
+          glUniform1f(shade_.uniform("uIsmBias"), params_.ismBias);
+          glUniform1i(shade_.uniform("uVisibility"), params_.visibility ? 1 : 0);
+          glBindVertexArray(emptyVao_.id());
+          glDrawArrays(GL_TRIANGLES, 0, 3);
+        });
+
+    g.addPass(
+        "vpl_filter", frame::Scope::Tile,
+        [this](frame::PassBuilder& b) {
+          for (const char* t : {"depth", "base_colour", "normal", "material", "vpl_indirect", "vpl_clamp_loss", "radiance"})
+            b.read(t);
+          b.write("radiance_gi");
+          b.margin(params_.interleave / 2 + 1);
+        },
+        [this, &f](const frame::PassContext& ctx) {
+          ctx.bindFramebuffer();
+          glDisable(GL_DEPTH_TEST);
+          filter_.use();
+          f.bindSceneBuffers();
+          ctx.bindTexture("depth", 0);
+          ctx.bindTexture("base_colour", 1);
+          ctx.bindTexture("normal", 2);
+          ctx.bindTexture("material", 3);
+          ctx.bindTexture("vpl_indirect", 4);
+          ctx.bindTexture("vpl_clamp_loss", 5);
+          ctx.bindTexture("radiance", 6);
+          glUniform1i(filter_.uniform("uInterleave"), params_.interleave);
+          glBindVertexArray(emptyVao_.id());
+          glDrawArrays(GL_TRIANGLES, 0, 3);
+        });
+  }
+
+  void bindLightTextures(const frame::PassContext& ctx) const {
+    ctx.bindTexture("light_depth", 0);
+    ctx.bindTexture("light_base", 1);
+    ctx.bindTexture("light_normal", 2);
+    ctx.bindTexture("light_material", 3);
+  }
+
+  // The flux generation `gen` re-emits: the sum over its VPLs of their flux times their surface's
+  // albedo (luminance). Read back: a few tens of kilobytes.
+  double emittedFlux(int gen) const {
+    std::vector<VplRecord> r(size_t(params_.count));
+    glGetNamedBufferSubData(records_.id(), GLintptr(size_t(gen) * r.size() * sizeof(VplRecord)),
+                            GLsizeiptr(r.size() * sizeof(VplRecord)), r.data());
+    double sum = 0;
+    for (const auto& v : r) {
+      const glm::vec3 flux(v.flux), base(v.baseColour);
+      const float metallic = v.flux.w;
+      const glm::vec3 albedo = int(v.baseColour.w) == NL_MATERIAL_LAMBERT
+                                   ? base
+                                   : (1 - metallic) * base + glm::mix(glm::vec3(0.04f), base, metallic);
+      const double e = luminance(flux * albedo);
+      if (std::isfinite(e)) sum += e;
+    }
+    return sum;
+  }
+
+  VplParameters params_;
+  int bounces_ = 1, generations_ = 0, generationsRun_ = 0;
+  std::string stopNote_, poolNote_;
+  int layers_ = 0;
+  std::vector<int> layerOwner_;
+  float radius_ = 1, clampDistance_ = 0;
+  gl::Buffer lightViews_, pyramid_, samples_, records_, ism_, ismLevels_, pool_, poolNodes_;
+  std::vector<PoolPoint> surfelPoints_;
+  std::vector<PoolNode> surfelNodes_;
+  size_t poolNodeCount_ = 0;
+  uint64_t poolPoints_ = 0;
+  uint64_t poolGeneration_ = ~uint64_t(0);
+  gl::ShaderProgram scanGBuffer_, meshGBuffer_, importance_, generate_, bounce_, gather_, splat_, pull_, push_, shade_, filter_;
+  std::unique_ptr<ImportanceWarp> warp_;
+  gl::Framebuffer lightFbo_;
+  gl::VertexArray emptyVao_;
+};
+
+}  // namespace
+
+const std::vector<std::string>& vplParameterKeys() {
+  static const std::vector<std::string> keys = {"vpls",       "light_resolution", "ism_size",    "ism_points",
+                                                "pull_push",  "interleave",       "clamp",       "ism_bias",
+                                                "lod_scale",  "energy_stop",      "visibility"};
+  return keys;
+}
+
+VplParameters vplParameters(const Scene& scene) {
+  VplParameters p;
+  if (scene.gi.parameters.is_null()) return p;
+  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+  auto powerOfTwo = [&](const char* key, int lo, int hi) {
+    const JsonField v = f.at(key);
+    const int n = int(v.integer(lo, hi));
+    if (n & (n - 1)) v.fail("must be a power of two (" + std::to_string(lo) + " to " + std::to_string(hi) + ")");
+    return n;
+  };
+  if (f.has("vpls")) p.count = int(f.at("vpls").integer(1, 65535));
+  if (f.has("light_resolution")) p.lightResolution = powerOfTwo("light_resolution", 16, 4096);
+  if (f.has("ism_size")) p.ismSize = powerOfTwo("ism_size", 8, 512);
+  if (f.has("ism_points")) p.ismPoints = int(f.at("ism_points").integer(16, 1 << 24));
+  if (f.has("pull_push")) p.pullPushLevels = int(f.at("pull_push").integer(0, 9));
+  if (f.has("interleave")) p.interleave = int(f.at("interleave").integer(1, 8));
+  if (f.has("clamp")) p.clampFraction = float(f.at("clamp").number(0, 1));
+  if (f.has("ism_bias")) p.ismBias = float(f.at("ism_bias").number(0, 64));
+  if (f.has("lod_scale")) p.lodScale = float(f.at("lod_scale").number(0.125, 16));
+  if (f.has("energy_stop")) p.energyStop = f.at("energy_stop").number(0, 1);
+  if (f.has("visibility")) p.visibility = f.at("visibility").choice({"ism", "none"}) == "ism";
+  return p;
+}
+
+std::unique_ptr<Method> createVplMethod(const Scene& scene, const MethodContext& ctx) {
+  auto ext = std::make_unique<VplExtension>(scene);
+  return createRasterMethod(scene, ctx, std::move(ext));
+}
+
+std::vector<WarpedSample> warpImportanceOnGpu(const std::vector<float>& importance, int size, int layers, int count) {
+  NL_CHECK(size > 0 && (size & (size - 1)) == 0 && layers > 0 && count > 0);
+  NL_CHECK(importance.size() == size_t(size) * size_t(size) * size_t(layers));
+  const size_t stride = pyramidLayerFloats(size);
+  std::vector<float> levels(stride * size_t(layers), 0.0f);
+  for (int l = 0; l < layers; ++l)
+    std::copy(importance.begin() + ptrdiff_t(size_t(l) * size * size), importance.begin() + ptrdiff_t(size_t(l + 1) * size * size),
+              levels.begin() + ptrdiff_t(size_t(l) * stride));
+  gl::Buffer pyramid(levels.size() * 4, levels.data());
+  gl::Buffer samples(size_t(count) * sizeof(WarpSample));
+  ImportanceWarp warp;
+  warp.run(pyramid, size, layers, count, samples);
+  std::vector<WarpSample> raw(static_cast<size_t>(count));
+  glGetNamedBufferSubData(samples.id(), 0, GLsizeiptr(raw.size() * sizeof(WarpSample)), raw.data());
+  std::vector<WarpedSample> out;
+  for (const auto& r : raw) {
+    WarpedSample s;
+    s.x = r.texel.x, s.y = r.texel.y, s.layer = r.texel.z, s.valid = r.texel.w == 1, s.probability = r.where.z;
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace nestlight::gi

@@ -1,0 +1,18 @@
+// One node of the lights' cut into the ISM point pool: world positions, normals, linear colours.
+layout(local_size_x = 128) in;
+#include "../../common/point_data.glsl"
+#include "../../common/srgb.glsl"
+#include "vpl_interface.glsl"
+layout(std430, binding = VPL_SSBO_POOL) writeonly buffer Pool { PoolPoint pool[]; };
+uniform vec3 uNodeOrigin;
+uniform int uFirst;
+uniform float uRadius, uColourScale;
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  if (i >= uNumPoints) return;
+  vec3 c = min(srgbDecode(unpackUnorm4x8(pointColour(i)).rgb) * uColourScale, vec3(65504.0));
+  PoolPoint q;
+  q.position = vec4(uNodeOrigin + pointLocal(i), uRadius);
+  q.surface = uvec4(pointNormalWord(i), packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0)) | (uint(NL_NO_MATERIAL) << 16), 0u);
+  pool[uFirst + int(i)] = q;
+}
