@@ -177,6 +177,62 @@ TEST(Vpl, OneVplLightsAPerpendicularWallAsTheClosedForm) {
   EXPECT_LT(worst, 0.04);
 }
 
+// A wall lit by a spot, its VPLs lighting the floor, a box on the floor between them casting an
+// indirect shadow: ISM visibility against Embree's exact visibility, pair by pair (every pixel
+// and every VPL of its subset where light could pass, and weighted by their light), and the light
+// they give (within 3%; without any visibility the floor behind the box is too bright).
+TEST(Vpl, IsmVisibilityAgreesWithExactRays) {
+  nestlight::test::TempDir t;
+  writeBoxObj(t.path() / "box.obj");
+  json meshes = json::array({json{{"path", "box.obj"},
+                                  {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+                                  {"material", "white"}},
+                             json{{"path", "box.obj"},
+                                  {"transform", {{"translate", {3.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 4.0}}}},
+                                  {"material", "white"}},
+                             json{{"path", "box.obj"},
+                                  {"transform", {{"translate", {1.0, -0.5, 0.0}}, {"scale", {0.6, 1.0, 1.2}}}},
+                                  {"material", "white"}}});
+  json j = {{"version", 1},
+            {"materials", {{"white", {{"type", "lambert"}, {"base_color", 0.7}}}}},
+            {"meshes", meshes},
+            {"lights",
+             {{{"type", "spot"}, {"position", {-2.0, 0.0, 2.5}}, {"direction", {1.0, 0.0, -0.1}}, {"intensity", 40.0},
+               {"outer_angle", 25.0}, {"inner_angle", 20.0}}}},
+            {"camera", {{"eye", {-1.5, -0.2, 4.0}}, {"target", {1.2, 0.0, 0.0}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
+                        {"width", 48}, {"height", 48}}},
+            {"gi", {{"method", "vpl"}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", {{"vpls", 256}}}}}};
+  std::ofstream(t.file("scene.json")) << j.dump(2);
+  Scene s = loadScene(t.file("scene.json"));
+  s.gi.parameters["visibility"] = "exact";
+  MethodFrame exact = createMethod(s, {true, false})->render(s.camera);
+  s.gi.parameters["visibility"] = "ism";
+  MethodFrame ism = createMethod(s, {true, false})->render(s.camera);
+  s.gi.parameters["visibility"] = "none";
+  MethodFrame none = createMethod(s, {true, false})->render(s.camera);
+  if (const char* keep = std::getenv("NESTLIGHT_TEST_KEEP")) {
+    writeToneMappedPng(std::string(keep) + "/vis_exact.png", exact.image, 0);
+    writeToneMappedPng(std::string(keep) + "/vis_ism.png", ism.image, 0);
+    writeToneMappedPng(std::string(keep) + "/vis_none.png", none.image, 0);
+  }
+  const double agree = std::stod(exact.attributes.at("nestlight:ism_agreement"));
+  auto sum = [](const HdrImage& img) {
+    double v = 0;
+    for (float c : img.rgb) v += c;
+    return v;
+  };
+  std::printf("%s\n", exact.summary.c_str());
+  std::printf("ISM vs exact visibility: %.2f%% of pairs agree; light with ISMs / exact = %.4f, without visibility = %.4f\n",
+              100 * agree, sum(ism.image) / sum(exact.image), sum(none.image) / sum(exact.image));
+  // Measured: 90% of the pairs and 92% of their light (32^2 ISMs, bias 1.5 texels slope-scaled):
+  // the disagreements are grazing pairs on either side of the bias (8% false shadows, 2% leaks).
+  EXPECT_GT(agree, 0.85);
+  EXPECT_GT(std::stod(exact.attributes.at("nestlight:ism_agreement_light")), 0.88);
+  EXPECT_NEAR(sum(ism.image) / sum(exact.image), 1.0, 0.03);
+  // The box's indirect shadow is there: without visibility the floor behind it is brighter.
+  EXPECT_GT(sum(none.image) / sum(exact.image), 1.02);
+}
+
 // Hierarchical warping of Halton points follows the importance: chi-square against the texel
 // probabilities of a map with a hot spot, a cold corner, zeros and a second layer.
 TEST(Vpl, WarpedHaltonSamplesFollowTheImportance) {

@@ -12,11 +12,13 @@
 #include <cstdio>
 
 #include <glm/gtc/packing.hpp>
+#include <tbb/parallel_for.h>
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/reference/reference_scene.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -105,6 +107,12 @@ class VplExtension : public RasterExtension {
   std::string name() const override { return "vpl"; }
   std::vector<std::string> parameterKeys() const override { return vplParameterKeys(); }
 
+  bool usesIsms() const { return params_.visibility != VplParameters::Visibility::None; }
+  bool exact() const { return params_.visibility == VplParameters::Visibility::Exact; }
+  const char* visibilityName() const {
+    return params_.visibility == VplParameters::Visibility::Ism ? "ism" : exact() ? "exact" : "none";
+  }
+
   std::vector<std::pair<std::string, std::string>> parameters() const override {
     return {{"vpls", std::to_string(params_.count)},
             {"bounces", std::to_string(bounces_)},
@@ -115,7 +123,7 @@ class VplExtension : public RasterExtension {
             {"interleave", std::to_string(params_.interleave)},
             {"clamp", std::to_string(params_.clampFraction).substr(0, 6)},
             {"energy_stop", std::to_string(params_.energyStop).substr(0, 6)},
-            {"visibility", params_.visibility ? "ism" : "none"}};
+            {"visibility", visibilityName()}};
   }
 
   std::string setUp(RasterFrame& f) override {
@@ -124,7 +132,7 @@ class VplExtension : public RasterExtension {
     generations_ = bounces_ - 1;
     const size_t atlasBytes = size_t(params_.count) * size_t(std::max(generations_, 1)) * size_t(params_.ismSize) *
                               size_t(params_.ismSize) * 4;
-    if (params_.visibility && atlasBytes > gl::kMaxSsboRange)
+    if (usesIsms() && atlasBytes > gl::kMaxSsboRange)
       throw Error(scene.file.string(), "gi.parameters.ism_size",
                   "the ISM atlas (vpls x (bounces - 1) x ism_size^2 x 4 bytes = " + std::to_string(atlasBytes >> 20) +
                       " MiB) exceeds one 128 MiB buffer range: lower vpls, bounces or ism_size");
@@ -133,12 +141,20 @@ class VplExtension : public RasterExtension {
     layers_ = int(f.lightClipFromWorld().size());
     setUpLightViews(f);
     setUpSurfels(f);
+    if (exact()) {
+      exactScene_ = ReferenceScene::load(scene);
+      agreement_ = gl::Buffer(6 * 4);
+    }
     compile();
     addPasses(f);
     return "radiance_gi";
   }
 
   void beforeFrame(RasterFrame& f) override {
+    if (exact()) {
+      const GLuint zero = 0;
+      glClearNamedBufferData(agreement_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    }
     if (f.cutGeneration() != poolGeneration_) {
       buildPool(f);
       poolGeneration_ = f.cutGeneration();
@@ -172,6 +188,22 @@ class VplExtension : public RasterExtension {
     }
     const double ratio = total > 0 ? loss / total : 0;
     out.attributes["nestlight:clamp_loss"] = std::to_string(ratio);
+    if (exact()) {
+      GLuint c[6] = {0, 0, 0, 0, 0, 0};
+      glGetNamedBufferSubData(agreement_.id(), 0, sizeof c, c);
+      const double agree = c[1] ? double(c[0]) / c[1] : 1.0;
+      const double weighted = c[5] ? double(c[4]) / c[5] : 1.0;
+      out.attributes["nestlight:ism_agreement"] = std::to_string(agree);
+      out.attributes["nestlight:ism_agreement_light"] = std::to_string(weighted);
+      out.attributes["nestlight:ism_false_shadow"] = std::to_string(c[1] ? double(c[2]) / c[1] : 0.0);
+      out.attributes["nestlight:ism_leak"] = std::to_string(c[1] ? double(c[3]) / c[1] : 0.0);
+      char a[200];
+      std::snprintf(a, sizeof a,
+                    "; exact visibility: ISMs agreed on %.2f%% of %u pairs (%.2f%% false shadow, %.2f%% leaks), "
+                    "%.2f%% of the light",
+                    100 * agree, c[1], c[1] ? 100.0 * c[2] / c[1] : 0.0, c[1] ? 100.0 * c[3] / c[1] : 0.0, 100 * weighted);
+      out.summary += a;
+    }
     char line[96];
     std::snprintf(line, sizeof line, "; clamp removed %.3g%% of the image's light", 100 * ratio);
     out.summary += line;
@@ -274,7 +306,7 @@ class VplExtension : public RasterExtension {
     pyramid_ = gl::Buffer(pyramidLayerFloats(G) * size_t(layers) * 4);
     samples_ = gl::Buffer(size_t(params_.count) * sizeof(WarpSample));
     records_ = gl::Buffer(size_t(params_.count) * size_t(std::max(bounces_ - 1, 1)) * sizeof(VplRecord));
-    if (params_.visibility) {
+    if (usesIsms()) {
       const size_t isms = size_t(params_.count) * size_t(std::max(generations_, 1));
       ism_ = gl::Buffer(isms * size_t(params_.ismSize) * size_t(params_.ismSize) * 4);
       ismLevels_ = gl::Buffer(std::max<size_t>(isms * ismPyramidFloats(params_.ismSize) * 4, 16));
@@ -481,7 +513,7 @@ class VplExtension : public RasterExtension {
           }
         });
 
-    if (params_.visibility) {
+    if (usesIsms()) {
       g.addPass(
           "ism", frame::Scope::Frame,
           [](frame::PassBuilder& b) {
@@ -527,11 +559,23 @@ class VplExtension : public RasterExtension {
           });
     }
 
+    if (exact()) {
+      g.addBuffer("vpl_exact");
+      g.addPass(
+          "vpl_exact", frame::Scope::Tile,
+          [](frame::PassBuilder& b) {
+            for (const char* t : {"depth", "base_colour", "normal", "vpls"}) b.read(t);
+            b.write("vpl_exact");
+          },
+          [this](const frame::PassContext& ctx) { exactVisibility(ctx); });
+    }
+
     g.addPass(
         "vpl_shade", frame::Scope::Tile,
         [this](frame::PassBuilder& b) {
           for (const char* t : {"depth", "base_colour", "normal", "material", "vpls"}) b.read(t);
-          if (params_.visibility) b.read("ism");
+          if (usesIsms()) b.read("ism");
+          if (exact()) b.read("vpl_exact");
           b.write("vpl_indirect");
           b.write("vpl_clamp_loss");
         },
@@ -545,13 +589,18 @@ class VplExtension : public RasterExtension {
           ctx.bindTexture("base_colour", 1);
           ctx.bindTexture("normal", 2);
           ctx.bindTexture("material", 3);
-          if (params_.visibility) ism_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM, 0, ism_.bytes());
+          if (usesIsms()) ism_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM, 0, ism_.bytes());
+          if (exact()) {
+            exactBits_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_EXACT, 0, exactBits_.bytes());
+            agreement_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_AGREEMENT, 0, agreement_.bytes());
+          }
+          glUniform1i(shade_.uniform("uExactWords"), exactWords_);
           glUniform1i(shade_.uniform("uVplCount"), params_.count * generationsRun_);
           glUniform1i(shade_.uniform("uInterleave"), params_.interleave);
           glUniform1i(shade_.uniform("uIsmSize"), params_.ismSize);
           glUniform1f(shade_.uniform("uClampDistance"), clampDistance_);
           glUniform1f(shade_.uniform("uIsmBias"), params_.ismBias);
-          glUniform1i(shade_.uniform("uVisibility"), params_.visibility ? 1 : 0);
+          glUniform1i(shade_.uniform("uVisibility"), exact() ? 2 : usesIsms() ? 1 : 0);
           glBindVertexArray(emptyVao_.id());
           glDrawArrays(GL_TRIANGLES, 0, 3);
         });
@@ -580,6 +629,68 @@ class VplExtension : public RasterExtension {
           glBindVertexArray(emptyVao_.id());
           glDrawArrays(GL_TRIANGLES, 0, 3);
         });
+  }
+
+  // Embree's visibility for every (pixel, VPL of its subset) pair of the tile, as bits; the
+  // receiver and the VPL are lifted off their surfaces by their disc radii and 1e-3 of the
+  // scene's extent.
+  void exactVisibility(const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    const int w = tile.width, h = tile.height;
+    const frame::FrameBlock& u = ctx.uniforms();
+    std::vector<float> depth(size_t(w) * h), base(size_t(w) * h * 4), normal(size_t(w) * h * 4);
+    glGetTextureSubImage(ctx.target("depth").id(), 0, 0, 0, 0, w, h, 1, GL_DEPTH_COMPONENT, GL_FLOAT,
+                         GLsizei(depth.size() * 4), depth.data());
+    glGetTextureSubImage(ctx.target("base_colour").id(), 0, 0, 0, 0, w, h, 1, GL_RGBA, GL_FLOAT, GLsizei(base.size() * 4),
+                         base.data());
+    glGetTextureSubImage(ctx.target("normal").id(), 0, 0, 0, 0, w, h, 1, GL_RGBA, GL_FLOAT, GLsizei(normal.size() * 4),
+                         normal.data());
+    const int total = params_.count * generationsRun_;
+    std::vector<VplRecord> vpls(size_t(std::max(total, 1)));
+    if (total > 0)
+      glGetNamedBufferSubData(records_.id(), 0, GLsizeiptr(size_t(total) * sizeof(VplRecord)), vpls.data());
+    const int N = params_.interleave;
+    const int perSubset = (total + N * N - 1) / (N * N);
+    exactWords_ = std::max(1, (perSubset + 31) / 32);
+    std::vector<uint32_t> bits(size_t(w) * h * size_t(exactWords_), 0xffffffffu);
+    const float eps = 1e-3f * exactScene_->extent();
+    const glm::vec3 eye(u.eye);
+    tbb::parallel_for(0, h, [&](int y) {
+      for (int x = 0; x < w; ++x) {
+        const size_t i = size_t(y) * w + x;
+        if (!(depth[i] < 1.0f)) continue;
+        const glm::vec2 ndc = (glm::vec2(x, y) + 0.5f) / glm::vec2(w, h) * 2.0f - 1.0f;
+        const glm::vec4 wp = u.worldFromClip * glm::vec4(ndc, depth[i] * 2 - 1, 1);
+        const glm::vec3 p = glm::vec3(wp) / wp.w;
+        const glm::vec3 wo = glm::normalize(eye - p);
+        glm::vec3 n(normal[4 * i], normal[4 * i + 1], normal[4 * i + 2]);
+        n = normal[4 * i + 3] > 0 ? glm::normalize(n) : wo;
+        if (glm::dot(n, wo) < 0) n = -n;
+        const float radius = base[4 * i + 3];
+        const glm::ivec2 g = glm::ivec2(int(u.tile.x) + x, int(u.tile.y) + y);
+        const int subset = (g.x % N) + N * (g.y % N);
+        for (int k = subset, slot = 0; k < total; k += N * N, ++slot) {
+          const VplRecord& v = vpls[size_t(k)];
+          if (v.flux.x == 0 && v.flux.y == 0 && v.flux.z == 0) continue;
+          const glm::vec3 x0(v.position), nv(v.normal);
+          const glm::vec3 d = p - x0;
+          const float dist = glm::length(d);
+          if (!(dist > 0)) continue;
+          const glm::vec3 dir = d / dist;
+          if (glm::dot(nv, dir) <= 0 || glm::dot(n, dir) >= 0) continue;  // no light either way
+          // Both ends lifted off their surfaces along the normals: positions read back from
+          // depth buffers sit a little above or below them.
+          const glm::vec3 from = x0 + nv * (v.position.w + eps), to = p + n * (radius + eps);
+          const glm::vec3 seg = to - from;
+          const float len = glm::length(seg);
+          if (!(len > 2 * eps)) continue;
+          if (exactScene_->occluded(from, seg / len, len - eps))
+            bits[i * size_t(exactWords_) + size_t(slot / 32)] &= ~(1u << (slot % 32));
+        }
+      }
+    });
+    exactBits_.reserve(bits.size() * 4);
+    exactBits_.upload(bits.data(), bits.size() * 4);
   }
 
   void bindLightTextures(const frame::PassContext& ctx) const {
@@ -615,6 +726,10 @@ class VplExtension : public RasterExtension {
   std::vector<int> layerOwner_;
   float radius_ = 1, clampDistance_ = 0;
   gl::Buffer lightViews_, pyramid_, samples_, records_, ism_, ismLevels_, pool_, poolNodes_;
+  // Visibility "exact": the reference's scene, the tile's bits, the agreement counters.
+  std::unique_ptr<ReferenceScene> exactScene_;
+  gl::Buffer exactBits_, agreement_;
+  int exactWords_ = 1;
   std::vector<PoolPoint> surfelPoints_;
   std::vector<PoolNode> surfelNodes_;
   size_t poolNodeCount_ = 0;
@@ -655,7 +770,11 @@ VplParameters vplParameters(const Scene& scene) {
   if (f.has("ism_bias")) p.ismBias = float(f.at("ism_bias").number(0, 64));
   if (f.has("lod_scale")) p.lodScale = float(f.at("lod_scale").number(0.125, 16));
   if (f.has("energy_stop")) p.energyStop = f.at("energy_stop").number(0, 1);
-  if (f.has("visibility")) p.visibility = f.at("visibility").choice({"ism", "none"}) == "ism";
+  if (f.has("visibility")) {
+    const std::string v = f.at("visibility").choice({"ism", "none", "exact"});
+    p.visibility = v == "ism" ? VplParameters::Visibility::Ism : v == "none" ? VplParameters::Visibility::None
+                                                                            : VplParameters::Visibility::Exact;
+  }
   return p;
 }
 

@@ -11,6 +11,15 @@
 #define VPL_SSBO_ISM_PYRAMID (NL_SSBO_METHOD0 + 6)// float[]: pull-push levels of every ISM
 #define VPL_SSBO_LIGHT_VIEWS (NL_SSBO_METHOD0 + 7)// LightView[]: each light G-buffer layer's inverse
 
+// Visibility "exact" (the ablation): Embree's answer per pixel and VPL of its subset, one bit
+// each, and the counts of (pixel, VPL) pairs where the ISM agreed with it. They reuse the warp's
+// slots, which shading does not bind.
+#define VPL_SSBO_EXACT (NL_SSBO_METHOD0 + 1)      // uint[]: bits, words per pixel in uExactWords
+#define VPL_SSBO_AGREEMENT (NL_SSBO_METHOD0 + 2)  // uint[6]: pairs agreeing, compared, ISM occluded but
+                                                  // visible, ISM visible but occluded; per pixel the
+                                                  // light-weighted share agreeing (sum of 1/1024ths),
+                                                  // 1024 x pixels compared
+
 #define VPL_FAR_BITS 0x7f7fffffu                  // FLT_MAX: an empty ISM texel
 
 // One VPL. Its emission towards w is flux x f(wi, w) x cos(n, w): the flux that reached it and

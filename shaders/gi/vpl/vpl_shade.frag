@@ -13,6 +13,8 @@
 #include "vpl_material.glsl"
 layout(std430, binding = VPL_SSBO_RECORDS) readonly buffer Vpls { VplRecord vpls[]; };
 layout(std430, binding = VPL_SSBO_ISM) readonly buffer Ism { uint ism[]; };
+layout(std430, binding = VPL_SSBO_EXACT) readonly buffer Exact { uint exactBits[]; };
+layout(std430, binding = VPL_SSBO_AGREEMENT) buffer Agreement { uint agreement[]; };
 layout(binding = 0) uniform sampler2D uDepth;
 layout(binding = 1) uniform sampler2D uBaseColour;
 layout(binding = 2) uniform sampler2D uNormal;
@@ -22,7 +24,8 @@ uniform int uInterleave;   // n
 uniform int uIsmSize;
 uniform float uClampDistance;
 uniform float uIsmBias;    // depth bias, in ISM texel footprints
-uniform bool uVisibility;  // false: every VPL sees every receiver (measures what ISMs cost in error)
+uniform int uVisibility;   // 0: none (every VPL sees every receiver), 1: ISMs, 2: exact (Embree bits; ISMs counted against them)
+uniform int uExactWords;   // words per pixel of the exact bits (tile pixels, row-major from the tile's corner)
 layout(location = 0) out vec4 outIndirect;
 layout(location = 1) out vec4 outClampLoss;
 
@@ -41,7 +44,7 @@ float ismVisibility(int k, VplRecord v, vec3 p, float dist, vec3 local, float co
   vec2 f = (uv * 0.5 + 0.5) * S - 0.5;
   ivec2 t0 = ivec2(floor(f));
   vec2 w = f - vec2(t0);
-  float tanAlpha = min(sqrt(max(1.0 - cosReceiver * cosReceiver, 0.0)) / max(cosReceiver, 1e-3), 8.0);
+  float tanAlpha = min(sqrt(max(1.0 - cosReceiver * cosReceiver, 0.0)) / max(cosReceiver, 1e-3), 4.0);
   float bias = uIsmBias * dist * (4.0 / S) / max(1.0 + local.z, 1e-3) * (1.0 + tanAlpha) + v.position.w;
   // Bilinear percentage-closer: the four nearest texels' tests, weighted.
   float vis = 0.0;
@@ -79,6 +82,7 @@ void main() {
   ivec2 g = ivec2(frame.tile.xy) + px;  // the full image's pixel: tiles take the same subsets
   int subset = (g.x % N) + N * (g.y % N);
   vec3 L = vec3(0.0), loss = vec3(0.0);
+  float agreeWeight = 0.0, compareWeight = 0.0;  // visibility "exact": light on which the ISMs agreed
   float clamp2 = uClampDistance * uClampDistance;
   for (int k = subset; k < uVplCount; k += N * N) {
     VplRecord v = vpls[k];
@@ -99,9 +103,27 @@ void main() {
     vec3 fr = evalBsdf(mat, woL, (-w) * receiverFrame);
     vec3 c = v.flux.rgb * fv * wL.z * fr * cosR;
     if (all(equal(c, vec3(0.0)))) continue;
-    if (uVisibility) c *= ismVisibility(k, v, p, dist, wL, cosR);
+    if (uVisibility == 1) {
+      c *= ismVisibility(k, v, p, dist, wL, cosR);
+    } else if (uVisibility == 2) {
+      int slot = k / (N * N);
+      uint word = exactBits[(px.y * int(frame.tile.z) + px.x) * uExactWords + slot / 32];
+      bool seen = ((word >> uint(slot % 32)) & 1u) != 0u;
+      bool ismSeen = ismVisibility(k, v, p, dist, wL, cosR) >= 0.5;
+      float weight = luminance(c / max(d2, clamp2));
+      agreeWeight += seen == ismSeen ? weight : 0.0;
+      compareWeight += weight;
+      atomicAdd(agreement[1], 1u);
+      if (seen == ismSeen) atomicAdd(agreement[0], 1u);
+      else atomicAdd(agreement[seen ? 2 : 3], 1u);
+      if (!seen) c = vec3(0.0);
+    }
     L += c / max(d2, clamp2);
     loss += c * (1.0 / d2 - 1.0 / max(d2, clamp2));
+  }
+  if (uVisibility == 2 && compareWeight > 0.0) {  // per pixel, in 1/1024ths
+    atomicAdd(agreement[4], uint(1024.0 * agreeWeight / compareWeight + 0.5));
+    atomicAdd(agreement[5], 1024u);
   }
   float weight = float(N * N);
   outIndirect = vec4(L * weight / demodulation(mat), 1.0);

@@ -127,7 +127,7 @@ void FrameGraph::compile(const std::string& output) {
       if (t == targets_.end()) throw Error("frame: pass '" + p.name + "' writes '" + w + "', which is not a target");
       if (p.scope == Scope::Frame && !t->second->desc.fixedSize)
         throw Error("frame: frame pass '" + p.name + "' writes tile target '" + w + "'");
-      if (p.scope == Scope::Tile && t->second->desc.fixedSize)
+      if (p.scope == Scope::Tile && t->second->desc.fixedSize && t->second->desc.format != GL_NONE)
         throw Error("frame: tile pass '" + p.name + "' writes fixed target '" + w +
                     "' (each tile would overwrite it)");
       if (t->second->writer < 0) t->second->writer = int(i);

@@ -111,7 +111,8 @@ class FrameGraph {
 
   void addTarget(const std::string& name, const TargetDesc& desc);
   // A buffer the passes that write it own (VPLs, shadow-map atlases in SSBOs): declared so that
-  // passes order and cull by it like a fixed target (frame passes write it, any pass reads it);
+  // passes order and cull by it like a fixed target (any pass writes or reads it: a tile pass that
+  // writes one owns what it means per tile);
   // the graph allocates nothing and PassContext::target() refuses it.
   void addBuffer(const std::string& name);
   void addPass(const std::string& name, Scope scope, const SetupFn& setup, RunFn run);

@@ -26,10 +26,13 @@ struct VplParameters {
   int pullPushLevels = 3;       // pull-push levels (0: none)
   int interleave = 4;           // n: n x n VPL subsets
   float clampFraction = 0.02f;  // clamp distance, as a fraction of the scene's bounding radius
-  float ismBias = 2.5f;         // ISM depth bias, in texel footprints (slope-scaled)
+  float ismBias = 1.5f;         // ISM depth bias, in texel footprints (slope-scaled)
   float lodScale = 1.0f;        // ISM points' spacing, in texel footprints
   double energyStop = 0.01;     // stop bouncing when a generation re-emits less than this fraction
-  bool visibility = true;       // false ("none"): no ISMs, every VPL sees everything
+  // "ism" (the method), "none" (every VPL sees everything: what visibility costs), "exact"
+  // (Embree rays on the CPU, per pixel and VPL of its subset: separates the ISMs' error from the
+  // VPLs'; the frame then also counts how often the ISMs agreed).
+  enum class Visibility { Ism, None, Exact } visibility = Visibility::Ism;
 };
 
 // From scene.gi.parameters (keys: vplParameterKeys()); throws nestlight::Error naming the file
