@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "../gi/chi2.h"
 #include "nestlight/converters/builder.h"
@@ -273,6 +275,151 @@ TEST(Vpl, WarpedHaltonSamplesFollowTheImportance) {
   // Zero importance everywhere: no sample is valid.
   std::vector<float> zero(imp.size(), 0.0f);
   for (const auto& s : warpImportanceOnGpu(zero, size, layers, 64)) EXPECT_FALSE(s.valid);
+}
+
+bool allFinite(const HdrImage& img) {
+  for (float v : img.rgb)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+// Lights that put no VPL anywhere: a spot pointed into empty space, a point light outside a
+// scan's bounds facing nothing but sky... The frame is the direct light alone (here: black), with
+// no VPL alive and nothing non-finite.
+TEST(Vpl, LightsThatSeeNothingGiveNoVpls) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 20000, 2.0f, 188);
+  json spot = {{"type", "spot"}, {"position", {0.0, 0.0, 10.0}}, {"direction", {0.0, 0.0, 1.0}}, {"intensity", 50.0},
+               {"outer_angle", 20.0}, {"inner_angle", 15.0}};
+  json j = {{"version", 1},
+            {"octrees", {{{"path", "sphere.octree"}}}},
+            {"lights", {spot}},
+            {"camera", {{"eye", {-0.3, 0.0, 0.1}}, {"target", {1.0, 0.2, 0.3}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
+                        {"width", 24}, {"height", 24}}},
+            {"gi", {{"method", "vpl"}, {"mode", "albedo"}, {"max_bounces", 3}, {"parameters", {{"vpls", 64}}}}}};
+  std::ofstream(t.file("scene.json")) << j.dump(2);
+  Scene s = loadScene(t.file("scene.json"));
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  EXPECT_TRUE(allFinite(f.image));
+  EXPECT_EQ(f.attributes.at("nestlight:vpls_live"), "0") << f.summary;
+  EXPECT_EQ(meanRed(f.image), 0.0);
+}
+
+// A light grazing the floor (2 mm above it): VPLs where the light arrives at 89.9 degrees carry
+// almost nothing and their incident direction lies in their surface; the frame stays finite and
+// the wall they face is lit no more than the flux that reached the floor allows.
+TEST(Vpl, GrazingVplsStayFinite) {
+  nestlight::test::TempDir t;
+  writeBoxObj(t.path() / "box.obj");
+  json j = {{"version", 1},
+            {"materials", {{"white", {{"type", "lambert"}, {"base_color", 0.8}}}}},
+            {"meshes", json::array({json{{"path", "box.obj"},
+                                         {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+                                         {"material", "white"}},
+                                    json{{"path", "box.obj"},
+                                         {"transform", {{"translate", {2.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 3.0}}}},
+                                         {"material", "white"}}})},
+            {"lights", {{{"type", "point"}, {"position", {-3.0, 0.0, 0.002}}, {"intensity", 10.0}}}},
+            {"camera", {{"eye", {-1.0, 0.0, 1.5}}, {"target", {2.0, 0.0, 0.5}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
+                        {"width", 24}, {"height", 24}}},
+            {"gi", {{"method", "vpl"}, {"mode", "albedo"}, {"max_bounces", 3}, {"parameters", {{"vpls", 256}}}}}};
+  std::ofstream(t.file("scene.json")) << j.dump(2);
+  Scene s = loadScene(t.file("scene.json"));
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  EXPECT_TRUE(allFinite(f.image)) << f.summary;
+  for (float v : f.image.rgb) EXPECT_GE(v, 0.0f);
+}
+
+// A receiver touching a VPL: inside the sphere, the camera looks at the wall where the light G-buffer
+// puts VPLs, and a small clamp distance (0.1% of the radius) lets 1 / d^2 grow huge for the
+// nearest pixels; the clamp keeps every pixel finite and bounded, and its measured loss is
+// reported (and small: few pixels are that near a VPL).
+TEST(Vpl, ReceiversTouchingVplsStayFiniteAndTheClampLossIsMeasured) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 80000, 2.0f, 188);
+  Scene s = sphereScene(t, 10.0f, 2, json{{"vpls", 1024}, {"light_resolution", 64}, {"clamp", 0.0005}}, 32);
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  EXPECT_TRUE(allFinite(f.image));
+  const double loss = std::stod(f.attributes.at("nestlight:clamp_loss"));
+  std::printf("clamp 0.05%% of the radius: loss %.3g; %s\n", loss, f.summary.c_str());
+  EXPECT_GE(loss, 0.0);
+  EXPECT_LT(loss, 0.01);
+  float peak = 0;
+  for (float v : f.image.rgb) peak = std::max(peak, v);
+  EXPECT_LT(peak, 10.0f);  // the closed form is 0.6 everywhere
+  // A large clamp (half the radius) removes measurably more, and says so.
+  s = sphereScene(t, 10.0f, 2, json{{"vpls", 1024}, {"light_resolution", 64}, {"clamp", 0.5}}, 32);
+  MethodFrame g = createMethod(s, {true, false})->render(s.camera);
+  EXPECT_GT(std::stod(g.attributes.at("nestlight:clamp_loss")), 10 * loss + 1e-4) << g.summary;
+}
+
+// National-grid coordinates: the same sphere 500 km east and 4,000 km north gives the same image
+// (everything on the GPU is relative to the scene's origin).
+TEST(Vpl, NationalGridCoordinatesGiveTheSameImage) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 40000, 2.0f, 188);
+  Scene s = sphereScene(t, 10.0f, 3, json{{"vpls", 256}, {"light_resolution", 64}});
+  const HdrImage near = createMethod(s, {true, false})->render(s.camera).image;
+  const glm::dvec3 shift(512345.25, 4012345.5, 120.0);
+  {
+    std::ifstream in(t.file("sphere.ply"));
+    std::ofstream out(t.file("far.ply"));
+    std::string line;
+    bool header = true;
+    while (std::getline(in, line)) {
+      if (header) {
+        // Positions this far out need doubles (a float's step at 4e6 is 0.25 m).
+        for (const char* axis : {"x", "y", "z"})
+          if (line == std::string("property float ") + axis) line = std::string("property double ") + axis;
+        out << line << "\n";
+        header = line != "end_header";
+        continue;
+      }
+      std::istringstream ls(line);
+      double x, y, z;
+      ls >> x >> y >> z;
+      std::string rest;
+      std::getline(ls, rest);
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "%.4f %.4f %.4f", x + shift.x, y + shift.y, z + shift.z);
+      out << buf << rest << "\n";
+    }
+  }
+  BuildOptions b;
+  b.output = t.path() / "sphere.octree";
+  b.progress = ProgressMode::Quiet;
+  std::filesystem::remove_all(b.output);
+  std::vector<std::unique_ptr<PointReader>> src;
+  src.push_back(openReader(t.file("far.ply")));
+  buildOctree(std::move(src), b);
+  json j = json::parse(std::ifstream(t.file("scene.json")));
+  j["lights"][0]["position"] = {shift.x, shift.y, shift.z};
+  j["camera"]["eye"] = {shift.x - 0.3, shift.y, shift.z + 0.1};
+  j["camera"]["target"] = {shift.x + 1.0, shift.y + 0.2, shift.z + 0.3};
+  std::ofstream(t.file("scene.json")) << j.dump(2);
+  Scene far = loadScene(t.file("scene.json"));
+  const HdrImage img = createMethod(far, {true, false})->render(far.camera).image;
+  std::printf("national grid: mean %.5f vs %.5f at the origin\n", meanRed(img), meanRed(near));
+  EXPECT_NEAR(meanRed(img) / meanRed(near), 1.0, 0.01);
+}
+
+// VPLs stay put when only the camera moves: they come from the lights' cut, which does not
+// depend on the camera, so frames along a camera path hold bit-identical VPLs (no flicker), while
+// the camera's cut changes.
+TEST(Vpl, VplsStayPutWhenOnlyTheCameraMoves) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 60000, 2.0f, 188);
+  Scene s = sphereScene(t, 10.0f, 3, json{{"vpls", 256}, {"light_resolution", 64}});
+  auto m = createMethod(s, {true, false});
+  std::string checksum;
+  for (int k = 0; k < 4; ++k) {
+    SceneCamera c = s.camera;
+    c.target = glm::dvec3(std::cos(k * 1.3), std::sin(k * 1.3), 0.2 * k - 0.3);
+    MethodFrame f = m->render(c);
+    if (k == 0) checksum = f.attributes.at("nestlight:vpl_checksum");
+    EXPECT_EQ(f.attributes.at("nestlight:vpl_checksum"), checksum) << "frame " << k;
+    EXPECT_TRUE(allFinite(f.image));
+  }
 }
 
 TEST(Vpl, ParametersOutOfRangeNameTheField) {

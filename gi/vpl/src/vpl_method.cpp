@@ -168,6 +168,8 @@ class VplExtension : public RasterExtension {
     out.attributes["nestlight:ism_size"] = std::to_string(params_.ismSize);
     out.attributes["nestlight:interleave"] = std::to_string(params_.interleave);
     out.attributes["nestlight:clamp_distance"] = std::to_string(clampDistance_);
+    out.attributes["nestlight:vpl_checksum"] = std::to_string(vplChecksum_);
+    out.attributes["nestlight:vpls_live"] = std::to_string(liveVpls_);
     char line[320];
     std::snprintf(line, sizeof line,
                   "; vpl: %d VPLs x %d generation(s) of %d bounce(s)%s, %d^2 ISMs from %llu pool points%s, "
@@ -477,6 +479,8 @@ class VplExtension : public RasterExtension {
           bindLightTextures(ctx);
           generationsRun_ = 0;
           stopNote_.clear();
+          vplChecksum_ = 14695981039346656037ull;
+          liveVpls_ = 0;
           if (generations_ == 0) return;
           samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
           generate_.use();
@@ -702,12 +706,17 @@ class VplExtension : public RasterExtension {
 
   // The flux generation `gen` re-emits: the sum over its VPLs of their flux times their surface's
   // albedo (luminance). Read back: a few tens of kilobytes.
-  double emittedFlux(int gen) const {
+  // Also folds the generation into the frame's VPL checksum (FNV-1a of the records: equal
+  // checksums, the same VPLs) and counts its live VPLs.
+  double emittedFlux(int gen) {
     std::vector<VplRecord> r(size_t(params_.count));
     glGetNamedBufferSubData(records_.id(), GLintptr(size_t(gen) * r.size() * sizeof(VplRecord)),
                             GLsizeiptr(r.size() * sizeof(VplRecord)), r.data());
+    const auto* bytes = reinterpret_cast<const unsigned char*>(r.data());
+    for (size_t i = 0; i < r.size() * sizeof(VplRecord); ++i) vplChecksum_ = (vplChecksum_ ^ bytes[i]) * 1099511628211ull;
     double sum = 0;
     for (const auto& v : r) {
+      if (v.flux.x != 0 || v.flux.y != 0 || v.flux.z != 0) ++liveVpls_;
       const glm::vec3 flux(v.flux), base(v.baseColour);
       const float metallic = v.flux.w;
       const glm::vec3 albedo = int(v.baseColour.w) == NL_MATERIAL_LAMBERT
@@ -721,6 +730,7 @@ class VplExtension : public RasterExtension {
 
   VplParameters params_;
   int bounces_ = 1, generations_ = 0, generationsRun_ = 0;
+  uint64_t vplChecksum_ = 0, liveVpls_ = 0;
   std::string stopNote_, poolNote_;
   int layers_ = 0;
   std::vector<int> layerOwner_;
