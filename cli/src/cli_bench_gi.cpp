@@ -60,8 +60,15 @@ void addBenchGi(CLI::App& app, int& exitCode) {
   cmd->add_option("--width", o->width, "Override the scene camera's width")->check(CLI::Range(1, 16384));
   cmd->add_option("--height", o->height, "Override the scene camera's height")->check(CLI::Range(1, 16384));
   cmd->add_flag("--force-reference", o->forceReference, "Render the reference again even when a cached one matches");
+  cmd->add_option("--mode", o->mode, "Override the scene's gi.mode: albedo (scan points reflect their colour) or radiance_cache (they emit it)")
+      ->check(CLI::IsMember({"albedo", "radiance_cache"}));
+  auto noVariants = std::make_shared<bool>(false);
+  cmd->add_flag("--no-variants", *noVariants,
+                "Only each method as the scene sets it (default: also its variants: vpl at 1 to 3 bounces and with exact "
+                "visibility, the ablation that separates the ISMs' error from the VPLs')");
   cmd->callback([=, &exitCode]() {
     gi::BenchGiOptions opt = *o;
+    opt.variants = !*noVariants;
     opt.device = cpuName();
     opt.scene = *scene;
     opt.out = *out;

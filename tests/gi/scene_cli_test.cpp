@@ -65,17 +65,22 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   std::ifstream csv(dir.file("b/bench_gi.csv"));
   std::string header, line;
   std::getline(csv, header);
-  EXPECT_EQ(header.rfind("method,quality,quality_name", 0), 0u);
+  EXPECT_EQ(header.rfind("method,variant,quality,quality_name", 0), 0u);
   int rows = 0;
   while (std::getline(csv, line)) rows++;
   // Every registered method: reference and direct at 1 and 4 spp, raster at 2 shadow-map sizes,
-  // vpl at 16 VPLs.
-  EXPECT_EQ(rows, 7);
+  // vpl at 16 VPLs as the scene sets it and in its 4 variants (1 to 3 bounces, exact visibility).
+  EXPECT_EQ(rows, 11);
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 7u);
+  ASSERT_EQ(j["rows"].size(), 11u);
   EXPECT_EQ(j["rows"][6]["method"], "vpl");
+  EXPECT_EQ(j["rows"][6]["variant"], "");
   EXPECT_EQ(j["rows"][6]["quality_name"], "VPLs");
   EXPECT_TRUE(j["rows"][6]["gpu_pass_ms"].contains("ism")) << j["rows"][6].dump();
+  EXPECT_EQ(j["rows"][7]["variant"], "1 bounce");
+  EXPECT_EQ(j["rows"][10]["variant"], "exact visibility");
+  EXPECT_TRUE(j["rows"][10]["attributes"].contains("nestlight:ism_agreement")) << j["rows"][10].dump();
+  EXPECT_TRUE(j["rows"][6]["attributes"].contains("nestlight:clamp_loss"));
   EXPECT_EQ(j["rows"][4]["method"], "raster");
   EXPECT_EQ(j["rows"][4]["quality"], 64);
   EXPECT_EQ(j["rows"][5]["quality_name"], "shadow-map texels");

@@ -107,6 +107,8 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     if (levels.empty()) throw Error("bench gi: no quality levels for '" + name + "'");
   }
   if (o.runs < 1) throw Error("bench gi: --runs must be at least 1");
+  if (!o.mode.empty() && o.mode != "albedo" && o.mode != "radiance_cache")
+    throw Error("bench gi: --mode must be albedo or radiance_cache, got '" + o.mode + "'");
 
   const fs::path sceneFile = fs::absolute(o.scene);
   BenchGiReport report;
@@ -118,6 +120,8 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   auto prepared = [&](const std::string& method) {
     Scene s = probe;
     s.gi.method = method;
+    if (o.mode == "albedo") s.gi.mode = RadianceMode::Albedo;
+    if (o.mode == "radiance_cache") s.gi.mode = RadianceMode::RadianceCache;
     s.camera.width = W;
     s.camera.height = H;
     return s;
@@ -126,7 +130,7 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   // The reference, cached under a key of everything that changes it.
   const std::string key = "model" + std::to_string(kReferenceModelVersion) + ":" + fileHash(sceneFile) + ":" +
                           assetStamp(probe) + ":" + std::to_string(W) + "x" + std::to_string(H) + ":" +
-                          std::to_string(o.referenceError);
+                          std::to_string(o.referenceError) + ":" + o.mode;
   const fs::path refPath = dir / "reference.exr";
   HdrImage reference;
   json refInfo;
@@ -174,13 +178,18 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   for (const MethodInfo* m : methods) {
     auto q = o.qualities.find(m->name);
     const std::vector<int>& levels = q != o.qualities.end() ? q->second : m->defaultQualities;
+    std::vector<MethodInfo::Variant> variants = {{"", [](GiSettings&) {}}};
+    if (o.variants) variants.insert(variants.end(), m->variants.begin(), m->variants.end());
+    for (const auto& variant : variants)
     for (int level : levels) {
       Scene s = prepared(m->name);
       s.gi.seed = 1;
       m->applyQuality(s.gi, level);
+      variant.apply(s.gi);
       std::unique_ptr<Method> method = createMethod(s, {true, false});
       BenchGiRow row;
       row.method = m->name;
+      row.variant = variant.name;
       row.qualityName = m->qualityName;
       row.quality = level;
       MethodFrame first;
@@ -193,14 +202,18 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
       row.raysPerSecond = first.raysPerSecond();
       row.samplesPerSecond = first.samplesPerSecond();
       row.passMs = first.passMs;
-      writeExr((dir / (m->name + "_" + std::to_string(level) + ".exr")).string(), first.image, first.attributes);
+      row.attributes = first.attributes;
+      std::string stem = m->name + (variant.name.empty() ? "" : "_" + variant.name) + "_" + std::to_string(level);
+      std::replace(stem.begin(), stem.end(), ' ', '_');
+      writeExr((dir / (stem + ".exr")).string(), first.image, first.attributes);
       CompareOptions co;
       co.testName = m->name + " " + std::to_string(level);
       co.referenceName = refPath.string();
       co.exposureStops = probe.output.exposure;
       row.cmp = compareImages(first.image, reference, co);
       row.relativeL2 = relativeL2(first.image, reference);
-      say("%-10s %8d %10.1f %12.3g %10.4f %10.4g %9.2f %7.4f %11.4f\n", m->name.c_str(), level, row.medianMs,
+      const std::string label = m->name + (variant.name.empty() ? "" : " (" + variant.name + ")");
+      say("%-10s %8d %10.1f %12.3g %10.4f %10.4g %9.2f %7.4f %11.4f\n", label.c_str(), level, row.medianMs,
           row.raysPerSecond, row.relativeL2, row.cmp.linear.rmse, row.cmp.linear.psnr, row.cmp.linear.ssim,
           row.cmp.toneMapped.ssim);
       report.rows.push_back(std::move(row));
@@ -212,46 +225,52 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
                              std::to_string(tbb::info::default_concurrency()) +
                              " threads (CPU methods: Embree 3; GL methods: the context's device)";
   std::ofstream csv(dir / "bench_gi.csv");
-  csv << "method,quality,quality_name,runs,median_ms,min_ms,max_ms,rays_per_second,samples_per_second,relative_l2,"
+  csv << "method,variant,quality,quality_name,runs,median_ms,min_ms,max_ms,rays_per_second,samples_per_second,relative_l2,"
          "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels\n";
   json jrows = json::array();
   std::vector<PlotSeries> series;
   json timeTo1;
-  for (const MethodInfo* m : methods) {
+  // One series per method and variant, in the order they ran.
+  std::vector<std::pair<std::string, std::string>> keys;
+  for (const BenchGiRow& r : report.rows)
+    if (std::find(keys.begin(), keys.end(), std::make_pair(r.method, r.variant)) == keys.end())
+      keys.emplace_back(r.method, r.variant);
+  for (const auto& [methodName, variantName] : keys) {
     PlotSeries ps;
-    ps.name = m->name;
+    ps.name = methodName + (variantName.empty() ? "" : " (" + variantName + ")");
     std::vector<const BenchGiRow*> mine;
     for (const BenchGiRow& r : report.rows) {
-      if (r.method != m->name) continue;
+      if (r.method != methodName || r.variant != variantName) continue;
       mine.push_back(&r);
       auto [lo, hi] = std::minmax_element(r.ms.begin(), r.ms.end());
       char line[640];
-      std::snprintf(line, sizeof line, "%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,%.6f,%llu\n",
-                    r.method.c_str(), r.quality, r.qualityName.c_str(), r.ms.size(), r.medianMs, *lo, *hi, r.raysPerSecond,
+      std::snprintf(line, sizeof line, "%s,%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,%.6f,%llu\n",
+                    r.method.c_str(), r.variant.c_str(), r.quality, r.qualityName.c_str(), r.ms.size(), r.medianMs, *lo, *hi, r.raysPerSecond,
                     r.samplesPerSecond, r.relativeL2, r.cmp.linear.rmse, r.cmp.linear.relativeMse, r.cmp.linear.psnr,
                     r.cmp.linear.ssim, r.cmp.toneMapped.rmse, r.cmp.toneMapped.psnr, r.cmp.toneMapped.ssim,
                     (unsigned long long)r.cmp.test.pixels);
       csv << line;
       json passes = json::object();
       for (const auto& [name, ms] : r.passMs) passes[name] = ms;
-      jrows.push_back({{"method", r.method}, {"quality", r.quality}, {"quality_name", r.qualityName}, {"runs_ms", r.ms},
+      json attrs = json::object();
+      for (const auto& [k, v] : r.attributes) attrs[k] = v;
+      jrows.push_back({{"method", r.method}, {"variant", r.variant}, {"attributes", attrs}, {"quality", r.quality}, {"quality_name", r.qualityName}, {"runs_ms", r.ms},
                        {"median_ms", r.medianMs}, {"rays_per_second", r.raysPerSecond},
                        {"samples_per_second", r.samplesPerSecond}, {"gpu_pass_ms", passes},
                        {"relative_l2", r.relativeL2}, {"comparison", toJson(r.cmp)}});
       ps.points.push_back({r.medianMs, r.relativeL2, std::to_string(r.quality)});
     }
-    timeTo1[m->name] = timeToError(mine, 0.01);
+    timeTo1[ps.name] = timeToError(mine, 0.01);
     series.push_back(std::move(ps));
   }
-  report.json = {{"scene", sceneFile.string()}, {"device", device}, {"width", W}, {"height", H}, {"runs", o.runs},
+  report.json = {{"scene", sceneFile.string()}, {"device", device}, {"mode", prepared("reference").gi.mode == RadianceMode::Albedo ? "albedo" : "radiance_cache"}, {"width", W}, {"height", H}, {"runs", o.runs},
                  {"reference", refInfo}, {"rows", jrows}, {"time_to_1_percent", timeTo1},
                  {"error_measure", "relative L2: sqrt(sum (t - r)^2 / sum r^2) over pixels and channels"}};
   std::ofstream(dir / "bench_gi.json") << report.json.dump(2) << "\n";
   writeSvgPlot((dir / "bench_gi.svg").string(), "GI speed against error: " + sceneFile.parent_path().filename().string(),
                "time per frame (ms, " + device + ")", "relative L2 error against the reference", series, true, true);
-  for (const MethodInfo* m : methods) {
-    const json& t = timeTo1[m->name];
-    say("time to 1%% relative error, %s: %s ms (%s)\n", m->name.c_str(),
+  for (const auto& [name, t] : timeTo1.items()) {
+    say("time to 1%% relative error, %s: %s ms (%s)\n", name.c_str(),
         t["ms"].is_null() ? "-" : std::to_string(int64_t(t["ms"].get<double>())).c_str(),
         t["how"].get<std::string>().c_str());
   }

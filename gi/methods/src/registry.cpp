@@ -17,23 +17,27 @@ const std::vector<MethodInfo>& registeredMethods() {
     };
     std::vector<MethodInfo> m;
     m.push_back({"reference", "path-traced ground truth (Embree, CPU): all bounces", false, "samples per pixel",
-                 {1, 4, 16, 64}, spp, createReferenceMethod});
+                 {1, 4, 16, 64}, spp, createReferenceMethod, {}});
     m.push_back({"direct", "the reference's path tracer stopped after one bounce: direct light (CPU)", false,
-                 "samples per pixel", {1, 4, 16, 64}, spp, createDirectMethod});
+                 "samples per pixel", {1, 4, 16, 64}, spp, createDirectMethod, {}});
     m.push_back({"raster", "real-time direct light through the GI frame: G-buffer, shadow maps (GL)", true,
                  "shadow-map texels", {256, 512, 1024, 2048},
                  [](GiSettings& g, int q) {
                    if (!g.parameters.is_object()) g.parameters = nlohmann::json::object();
                    g.parameters["shadow_map_size"] = q;
                  },
-                 [](const Scene& s, const MethodContext& c) { return createRasterMethod(s, c); }});
+                 [](const Scene& s, const MethodContext& c) { return createRasterMethod(s, c); }, {}});
     m.push_back({"vpl", "real-time GI: importance-warped VPLs with imperfect shadow maps on the resident cut (GL)", true,
                  "VPLs", {64, 256, 1024, 4096},
                  [](GiSettings& g, int q) {
                    if (!g.parameters.is_object()) g.parameters = nlohmann::json::object();
                    g.parameters["vpls"] = q;
                  },
-                 createVplMethod});
+                 createVplMethod,
+                 {{"1 bounce", [](GiSettings& g) { g.maxBounces = 1; }},
+                  {"2 bounces", [](GiSettings& g) { g.maxBounces = 2; }},
+                  {"3 bounces", [](GiSettings& g) { g.maxBounces = 3; }},
+                  {"exact visibility", [](GiSettings& g) { g.parameters["visibility"] = "exact"; }}}});
     return m;
   }();
   return methods;

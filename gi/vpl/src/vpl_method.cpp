@@ -129,6 +129,7 @@ class VplExtension : public RasterExtension {
   std::string setUp(RasterFrame& f) override {
     const Scene& scene = f.scene();
     bounces_ = std::max(scene.gi.maxBounces, 1);
+    radianceCache_ = scene.gi.mode == RadianceMode::RadianceCache;
     generations_ = bounces_ - 1;
     const size_t atlasBytes = size_t(params_.count) * size_t(std::max(generations_, 1)) * size_t(params_.ismSize) *
                               size_t(params_.ismSize) * 4;
@@ -455,6 +456,7 @@ class VplExtension : public RasterExtension {
           pyramid_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_PYRAMID, 0, pyramid_.bytes());
           importance_.use();
           glUniform1i(importance_.uniform("uLayerStride"), int(pyramidLayerFloats(G)));
+          glUniform1i(importance_.uniform("uRadianceCache"), radianceCache_ ? 1 : 0);
           if (layers_ > 0) {
             glDispatchCompute(GLuint((G + 7) / 8), GLuint((G + 7) / 8), GLuint(layers_));
           } else {
@@ -485,6 +487,7 @@ class VplExtension : public RasterExtension {
           samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
           generate_.use();
           glUniform1i(generate_.uniform("uCount"), params_.count);
+          glUniform1i(generate_.uniform("uRadianceCache"), radianceCache_ ? 1 : 0);
           glDispatchCompute(GLuint((params_.count + 63) / 64), 1, 1);
           glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
           generationsRun_ = 1;
@@ -495,6 +498,7 @@ class VplExtension : public RasterExtension {
             glUniform1i(bounce_.uniform("uParentFirst"), (gen - 1) * params_.count);
             glUniform1i(bounce_.uniform("uChildFirst"), gen * params_.count);
             glUniform1i(bounce_.uniform("uCount"), params_.count);
+            glUniform1i(bounce_.uniform("uRadianceCache"), radianceCache_ ? 1 : 0);
             if (poolNodeCount_ == 0) {
               // Nothing to hit: the generation is dark.
               std::vector<VplRecord> dark(size_t(params_.count));
@@ -730,6 +734,7 @@ class VplExtension : public RasterExtension {
 
   VplParameters params_;
   int bounces_ = 1, generations_ = 0, generationsRun_ = 0;
+  bool radianceCache_ = false;
   uint64_t vplChecksum_ = 0, liveVpls_ = 0;
   std::string stopNote_, poolNote_;
   int layers_ = 0;

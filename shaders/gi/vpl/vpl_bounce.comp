@@ -12,6 +12,7 @@ layout(local_size_x = 64) in;
 layout(std430, binding = VPL_SSBO_RECORDS) buffer Vpls { VplRecord vpls[]; };
 uniform int uParentFirst, uChildFirst;  // record ranges of the two generations
 uniform int uCount;                     // VPLs per generation
+uniform bool uRadianceCache;            // scan points' colour is radiance: light reaching them ends there
 
 float radicalInverse(uint i, uint base) {
   float inv = 1.0 / float(base), f = inv, r = 0.0;
@@ -89,6 +90,7 @@ void main() {
   }
   if (lid != 0u) return;
   best = sBest[0];
+  if (best >= 0 && uRadianceCache && (pool[best].surface.z >> 16) == uint(NL_NO_MATERIAL)) best = -1;
   if (best >= 0) {
     PoolPoint q = pool[best];
     vec3 n = decodeNormal(q.surface.x);

@@ -29,12 +29,15 @@ struct BenchGiOptions {
   // Quality levels per method (samples per pixel, shadow-map texels, ...); a method not listed
   // takes its registered defaults.
   std::map<std::string, std::vector<int>> qualities;
+  bool variants = true;                // also each method's variants (MethodInfo::variants)
+  std::string mode;                    // "albedo" or "radiance_cache": overrides the scene's
   int width = 0, height = 0;           // 0: the scene camera's
   std::string device;                  // the CPU's name, for the report (the CLI reads /proc/cpuinfo)
 };
 
 struct BenchGiRow {
   std::string method;
+  std::string variant;                  // "" : the method as the scene sets it
   std::string qualityName;
   int quality = 0;
   std::vector<double> ms;               // per run, the method's frame time
@@ -43,6 +46,7 @@ struct BenchGiRow {
   std::vector<std::pair<std::string, double>> passMs;  // GL methods: GPU time per pass, first run
   ImageComparison cmp;
   double relativeL2 = 0;
+  ImageAttributes attributes;           // the first run's (clamp loss, ISM agreement, ...)
 };
 
 struct BenchGiReport {

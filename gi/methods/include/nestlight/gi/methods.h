@@ -22,6 +22,13 @@ struct MethodInfo {
   // Sets one quality level in a scene's settings before the method is made.
   std::function<void(GiSettings&, int quality)> applyQuality;
   std::function<std::unique_ptr<Method>(const Scene&, const MethodContext&)> create;
+  // Settings `bench gi` also measures, each at every quality level (vpl: fewer bounces; exact
+  // visibility, the ablation that separates the ISMs' error from the VPLs').
+  struct Variant {
+    std::string name;
+    std::function<void(GiSettings&)> apply;
+  };
+  std::vector<Variant> variants;
 };
 
 const std::vector<MethodInfo>& registeredMethods();
