@@ -229,7 +229,7 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
          "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels\n";
   json jrows = json::array();
   std::vector<PlotSeries> series;
-  json timeTo1;
+  json timeTo1, timeTo10;
   // One series per method and variant, in the order they ran.
   std::vector<std::pair<std::string, std::string>> keys;
   for (const BenchGiRow& r : report.rows)
@@ -261,14 +261,20 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
       ps.points.push_back({r.medianMs, r.relativeL2, std::to_string(r.quality)});
     }
     timeTo1[ps.name] = timeToError(mine, 0.01);
+    timeTo10[ps.name] = timeToError(mine, 0.1);
     series.push_back(std::move(ps));
   }
   report.json = {{"scene", sceneFile.string()}, {"device", device}, {"mode", prepared("reference").gi.mode == RadianceMode::Albedo ? "albedo" : "radiance_cache"}, {"width", W}, {"height", H}, {"runs", o.runs},
-                 {"reference", refInfo}, {"rows", jrows}, {"time_to_1_percent", timeTo1},
+                 {"reference", refInfo}, {"rows", jrows}, {"time_to_1_percent", timeTo1}, {"time_to_10_percent", timeTo10},
                  {"error_measure", "relative L2: sqrt(sum (t - r)^2 / sum r^2) over pixels and channels"}};
   std::ofstream(dir / "bench_gi.json") << report.json.dump(2) << "\n";
   writeSvgPlot((dir / "bench_gi.svg").string(), "GI speed against error: " + sceneFile.parent_path().filename().string(),
                "time per frame (ms, " + device + ")", "relative L2 error against the reference", series, true, true);
+  for (const auto& [name, t] : timeTo10.items()) {
+    say("time to 10%% relative error, %s: %s ms (%s)\n", name.c_str(),
+        t["ms"].is_null() ? "-" : std::to_string(int64_t(t["ms"].get<double>())).c_str(),
+        t["how"].get<std::string>().c_str());
+  }
   for (const auto& [name, t] : timeTo1.items()) {
     say("time to 1%% relative error, %s: %s ms (%s)\n", name.c_str(),
         t["ms"].is_null() ? "-" : std::to_string(int64_t(t["ms"].get<double>())).c_str(),

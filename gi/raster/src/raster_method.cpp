@@ -152,6 +152,7 @@ class RasterMethod : public Method, public RasterFrame {
   }
   const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
   uint64_t cutGeneration() const override { return cutGeneration_; }
+  void bindLightsCutTree(int scan) const override { scans_.at(size_t(scan)).shadowTree.bind(); }
   bool quiet() const override { return quiet_; }
 
   MethodFrame render(const SceneCamera& camera) override {
@@ -274,11 +275,15 @@ class RasterMethod : public Method, public RasterFrame {
   // The lights' cuts as one list for the extension; a new generation when any node changed.
   void updateLightsCut() {
     std::vector<CutNode> cut;
-    for (const auto& s : scans_) {
+    for (size_t si = 0; si < scans_.size(); ++si) {
+      const auto& s = scans_[si];
       const auto& nodes = s.shadowStreamer->drawList();
       std::unordered_map<NodeKey, int, NodeKeyHash> index;
-      for (const auto& n : nodes) {
+      for (size_t ni = 0; ni < nodes.size(); ++ni) {
+        const auto& n = nodes[ni];
         CutNode c;
+        c.scan = int(si);
+        c.indexInScan = int(ni);
         c.buffer = s.store->buffer(n.handle);
         c.numPoints = n.numPoints;
         c.origin = scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});

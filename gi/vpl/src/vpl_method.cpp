@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include <glm/gtc/packing.hpp>
 #include <tbb/parallel_for.h>
@@ -256,6 +257,8 @@ class VplExtension : public RasterExtension {
         hi = glm::max(hi, s.positions[i]);
       }
       const float spacing = float(std::sqrt(area / double(s.positions.size())));
+      objectsLo_ = glm::min(objectsLo_, lo);
+      objectsHi_ = glm::max(objectsHi_, hi);
       PoolNode n{};
       n.box = glm::vec4(0.5f * (lo + hi), 0.5f * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
       n.lod = glm::vec4(spacing, 1e30f, spacing, 0.0f);
@@ -265,8 +268,11 @@ class VplExtension : public RasterExtension {
         PoolPoint q{};
         q.position = glm::vec4(s.positions[i], 0.5f * spacing);
         const glm::vec3 nn = s.normals[i];
+        float a = s.area[i];
+        uint32_t areaBits;
+        std::memcpy(&areaBits, &a, 4);
         q.surface = glm::uvec4(packNormalWord(nn), packHalf2(s.albedo[i].r, s.albedo[i].g),
-                               packHalf2(s.albedo[i].b, 0.0f) | (s.material[i] << 16), 0u);
+                               packHalf2(s.albedo[i].b, 0.0f) | (s.material[i] << 16), areaBits);
         surfelPoints_.push_back(q);
       }
     }
@@ -294,6 +300,8 @@ class VplExtension : public RasterExtension {
     meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
     importance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_importance.comp"}});
     generate_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_generate.comp"}});
+    emitImportance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit_importance.comp"}});
+    emit_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit.comp"}});
     bounce_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_bounce.comp"}});
     gather_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_gather.comp"}});
     splat_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_splat.comp"}});
@@ -359,6 +367,10 @@ class VplExtension : public RasterExtension {
       points += c.numPoints;
     }
     const uint64_t scanPoints = points;
+    scanPoints_ = scanPoints;
+    emitSide_ = 1;
+    while (uint64_t(emitSide_) * uint64_t(emitSide_) < scanPoints) emitSide_ *= 2;
+    if (radianceCache_ && scanPoints > 0) emitPyramid_ = gl::Buffer(pyramidLayerFloats(emitSide_) * 4);
     for (PoolNode n : surfelNodes_) {
       n.range.x += int(scanPoints);
       nodes.push_back(n);
@@ -375,8 +387,12 @@ class VplExtension : public RasterExtension {
     pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
     gather_.use();
     const float splat = f.rasterParameters().splatScale;
+    int boundScan = -1;
     for (size_t j = 0; j < taken.size(); ++j) {
       const CutNode& c = cut[taken[j]];
+      if (c.scan != boundScan) f.bindLightsCutTree(boundScan = c.scan);
+      glUniform1i(gather_.uniform("uNodeIndex"), c.indexInScan);
+      glUniform1f(gather_.uniform("uNodeSize"), c.size);
       glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, c.buffer, 0,
                         GLsizeiptr(size_t(c.numPoints) * frame::kGpuPointBytes));
       glUniform3f(gather_.uniform("uNodeOrigin"), c.origin.x, c.origin.y, c.origin.z);
@@ -464,7 +480,7 @@ class VplExtension : public RasterExtension {
             glClearNamedBufferData(pyramid_.id(), GL_R32F, GL_RED, GL_FLOAT, &zero);
           }
           glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-          warp_->run(pyramid_, G, layers, params_.count, samples_);
+          if (!radianceCache_) warp_->run(pyramid_, G, layers, params_.count, samples_);
         });
 
     // VPLs: the first generation from the samples, then one generation per further bounce
@@ -484,12 +500,16 @@ class VplExtension : public RasterExtension {
           vplChecksum_ = 14695981039346656037ull;
           liveVpls_ = 0;
           if (generations_ == 0) return;
-          samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
-          generate_.use();
-          glUniform1i(generate_.uniform("uCount"), params_.count);
-          glUniform1i(generate_.uniform("uRadianceCache"), radianceCache_ ? 1 : 0);
-          glDispatchCompute(GLuint((params_.count + 63) / 64), 1, 1);
-          glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+          if (radianceCache_) {
+            emitFromScans(f);
+          } else {
+            samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
+            generate_.use();
+            glUniform1i(generate_.uniform("uCount"), params_.count);
+            glUniform1i(generate_.uniform("uRadianceCache"), 0);
+            glDispatchCompute(GLuint((params_.count + 63) / 64), 1, 1);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+          }
           generationsRun_ = 1;
           double emitted = emittedFlux(0);
           for (int gen = 1; gen < generations_; ++gen) {
@@ -701,6 +721,38 @@ class VplExtension : public RasterExtension {
     exactBits_.upload(bits.data(), bits.size() * 4);
   }
 
+  // Radiance-cache mode: the first generation drawn on the scans' emitting points, by luminance x
+  // area (hierarchical warping over the pool laid out as a square). Without inserted objects
+  // there is nothing for them to light (scan pixels take no indirect light in this mode).
+  void emitFromScans(RasterFrame& f) {
+    const bool any = scanPoints_ > 0 && surfelPoints_.size() > 0;
+    if (!any) {
+      std::vector<VplRecord> dark(size_t(params_.count));
+      records_.upload(dark.data(), dark.size() * sizeof(VplRecord), 0);
+      return;
+    }
+    (void)f;
+    const float zero = 0;
+    glClearNamedBufferData(emitPyramid_.id(), GL_R32F, GL_RED, GL_FLOAT, &zero);
+    pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
+    emitPyramid_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_PYRAMID, 0, emitPyramid_.bytes());
+    emitImportance_.use();
+    glUniform1i(emitImportance_.uniform("uScanPoints"), int(scanPoints_));
+    glDispatchCompute(GLuint((scanPoints_ + 127) / 128), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    warp_->run(emitPyramid_, emitSide_, 1, params_.count, samples_);
+    samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
+    records_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_RECORDS, 0, records_.bytes());
+    pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
+    emit_.use();
+    glUniform1i(emit_.uniform("uCount"), params_.count);
+    glUniform1i(emit_.uniform("uSide"), emitSide_);
+    const glm::vec3 c = 0.5f * (objectsLo_ + objectsHi_);
+    glUniform3f(emit_.uniform("uObjectsCentre"), c.x, c.y, c.z);
+    glDispatchCompute(GLuint((params_.count + 63) / 64), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+
   void bindLightTextures(const frame::PassContext& ctx) const {
     ctx.bindTexture("light_depth", 0);
     ctx.bindTexture("light_base", 1);
@@ -750,6 +802,11 @@ class VplExtension : public RasterExtension {
   size_t poolNodeCount_ = 0;
   uint64_t poolPoints_ = 0;
   uint64_t poolGeneration_ = ~uint64_t(0);
+  gl::ShaderProgram emitImportance_, emit_;  // radiance-cache mode
+  gl::Buffer emitPyramid_;
+  int emitSide_ = 1;
+  uint64_t scanPoints_ = 0;
+  glm::vec3 objectsLo_{INFINITY}, objectsHi_{-INFINITY};
   gl::ShaderProgram scanGBuffer_, meshGBuffer_, importance_, generate_, bounce_, gather_, splat_, pull_, push_, shade_, filter_;
   std::unique_ptr<ImportanceWarp> warp_;
   gl::Framebuffer lightFbo_;

@@ -1,7 +1,11 @@
-// One node of the lights' cut into the ISM point pool: world positions, normals, linear colours.
+// One node of the lights' cut into the ISM point pool: world positions, normals, linear colours,
+// and the area each point stands for: the square of the measured spacing of the finest node of
+// the cut at its position (the builder measures spacing as sqrt(area / points) on exactly the
+// points drawn there, octree/spacing.h), which radiance-cache VPLs emit from.
 layout(local_size_x = 128) in;
 #include "../../common/point_data.glsl"
 #include "../../common/srgb.glsl"
+#include "../../points/splat_size.glsl"
 #include "vpl_interface.glsl"
 layout(std430, binding = VPL_SSBO_POOL) writeonly buffer Pool { PoolPoint pool[]; };
 uniform vec3 uNodeOrigin;
@@ -13,6 +17,8 @@ void main() {
   vec3 c = min(srgbDecode(unpackUnorm4x8(pointColour(i)).rgb) * uColourScale, vec3(65504.0));
   PoolPoint q;
   q.position = vec4(uNodeOrigin + pointLocal(i), uRadius);
-  q.surface = uvec4(pointNormalWord(i), packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0)) | (uint(NL_NO_MATERIAL) << 16), 0u);
+  float s = finestSpacing(pointLocal(i));
+  q.surface = uvec4(pointNormalWord(i), packHalf2x16(c.rg), packHalf2x16(vec2(c.b, 0.0)) | (uint(NL_NO_MATERIAL) << 16),
+                    floatBitsToUint(s * s));
   pool[uFirst + int(i)] = q;
 }

@@ -20,6 +20,7 @@
                                                   // light-weighted share agreeing (sum of 1/1024ths),
                                                   // 1024 x pixels compared
 
+#define VPL_EMITTER 65534.0                        // VplRecord.incident.w of an emitting scan point
 #define VPL_FAR_BITS 0x7f7fffffu                  // FLT_MAX: an empty ISM texel
 
 // One VPL. Its emission towards w is flux x f(wi, w) x cos(n, w): the flux that reached it and
@@ -30,6 +31,7 @@ NL_STRUCT(VplRecord) {
   vec4 normal;     // xyz unit (faces where the light came from), w: roughness
   vec4 flux;       // rgb: incident flux (W) divided by the sample's probability, w: metallic
   vec4 incident;   // xyz: unit direction towards where the light came from, w: material index
+                   // (VPL_EMITTER: a scan point emitting its colour, radiance-cache mode)
   vec4 baseColour; // rgb linear, w: material type (NL_MATERIAL_*)
 };
 
@@ -42,7 +44,7 @@ NL_STRUCT(WarpSample) {
 // An ISM occluder: scene-local position and splat radius (world).
 NL_STRUCT(PoolPoint) {
   vec4 position;   // xyz, w: radius
-  uvec4 surface;   // x: octahedral normal, y: colour rg (half2), z: colour b (half) | material << 16, w: unused
+  uvec4 surface;   // x: octahedral normal, y: colour rg (half2), z: colour b (half) | material << 16, w: area (float bits)
 };
 
 // A node of the pool (a node of the lights' cut, or one mesh's surfels).

@@ -10,7 +10,7 @@ MaterialParams vplMaterial(VplRecord v) {
   m.metallic = v.flux.w;
   m.specular = 0.5, m.specularTint = 0.0, m.sheen = 0.0, m.sheenTint = 0.5, m.clearcoat = 0.0, m.clearcoatGloss = 1.0;
   uint index = uint(v.incident.w);
-  if (index != uint(NL_NO_MATERIAL)) {
+  if (index < uint(VPL_EMITTER)) {
     MaterialRecord r = materials[index];
     m.specular = r.params.z, m.specularTint = r.params.w;
     m.sheen = r.params2.x, m.sheenTint = r.params2.y, m.clearcoat = r.params2.z, m.clearcoatGloss = r.params2.w;

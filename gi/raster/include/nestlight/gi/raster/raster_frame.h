@@ -32,6 +32,8 @@ struct CutNode {
   float spacing = 0;          // nominal spacing of its level
   int parent = -1;            // index of its parent in the same list (-1: a root)
   float colourScale = 1;      // its scan's colour_scale
+  int scan = 0;               // which scan (bindLightsCutTree)
+  int indexInScan = 0;        // its entry in that scan's lights'-cut draw tree
 };
 
 class RasterFrame {
@@ -61,6 +63,9 @@ class RasterFrame {
   // (cutGeneration() counts the changes).
   virtual const std::vector<CutNode>& lightsCut() const = 0;
   virtual uint64_t cutGeneration() const = 0;
+  // Binds scan `scan`'s lights'-cut draw tree (NL_SSBO_DRAW_TREE: points/splat_size.glsl's
+  // finestSpacing() then works for that scan's CutNodes).
+  virtual void bindLightsCutTree(int scan) const = 0;
   virtual bool quiet() const = 0;
 };
 
