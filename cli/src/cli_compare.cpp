@@ -92,6 +92,7 @@ void addCompare(CLI::App& app, int& exitCode) {
     std::vector<double> errorRange;
     double exposure = 0;
     bool json = false;
+    int box = 1;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("test", o->test, "Image to judge: linear .exr or .hdr")->required();
@@ -109,6 +110,10 @@ void addCompare(CLI::App& app, int& exitCode) {
   cmd->add_option("--exposure", o->exposure,
                   "Exposure in stops applied before the tone map (default 0)");
   cmd->add_flag("--json", o->json, "Print JSON instead of a table");
+  cmd->add_option("--box", o->box,
+                  "Compare the means of K x K pixel blocks of both images (separates shading error from "
+                  "pixel-scale sampling: centre samples against area averages, noisy colours, edges)")
+      ->check(CLI::Range(1, 1024));
   cmd->footer(kMetricsHelp);
   cmd->callback([o, &exitCode]() {
     if (!std::isfinite(o->exposure))
@@ -124,8 +129,13 @@ void addCompare(CLI::App& app, int& exitCode) {
                     "needs 0 < low < high, got " + number(imageOptions.minRelative) + " " +
                         number(imageOptions.maxRelative));
     }
-    const gi::HdrImage test = gi::readHdrImage(o->test);
-    const gi::HdrImage reference = gi::readHdrImage(o->reference);
+    gi::HdrImage test = gi::readHdrImage(o->test);
+    gi::HdrImage reference = gi::readHdrImage(o->reference);
+    if (o->box > 1) {
+      gi::checkSameSize(test, reference, o->test, o->reference);
+      test = gi::boxFilter(test, o->box);
+      reference = gi::boxFilter(reference, o->box);
+    }
     gi::CompareOptions options;
     options.exposureStops = o->exposure;
     options.testName = o->test;

@@ -458,11 +458,30 @@ TEST(Vpl, VplsStayPutWhenOnlyTheCameraMoves) {
   }
 }
 
+// "vpls": "auto" picks the count from a time target: an impossible budget gives the fewest (16),
+// a generous one the most the ISM atlas holds (32^2 ISMs for 2 generations: 16384). (Counts in
+// between depend on the machine's speed: the bench measures them, not a test.)
+TEST(Vpl, AutomaticCountFollowsTheTimeTarget) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 20000, 2.0f, 188);
+  auto countFor = [&](double ms) {
+    Scene s = sphereScene(t, 10.0f, 3, json{{"vpls", "auto"}, {"target_ms", ms}, {"light_resolution", 32}}, 16);
+    MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+    std::printf("target %.1f ms: %s VPLs, %.1f ms; %s\n", ms, f.attributes.at("nestlight:vpls").c_str(), f.seconds * 1e3,
+                f.summary.substr(f.summary.find("vpl:")).c_str());
+    return std::stoi(f.attributes.at("nestlight:vpls"));
+  };
+  EXPECT_EQ(countFor(0.1), 16);
+  EXPECT_EQ(countFor(1e5), 16384);
+}
+
 TEST(Vpl, ParametersOutOfRangeNameTheField) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 2000, 2.0f, 188);
   for (const auto& [params, field] : std::vector<std::pair<json, std::string>>{
            {json{{"vpls", 0}}, "gi.parameters.vpls"},
+           {json{{"vpls", "many"}}, "gi.parameters.vpls"},
+           {json{{"target_ms", 0}}, "gi.parameters.target_ms"},
            {json{{"ism_size", 48}}, "gi.parameters.ism_size"},
            {json{{"interleave", 9}}, "gi.parameters.interleave"},
            {json{{"visibility", "exactly"}}, "gi.parameters.visibility"},

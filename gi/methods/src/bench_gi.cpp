@@ -55,23 +55,25 @@ double medianOf(std::vector<double> v) {
 }
 
 // log-log interpolation of the time at which `rows` (in order of quality) reach `target`.
-json timeToError(const std::vector<const BenchGiRow*>& rows, double target) {
+// `box4`: the error of 4 x 4-pixel block means.
+json timeToError(const std::vector<const BenchGiRow*>& rows, double target, bool box4 = false) {
+  auto err = [box4](const BenchGiRow& r) { return box4 ? r.relativeL2Box4 : r.relativeL2; };
   for (size_t i = 0; i < rows.size(); ++i) {
-    if (rows[i]->relativeL2 <= target) {
+    if (err(*rows[i]) <= target) {
       if (i == 0) return {{"ms", rows[0]->medianMs}, {"how", "reached at the lowest setting"}};
       const BenchGiRow &a = *rows[i - 1], &b = *rows[i];
-      double t = (std::log(target) - std::log(a.relativeL2)) / (std::log(b.relativeL2) - std::log(a.relativeL2));
+      double t = (std::log(target) - std::log(err(a))) / (std::log(err(b)) - std::log(err(a)));
       return {{"ms", std::exp(std::log(a.medianMs) + t * (std::log(b.medianMs) - std::log(a.medianMs)))},
               {"how", "interpolated between " + std::to_string(a.quality) + " and " + std::to_string(b.quality) + " " +
                           a.qualityName}};
     }
   }
-  if (rows.empty() || !(rows.back()->relativeL2 > 0)) return {{"ms", nullptr}, {"how", "no data"}};
+  if (rows.empty() || !(err(*rows.back()) > 0)) return {{"ms", nullptr}, {"how", "no data"}};
   const BenchGiRow& b = *rows.back();
   if (b.qualityName != "samples per pixel")
-    return {{"ms", nullptr}, {"how", "not reached (" + std::to_string(b.relativeL2) + " at the best setting)"}};
+    return {{"ms", nullptr}, {"how", "not reached (" + std::to_string(err(b)) + " at the best setting)"}};
   // Monte Carlo error falls as 1/sqrt(time): extrapolate from the best setting.
-  double ms = b.medianMs * std::pow(b.relativeL2 / target, 2);
+  double ms = b.medianMs * std::pow(err(b) / target, 2);
   return {{"ms", ms}, {"how", "extrapolated as error ~ time^-1/2 from " + std::to_string(b.quality) + " spp"}};
 }
 
@@ -212,6 +214,7 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
       co.exposureStops = probe.output.exposure;
       row.cmp = compareImages(first.image, reference, co);
       row.relativeL2 = relativeL2(first.image, reference);
+      row.relativeL2Box4 = relativeL2(boxFilter(first.image, 4), boxFilter(reference, 4));
       const std::string label = m->name + (variant.name.empty() ? "" : " (" + variant.name + ")");
       say("%-10s %8d %10.1f %12.3g %10.4f %10.4g %9.2f %7.4f %11.4f\n", label.c_str(), level, row.medianMs,
           row.raysPerSecond, row.relativeL2, row.cmp.linear.rmse, row.cmp.linear.psnr, row.cmp.linear.ssim,
@@ -229,7 +232,7 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
          "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels\n";
   json jrows = json::array();
   std::vector<PlotSeries> series;
-  json timeTo1, timeTo10;
+  json timeTo1, timeTo10, timeTo10Box4;
   // One series per method and variant, in the order they ran.
   std::vector<std::pair<std::string, std::string>> keys;
   for (const BenchGiRow& r : report.rows)
@@ -257,19 +260,26 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
       jrows.push_back({{"method", r.method}, {"variant", r.variant}, {"attributes", attrs}, {"quality", r.quality}, {"quality_name", r.qualityName}, {"runs_ms", r.ms},
                        {"median_ms", r.medianMs}, {"rays_per_second", r.raysPerSecond},
                        {"samples_per_second", r.samplesPerSecond}, {"gpu_pass_ms", passes},
-                       {"relative_l2", r.relativeL2}, {"comparison", toJson(r.cmp)}});
+                       {"relative_l2", r.relativeL2}, {"relative_l2_box4", r.relativeL2Box4},
+                       {"comparison", toJson(r.cmp)}});
       ps.points.push_back({r.medianMs, r.relativeL2, std::to_string(r.quality)});
     }
     timeTo1[ps.name] = timeToError(mine, 0.01);
     timeTo10[ps.name] = timeToError(mine, 0.1);
+    timeTo10Box4[ps.name] = timeToError(mine, 0.1, true);
     series.push_back(std::move(ps));
   }
   report.json = {{"scene", sceneFile.string()}, {"device", device}, {"mode", prepared("reference").gi.mode == RadianceMode::Albedo ? "albedo" : "radiance_cache"}, {"width", W}, {"height", H}, {"runs", o.runs},
-                 {"reference", refInfo}, {"rows", jrows}, {"time_to_1_percent", timeTo1}, {"time_to_10_percent", timeTo10},
+                 {"reference", refInfo}, {"rows", jrows}, {"time_to_1_percent", timeTo1}, {"time_to_10_percent", timeTo10}, {"time_to_10_percent_box4", timeTo10Box4},
                  {"error_measure", "relative L2: sqrt(sum (t - r)^2 / sum r^2) over pixels and channels"}};
   std::ofstream(dir / "bench_gi.json") << report.json.dump(2) << "\n";
   writeSvgPlot((dir / "bench_gi.svg").string(), "GI speed against error: " + sceneFile.parent_path().filename().string(),
                "time per frame (ms, " + device + ")", "relative L2 error against the reference", series, true, true);
+  for (const auto& [name, t] : timeTo10Box4.items()) {
+    say("time to 10%% relative error of 4x4-pixel means, %s: %s ms (%s)\n", name.c_str(),
+        t["ms"].is_null() ? "-" : std::to_string(int64_t(t["ms"].get<double>())).c_str(),
+        t["how"].get<std::string>().c_str());
+  }
   for (const auto& [name, t] : timeTo10.items()) {
     say("time to 10%% relative error, %s: %s ms (%s)\n", name.c_str(),
         t["ms"].is_null() ? "-" : std::to_string(int64_t(t["ms"].get<double>())).c_str(),

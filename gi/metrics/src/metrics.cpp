@@ -394,4 +394,24 @@ nlohmann::json toJson(const ErrorImageLegend& l) {
           {"description", l.describe()}};
 }
 
+HdrImage boxFilter(const HdrImage& img, int k) {
+  NL_CHECK(k >= 1);
+  const int w = (img.width + k - 1) / k, h = (img.height + k - 1) / k;
+  HdrImage out(w, h);
+  for (int by = 0; by < h; ++by)
+    for (int bx = 0; bx < w; ++bx) {
+      double sum[3] = {0, 0, 0};
+      int n[3] = {0, 0, 0};
+      for (int y = by * k; y < std::min(img.height, by * k + k); ++y)
+        for (int x = bx * k; x < std::min(img.width, bx * k + k); ++x)
+          for (int c = 0; c < 3; ++c) {
+            const float v = img.rgb[3 * (size_t(y) * img.width + x) + c];
+            if (std::isfinite(v)) sum[c] += v, ++n[c];
+          }
+      for (int c = 0; c < 3; ++c)
+        out.rgb[3 * (size_t(by) * w + bx) + c] = n[c] ? float(sum[c] / n[c]) : std::numeric_limits<float>::quiet_NaN();
+    }
+  return out;
+}
+
 }  // namespace nestlight::gi

@@ -115,7 +115,7 @@ class VplExtension : public RasterExtension {
   }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
-    return {{"vpls", std::to_string(params_.count)},
+    return {{"vpls", std::to_string(params_.count) + (params_.autoCount ? " (auto)" : "")},
             {"bounces", std::to_string(bounces_)},
             {"light_resolution", std::to_string(params_.lightResolution)},
             {"ism_size", std::to_string(params_.ismSize)},
@@ -132,6 +132,13 @@ class VplExtension : public RasterExtension {
     bounces_ = std::max(scene.gi.maxBounces, 1);
     radianceCache_ = scene.gi.mode == RadianceMode::RadianceCache;
     generations_ = bounces_ - 1;
+    if (params_.autoCount) {
+      // The most VPLs whose ISMs fit one buffer range, a power of two up to 16384; probes start low.
+      const size_t perVpl = size_t(std::max(generations_, 1)) * size_t(params_.ismSize) * size_t(params_.ismSize) * 4;
+      autoCap_ = 16;
+      while (autoCap_ < 16384 && size_t(autoCap_) * 2 * perVpl <= gl::kMaxSsboRange) autoCap_ *= 2;
+      params_.count = std::min(64, autoCap_);
+    }
     const size_t atlasBytes = size_t(params_.count) * size_t(std::max(generations_, 1)) * size_t(params_.ismSize) *
                               size_t(params_.ismSize) * 4;
     if (usesIsms() && atlasBytes > gl::kMaxSsboRange)
@@ -174,9 +181,9 @@ class VplExtension : public RasterExtension {
     out.attributes["nestlight:vpls_live"] = std::to_string(liveVpls_);
     char line[320];
     std::snprintf(line, sizeof line,
-                  "; vpl: %d VPLs x %d generation(s) of %d bounce(s)%s, %d^2 ISMs from %llu pool points%s, "
+                  "; vpl: %d VPLs%s x %d generation(s) of %d bounce(s)%s, %d^2 ISMs from %llu pool points%s, "
                   "interleave %dx%d, clamp %.3g",
-                  params_.count, generationsRun_, bounces_, stopNote_.c_str(), params_.ismSize,
+                  params_.count, autoNote_.c_str(), generationsRun_, bounces_, stopNote_.c_str(), params_.ismSize,
                   (unsigned long long)poolPoints_, poolNote_.c_str(), params_.interleave, params_.interleave,
                   double(clampDistance_));
     out.summary += line;
@@ -315,6 +322,11 @@ class VplExtension : public RasterExtension {
     const int G = params_.lightResolution;
     const int layers = std::max(layers_, 1);
     pyramid_ = gl::Buffer(pyramidLayerFloats(G) * size_t(layers) * 4);
+    allocateCountBuffers();
+  }
+
+  // The buffers whose size follows the VPL count.
+  void allocateCountBuffers() {
     samples_ = gl::Buffer(size_t(params_.count) * sizeof(WarpSample));
     records_ = gl::Buffer(size_t(params_.count) * size_t(std::max(bounces_ - 1, 1)) * sizeof(VplRecord));
     if (usesIsms()) {
@@ -322,6 +334,49 @@ class VplExtension : public RasterExtension {
       ism_ = gl::Buffer(isms * size_t(params_.ismSize) * size_t(params_.ismSize) * 4);
       ismLevels_ = gl::Buffer(std::max<size_t>(isms * ismPyramidFloats(params_.ismSize) * 4, 16));
     }
+  }
+
+  void setCount(int n) {
+    if (n == params_.count) return;
+    params_.count = n;
+    allocateCountBuffers();
+  }
+
+  // "vpls": "auto". Stills: a warm-up frame, then frames at 64 and 256 VPLs give a + b x count,
+  // then the count that fits target_ms. Interactive: the frame time, smoothed, halves or doubles the count when it leaves
+  // [0.5, 1.25] x target (at most every 8 frames: the VPLs change only then).
+  bool afterFrame(double seconds, bool still) override {
+    if (!params_.autoCount) return false;
+    const double target = params_.targetMs * 1e-3;
+    if (still) {
+      if (autoDecided_) return false;
+      // The first frame pays one-time costs (shader compilation, the pool): it only warms up.
+      probes_.emplace_back(params_.count, seconds);
+      if (probes_.size() == 1) return true;
+      if (probes_.size() == 2) {
+        setCount(std::min(256, autoCap_));
+        return true;
+      }
+      const auto [n1, t1] = probes_[probes_.size() - 2];
+      const auto [n2, t2] = probes_.back();
+      const double b = n2 != n1 ? (t2 - t1) / double(n2 - n1) : 0, a = t1 - b * n1;
+      // No measurable cost per VPL: all fit, or none does.
+      int n = t2 <= target ? autoCap_ : 16;
+      if (b > 0) {
+        const double fit = (target - a) / b;
+        n = 16;
+        while (n * 2 <= autoCap_ && n * 2 <= fit) n *= 2;
+      }
+      autoDecided_ = true;
+      autoNote_ = " (auto: " + std::to_string(n) + " fit " + std::to_string(int(params_.targetMs)) + " ms)";
+      setCount(n);
+      return n != n2;
+    }
+    smoothed_ = smoothed_ > 0 ? 0.8 * smoothed_ + 0.2 * seconds : seconds;
+    if (++sinceChange_ < 8) return false;
+    if (smoothed_ > 1.25 * target && params_.count > 16) setCount(params_.count / 2), sinceChange_ = 0;
+    else if (smoothed_ < 0.5 * target && params_.count * 2 <= autoCap_) setCount(params_.count * 2), sinceChange_ = 0;
+    return false;
   }
 
   void bindCommon(RasterFrame& f) const {
@@ -786,6 +841,12 @@ class VplExtension : public RasterExtension {
 
   VplParameters params_;
   int bounces_ = 1, generations_ = 0, generationsRun_ = 0;
+  // "vpls": "auto"
+  int autoCap_ = 0, sinceChange_ = 0;
+  bool autoDecided_ = false;
+  double smoothed_ = 0;
+  std::vector<std::pair<int, double>> probes_;
+  std::string autoNote_;
   bool radianceCache_ = false;
   uint64_t vplChecksum_ = 0, liveVpls_ = 0;
   std::string stopNote_, poolNote_;
@@ -816,7 +877,7 @@ class VplExtension : public RasterExtension {
 }  // namespace
 
 const std::vector<std::string>& vplParameterKeys() {
-  static const std::vector<std::string> keys = {"vpls",       "light_resolution", "ism_size",    "ism_points",
+  static const std::vector<std::string> keys = {"vpls",       "target_ms",        "light_resolution", "ism_size",    "ism_points",
                                                 "pull_push",  "interleave",       "clamp",       "ism_bias",
                                                 "lod_scale",  "energy_stop",      "visibility"};
   return keys;
@@ -832,7 +893,15 @@ VplParameters vplParameters(const Scene& scene) {
     if (n & (n - 1)) v.fail("must be a power of two (" + std::to_string(lo) + " to " + std::to_string(hi) + ")");
     return n;
   };
-  if (f.has("vpls")) p.count = int(f.at("vpls").integer(1, 65535));
+  if (f.has("vpls")) {
+    const JsonField v = f.at("vpls");
+    if (v.value().is_string()) {
+      if (v.choice({"auto"}) == "auto") p.autoCount = true;
+    } else {
+      p.count = int(v.integer(1, 65535));
+    }
+  }
+  if (f.has("target_ms")) p.targetMs = f.at("target_ms").number(0.1, 1e6);
   if (f.has("light_resolution")) p.lightResolution = powerOfTwo("light_resolution", 16, 4096);
   if (f.has("ism_size")) p.ismSize = powerOfTwo("ism_size", 8, 512);
   if (f.has("ism_points")) p.ismPoints = int(f.at("ism_points").integer(16, 1 << 24));

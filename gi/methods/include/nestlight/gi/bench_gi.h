@@ -46,6 +46,7 @@ struct BenchGiRow {
   std::vector<std::pair<std::string, double>> passMs;  // GL methods: GPU time per pass, first run
   ImageComparison cmp;
   double relativeL2 = 0;
+  double relativeL2Box4 = 0;            // of 4 x 4-pixel block means (shading, not pixel sampling)
   ImageAttributes attributes;           // the first run's (clamp loss, ISM agreement, ...)
 };
 

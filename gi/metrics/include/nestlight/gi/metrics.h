@@ -76,6 +76,12 @@ ImageComparison compareImages(const HdrImage& test, const HdrImage& reference,
 // compareImages says how many were left out. Symmetric in its two images.
 double ssim(const HdrImage& a, const HdrImage& b, double dynamicRange);
 
+// Means of k x k blocks (edge blocks of what is there; non-finite values skipped): comparing two
+// images box-filtered separates their shading's error from pixel-scale sampling (one sample
+// at each pixel's centre against the area average of a path tracer, over noisy recorded colours
+// and edges).
+HdrImage boxFilter(const HdrImage& img, int k);
+
 // Throws nestlight::Error("test: is WxH pixels but reference ref is W'xH' pixels").
 void checkSameSize(const HdrImage& test, const HdrImage& reference, const std::string& testName,
                    const std::string& referenceName);

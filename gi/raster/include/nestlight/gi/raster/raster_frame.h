@@ -85,6 +85,10 @@ class RasterExtension {
   virtual void describe(const RasterFrame& frame, MethodFrame& f) const { (void)frame, (void)f; }
   // After a still's read-back (`rgba`: the output target's pixels, alpha included).
   virtual void afterReadBack(const std::vector<float>& rgba, MethodFrame& f) { (void)rgba, (void)f; }
+  // After every frame, still or interactive, with its wall time (GPU work finished for stills).
+  // A still is rendered again while this returns true (an extension tuning itself, at most 4
+  // times).
+  virtual bool afterFrame(double seconds, bool still) { (void)seconds, (void)still; return false; }
   virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
 };
 

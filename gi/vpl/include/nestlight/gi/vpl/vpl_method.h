@@ -20,6 +20,11 @@ namespace nestlight::gi {
 
 struct VplParameters {
   int count = 1024;             // VPLs per generation ("vpls")
+  // "vpls": "auto": the count is picked to fit target_ms per frame (stills: from two probe frames
+  // fitted as a + b x count; interactive: halved or doubled when the frame time leaves
+  // [0.5, 1.25] x target), a power of two from 16 to the most the ISM atlas holds.
+  bool autoCount = false;
+  double targetMs = 33;
   int lightResolution = 256;    // light G-buffer texels per side and layer (a power of two)
   int ismSize = 32;             // texels per side of one ISM (a power of two)
   int ismPoints = 2048;         // points one ISM splats at most
