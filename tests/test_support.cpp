@@ -1,5 +1,7 @@
 #include "test_support.h"
 
+#include "nestlight/converters/builder.h"
+
 #include <unistd.h>
 
 #include <array>
@@ -69,6 +71,16 @@ bool anyContains(const std::vector<std::string>& v, const std::string& s) {
   for (auto& x : v)
     if (x.find(s) != std::string::npos) return true;
   return false;
+}
+
+void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output) {
+  BuildOptions b;
+  b.output = output;
+  b.progress = ProgressMode::Quiet;
+  std::filesystem::remove_all(output);
+  std::vector<std::unique_ptr<PointReader>> src;
+  src.push_back(openReader(input.string()));
+  buildOctree(std::move(src), b);
 }
 
 }  // namespace nestlight::test

@@ -35,6 +35,9 @@ int runCli(const std::string& args, std::string* output = nullptr);
 
 void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);
+// Converts one point file (any reader's format) into an octree at `output`, quietly, replacing
+// what is there.
+void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output);
 
 // Every point a reader gave, its batches concatenated.
 struct Points {

@@ -163,6 +163,10 @@ void addCompare(CLI::App& app, int& exitCode) {
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       printTable(o->test, o->reference, c);
+      double st = 0, sr = 0;
+      for (size_t i = 0; i < test.rgb.size(); ++i)
+        if (std::isfinite(test.rgb[i]) && std::isfinite(reference.rgb[i])) st += test.rgb[i], sr += reference.rgb[i];
+      std::printf("mean radiance, test / reference: %.4f\n", sr > 0 ? st / sr : 0.0);
       if (!o->errorImage.empty())
         std::printf("error image %s: %s\n", o->errorImage.c_str(),
                     legend["description"].get<std::string>().c_str());

@@ -373,12 +373,7 @@ TEST(Raster, ScannedPlaneUnderAPointLightIsTheClosedForm) {
     Rng rng(7);
     for (int i = 0; i < 120000; ++i) ply << rng.uniform() * 8 - 4 << " " << rng.uniform() * 8 - 4 << " 0 0 0 1 188 188 188\n";
   }
-  BuildOptions b;
-  b.output = t.path() / "plane.octree";
-  b.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> src;
-  src.push_back(openReader(t.file("plane.ply")));
-  buildOctree(std::move(src), b);
+  test::buildOctreeFrom(t.file("plane.ply"), t.path() / "plane.octree");
   const float I = 40.0f;
   const glm::vec3 light(0.5f, 0.3f, 3.0f);
   json j = {{"version", 1},
@@ -434,12 +429,7 @@ TEST(Raster, OccludersOutOfViewStillCastShadows) {
     for (int i = 0; i < plate; ++i)
       ply << rng.uniform() * 1.6 - 0.8 << " " << rng.uniform() * 1.6 + 2.2 << " 1.5 0 0 1 188 188 188\n";
   }
-  BuildOptions b;
-  b.output = t.path() / "s.octree";
-  b.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> src;
-  src.push_back(openReader(t.file("s.ply")));
-  buildOctree(std::move(src), b);
+  test::buildOctreeFrom(t.file("s.ply"), t.path() / "s.octree");
   json j = {{"version", 1},
             {"origin", {0.0, 0.0, 0.0}},  // world = local, as floorPoint() assumes
             {"octrees", {{{"path", "s.octree"}}}},

@@ -46,12 +46,7 @@ void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, int grey
           << " " << grey << "\n";
     }
   }
-  BuildOptions b;
-  b.output = t.path() / "sphere.octree";
-  b.progress = ProgressMode::Quiet;
-  std::vector<std::unique_ptr<PointReader>> src;
-  src.push_back(openReader(t.file("sphere.ply")));
-  buildOctree(std::move(src), b);
+  nestlight::test::buildOctreeFrom(t.file("sphere.ply"), t.path() / "sphere.octree");
 }
 
 Scene sphereScene(const nestlight::test::TempDir& t, float I, int bounces, const json& parameters, int size = 32) {
@@ -421,13 +416,7 @@ TEST(Vpl, NationalGridCoordinatesGiveTheSameImage) {
       out << buf << rest << "\n";
     }
   }
-  BuildOptions b;
-  b.output = t.path() / "sphere.octree";
-  b.progress = ProgressMode::Quiet;
-  std::filesystem::remove_all(b.output);
-  std::vector<std::unique_ptr<PointReader>> src;
-  src.push_back(openReader(t.file("far.ply")));
-  buildOctree(std::move(src), b);
+  nestlight::test::buildOctreeFrom(t.file("far.ply"), t.path() / "sphere.octree");
   json j = json::parse(std::ifstream(t.file("scene.json")));
   j["lights"][0]["position"] = {shift.x, shift.y, shift.z};
   j["camera"]["eye"] = {shift.x - 0.3, shift.y, shift.z + 0.1};

@@ -763,12 +763,7 @@ class RasterMethod : public Method, public RasterFrame {
       glDepthFunc(GL_LESS);
       glDisable(GL_BLEND);
       glDisable(GL_CULL_FACE);
-      const float zero[4] = {0, 0, 0, 0}, one = 1.0f;
-      const GLuint noMaterial[4] = {0, 0, 0, NL_NO_MATERIAL};
-      glClearBufferfv(GL_DEPTH, 0, &one);
-      glClearBufferfv(GL_COLOR, 0, zero);
-      glClearBufferfv(GL_COLOR, 1, zero);
-      glClearBufferuiv(GL_COLOR, 2, noMaterial);
+      frame::clearGBuffer();
       drawMeshes(meshGBuffer_, ctx.uniforms().clipFromWorld, true);
     });
     graph_.addPass("gbuffer_scans", frame::Scope::Tile, scanWrites, [this](const frame::PassContext& ctx) {

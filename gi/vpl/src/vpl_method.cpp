@@ -16,6 +16,7 @@
 #include <tbb/parallel_for.h>
 
 #include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/passes.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/raster/raster_frame.h"
@@ -498,12 +499,7 @@ class VplExtension : public RasterExtension {
             lightFbo_.attachLayer(GL_DEPTH_ATTACHMENT, ctx.target("light_depth"), layer);
             lightFbo_.finish(3, "light G-buffer");
             glBindFramebuffer(GL_FRAMEBUFFER, lightFbo_.id());
-            const float zero[4] = {0, 0, 0, 0}, one = 1.0f;
-            const GLuint noMaterial[4] = {0, 0, 0, NL_NO_MATERIAL};
-            glClearBufferfv(GL_DEPTH, 0, &one);
-            glClearBufferfv(GL_COLOR, 0, zero);
-            glClearBufferfv(GL_COLOR, 1, zero);
-            glClearBufferuiv(GL_COLOR, 2, noMaterial);
+            frame::clearGBuffer();
             const glm::mat4& clip = f.lightClipFromWorld()[size_t(layer)];
             f.drawMeshes(meshGBuffer_, clip, true);
             const frame::LightRecord& l = f.lights()[size_t(layerOwner_[size_t(layer)])];

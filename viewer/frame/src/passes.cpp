@@ -29,4 +29,13 @@ void addToneMapPass(FrameGraph& graph, const std::string& input, const std::stri
       });
 }
 
+void clearGBuffer() {
+  const float zero[4] = {0, 0, 0, 0}, one = 1.0f;
+  const GLuint noMaterial[4] = {0, 0, 0, NL_NO_MATERIAL};
+  glClearBufferfv(GL_DEPTH, 0, &one);
+  glClearBufferfv(GL_COLOR, NL_GBUFFER_BASE_COLOUR, zero);
+  glClearBufferfv(GL_COLOR, NL_GBUFFER_NORMAL, zero);
+  glClearBufferuiv(GL_COLOR, NL_GBUFFER_MATERIAL, noMaterial);
+}
+
 }  // namespace nestlight::frame
