@@ -188,7 +188,7 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
       s.gi.seed = 1;
       m->applyQuality(s.gi, level);
       variant.apply(s.gi);
-      std::unique_ptr<Method> method = createMethod(s, {true, false});
+      std::unique_ptr<Method> method = createMethod(s, {true, false, true});
       BenchGiRow row;
       row.method = m->name;
       row.variant = variant.name;

@@ -107,6 +107,7 @@ class RasterMethod : public Method, public RasterFrame {
  public:
   RasterMethod(const Scene& scene, const MethodContext& mc, std::unique_ptr<RasterExtension> extension)
       : scene_(scene), quiet_(mc.quiet), extension_(std::move(extension)) {
+    graph_.setSyncTiming(mc.syncPassTiming);
     params_ = parseRasterParameters(scene, extension_ ? extension_->parameterKeys() : std::vector<std::string>{});
     if (!mc.glContextCurrent) {
       context_ = gl::createHeadlessContext();
@@ -325,6 +326,8 @@ class RasterMethod : public Method, public RasterFrame {
       passes += (passes.empty() ? "" : ", ") + name + " " + std::to_string(ms).substr(0, 6) + " ms";
       f.attributes["nestlight:pass_ms:" + name] = std::to_string(ms);
     }
+    for (const auto& t : graph_.timings())
+      if (t.wallMs > 0) f.attributes["nestlight:pass_wall_ms:" + t.name] = std::to_string(t.wallMs);
     if (extension_) f.attributes["nestlight:method"] = extension_->name();
     char line[256];
     std::snprintf(line, sizeof line, "%llu points, %zu lights, %d px shadow maps, %.1f ms (stream %.2f s)",

@@ -1,6 +1,7 @@
 #include "nestlight/frame/frame_graph.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <set>
 
@@ -218,6 +219,8 @@ void FrameGraph::runPasses(Scope scope, const Tile& tile) {
     ctx.graph_ = this;
     ctx.pass_ = i;
     ctx.tile_ = &tile;
+    if (syncTiming_) glFinish();
+    const auto wall0 = std::chrono::steady_clock::now();
     if (timing_) {
       if (!p.timer) p.timer = std::make_unique<gl::GpuTimer>();
       p.timer->begin();
@@ -226,6 +229,10 @@ void FrameGraph::runPasses(Scope scope, const Tile& tile) {
     if (timing_) {
       p.timer->end();
       timing.gpuMs += p.timer->milliseconds();
+    }
+    if (syncTiming_) {
+      glFinish();
+      timing.wallMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0).count();
     }
     ++timing.runs;
   }
@@ -236,7 +243,7 @@ std::vector<float> FrameGraph::execute(int width, int height, int maxTile) {
     throw Error("frame: image size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
   if (!compiled_) throw Error("frame: execute() before compile()");
   NL_CHECK(maxTile >= 16);
-  for (auto& t : timings_) t.gpuMs = 0, t.runs = 0;
+  for (auto& t : timings_) t.gpuMs = 0, t.wallMs = 0, t.runs = 0;
   fullClipFromView_ = uniforms_.clipFromView;
   const int tile = std::min(maxTile, std::max(width, height));
   const bool single = width <= tile && height <= tile;
@@ -284,7 +291,7 @@ std::vector<float> FrameGraph::execute(int width, int height, int maxTile) {
 
 void FrameGraph::executeToTarget(int width, int height) {
   if (!compiled_) throw Error("frame: execute() before compile()");
-  for (auto& t : timings_) t.gpuMs = 0, t.runs = 0;
+  for (auto& t : timings_) t.gpuMs = 0, t.wallMs = 0, t.runs = 0;
   fullClipFromView_ = uniforms_.clipFromView;
   allocate(width, height);
   Tile whole{width, height, 0, 0, width, height, glm::mat4(1.0f)};

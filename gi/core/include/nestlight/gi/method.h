@@ -54,8 +54,14 @@ class Method {
 // How a method was asked for: progress lines (stderr) unless quiet; GL methods make a headless
 // context of their own unless the caller (the viewer's window) has one current.
 struct MethodContext {
+  MethodContext(bool quietArg = false, bool glContextCurrentArg = false, bool syncPassTimingArg = false)
+      : quiet(quietArg), glContextCurrent(glContextCurrentArg), syncPassTiming(syncPassTimingArg) {}
   bool quiet = false;
   bool glContextCurrent = false;
+  // GL methods: also time each pass between glFinish() calls (attributes
+  // nestlight:pass_wall_ms:<pass>), which a CPU rasteriser needs for per-pass figures; costs the
+  // overlap of passes. `bench gi` sets it.
+  bool syncPassTiming = false;
 };
 
 // The names scene files may give as gi.method; the registry (gi/methods) creates exactly these

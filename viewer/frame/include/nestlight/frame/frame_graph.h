@@ -96,6 +96,10 @@ struct PassTiming {
   std::string name;
   Scope scope = Scope::Tile;
   double gpuMs = 0;  // GL_TIME_ELAPSED, summed over the frame's tiles
+  // With setSyncTiming: wall time between glFinish() before and after the pass, summed over the
+  // tiles. A CPU rasteriser (llvmpipe) runs compute dispatches at the next synchronisation, so
+  // its timer queries charge them to a later pass; this charges every pass its own work.
+  double wallMs = 0;
   int runs = 0;      // 1 for frame passes, the number of tiles for tile passes
 };
 
@@ -132,6 +136,7 @@ class FrameGraph {
 
   const std::vector<PassTiming>& timings() const { return timings_; }
   void setTiming(bool on) { timing_ = on; }
+  void setSyncTiming(bool on) { syncTiming_ = on; }
   bool isCulled(const std::string& pass) const;
   // One line per pass: "name (scope): reads a, b; writes c", culled passes marked.
   std::string describe() const;
@@ -147,7 +152,7 @@ class FrameGraph {
   std::vector<std::unique_ptr<Pass>> passes_;
   std::map<std::string, std::unique_ptr<Target>> targets_;
   std::string output_;
-  bool compiled_ = false, timing_ = true;
+  bool compiled_ = false, timing_ = true, syncTiming_ = false;
   int margin_ = 0;
   FrameBlock uniforms_{};
   glm::mat4 fullClipFromView_{1.0f};
