@@ -132,7 +132,11 @@ class VplExtension : public RasterExtension {
     const Scene& scene = f.scene();
     bounces_ = std::max(scene.gi.maxBounces, 1);
     radianceCache_ = scene.gi.mode == RadianceMode::RadianceCache;
-    generations_ = bounces_ - 1;
+    // Bounces as the reference counts them. With lights, the first bounce is direct light (the
+    // raster frame's) and each further one a VPL generation; in the radiance-cache mode the scan's
+    // emission reaching an object is already its first bounce, so the emitting generation counts
+    // as bounce 1.
+    generations_ = radianceCache_ ? bounces_ : bounces_ - 1;
     if (params_.autoCount) {
       // The most VPLs whose ISMs fit one buffer range, a power of two up to 16384; probes start low.
       const size_t perVpl = size_t(std::max(generations_, 1)) * size_t(params_.ismSize) * size_t(params_.ismSize) * 4;
@@ -144,7 +148,7 @@ class VplExtension : public RasterExtension {
                               size_t(params_.ismSize) * 4;
     if (usesIsms() && atlasBytes > gl::kMaxSsboRange)
       throw Error(scene.file.string(), "gi.parameters.ism_size",
-                  "the ISM atlas (vpls x (bounces - 1) x ism_size^2 x 4 bytes = " + std::to_string(atlasBytes >> 20) +
+                  "the ISM atlas (vpls x VPL generations x ism_size^2 x 4 bytes = " + std::to_string(atlasBytes >> 20) +
                       " MiB) exceeds one 128 MiB buffer range: lower vpls, bounces or ism_size");
     radius_ = 0.5f * glm::length(f.boundsHi() - f.boundsLo());
     clampDistance_ = std::max(params_.clampFraction * radius_, 1e-6f);
@@ -329,7 +333,7 @@ class VplExtension : public RasterExtension {
   // The buffers whose size follows the VPL count.
   void allocateCountBuffers() {
     samples_ = gl::Buffer(size_t(params_.count) * sizeof(WarpSample));
-    records_ = gl::Buffer(size_t(params_.count) * size_t(std::max(bounces_ - 1, 1)) * sizeof(VplRecord));
+    records_ = gl::Buffer(size_t(params_.count) * size_t(std::max(generations_, 1)) * sizeof(VplRecord));
     if (usesIsms()) {
       const size_t isms = size_t(params_.count) * size_t(std::max(generations_, 1));
       ism_ = gl::Buffer(isms * size_t(params_.ismSize) * size_t(params_.ismSize) * 4);
