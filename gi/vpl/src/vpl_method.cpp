@@ -16,10 +16,12 @@
 #include <tbb/parallel_for.h>
 
 #include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/gl_node_store.h"
 #include "nestlight/frame/passes.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/sampling.h"
 #include "nestlight/gi/reference/reference_scene.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
@@ -67,8 +69,6 @@ size_t ismPyramidFloats(int size) {
   for (int s = size >> 1; s >= 1; s >>= 1) n += size_t(s) * size_t(s);
   return n;
 }
-
-float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
 // Importance pyramid and warping: shared by the method and warpImportanceOnGpu.
 class ImportanceWarp {
@@ -283,24 +283,11 @@ class VplExtension : public RasterExtension {
         float a = s.area[i];
         uint32_t areaBits;
         std::memcpy(&areaBits, &a, 4);
-        q.surface = glm::uvec4(packNormalWord(nn), packHalf2(s.albedo[i].r, s.albedo[i].g),
+        q.surface = glm::uvec4(frame::packNormal(nn.x, nn.y, nn.z), packHalf2(s.albedo[i].r, s.albedo[i].g),
                                packHalf2(s.albedo[i].b, 0.0f) | (s.material[i] << 16), areaBits);
         surfelPoints_.push_back(q);
       }
     }
-  }
-
-  static uint32_t packNormalWord(const glm::vec3& n) {
-    const float l1 = std::fabs(n.x) + std::fabs(n.y) + std::fabs(n.z);
-    if (!(l1 > 0) || !std::isfinite(l1)) return 0;
-    float u = n.x / l1, v = n.y / l1;
-    if (n.z < 0) {
-      const float ou = u;
-      u = (1 - std::fabs(v)) * (ou >= 0 ? 1.f : -1.f);
-      v = (1 - std::fabs(ou)) * (v >= 0 ? 1.f : -1.f);
-    }
-    auto q = [](float a) { return uint32_t(std::lround((std::clamp(a, -1.f, 1.f) * 0.5f + 0.5f) * 65535.f)); };
-    return q(u) | (q(v) << 16);
   }
 
   static uint32_t packHalf2(float a, float b) { return uint32_t(glm::packHalf1x16(std::min(a, 65504.f))) |

@@ -8,13 +8,6 @@
 
 namespace nestlight::frame {
 
-namespace {
-
-uint32_t packRgba(double r, double g, double b) {
-  auto q = [](double v) { return static_cast<uint32_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5); };
-  return q(r) | (q(g) << 8) | (q(b) << 16) | (255u << 24);
-}
-
 // Octahedral normal encoding (Cigolle et al. 2014, "A Survey of Efficient Representations for
 // Independent Unit Vectors"): 2 x 16 bits, max error ~1e-4 rad.
 uint32_t packNormal(float x, float y, float z) {
@@ -28,6 +21,13 @@ uint32_t packNormal(float x, float y, float z) {
   }
   auto q = [](float a) { return static_cast<uint32_t>(std::lround((std::clamp(a, -1.f, 1.f) * 0.5f + 0.5f) * 65535.f)); };
   return q(u) | (q(v) << 16);
+}
+
+namespace {
+
+uint32_t packRgba(double r, double g, double b) {
+  auto q = [](double v) { return static_cast<uint32_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5); };
+  return q(r) | (q(g) << 8) | (q(b) << 16) | (255u << 24);
 }
 
 // ASPRS standard classes (LAS 1.4 table 17), other codes by a hash hue.

@@ -36,6 +36,10 @@ class NodeLayer {
                        std::vector<uint8_t>& out) const = 0;
 };
 
+// A unit normal in the GPU point format's word (octahedral, 2 x 16 bits; 0 for a zero or
+// non-finite vector), as shaders/common/octahedral.glsl decodes it.
+uint32_t packNormal(float x, float y, float z);
+
 enum class ColourMode { Rgb, Intensity, Classification, Elevation, Normal };
 const char* colourModeName(ColourMode m);
 // Parses "rgb", "intensity", "classification", "elevation", "normal"; throws on others.
