@@ -7,22 +7,22 @@
 // Interleaved sampling: Keller and Heidrich 2001, "Interleaved Sampling".
 #include "nestlight/gi/vpl/vpl_method.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-
 #include <glm/gtc/packing.hpp>
-#include <tbb/parallel_for.h>
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
-#include "nestlight/frame/passes.h"
 #include "nestlight/frame/interface.h"
+#include "nestlight/frame/passes.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/raster/raster_frame.h"
-#include "nestlight/gi/sampling.h"
 #include "nestlight/gi/reference/reference_scene.h"
+#include "nestlight/gi/sampling.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -35,8 +35,8 @@ using vec4 = glm::vec4;
 using ivec4 = glm::ivec4;
 using uvec4 = glm::uvec4;
 using mat4 = glm::mat4;
-#include "interface/frame_interface.glsl"
 #include "gi/vpl/vpl_interface.glsl"
+#include "interface/frame_interface.glsl"
 }  // namespace vplglsl
 
 namespace {
@@ -74,7 +74,8 @@ size_t ismPyramidFloats(int size) {
 class ImportanceWarp {
  public:
   ImportanceWarp()
-      : pyramid_({{GL_COMPUTE_SHADER, "gi/vpl/vpl_pyramid.comp"}}), warp_({{GL_COMPUTE_SHADER, "gi/vpl/vpl_warp.comp"}}) {}
+      : pyramid_({{GL_COMPUTE_SHADER, "gi/vpl/vpl_pyramid.comp"}}),
+        warp_({{GL_COMPUTE_SHADER, "gi/vpl/vpl_warp.comp"}}) {}
 
   // `levels` holds level 0 of every layer (pyramidLayerFloats(size) floats per layer): fills the
   // levels above, then warps `count` Halton points into `samples`.
@@ -88,7 +89,8 @@ class ImportanceWarp {
       glDispatchCompute(g, g, GLuint(layers));
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
-    samples.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, size_t(count) * sizeof(WarpSample));
+    samples.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0,
+                      size_t(count) * sizeof(WarpSample));
     warp_.use();
     glUniform1i(warp_.uniform("uSize"), size);
     glUniform1i(warp_.uniform("uLayers"), layers);
@@ -112,7 +114,9 @@ class VplExtension : public RasterExtension {
   bool usesIsms() const { return params_.visibility != VplParameters::Visibility::None; }
   bool exact() const { return params_.visibility == VplParameters::Visibility::Exact; }
   const char* visibilityName() const {
-    return params_.visibility == VplParameters::Visibility::Ism ? "ism" : exact() ? "exact" : "none";
+    return params_.visibility == VplParameters::Visibility::Ism ? "ism"
+           : exact()                                            ? "exact"
+                                                                : "none";
   }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
@@ -138,17 +142,20 @@ class VplExtension : public RasterExtension {
     // as bounce 1.
     generations_ = radianceCache_ ? bounces_ : bounces_ - 1;
     if (params_.autoCount) {
-      // The most VPLs whose ISMs fit one buffer range, a power of two up to 16384; probes start low.
-      const size_t perVpl = size_t(std::max(generations_, 1)) * size_t(params_.ismSize) * size_t(params_.ismSize) * 4;
+      // The most VPLs whose ISMs fit one buffer range, a power of two up to 16384; probes start
+      // low.
+      const size_t perVpl =
+          size_t(std::max(generations_, 1)) * size_t(params_.ismSize) * size_t(params_.ismSize) * 4;
       autoCap_ = 16;
       while (autoCap_ < 16384 && size_t(autoCap_) * 2 * perVpl <= gl::kMaxSsboRange) autoCap_ *= 2;
       params_.count = std::min(64, autoCap_);
     }
-    const size_t atlasBytes = size_t(params_.count) * size_t(std::max(generations_, 1)) * size_t(params_.ismSize) *
-                              size_t(params_.ismSize) * 4;
+    const size_t atlasBytes = size_t(params_.count) * size_t(std::max(generations_, 1)) *
+                              size_t(params_.ismSize) * size_t(params_.ismSize) * 4;
     if (usesIsms() && atlasBytes > gl::kMaxSsboRange)
       throw Error(scene.file.string(), "gi.parameters.ism_size",
-                  "the ISM atlas (vpls x VPL generations x ism_size^2 x 4 bytes = " + std::to_string(atlasBytes >> 20) +
+                  "the ISM atlas (vpls x VPL generations x ism_size^2 x 4 bytes = " +
+                      std::to_string(atlasBytes >> 20) +
                       " MiB) exceeds one 128 MiB buffer range: lower vpls, bounces or ism_size");
     radius_ = 0.5f * glm::length(f.boundsHi() - f.boundsLo());
     clampDistance_ = std::max(params_.clampFraction * radius_, 1e-6f);
@@ -185,12 +192,13 @@ class VplExtension : public RasterExtension {
     out.attributes["nestlight:vpl_checksum"] = std::to_string(vplChecksum_);
     out.attributes["nestlight:vpls_live"] = std::to_string(liveVpls_);
     char line[320];
-    std::snprintf(line, sizeof line,
-                  "; vpl: %d VPLs%s x %d generation(s) of %d bounce(s)%s, %d^2 ISMs from %llu pool points%s, "
-                  "interleave %dx%d, clamp %.3g",
-                  params_.count, autoNote_.c_str(), generationsRun_, bounces_, stopNote_.c_str(), params_.ismSize,
-                  (unsigned long long)poolPoints_, poolNote_.c_str(), params_.interleave, params_.interleave,
-                  double(clampDistance_));
+    std::snprintf(
+        line, sizeof line,
+        "; vpl: %d VPLs%s x %d generation(s) of %d bounce(s)%s, %d^2 ISMs from %llu pool points%s, "
+        "interleave %dx%d, clamp %.3g",
+        params_.count, autoNote_.c_str(), generationsRun_, bounces_, stopNote_.c_str(),
+        params_.ismSize, (unsigned long long)poolPoints_, poolNote_.c_str(), params_.interleave,
+        params_.interleave, double(clampDistance_));
     out.summary += line;
   }
 
@@ -211,13 +219,16 @@ class VplExtension : public RasterExtension {
       const double weighted = c[5] ? double(c[4]) / c[5] : 1.0;
       out.attributes["nestlight:ism_agreement"] = std::to_string(agree);
       out.attributes["nestlight:ism_agreement_light"] = std::to_string(weighted);
-      out.attributes["nestlight:ism_false_shadow"] = std::to_string(c[1] ? double(c[2]) / c[1] : 0.0);
+      out.attributes["nestlight:ism_false_shadow"] =
+          std::to_string(c[1] ? double(c[2]) / c[1] : 0.0);
       out.attributes["nestlight:ism_leak"] = std::to_string(c[1] ? double(c[3]) / c[1] : 0.0);
       char a[200];
       std::snprintf(a, sizeof a,
-                    "; exact visibility: ISMs agreed on %.2f%% of %u pairs (%.2f%% false shadow, %.2f%% leaks), "
+                    "; exact visibility: ISMs agreed on %.2f%% of %u pairs (%.2f%% false shadow, "
+                    "%.2f%% leaks), "
                     "%.2f%% of the light",
-                    100 * agree, c[1], c[1] ? 100.0 * c[2] / c[1] : 0.0, c[1] ? 100.0 * c[3] / c[1] : 0.0, 100 * weighted);
+                    100 * agree, c[1], c[1] ? 100.0 * c[2] / c[1] : 0.0,
+                    c[1] ? 100.0 * c[3] / c[1] : 0.0, 100 * weighted);
       out.summary += a;
     }
     char line[96];
@@ -283,44 +294,55 @@ class VplExtension : public RasterExtension {
         float a = s.area[i];
         uint32_t areaBits;
         std::memcpy(&areaBits, &a, 4);
-        q.surface = glm::uvec4(frame::packNormal(nn.x, nn.y, nn.z), packHalf2(s.albedo[i].r, s.albedo[i].g),
-                               packHalf2(s.albedo[i].b, 0.0f) | (s.material[i] << 16), areaBits);
+        q.surface =
+            glm::uvec4(frame::packNormal(nn.x, nn.y, nn.z), packHalf2(s.albedo[i].r, s.albedo[i].g),
+                       packHalf2(s.albedo[i].b, 0.0f) | (s.material[i] << 16), areaBits);
         surfelPoints_.push_back(q);
       }
     }
   }
 
-  static uint32_t packHalf2(float a, float b) { return uint32_t(glm::packHalf1x16(std::min(a, 65504.f))) |
-                                                      (uint32_t(glm::packHalf1x16(std::min(b, 65504.f))) << 16); }
+  static uint32_t packHalf2(float a, float b) {
+    return uint32_t(glm::packHalf1x16(std::min(a, 65504.f))) |
+           (uint32_t(glm::packHalf1x16(std::min(b, 65504.f))) << 16);
+  }
 
   void compile() {
     using gl::ShaderProgram;
-    scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
-    meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
-    importance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_importance.comp"}});
-    generate_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_generate.comp"}});
-    emitImportance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit_importance.comp"}});
-    emit_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit.comp"}});
+    // Each mode makes only what its first generation needs: the lights' (albedo) or the
+    // emitting scan points' (radiance cache).
+    if (radianceCache_) {
+      emitImportance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit_importance.comp"}});
+      emit_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit.comp"}});
+    } else {
+      scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
+                                    {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
+      meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
+                                    {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
+      importance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_importance.comp"}});
+      generate_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_generate.comp"}});
+      lightFbo_ = gl::Framebuffer::create();
+      pyramid_ = gl::Buffer(pyramidLayerFloats(params_.lightResolution) * size_t(std::max(layers_, 1)) * 4);
+    }
     bounce_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_bounce.comp"}});
     gather_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_gather.comp"}});
     splat_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_splat.comp"}});
     pull_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_pull.comp"}});
     push_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_push.comp"}});
-    shade_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/vpl/vpl_shade.frag"}});
-    filter_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/vpl/vpl_filter.frag"}});
+    shade_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                            {GL_FRAGMENT_SHADER, "gi/vpl/vpl_shade.frag"}});
+    filter_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                             {GL_FRAGMENT_SHADER, "gi/vpl/vpl_filter.frag"}});
     warp_ = std::make_unique<ImportanceWarp>();
-    lightFbo_ = gl::Framebuffer::create();
     emptyVao_ = gl::VertexArray::create();
-    const int G = params_.lightResolution;
-    const int layers = std::max(layers_, 1);
-    pyramid_ = gl::Buffer(pyramidLayerFloats(G) * size_t(layers) * 4);
     allocateCountBuffers();
   }
 
   // The buffers whose size follows the VPL count.
   void allocateCountBuffers() {
     samples_ = gl::Buffer(size_t(params_.count) * sizeof(WarpSample));
-    records_ = gl::Buffer(size_t(params_.count) * size_t(std::max(generations_, 1)) * sizeof(VplRecord));
+    records_ =
+        gl::Buffer(size_t(params_.count) * size_t(std::max(generations_, 1)) * sizeof(VplRecord));
     if (usesIsms()) {
       const size_t isms = size_t(params_.count) * size_t(std::max(generations_, 1));
       ism_ = gl::Buffer(isms * size_t(params_.ismSize) * size_t(params_.ismSize) * 4);
@@ -335,8 +357,9 @@ class VplExtension : public RasterExtension {
   }
 
   // "vpls": "auto". Stills: a warm-up frame, then frames at 64 and 256 VPLs give a + b x count,
-  // then the count that fits target_ms. Interactive: the frame time, smoothed, halves or doubles the count when it leaves
-  // [0.5, 1.25] x target (at most every 8 frames: the VPLs change only then).
+  // then the count that fits target_ms. Interactive: the frame time, smoothed, halves or doubles
+  // the count when it leaves [0.5, 1.25] x target (at most every 8 frames: the VPLs change only
+  // then).
   bool afterFrame(double seconds, bool still) override {
     if (!params_.autoCount) return false;
     const double target = params_.targetMs * 1e-3;
@@ -360,14 +383,17 @@ class VplExtension : public RasterExtension {
         while (n * 2 <= autoCap_ && n * 2 <= fit) n *= 2;
       }
       autoDecided_ = true;
-      autoNote_ = " (auto: " + std::to_string(n) + " fit " + std::to_string(int(params_.targetMs)) + " ms)";
+      autoNote_ =
+          " (auto: " + std::to_string(n) + " fit " + std::to_string(int(params_.targetMs)) + " ms)";
       setCount(n);
       return n != n2;
     }
     smoothed_ = smoothed_ > 0 ? 0.8 * smoothed_ + 0.2 * seconds : seconds;
     if (++sinceChange_ < 8) return false;
-    if (smoothed_ > 1.25 * target && params_.count > 16) setCount(params_.count / 2), sinceChange_ = 0;
-    else if (smoothed_ < 0.5 * target && params_.count * 2 <= autoCap_) setCount(params_.count * 2), sinceChange_ = 0;
+    if (smoothed_ > 1.25 * target && params_.count > 16)
+      setCount(params_.count / 2), sinceChange_ = 0;
+    else if (smoothed_ < 0.5 * target && params_.count * 2 <= autoCap_)
+      setCount(params_.count * 2), sinceChange_ = 0;
     return false;
   }
 
@@ -383,7 +409,8 @@ class VplExtension : public RasterExtension {
     glUniform1f(p.uniform("uLodScale"), params_.lodScale);
     glUniform1ui(p.uniform("uPointBudget"), GLuint(params_.ismPoints));
     if (pool_.bytes()) pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
-    if (poolNodes_.bytes()) poolNodes_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL_NODES, 0, poolNodes_.bytes());
+    if (poolNodes_.bytes())
+      poolNodes_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL_NODES, 0, poolNodes_.bytes());
   }
 
   // The ISM pool: the lights' cut's points (gathered on the GPU from the nodes' buffers) and the
@@ -417,19 +444,24 @@ class VplExtension : public RasterExtension {
     scanPoints_ = scanPoints;
     emitSide_ = 1;
     while (uint64_t(emitSide_) * uint64_t(emitSide_) < scanPoints) emitSide_ *= 2;
-    if (radianceCache_ && scanPoints > 0) emitPyramid_ = gl::Buffer(pyramidLayerFloats(emitSide_) * 4);
+    if (radianceCache_ && scanPoints > 0)
+      emitPyramid_ = gl::Buffer(pyramidLayerFloats(emitSide_) * 4);
     for (PoolNode n : surfelNodes_) {
       n.range.x += int(scanPoints);
       nodes.push_back(n);
     }
     points += surfelPoints_.size();
     poolPoints_ = points;
-    poolNote_ = dropped ? " (" + std::to_string(dropped) + " points of the finest nodes left out: 128 MiB)" : "";
+    poolNote_ =
+        dropped ? " (" + std::to_string(dropped) + " points of the finest nodes left out: 128 MiB)"
+                : "";
     poolNodeCount_ = nodes.size();
     pool_ = points ? gl::Buffer(points * sizeof(PoolPoint)) : gl::Buffer();
-    poolNodes_ = nodes.empty() ? gl::Buffer() : gl::Buffer(nodes.size() * sizeof(PoolNode), nodes.data(), 0);
+    poolNodes_ =
+        nodes.empty() ? gl::Buffer() : gl::Buffer(nodes.size() * sizeof(PoolNode), nodes.data(), 0);
     if (!surfelPoints_.empty())
-      pool_.upload(surfelPoints_.data(), surfelPoints_.size() * sizeof(PoolPoint), scanPoints * sizeof(PoolPoint));
+      pool_.upload(surfelPoints_.data(), surfelPoints_.size() * sizeof(PoolPoint),
+                   scanPoints * sizeof(PoolPoint));
     if (scanPoints == 0) return;
     pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
     gather_.use();
@@ -454,12 +486,6 @@ class VplExtension : public RasterExtension {
 
   void addPasses(RasterFrame& f) {
     frame::FrameGraph& g = f.graph();
-    const int G = params_.lightResolution, layers = std::max(layers_, 1);
-    g.addTarget("light_depth", {GL_DEPTH_COMPONENT32F, true, G, G, layers});
-    g.addTarget("light_base", {GL_RGBA32F, true, G, G, layers});
-    g.addTarget("light_normal", {GL_RGBA16F, true, G, G, layers});
-    g.addTarget("light_material", {GL_RGBA16UI, true, G, G, layers});
-    g.addBuffer("vpl_samples");
     g.addBuffer("vpls");
     g.addBuffer("ism_raw");
     g.addBuffer("ism");
@@ -467,6 +493,36 @@ class VplExtension : public RasterExtension {
     g.addTarget("vpl_clamp_loss", {GL_RGBA32F});
     g.addTarget("radiance_gi", {GL_RGBA32F});
     const char* lightTargets[] = {"light_depth", "light_base", "light_normal", "light_material"};
+    // The lights' VPLs (albedo mode). In the radiance-cache mode the first generation is drawn on
+    // the emitting scan points instead (vpl_generate), and neither pass exists.
+    if (!radianceCache_) addLightPasses(f, lightTargets);
+
+    // VPLs: the first generation from the samples (or the emitting scan points), then one
+    // generation per further bounce while each still re-emits at least energy_stop of what came
+    // before.
+    g.addPass(
+        "vpl_generate", frame::Scope::Frame,
+        [&](frame::PassBuilder& b) {
+          if (!radianceCache_) {
+            for (const char* t : lightTargets) b.read(t);
+            b.read("vpl_samples");
+          }
+          b.write("vpls");
+        },
+        [this, &f](const frame::PassContext& ctx) { generateVpls(f, ctx); });
+
+    addVisibilityAndShadingPasses(f);
+  }
+
+  // The light G-buffer and the warped samples on it.
+  void addLightPasses(RasterFrame& f, const char* const (&lightTargets)[4]) {
+    frame::FrameGraph& g = f.graph();
+    const int G = params_.lightResolution, layers = std::max(layers_, 1);
+    g.addTarget("light_depth", {GL_DEPTH_COMPONENT32F, true, G, G, layers});
+    g.addTarget("light_base", {GL_RGBA32F, true, G, G, layers});
+    g.addTarget("light_normal", {GL_RGBA16F, true, G, G, layers});
+    g.addTarget("light_material", {GL_RGBA16UI, true, G, G, layers});
+    g.addBuffer("vpl_samples");
 
     // The light G-buffer: every light's views (the shadow maps' projections) of the meshes and
     // the lights' cut, with the camera G-buffer's shaders and encoding.
@@ -497,7 +553,8 @@ class VplExtension : public RasterExtension {
             const bool ortho = int(l.position.w) == NL_LIGHT_DIRECTIONAL;
             // Texels per unit at distance 1 (or per world unit): the shadow map's, rescaled.
             const float pixelsPerUnit = float(G) / (l.shadow.y * float(S));
-            f.drawScans(scanGBuffer_, clip, f.lightViewFromWorld()[size_t(layer)], pixelsPerUnit, ortho, true);
+            f.drawScans(scanGBuffer_, clip, f.lightViewFromWorld()[size_t(layer)], pixelsPerUnit,
+                        ortho, true);
           }
         });
 
@@ -514,7 +571,6 @@ class VplExtension : public RasterExtension {
           pyramid_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_PYRAMID, 0, pyramid_.bytes());
           importance_.use();
           glUniform1i(importance_.uniform("uLayerStride"), int(pyramidLayerFloats(G)));
-          glUniform1i(importance_.uniform("uRadianceCache"), radianceCache_ ? 1 : 0);
           if (layers_ > 0) {
             glDispatchCompute(GLuint((G + 7) / 8), GLuint((G + 7) / 8), GLuint(layers_));
           } else {
@@ -522,67 +578,63 @@ class VplExtension : public RasterExtension {
             glClearNamedBufferData(pyramid_.id(), GL_R32F, GL_RED, GL_FLOAT, &zero);
           }
           glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-          if (!radianceCache_) warp_->run(pyramid_, G, layers, params_.count, samples_);
+          warp_->run(pyramid_, G, layers, params_.count, samples_);
         });
+  }
 
-    // VPLs: the first generation from the samples, then one generation per further bounce
-    // while each still re-emits at least energy_stop of what came before.
-    g.addPass(
-        "vpl_generate", frame::Scope::Frame,
-        [&](frame::PassBuilder& b) {
-          for (const char* t : lightTargets) b.read(t);
-          b.read("vpl_samples");
-          b.write("vpls");
-        },
-        [this, &f](const frame::PassContext& ctx) {
-          bindCommon(f);
-          bindLightTextures(ctx);
-          generationsRun_ = 0;
-          stopNote_.clear();
-          vplChecksum_ = 14695981039346656037ull;
-          liveVpls_ = 0;
-          if (generations_ == 0) return;
-          if (radianceCache_) {
-            emitFromScans(f);
-          } else {
-            samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
-            generate_.use();
-            glUniform1i(generate_.uniform("uCount"), params_.count);
-            glUniform1i(generate_.uniform("uRadianceCache"), 0);
-            glDispatchCompute(GLuint((params_.count + 63) / 64), 1, 1);
-            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-          }
-          generationsRun_ = 1;
-          double emitted = emittedFlux(0);
-          for (int gen = 1; gen < generations_; ++gen) {
-            bounce_.use();
-            setPoolUniforms(bounce_);
-            glUniform1i(bounce_.uniform("uParentFirst"), (gen - 1) * params_.count);
-            glUniform1i(bounce_.uniform("uChildFirst"), gen * params_.count);
-            glUniform1i(bounce_.uniform("uCount"), params_.count);
-            glUniform1i(bounce_.uniform("uRadianceCache"), radianceCache_ ? 1 : 0);
-            if (poolNodeCount_ == 0) {
-              // Nothing to hit: the generation is dark.
-              std::vector<VplRecord> dark(size_t(params_.count));
-              records_.upload(dark.data(), dark.size() * sizeof(VplRecord), size_t(gen) * params_.count * sizeof(VplRecord));
-            } else {
-              glDispatchCompute(GLuint(params_.count), 1, 1);
-              glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-            }
-            generationsRun_ = gen + 1;
-            const double e = emittedFlux(gen);
-            if (!(e >= params_.energyStop * emitted)) {
-              char note[96];
-              std::snprintf(note, sizeof note, " (stopped: generation %d re-emits %.2g%% of the ones before)", gen + 1,
-                            emitted > 0 ? 100 * e / emitted : 0.0);
-              stopNote_ = note;
-              // Its light is still counted (it is computed); the next is not made.
-              break;
-            }
-            emitted += e;
-          }
-        });
+  void generateVpls(RasterFrame& f, const frame::PassContext& ctx) {
+    bindCommon(f);
+    generationsRun_ = 0;
+    stopNote_.clear();
+    vplChecksum_ = 14695981039346656037ull;
+    liveVpls_ = 0;
+    if (generations_ == 0) return;
+    if (radianceCache_) {
+      emitFromScans();
+    } else {
+      bindLightTextures(ctx);
+      samples_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_SAMPLES, 0, samples_.bytes());
+      generate_.use();
+      glUniform1i(generate_.uniform("uCount"), params_.count);
+      glDispatchCompute(GLuint((params_.count + 63) / 64), 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+    generationsRun_ = 1;
+    double emitted = emittedFlux(0);
+    for (int gen = 1; gen < generations_; ++gen) {
+      bounce_.use();
+      setPoolUniforms(bounce_);
+      glUniform1i(bounce_.uniform("uParentFirst"), (gen - 1) * params_.count);
+      glUniform1i(bounce_.uniform("uChildFirst"), gen * params_.count);
+      glUniform1i(bounce_.uniform("uCount"), params_.count);
+      glUniform1i(bounce_.uniform("uRadianceCache"), radianceCache_ ? 1 : 0);
+      if (poolNodeCount_ == 0) {
+        // Nothing to hit: the generation is dark.
+        std::vector<VplRecord> dark(size_t(params_.count));
+        records_.upload(dark.data(), dark.size() * sizeof(VplRecord),
+                        size_t(gen) * params_.count * sizeof(VplRecord));
+      } else {
+        glDispatchCompute(GLuint(params_.count), 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+      }
+      generationsRun_ = gen + 1;
+      const double e = emittedFlux(gen);
+      if (!(e >= params_.energyStop * emitted)) {
+        char note[96];
+        std::snprintf(note, sizeof note,
+                      " (stopped: generation %d re-emits %.2g%% of the ones before)", gen + 1,
+                      emitted > 0 ? 100 * e / emitted : 0.0);
+        stopNote_ = note;
+        // Its light is still counted (it is computed); the next is not made.
+        break;
+      }
+      emitted += e;
+    }
+  }
 
+  // ISMs, pull-push, (exact visibility,) shading and the filter.
+  void addVisibilityAndShadingPasses(RasterFrame& f) {
+    frame::FrameGraph& g = f.graph();
     if (usesIsms()) {
       g.addPass(
           "ism", frame::Scope::Frame,
@@ -613,7 +665,8 @@ class VplExtension : public RasterExtension {
             const int levels = std::min(params_.pullPushLevels, log2Exact(S));
             if (levels == 0 || generationsRun_ == 0) return;
             ism_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM, 0, ism_.bytes());
-            ismLevels_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM_PYRAMID, 0, ismLevels_.bytes());
+            ismLevels_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM_PYRAMID, 0,
+                                 ismLevels_.bytes());
             const GLuint isms = GLuint(params_.count * generationsRun_);
             auto run = [&](const gl::ShaderProgram& p, int level) {
               p.use();
@@ -662,7 +715,8 @@ class VplExtension : public RasterExtension {
           if (usesIsms()) ism_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_ISM, 0, ism_.bytes());
           if (exact()) {
             exactBits_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_EXACT, 0, exactBits_.bytes());
-            agreement_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_AGREEMENT, 0, agreement_.bytes());
+            agreement_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_AGREEMENT, 0,
+                                 agreement_.bytes());
           }
           glUniform1i(shade_.uniform("uExactWords"), exactWords_);
           glUniform1i(shade_.uniform("uVplCount"), params_.count * generationsRun_);
@@ -678,7 +732,8 @@ class VplExtension : public RasterExtension {
     g.addPass(
         "vpl_filter", frame::Scope::Tile,
         [this](frame::PassBuilder& b) {
-          for (const char* t : {"depth", "base_colour", "normal", "material", "vpl_indirect", "vpl_clamp_loss", "radiance"})
+          for (const char* t : {"depth", "base_colour", "normal", "material", "vpl_indirect",
+                                "vpl_clamp_loss", "radiance"})
             b.read(t);
           b.write("radiance_gi");
           b.margin(params_.interleave / 2 + 1);
@@ -709,16 +764,17 @@ class VplExtension : public RasterExtension {
     const int w = tile.width, h = tile.height;
     const frame::FrameBlock& u = ctx.uniforms();
     std::vector<float> depth(size_t(w) * h), base(size_t(w) * h * 4), normal(size_t(w) * h * 4);
-    glGetTextureSubImage(ctx.target("depth").id(), 0, 0, 0, 0, w, h, 1, GL_DEPTH_COMPONENT, GL_FLOAT,
-                         GLsizei(depth.size() * 4), depth.data());
-    glGetTextureSubImage(ctx.target("base_colour").id(), 0, 0, 0, 0, w, h, 1, GL_RGBA, GL_FLOAT, GLsizei(base.size() * 4),
-                         base.data());
-    glGetTextureSubImage(ctx.target("normal").id(), 0, 0, 0, 0, w, h, 1, GL_RGBA, GL_FLOAT, GLsizei(normal.size() * 4),
-                         normal.data());
+    glGetTextureSubImage(ctx.target("depth").id(), 0, 0, 0, 0, w, h, 1, GL_DEPTH_COMPONENT,
+                         GL_FLOAT, GLsizei(depth.size() * 4), depth.data());
+    glGetTextureSubImage(ctx.target("base_colour").id(), 0, 0, 0, 0, w, h, 1, GL_RGBA, GL_FLOAT,
+                         GLsizei(base.size() * 4), base.data());
+    glGetTextureSubImage(ctx.target("normal").id(), 0, 0, 0, 0, w, h, 1, GL_RGBA, GL_FLOAT,
+                         GLsizei(normal.size() * 4), normal.data());
     const int total = params_.count * generationsRun_;
     std::vector<VplRecord> vpls(size_t(std::max(total, 1)));
     if (total > 0)
-      glGetNamedBufferSubData(records_.id(), 0, GLsizeiptr(size_t(total) * sizeof(VplRecord)), vpls.data());
+      glGetNamedBufferSubData(records_.id(), 0, GLsizeiptr(size_t(total) * sizeof(VplRecord)),
+                              vpls.data());
     const int N = params_.interleave;
     const int perSubset = (total + N * N - 1) / (N * N);
     exactWords_ = std::max(1, (perSubset + 31) / 32);
@@ -766,14 +822,13 @@ class VplExtension : public RasterExtension {
   // Radiance-cache mode: the first generation drawn on the scans' emitting points, by luminance x
   // area (hierarchical warping over the pool laid out as a square). Without inserted objects
   // there is nothing for them to light (scan pixels take no indirect light in this mode).
-  void emitFromScans(RasterFrame& f) {
+  void emitFromScans() {
     const bool any = scanPoints_ > 0 && surfelPoints_.size() > 0;
     if (!any) {
       std::vector<VplRecord> dark(size_t(params_.count));
       records_.upload(dark.data(), dark.size() * sizeof(VplRecord), 0);
       return;
     }
-    (void)f;
     const float zero = 0;
     glClearNamedBufferData(emitPyramid_.id(), GL_R32F, GL_RED, GL_FLOAT, &zero);
     pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
@@ -811,15 +866,17 @@ class VplExtension : public RasterExtension {
     glGetNamedBufferSubData(records_.id(), GLintptr(size_t(gen) * r.size() * sizeof(VplRecord)),
                             GLsizeiptr(r.size() * sizeof(VplRecord)), r.data());
     const auto* bytes = reinterpret_cast<const unsigned char*>(r.data());
-    for (size_t i = 0; i < r.size() * sizeof(VplRecord); ++i) vplChecksum_ = (vplChecksum_ ^ bytes[i]) * 1099511628211ull;
+    for (size_t i = 0; i < r.size() * sizeof(VplRecord); ++i)
+      vplChecksum_ = (vplChecksum_ ^ bytes[i]) * 1099511628211ull;
     double sum = 0;
     for (const auto& v : r) {
       if (v.flux.x != 0 || v.flux.y != 0 || v.flux.z != 0) ++liveVpls_;
       const glm::vec3 flux(v.flux), base(v.baseColour);
       const float metallic = v.flux.w;
-      const glm::vec3 albedo = int(v.baseColour.w) == NL_MATERIAL_LAMBERT
-                                   ? base
-                                   : (1 - metallic) * base + glm::mix(glm::vec3(0.04f), base, metallic);
+      const glm::vec3 albedo =
+          int(v.baseColour.w) == NL_MATERIAL_LAMBERT
+              ? base
+              : (1 - metallic) * base + glm::mix(glm::vec3(0.04f), base, metallic);
       const double e = luminance(flux * albedo);
       if (std::isfinite(e)) sum += e;
     }
@@ -855,7 +912,8 @@ class VplExtension : public RasterExtension {
   int emitSide_ = 1;
   uint64_t scanPoints_ = 0;
   glm::vec3 objectsLo_{INFINITY}, objectsHi_{-INFINITY};
-  gl::ShaderProgram scanGBuffer_, meshGBuffer_, importance_, generate_, bounce_, gather_, splat_, pull_, push_, shade_, filter_;
+  gl::ShaderProgram scanGBuffer_, meshGBuffer_, importance_, generate_, bounce_, gather_, splat_,
+      pull_, push_, shade_, filter_;
   std::unique_ptr<ImportanceWarp> warp_;
   gl::Framebuffer lightFbo_;
   gl::VertexArray emptyVao_;
@@ -864,9 +922,9 @@ class VplExtension : public RasterExtension {
 }  // namespace
 
 const std::vector<std::string>& vplParameterKeys() {
-  static const std::vector<std::string> keys = {"vpls",       "target_ms",        "light_resolution", "ism_size",    "ism_points",
-                                                "pull_push",  "interleave",       "clamp",       "ism_bias",
-                                                "lod_scale",  "energy_stop",      "visibility"};
+  static const std::vector<std::string> keys = {
+      "vpls",       "target_ms", "light_resolution", "ism_size",  "ism_points",  "pull_push",
+      "interleave", "clamp",     "ism_bias",         "lod_scale", "energy_stop", "visibility"};
   return keys;
 }
 
@@ -877,7 +935,8 @@ VplParameters vplParameters(const Scene& scene) {
   auto powerOfTwo = [&](const char* key, int lo, int hi) {
     const JsonField v = f.at(key);
     const int n = int(v.integer(lo, hi));
-    if (n & (n - 1)) v.fail("must be a power of two (" + std::to_string(lo) + " to " + std::to_string(hi) + ")");
+    if (n & (n - 1))
+      v.fail("must be a power of two (" + std::to_string(lo) + " to " + std::to_string(hi) + ")");
     return n;
   };
   if (f.has("vpls")) {
@@ -900,8 +959,9 @@ VplParameters vplParameters(const Scene& scene) {
   if (f.has("energy_stop")) p.energyStop = f.at("energy_stop").number(0, 1);
   if (f.has("visibility")) {
     const std::string v = f.at("visibility").choice({"ism", "none", "exact"});
-    p.visibility = v == "ism" ? VplParameters::Visibility::Ism : v == "none" ? VplParameters::Visibility::None
-                                                                            : VplParameters::Visibility::Exact;
+    p.visibility = v == "ism"    ? VplParameters::Visibility::Ism
+                   : v == "none" ? VplParameters::Visibility::None
+                                 : VplParameters::Visibility::Exact;
   }
   return p;
 }
@@ -911,13 +971,15 @@ std::unique_ptr<Method> createVplMethod(const Scene& scene, const MethodContext&
   return createRasterMethod(scene, ctx, std::move(ext));
 }
 
-std::vector<WarpedSample> warpImportanceOnGpu(const std::vector<float>& importance, int size, int layers, int count) {
+std::vector<WarpedSample> warpImportanceOnGpu(const std::vector<float>& importance, int size,
+                                              int layers, int count) {
   NL_CHECK(size > 0 && (size & (size - 1)) == 0 && layers > 0 && count > 0);
   NL_CHECK(importance.size() == size_t(size) * size_t(size) * size_t(layers));
   const size_t stride = pyramidLayerFloats(size);
   std::vector<float> levels(stride * size_t(layers), 0.0f);
   for (int l = 0; l < layers; ++l)
-    std::copy(importance.begin() + ptrdiff_t(size_t(l) * size * size), importance.begin() + ptrdiff_t(size_t(l + 1) * size * size),
+    std::copy(importance.begin() + ptrdiff_t(size_t(l) * size * size),
+              importance.begin() + ptrdiff_t(size_t(l + 1) * size * size),
               levels.begin() + ptrdiff_t(size_t(l) * stride));
   gl::Buffer pyramid(levels.size() * 4, levels.data());
   gl::Buffer samples(size_t(count) * sizeof(WarpSample));
@@ -928,7 +990,8 @@ std::vector<WarpedSample> warpImportanceOnGpu(const std::vector<float>& importan
   std::vector<WarpedSample> out;
   for (const auto& r : raw) {
     WarpedSample s;
-    s.x = r.texel.x, s.y = r.texel.y, s.layer = r.texel.z, s.valid = r.texel.w == 1, s.probability = r.where.z;
+    s.x = r.texel.x, s.y = r.texel.y, s.layer = r.texel.z, s.valid = r.texel.w == 1,
+    s.probability = r.where.z;
     out.push_back(s);
   }
   return out;

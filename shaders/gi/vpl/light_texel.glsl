@@ -12,7 +12,6 @@ layout(binding = 0) uniform sampler2DArray uLightDepth;
 layout(binding = 1) uniform sampler2DArray uLightBase;
 layout(binding = 2) uniform sampler2DArray uLightNormal;
 layout(binding = 3) uniform usampler2DArray uLightMaterial;
-uniform bool uRadianceCache;  // scan colours are radiance: scan texels reflect nothing
 
 struct LightTexel {
   bool valid;
@@ -52,7 +51,7 @@ LightTexel lightTexel(ivec3 t) {
   r.radius = base.a;
   r.n = nn.w > 0.0 ? normalize(nn.xyz) : s.wi;
   if (dot(r.n, s.wi) < 0.0) r.n = -r.n;  // two-sided, as the reference
-  r.valid = any(greaterThan(r.fluxIn, vec3(0.0))) && !(uRadianceCache && gbufferSource(m) == NL_SOURCE_SCAN);
+  r.valid = any(greaterThan(r.fluxIn, vec3(0.0)));
   return r;
 }
 
