@@ -269,7 +269,7 @@ class RasterMethod : public Method, public RasterFrame {
       }
       s.shadowTree.upload(s.shadowStreamer->drawList());
     }
-    updateLightsCut();
+    if (extension_) updateLightsCut();  // only extensions read it
 
     frame::FrameBlock& u = graph_.uniforms();
     u.viewFromWorld = glm::lookAt(eye, target, up);
