@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -31,9 +32,11 @@ uint64_t mix64(uint64_t x) {
 }
 
 // Offsets a ray origin off the surface it leaves, on the side it leaves towards. Relative to
-// the scene's coordinate scale (float spacing there) and, for discs, to the disc's size.
+// the scene's coordinate scale (float spacing there) and, for discs, to the disc's size and to
+// the scanned surface's thickness there (its neighbours' discs, offset by the scan's noise, would
+// shadow it otherwise).
 glm::vec3 offsetOrigin(const SurfaceHit& h, const glm::vec3& dir, float sceneExtent) {
-  float eps = 1e-5f * sceneExtent + 1e-3f * h.radius;
+  float eps = 1e-5f * sceneExtent + std::max(1e-3f * h.radius, h.thickness);
   glm::vec3 n = h.geometricNormal;
   return h.position + (glm::dot(dir, n) >= 0 ? n : -n) * eps;
 }

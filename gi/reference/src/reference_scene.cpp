@@ -19,7 +19,7 @@
 namespace nestlight::gi {
 namespace {
 
-constexpr size_t kBytesPerDisc = sizeof(glm::vec4) + sizeof(glm::vec3) + sizeof(Rgb);
+constexpr size_t kBytesPerDisc = sizeof(glm::vec4) + sizeof(glm::vec3) + sizeof(Rgb) + sizeof(float);
 constexpr int kRadiusNeighbours = 8;
 // Discs must close an evenly sampled surface, or rays leak through it and the reference renders
 // too dark (a Poisson-disk sampled room: 1 to 3% darker than the same room as meshes, up to 8% on
@@ -44,6 +44,26 @@ struct DiscAdaptor {
 };
 using DiscTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, DiscAdaptor>, DiscAdaptor, 3, uint32_t>;
 
+// Distinct positions of `discs` (a k-d tree's queries turn quadratic on a leaf of identical
+// points), which one each disc is, and the first disc at each.
+struct DistinctPositions {
+  std::vector<glm::vec4> unique;
+  std::vector<uint32_t> uniqueOf, firstOf;
+};
+DistinctPositions distinctPositions(const std::vector<glm::vec4>& discs) {
+  std::vector<uint32_t> order(discs.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  auto key = [&](uint32_t i) { return std::tuple(discs[i].x, discs[i].y, discs[i].z); };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  DistinctPositions d;
+  d.uniqueOf.resize(discs.size());
+  for (size_t j = 0; j < order.size(); ++j) {
+    if (j == 0 || key(order[j]) != key(order[j - 1])) d.unique.push_back(discs[order[j]]), d.firstOf.push_back(order[j]);
+    d.uniqueOf[order[j]] = uint32_t(d.unique.size() - 1);
+  }
+  return d;
+}
+
 void embreeError(void*, RTCError code, const char* message) {
   // Embree reports misuse here; it is a programming error (bad buffers), never user input.
   nestlight::checkFailed("Embree", __FILE__, __LINE__, std::string("error ") + std::to_string(int(code)) + ": " + (message ? message : ""));
@@ -55,18 +75,10 @@ void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std
   NL_CHECK(!maxRadius || maxRadius->size() == discs.size());
   if (discs.empty()) return;
   // Spacing is measured between distinct positions: coincident copies (merged scans, a
-  // million duplicates) neither shrink their neighbours' discs nor degrade the k-d tree, whose
-  // queries turn quadratic on a leaf of identical points.
-  std::vector<uint32_t> order(discs.size());
-  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-  auto key = [&](uint32_t i) { return std::tuple(discs[i].x, discs[i].y, discs[i].z); };
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
-  std::vector<glm::vec4> unique;
-  std::vector<uint32_t> uniqueOf(discs.size());
-  for (size_t j = 0; j < order.size(); ++j) {
-    if (j == 0 || key(order[j]) != key(order[j - 1])) unique.push_back(discs[order[j]]);
-    uniqueOf[order[j]] = uint32_t(unique.size() - 1);
-  }
+  // million duplicates) neither shrink their neighbours' discs nor degrade the k-d tree.
+  DistinctPositions distinct = distinctPositions(discs);
+  std::vector<glm::vec4>& unique = distinct.unique;
+  const std::vector<uint32_t>& uniqueOf = distinct.uniqueOf;
   DiscAdaptor adaptor{unique};
   DiscTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
@@ -85,6 +97,54 @@ void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std
     discs[i].w = unique[uniqueOf[i]].w;
     if (maxRadius) discs[i].w = std::min(discs[i].w, (*maxRadius)[i]);
   }
+}
+
+void assignDiscThickness(DiscCloud& c) {
+  c.thickness.clear();
+  if (c.normals.empty() || c.discs.empty()) return;
+  NL_CHECK(c.normals.size() == c.discs.size());
+  c.thickness.assign(c.discs.size(), 0.0f);
+  // Neighbours are distinct positions (each stands for the first disc there), as for radii.
+  const DistinctPositions distinct = distinctPositions(c.discs);
+  DiscAdaptor adaptor{distinct.unique};
+  DiscTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  const size_t k = std::min<size_t>(kRadiusNeighbours + 1, distinct.unique.size());
+  // Neighbours further than 30 degrees off belong to another surface (a crease, a thin wall's
+  // far side): their extent is geometry, not noise.
+  const float sameSurface = 0.8660254f;  // cos 30 degrees
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, c.discs.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<uint32_t> idx(k);
+    std::vector<float> d2(k);
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const glm::vec3 p(c.discs[i]), n = c.normals[i];
+      float q[3] = {p.x, p.y, p.z};
+      size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
+      // Heights above (+) and below (-) the plane, as sums for mean and variance.
+      double s[2] = {0, 0}, s2[2] = {0, 0};
+      int m = 0;
+      for (size_t jj = 0; jj < found; ++jj) {
+        if (idx[jj] == distinct.uniqueOf[i]) continue;
+        const uint32_t j = distinct.firstOf[idx[jj]];
+        const glm::vec3 nj = c.normals[j];
+        float cosA = glm::dot(nj, n);
+        if (cosA < sameSurface) continue;
+        float along = glm::dot(glm::vec3(c.discs[j]) - p, n);
+        float reach = c.discs[j].w * std::sqrt(std::max(0.0f, 1 - cosA * cosA));
+        float h[2] = {along + reach, -along + reach};
+        for (int side = 0; side < 2; ++side) s[side] += h[side], s2[side] += double(h[side]) * h[side];
+        ++m;
+      }
+      if (m < 2) continue;  // isolated: nothing of its own surface around to shadow it
+      float t = 0;
+      for (int side = 0; side < 2; ++side) {
+        double mean = s[side] / m, var = std::max(0.0, s2[side] / m - mean * mean);
+        t = std::max(t, float(mean + 3 * std::sqrt(var)));
+      }
+      float cap = c.discs[i].w;
+      c.thickness[i] = std::isfinite(t) ? std::clamp(t, 0.0f, std::isfinite(cap) ? std::max(cap, 0.0f) : 0.0f) : 0.0f;
+    }
+  });
 }
 
 DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, DiscCloudStats* statsOut) {
@@ -264,6 +324,7 @@ void ReferenceScene::build() {
       maxCoord = std::max({maxCoord, std::abs(d.x), std::abs(d.y), std::abs(d.z)});
     }
     bool oriented = !c.normals.empty();
+    if (oriented && c.thickness.size() != c.discs.size()) assignDiscThickness(c);
     RTCGeometry g = rtcNewGeometry(rtc_->device, oriented ? RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT : RTC_GEOMETRY_TYPE_DISC_POINT);
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, c.discs.data(), 0, sizeof(glm::vec4), c.discs.size());
     // Embree may read 16 bytes at the last FLOAT3 element: one element of padding.
@@ -338,6 +399,7 @@ bool ReferenceScene::intersect(const glm::vec3& o, const glm::vec3& d, float tMa
     hit->kind = SurfaceHit::Kind::Disc;
     hit->colour = c.colour[rh.hit.primID];
     hit->radius = c.discs[rh.hit.primID].w;
+    hit->thickness = c.thickness.empty() ? 0.0f : c.thickness[rh.hit.primID];
     hit->orientedDisc = !c.normals.empty();
     hit->material = 0;
   } else {
