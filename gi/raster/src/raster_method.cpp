@@ -506,6 +506,10 @@ class RasterMethod : public Method, public RasterFrame {
     glUniformMatrix4fv(program.uniform("uViewFromWorld"), 1, GL_FALSE, &viewFromWorld[0][0]);
     glUniform1f(program.uniform("uPixelsPerUnit"), pixelsPerUnit);
     glUniform1i(program.uniform("uOrthographic"), orthographic ? 1 : 0);
+    // Splats that follow their discs write their own depth (splat_surface.glsl): the view's
+    // projection. A tile's guard band narrows x and y only, so depth is the same either way.
+    const glm::mat4 clipFromView = clipFromWorld * glm::inverse(viewFromWorld);
+    glUniformMatrix4fv(program.uniform("uClipFromView"), 1, GL_FALSE, &clipFromView[0][0]);
     glUniform1f(program.uniform("uSizeScale"), params_.splatScale);
     // Up to 64 px as the viewer; at least 1 px (shadow maps of far scans still occlude).
     glUniform2f(program.uniform("uSizeRange"), 1.0f, kMaxSplatPixels);
@@ -609,7 +613,6 @@ class RasterMethod : public Method, public RasterFrame {
     const glm::mat4 guarded = guardBand(ctx);
     glDepthFunc(GL_LESS);
     hqsDepth_.use();
-    glUniformMatrix4fv(hqsDepth_.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
     glUniform1f(hqsDepth_.uniform("uDepthEpsilon"), params_.hqsDepthEpsilon);
     drawScans(hqsDepth_, guarded, u.viewFromWorld, u.eye.w, false);
     // Pass 2: weighted sums of what lies in front of it.

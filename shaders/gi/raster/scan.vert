@@ -16,6 +16,8 @@ out vec3 vColour;
 out vec3 vNormal;
 flat out float vRadius;   // the splat's radius, world units
 flat out vec3 vViewPos;   // its centre in view space (high-quality splatting)
+flat out vec3 vViewNormal;  // its normal in view space (splat_surface.glsl)
+flat out float vPointSize;
 void main() {
   uint i = uint(gl_VertexID);
   vec3 local = pointLocal(i);
@@ -27,4 +29,6 @@ void main() {
   vViewPos = (uViewFromWorld * vec4(world, 1.0)).xyz;
   vColour = srgbDecode(unpackUnorm4x8(pointColour(i)).rgb) * uColourScale;
   vNormal = decodeNormal(pointNormalWord(i));
+  vViewNormal = mat3(uViewFromWorld) * vNormal;
+  vPointSize = gl_PointSize;
 }
