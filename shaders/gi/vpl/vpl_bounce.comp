@@ -61,14 +61,18 @@ void main() {
       PoolPoint q = pool[first + int(i)];
       vec3 d = q.position.xyz - x;
       float dist = length(d);
-      // The stride thinned the points: each stands for sqrt(stride) of its own spacing (the
-      // measured spacing where it lies, stored as its area). Discs 1.5 of that spacing in radius
-      // close the thinned surface (taking every stride-th point in Morton order leaves clumps
-      // and gaps: inside a closed sphere, 0.75 let 7% of third-bounce rays out, 1.5 lets 0.4%).
-      // Growing the wanted spacing instead would make discs metres wide where the level of
-      // detail took far more points than wanted, and rays that should leave through openings
-      // would end on them.
-      float radius = max(0.5 * pointSpacing(n, dist), 1.5 * sqrt(uintBitsToFloat(q.surface.w)) * grow);
+      // A point stands for the spacing where it lies: its level of detail's (half the wanted
+      // spacing, between the deepest taken level's and the wanted one) or, nearer than the scan's
+      // finest level reaches, its own measured spacing (stored as its area). The stride thinned
+      // the points: each then stands for sqrt(stride) of that. Discs 1.5 of the latter in radius
+      // close the thinned surface (every stride-th point in Morton order leaves clumps and gaps:
+      // inside a closed sphere, 0.75 let 7% of third-bounce rays out, 1.5 lets 0.4%). Measured in
+      // the closed cornell room (1024 VPLs, 4 bounces): without sqrt(stride) on the level of
+      // detail's term 31% of bounce rays left between the points and the third and fourth
+      // bounces were 23% and 48% dark; with it 0.1% leave and they are within the reference's
+      // noise. Wider discs (the wanted spacing itself) catch rays on their overhang past the
+      // surfaces' edges: the indirect light rose 5% (11% at 1.5 x) above the reference.
+      float radius = grow * max(0.5 * pointSpacing(n, dist), 1.5 * sqrt(uintBitsToFloat(q.surface.w)));
       // Points of the VPL's own surface (within half their disc's radius of its tangent plane)
       // are not hits: the parent's neighbours would catch grazing rays right at their start.
       if (dot(d, parent.normal.xyz) <= 0.5 * radius) continue;
