@@ -23,6 +23,18 @@ uint32_t packNormal(float x, float y, float z) {
   return q(u) | (q(v) << 16);
 }
 
+glm::vec3 unpackNormal(uint32_t w) {
+  if (w == 0) return glm::vec3(0);
+  const float ex = float(w & 0xffffu) / 65535.f * 2.f - 1.f, ey = float(w >> 16) / 65535.f * 2.f - 1.f;
+  glm::vec3 n(ex, ey, 1.f - std::fabs(ex) - std::fabs(ey));
+  if (n.z < 0) {
+    const float x = n.x;
+    n.x = (1 - std::fabs(n.y)) * (x >= 0 ? 1.f : -1.f);
+    n.y = (1 - std::fabs(x)) * (n.y >= 0 ? 1.f : -1.f);
+  }
+  return glm::normalize(n);
+}
+
 namespace {
 
 uint32_t packRgba(double r, double g, double b) {

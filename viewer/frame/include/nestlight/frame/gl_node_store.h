@@ -13,6 +13,8 @@
 
 #include <epoxy/gl.h>
 
+#include <glm/glm.hpp>
+
 #include <memory>
 #include <mutex>
 #include <string>
@@ -39,6 +41,8 @@ class NodeLayer {
 // A unit normal in the GPU point format's word (octahedral, 2 x 16 bits; 0 for a zero or
 // non-finite vector), as shaders/common/octahedral.glsl decodes it.
 uint32_t packNormal(float x, float y, float z);
+// Its inverse, as decodeNormal in shaders/common/octahedral.glsl: (0, 0, 0) for the word 0.
+glm::vec3 unpackNormal(uint32_t word);
 
 enum class ColourMode { Rgb, Intensity, Classification, Elevation, Normal };
 const char* colourModeName(ColourMode m);

@@ -1,0 +1,33 @@
+// The BSH of each streamed node, built by the loader thread that loads it (never on the render
+// thread) and uploaded with the node as a layer of its own: counted in the node's resident bytes
+// and freed with it, so a gather can only ever read the hierarchy of a node that is resident.
+#pragma once
+
+#include <string>
+
+#include "nestlight/frame/gl_node_store.h"
+#include "nestlight/gi/pbgi/bsh.h"
+#include "nestlight/octree/metadata.h"
+
+namespace nestlight::gi::pbgi {
+
+// Leaves: the node's points, linear colour from the scan's 16-bit sRGB colour (0.8 grey without
+// colour, as the reference), the scan's normals, disc radius the node level's nominal spacing
+// (the distance a level's sample keeps between its points, so discs of that radius leave no
+// surface uncovered where this node is the finest drawn).
+class BshLayer : public frame::NodeLayer {
+ public:
+  explicit BshLayer(const Metadata& meta, BshOptions options = {});
+  std::string name() const override { return "pbgi_bsh"; }
+  void prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
+               std::vector<uint8_t>& out) const override;
+  // The same build, returned whole (tests, tools).
+  Bsh build(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints) const;
+
+ private:
+  Metadata meta_;
+  BshOptions options_;
+  int rgb_ = -1, normal_ = -1;
+};
+
+}  // namespace nestlight::gi::pbgi

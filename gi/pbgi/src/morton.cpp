@@ -1,0 +1,61 @@
+#include "nestlight/gi/pbgi/morton.h"
+
+#include <array>
+
+#include "nestlight/octree/error.h"
+
+namespace nestlight::gi::pbgi {
+
+namespace {
+
+// Spreads the low 21 bits of v so that two zero bits follow each.
+uint64_t spread3(uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffull;
+  v = (v | v << 16) & 0x1f0000ff0000ffull;
+  v = (v | v << 8) & 0x100f00f00f00f00full;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+  v = (v | v << 2) & 0x1249249249249249ull;
+  return v;
+}
+
+}  // namespace
+
+uint64_t mortonCode(uint32_t x, uint32_t y, uint32_t z) {
+  NL_CHECK(x <= kMortonAxisMax && y <= kMortonAxisMax && z <= kMortonAxisMax);
+  return spread3(x) | spread3(y) << 1 | spread3(z) << 2;
+}
+
+void radixSortPairs(std::vector<uint64_t>& keys, std::vector<uint32_t>& values) {
+  NL_CHECK(keys.size() == values.size());
+  const size_t n = keys.size();
+  if (n < 2) return;
+  // Histograms of all eight bytes in one pass over the keys.
+  std::array<std::array<size_t, 256>, 8> count{};
+  for (uint64_t k : keys)
+    for (int b = 0; b < 8; ++b) count[b][(k >> (8 * b)) & 0xff]++;
+  std::vector<uint64_t> k2(n);
+  std::vector<uint32_t> v2(n);
+  for (int b = 0; b < 8; ++b) {
+    auto& c = count[b];
+    bool shared = false;
+    for (size_t d = 0; d < 256; ++d)
+      if (c[d] == n) shared = true;  // every key has this byte: the pass would not move anything
+    if (shared) continue;
+    size_t sum = 0;
+    for (auto& x : c) {
+      const size_t t = x;
+      x = sum;
+      sum += t;
+    }
+    for (size_t i = 0; i < n; ++i) {
+      const size_t dst = c[(keys[i] >> (8 * b)) & 0xff]++;
+      k2[dst] = keys[i];
+      v2[dst] = values[i];
+    }
+    keys.swap(k2);
+    values.swap(v2);
+  }
+}
+
+}  // namespace nestlight::gi::pbgi

@@ -1,0 +1,21 @@
+// The `pbgi` method's bounding-sphere hierarchy as C++ (gi/pbgi) writes it and GLSL reads it.
+// Kept to the preprocessor subset both share; include frame_interface.glsl first (NL_STRUCT).
+//
+// One hierarchy per resident octree node, uploaded as the node's layer: an array of BshNode in
+// depth-first order, the root at index 0, positions in the node's frame (metres from the node
+// cube's minimum corner, as the node's points). A node's left child is the next node; `right`
+// says where its right child starts. Depth is at most BSH_MAX_DEPTH (Morton codes of 63 bits
+// give every split a longer common prefix), so a fixed traversal stack suffices.
+
+#define BSH_LEAF 0xffffffffu       // BshNode.links.x of a leaf
+#define BSH_MAX_DEPTH 64           // levels below the root, at most
+#define BSH_CONE_NONE 3.14159265   // half aperture of a node whose normals bound nothing (pi)
+
+// 48 bytes (the paper's 40, with float colour: HDR beyond half-float range survives).
+NL_STRUCT(BshNode) {
+  vec4 sphere;   // xyz centre, w radius: contains every point's disc below it
+  vec4 colour;   // rgb mean linear colour of the points below (scan units), w: the normal cone's
+                 // half aperture in radians (0: one direction; BSH_CONE_NONE: no bound)
+  uvec4 links;   // x: left child index or BSH_LEAF, y: right child index (leaf: 0), z: points it
+                 // stands for, w: the cone's axis, octahedral 2 x 16 bits (0: none)
+};
