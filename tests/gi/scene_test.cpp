@@ -130,6 +130,24 @@ TEST(Scene, CamerasOfAPathAreInterpolatedPerFrame) {
   }
 }
 
+// Albedo mode needs something to emit: a scene of scans alone (the nave) is black there.
+TEST(Scene, WhatLightsASceneDependsOnTheMode) {
+  Scene s = parseScene(json::parse(R"({"octrees": ["scan.octree"],
+      "materials": {"lamp": {"type": "lambert", "base_color": 0.5, "emission": [0, 0, 2]}},
+      "meshes": [{"path": "x.obj", "material": {"type": "lambert", "base_color": 0.5}}]})"),
+                       "/scenes/test.json");
+  EXPECT_TRUE(sceneHasLight(s, RadianceMode::RadianceCache));
+  EXPECT_FALSE(sceneHasLight(s, RadianceMode::Albedo));
+  s.meshes[0].material = 0;  // the emissive material
+  EXPECT_TRUE(sceneHasLight(s, RadianceMode::Albedo));
+  s.meshes[0].material = 1;
+  s.environment = SceneEnvironment{};
+  EXPECT_TRUE(sceneHasLight(s, RadianceMode::Albedo));
+  s.environment.reset();
+  s.lights.push_back(Light{});
+  EXPECT_TRUE(sceneHasLight(s, RadianceMode::Albedo));
+}
+
 TEST(Scene, ErrorsNameTheField) {
   auto with = [](const std::string& pointer, const json& v) {
     json j = minimal();

@@ -23,31 +23,13 @@
 #include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/octree/error.h"
+#include "gi_gl/sphere_scan.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
 namespace {
 
 using json = nlohmann::json;
-
-// A Fibonacci sphere of `n` scan points of radius R about the origin, normals inward, grey
-// `grey` (8-bit sRGB), built into an octree at t/sphere.octree.
-void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, int grey) {
-  {
-    std::ofstream ply(t.file("sphere.ply"));
-    ply << "ply\nformat ascii 1.0\nelement vertex " << n
-        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
-           "property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
-    const double golden = kPi * (3 - std::sqrt(5.0));
-    for (int i = 0; i < n; ++i) {
-      const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = golden * i;
-      const double x = r * std::cos(phi), y = r * std::sin(phi);
-      ply << R * x << " " << R * y << " " << R * z << " " << -x << " " << -y << " " << -z << " " << grey << " " << grey
-          << " " << grey << "\n";
-    }
-  }
-  nestlight::test::buildOctreeFrom(t.file("sphere.ply"), t.path() / "sphere.octree");
-}
 
 Scene sphereScene(const nestlight::test::TempDir& t, float I, int bounces, const json& parameters, int size = 32) {
   json j = {{"version", 1},

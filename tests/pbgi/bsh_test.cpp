@@ -383,5 +383,57 @@ TEST(Bsh, BadPointsAreRejectedAndCountedAndHdrSurvives) {
   EXPECT_EQ(none.stats.rejected, 10u);
 }
 
+// The top tree over several nodes' roots: every root one leaf (links.y its index), spheres and
+// cones of inner nodes containing their children's, counts summed.
+TEST(TopTree, JoinsRootsIntoOneHierarchy) {
+  std::vector<BshNode> roots;
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (int i = 0; i < 300; ++i) {
+    BshPoints pts = randomPoints(50, uint32_t(i), true, 0.3f);
+    const glm::vec3 offset(u(rng) * 100, u(rng) * 100, u(rng) * 10);
+    for (auto& p : pts.position) p = p * 0.1f + offset;
+    if (i % 5 == 0)  // flat patches: narrow cones
+      for (auto& n : pts.normal) n = glm::normalize(glm::vec3(0.05f * u(rng), 0.05f * u(rng), 1));
+    BshOptions opt;
+    opt.leafRadius = 0.01f;
+    roots.push_back(buildBsh(pts, opt).nodes[0]);
+  }
+  roots.push_back(roots[7]);  // two nodes with one centre stay two leaves
+  const Bsh top = buildTopTree(roots);
+  ASSERT_EQ(top.nodes.size(), 2 * roots.size() - 1);
+  std::vector<int> seen(roots.size(), 0);
+  uint64_t leafCount = 0;
+  for (uint32_t i = 0; i < top.nodes.size(); ++i) {
+    const BshNode& n = top.nodes[i];
+    if (isLeaf(n)) {
+      ASSERT_LT(n.links.y, roots.size());
+      seen[n.links.y]++;
+      const BshNode& r = roots[n.links.y];
+      EXPECT_EQ(n.sphere, r.sphere);
+      EXPECT_EQ(n.links.w, r.links.w);
+      EXPECT_EQ(n.colour.w, r.colour.w);
+      leafCount += n.links.z;
+      continue;
+    }
+    const NormalCone cone{coneAxis(n), n.colour.w};
+    for (uint32_t ch : {n.links.x, n.links.y}) {
+      const BshNode& k = top.nodes[ch];
+      EXPECT_LE(glm::length(glm::vec3(k.sphere) - glm::vec3(n.sphere)) + k.sphere.w, n.sphere.w * (1 + kSphereRel));
+      if (!cone.boundsNothing()) {
+        EXPECT_NE(k.links.w, 0u);
+        EXPECT_TRUE(cone.contains(NormalCone{coneAxis(k), k.colour.w}, kConeSlack));
+      }
+    }
+    EXPECT_EQ(n.links.z, top.nodes[n.links.x].links.z + top.nodes[n.links.y].links.z);
+  }
+  for (int s : seen) EXPECT_EQ(s, 1);
+  EXPECT_EQ(leafCount, top.nodes[0].links.z);
+  EXPECT_TRUE(buildTopTree({}).nodes.empty());
+  const Bsh one = buildTopTree({roots[3]});
+  ASSERT_EQ(one.nodes.size(), 1u);
+  EXPECT_EQ(one.nodes[0].links.y, 0u);
+}
+
 }  // namespace
 }  // namespace nestlight::gi::pbgi

@@ -334,6 +334,17 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
   return s;
 }
 
+bool sceneHasLight(const Scene& scene, RadianceMode mode) {
+  if (mode == RadianceMode::RadianceCache && !scene.octrees.empty()) return true;
+  if (!scene.lights.empty() || scene.environment) return true;
+  for (const auto& m : scene.meshes)
+    if (m.material < scene.materials.size()) {
+      const Rgb& e = scene.materials[m.material].emission;
+      if (e.r > 0 || e.g > 0 || e.b > 0) return true;
+    }
+  return false;
+}
+
 std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
   const std::string file = scene.file.string();
   std::vector<SceneCamera> cameras;

@@ -129,6 +129,12 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     return s;
   };
 
+  if (!sceneHasLight(prepared("reference"), prepared("reference").gi.mode))
+    throw Error(sceneFile.string(), "lights",
+                "nothing lights this scene in albedo mode (scan colours are reflectances there, and it has no "
+                "lights, no environment and no emissive mesh): every method would render black. Use "
+                "--mode radiance_cache, or add a light");
+
   // The reference, cached under a key of everything that changes it.
   const std::string key = "model" + std::to_string(kReferenceModelVersion) + ":" + fileHash(sceneFile) + ":" +
                           assetStamp(probe) + ":" + std::to_string(W) + "x" + std::to_string(H) + ":" +
@@ -178,6 +184,10 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   say("%-10s %8s %10s %12s %10s %10s %9s %7s %11s\n", "method", "quality", "median ms", "rays/s", "rel L2", "RMSE",
       "PSNR dB", "SSIM", "SSIM (tm)");
   for (const MethodInfo* m : methods) {
+    if (!m->albedoMode && prepared(m->name).gi.mode == RadianceMode::Albedo) {
+      say("%s: skipped (it renders the radiance-cache mode only so far)\n", m->name.c_str());
+      continue;
+    }
     auto q = o.qualities.find(m->name);
     const std::vector<int>& levels = q != o.qualities.end() ? q->second : m->defaultQualities;
     std::vector<MethodInfo::Variant> variants = {{"", [](GiSettings&) {}}};

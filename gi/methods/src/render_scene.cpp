@@ -35,6 +35,11 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
   if (scene.output.exr.extension() != ".exr")
     throw Error(scene.output.exr.string(), "", "the scene renderer writes linear HDR: give a .exr file");
   if (!ov.quiet) std::fprintf(stderr, "render: loading %s\n", file.c_str());
+  if (!sceneHasLight(scene, scene.gi.mode))
+    std::fprintf(stderr,
+                 "render: warning: %s: nothing lights this scene in albedo mode (no lights, environment or "
+                 "emissive mesh; scan colours are reflectances there): the image will be black\n",
+                 file.c_str());
   MethodContext mc;
   mc.quiet = ov.quiet;
   std::unique_ptr<Method> method = createMethod(scene, mc);

@@ -145,6 +145,57 @@ class Builder {
     return out;
   }
 
+  // The top tree over resident nodes' roots: leaves are the roots (links.y: their index), no
+  // voxelisation (distinct nodes stay distinct leaves) and no pruning.
+  Bsh buildTop(const std::vector<BshNode>& roots) {
+    Bsh out;
+    const size_t n = roots.size();
+    out.stats.input = n;
+    if (n == 0) return out;
+    NL_CHECK_MSG(n < (1u << 22), "a top tree over more than 4M nodes");
+    top_ = true;
+    topRoots_ = &roots;
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const auto& r : roots) lo = glm::min(lo, glm::vec3(r.sphere)), hi = glm::max(hi, glm::vec3(r.sphere));
+    const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    const float toGrid = extent > 0 ? 16383.0f / extent : 0.0f;
+    std::vector<uint64_t> codes(n);
+    std::vector<uint32_t> order(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      const glm::vec3 q = glm::clamp((glm::vec3(roots[i].sphere) - lo) * toGrid, glm::vec3(0), glm::vec3(16383));
+      // 14 bits per axis, then the index: unique codes even for nodes with one centre.
+      codes[i] = mortonCode(uint32_t(q.x), uint32_t(q.y), uint32_t(q.z)) << 22 | i;
+      order[i] = i;
+    }
+    radixSortPairs(codes, order);
+    for (uint32_t k = 0; k < n; ++k) {
+      const BshNode& r = roots[order[k]];
+      Aggregate a;
+      a.centre = glm::dvec3(glm::vec3(r.sphere));
+      a.radius = r.sphere.w;
+      a.count = std::max(double(r.links.z), 1.0);
+      a.sumColour = glm::dvec3(glm::vec3(r.colour)) * a.count;
+      a.sumColour2 = glm::dvec3(glm::vec3(r.colour)) * glm::dvec3(glm::vec3(r.colour)) * a.count;
+      a.cone = r.links.w ? NormalCone{coneAxis(r), r.colour.w} : NormalCone::everything();
+      cells_.push_back(a);
+      payload_.push_back(order[k]);
+    }
+    out.stats.leaves = n;
+    out.stats.nodesBeforePruning = 2 * n - 1;
+    Ref root{true, 0};
+    if (n > 1) {
+      buildInner(codes);
+      root = Ref{false, 0};
+      inner_.resize(n - 1);
+      fill(root);
+    }
+    out.nodes.reserve(2 * n - 1);
+    emit(root, 0, out);
+    out.stats.nodes = out.nodes.size();
+    out.stats.depth = depth_;
+    return out;
+  }
+
  private:
   // Karras 2012: inner node i covers a range of sorted unique codes with i at one end and splits
   // it where the highest differing bit changes; every node's range is found independently.
@@ -213,7 +264,17 @@ class Builder {
     const Aggregate& a = agg(r);
     const uint32_t index = uint32_t(out.nodes.size());
     out.nodes.push_back(pack(a));
-    const bool collapse = !r.leaf && opt_.prune && similar(a);
+    const bool collapse = !top_ && !r.leaf && opt_.prune && similar(a);
+    if (r.leaf && top_) {
+      out.nodes[index].links.x = BSH_LEAF;
+      out.nodes[index].links.y = payload_[r.index];
+      // The sphere and cone exactly as the node's own root stores them.
+      const BshNode& root = (*topRoots_)[payload_[r.index]];
+      out.nodes[index].sphere = root.sphere;
+      out.nodes[index].colour.w = root.colour.w;
+      out.nodes[index].links.w = root.links.w;
+      return index;
+    }
     if (r.leaf || collapse) {
       clusters_ += collapse;
       if (sorted_) {
@@ -297,11 +358,20 @@ class Builder {
   const std::vector<uint32_t>* sorted_ = nullptr; // the valid points in Morton order (recordLeaves)
   uint64_t clusters_ = 0;
   int depth_ = 0;
+  bool top_ = false;
+  std::vector<uint32_t> payload_;  // top tree: per leaf, the root it stands for
+  const std::vector<BshNode>* topRoots_ = nullptr;
 };
 
 }  // namespace
 
 Bsh buildBsh(const BshPoints& points, const BshOptions& options) { return Builder(points, options).build(); }
+
+Bsh buildTopTree(const std::vector<BshNode>& roots) {
+  const BshPoints none;
+  const BshOptions opt;
+  return Builder(none, opt).buildTop(roots);
+}
 
 glm::vec3 coneAxis(const BshNode& n) { return n.links.w ? frame::unpackNormal(n.links.w) : glm::vec3(0); }
 

@@ -154,6 +154,18 @@ class RasterMethod : public Method, public RasterFrame {
   const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
   uint64_t cutGeneration() const override { return cutGeneration_; }
   void bindLightsCutTree(int scan) const override { scans_.at(size_t(scan)).shadowTree.bind(); }
+  size_t addNodeLayer(const NodeLayerFactory& make) override {
+    NL_CHECK_MSG(frameNumber_ == 0, "node layers are added before the first frame streams");
+    size_t index = 0;
+    for (auto& s : scans_) index = s.store->addLayer(make(s.reader->metadata()));
+    return index;
+  }
+  unsigned layerBuffer(const CutNode& n, size_t layer) const override {
+    return scans_.at(size_t(n.scan)).store->layerBuffer(n.handle, layer);
+  }
+  size_t layerBytes(const CutNode& n, size_t layer) const override {
+    return scans_.at(size_t(n.scan)).store->layerBytes(n.handle, layer);
+  }
   bool quiet() const override { return quiet_; }
 
   MethodFrame render(const SceneCamera& camera) override {
@@ -293,6 +305,7 @@ class RasterMethod : public Method, public RasterFrame {
         c.scan = int(si);
         c.indexInScan = int(ni);
         c.buffer = s.store->buffer(n.handle);
+        c.handle = n.handle;
         c.numPoints = n.numPoints;
         c.origin = scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});
         c.size = float(n.worldBounds.max.x - n.worldBounds.min.x);

@@ -19,3 +19,15 @@ NL_STRUCT(BshNode) {
   uvec4 links;   // x: left child index or BSH_LEAF, y: right child index (leaf: 0), z: points it
                  // stands for, w: the cone's axis, octahedral 2 x 16 bits (0: none)
 };
+
+// The gather's buffers (the GI frame's method slots).
+#define PBGI_SSBO_TOP (NL_SSBO_METHOD0 + 0)     // BshNode[]: the top tree over the cut's nodes (scene frame)
+#define PBGI_SSBO_NODES (NL_SSBO_METHOD0 + 1)   // BshNode[]: every included node's hierarchy, one after another
+#define PBGI_SSBO_TABLE (NL_SSBO_METHOD0 + 2)   // PbgiNode[]: where each one starts, its frame and colour scale
+#define PBGI_SSBO_MICRO (NL_SSBO_METHOD0 + 3)   // vec4[M x M]: m-pixel mean directions and solid angles
+
+// A node of the cut as the gather enters it from a top-tree leaf.
+NL_STRUCT(PbgiNode) {
+  vec4 origin;   // xyz: the node cube's corner in the scene frame (its hierarchy's frame), w: colour scale
+  uvec4 range;   // x: index of its root in PBGI_SSBO_NODES, y: its node count
+};

@@ -126,6 +126,10 @@ Scene loadScene(const std::filesystem::path& file);
 // no octree: the origin stays 0 unless the document sets it (see resolveOrigin()).
 Scene parseScene(const nlohmann::json& j, const std::filesystem::path& file);
 void resolveOrigin(Scene& scene);
+// Whether anything emits light in `mode`: the scan itself (radiance-cache mode), a light, the
+// environment, or an emissive material used by a mesh. In albedo mode a scene with none of these
+// renders black.
+bool sceneHasLight(const Scene& scene, RadianceMode mode);
 // A camera can look from `eye` at `target`: they differ and the view is not parallel to `up`.
 bool viewIsValid(const glm::dvec3& eye, const glm::dvec3& target, const glm::dvec3& up);
 

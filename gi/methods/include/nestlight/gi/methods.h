@@ -29,6 +29,9 @@ struct MethodInfo {
     std::function<void(GiSettings&)> apply;
   };
   std::vector<Variant> variants;
+  // Whether it renders the albedo mode (scan points lit by the scene's lights); `bench gi`
+  // skips, and says so, a method that does not.
+  bool albedoMode = true;
 };
 
 const std::vector<MethodInfo>& registeredMethods();

@@ -72,6 +72,13 @@ struct Bsh {
 
 Bsh buildBsh(const BshPoints& points, const BshOptions& options);
 
+// The top tree over the resident nodes' hierarchies, rebuilt when the cut changes: `roots` are
+// their root nodes moved into one frame (the scene's), colours scaled as the gather sees them.
+// Its leaves are the roots themselves (sphere, cone, colour, count as given) with links.y the
+// index into `roots`; inner nodes as buildBsh's (never pruned). The gather enters a node's own
+// hierarchy at a leaf, so the resident cut is traversed as one hierarchy.
+Bsh buildTopTree(const std::vector<BshNode>& roots);
+
 // Decoded fields of a node, for tests and tools.
 glm::vec3 coneAxis(const BshNode& n);  // (0, 0, 0) when the node's cone bounds nothing
 inline bool isLeaf(const BshNode& n) { return n.links.x == BSH_LEAF; }

@@ -15,10 +15,12 @@
 #include <glm/glm.hpp>
 
 #include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/gl_node_store.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/raster/raster_method.h"
 #include "nestlight/gl/program.h"
+#include "nestlight/octree/metadata.h"
 
 namespace nestlight::gi {
 
@@ -34,6 +36,7 @@ struct CutNode {
   float colourScale = 1;      // its scan's colour_scale
   int scan = 0;               // which scan (bindLightsCutTree)
   int indexInScan = 0;        // its entry in that scan's lights'-cut draw tree
+  uint64_t handle = 0;        // its store handle (layerBuffer)
 };
 
 class RasterFrame {
@@ -66,6 +69,15 @@ class RasterFrame {
   // Binds scan `scan`'s lights'-cut draw tree (NL_SSBO_DRAW_TREE: points/splat_size.glsl's
   // finestSpacing() then works for that scan's CutNodes).
   virtual void bindLightsCutTree(int scan) const = 0;
+  // Adds a per-node layer (a hierarchy over the node's points) to every scan's store, made for
+  // that scan's metadata: from then on loader threads build it with each node, it is uploaded
+  // and freed with the node and counted in the budgets. Call in setUp, before the first frame
+  // streams anything. Returns the layer's index (the same for every scan).
+  using NodeLayerFactory = std::function<std::shared_ptr<const frame::NodeLayer>(const Metadata&)>;
+  virtual size_t addNodeLayer(const NodeLayerFactory& make) = 0;
+  // A cut node's layer buffer (GL name; 0 when it has none) and its bytes.
+  virtual unsigned layerBuffer(const CutNode& node, size_t layer) const = 0;
+  virtual size_t layerBytes(const CutNode& node, size_t layer) const = 0;
   virtual bool quiet() const = 0;
 };
 
