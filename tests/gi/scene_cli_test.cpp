@@ -57,7 +57,8 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
   ASSERT_EQ(test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out), 0) << out;
   ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
-                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 --reference-error 0.05 --reference-spp 256 -o " +
+                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 --quality pbgi=8 --reference-error 0.05 "
+                             "--reference-spp 256 -o " +
                              dir.file("b"),
                          &out),
             0)
@@ -69,10 +70,14 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   int rows = 0;
   while (std::getline(csv, line)) rows++;
   // Every registered method: reference and direct at 1 and 4 spp, raster at 2 shadow-map sizes,
-  // vpl at 16 VPLs as the scene sets it and in its 4 variants (1 to 3 bounces, exact visibility).
-  EXPECT_EQ(rows, 11);
+  // vpl at 16 VPLs as the scene sets it and in its 4 variants (1 to 3 bounces, exact visibility),
+  // pbgi at 8 x 8 micro-buffers and in its 2 variants (no pruning, conservative).
+  EXPECT_EQ(rows, 14);
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 11u);
+  ASSERT_EQ(j["rows"].size(), 14u);
+  EXPECT_EQ(j["rows"][11]["method"], "pbgi");
+  EXPECT_EQ(j["rows"][13]["variant"], "conservative");
+  EXPECT_TRUE(j["rows"][11]["gpu_pass_ms"].contains("pbgi_gather")) << j["rows"][11].dump();
   EXPECT_EQ(j["rows"][6]["method"], "vpl");
   EXPECT_EQ(j["rows"][6]["variant"], "");
   EXPECT_EQ(j["rows"][6]["quality_name"], "VPLs");

@@ -55,11 +55,12 @@ TEST(BshLayer, EveryNodeOfANationalGridScanAccountsForItsPoints) {
       EXPECT_LE(bsh[0].sphere[a], cube + leaf);
     }
     // Spheres that must contain their children's spheres grow level by level beyond the points'
-    // smallest enclosing sphere (at most the cube's half diagonal, plus a leaf): 1.55 times at
-    // worst on this scan, 1.10 on average. Looser spheres cost traversal time (solid angles grow
-    // as r^2), never correctness; this bounds a regression.
+    // smallest enclosing sphere (at most the cube's half diagonal, plus a leaf), and pruned
+    // clusters' spheres are centred on their centroids, not their smallest: 1.61 times at worst
+    // on this scan, 1.12 on average. Looser spheres cost traversal time (solid angles grow as
+    // r^2), never correctness; this bounds a regression.
     const double bound = cube * std::sqrt(3.0) / 2 + leaf;
-    EXPECT_LE(bsh[0].sphere.w, 1.6 * bound);
+    EXPECT_LE(bsh[0].sphere.w, 1.7 * bound);
     worstRoot = std::max(worstRoot, bsh[0].sphere.w / bound);
     sumRoot += bsh[0].sphere.w / bound;
     // Leaves are at least the level's spacing wide.

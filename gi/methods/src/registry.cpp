@@ -2,6 +2,7 @@
 
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/raster/raster_method.h"
+#include "nestlight/gi/pbgi/pbgi_method.h"
 #include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/octree/error.h"
 #include "reference_method.h"
@@ -38,6 +39,16 @@ const std::vector<MethodInfo>& registeredMethods() {
                   {"2 bounces", [](GiSettings& g) { g.maxBounces = 2; }},
                   {"3 bounces", [](GiSettings& g) { g.maxBounces = 3; }},
                   {"exact visibility", [](GiSettings& g) { g.parameters["visibility"] = "exact"; }}}});
+    m.push_back({"pbgi", "real-time GI: point-based GI on a bounding-sphere hierarchy of the resident cut (GL)", true,
+                 "micro-buffer m-pixels per side", {8, 16, 32},
+                 [](GiSettings& g, int q) {
+                   if (!g.parameters.is_object()) g.parameters = nlohmann::json::object();
+                   g.parameters["micro_buffer"] = q;
+                 },
+                 createPbgiMethod,
+                 {{"no pruning", [](GiSettings& g) { g.parameters["prune"] = false; }},
+                  {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }}},
+                 /*albedoMode=*/false});
     return m;
   }();
   return methods;

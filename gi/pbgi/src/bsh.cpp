@@ -21,6 +21,7 @@ struct Aggregate {
   double count = 0;            // points
   glm::dvec3 sumColour{0}, sumColour2{0};
   glm::dvec3 sumNormal{0};     // of the points' unit normals
+  glm::dvec3 sumPosition{0};
   double withNormal = 0;       // points that have one
 };
 
@@ -113,6 +114,7 @@ class Builder {
         }
       }
       a.count = double(e - k);
+      a.sumPosition = a.centre;
       a.centre /= a.count;
       double spread = 0;
       for (size_t j = k; j < e; ++j) spread = std::max(spread, glm::length(glm::dvec3(pts_.position[valid[j]]) - a.centre));
@@ -243,6 +245,7 @@ class Builder {
     p.cone = merge(a.cone, b.cone);
     p.count = a.count + b.count;
     p.sumColour = a.sumColour + b.sumColour;
+    p.sumPosition = a.sumPosition + b.sumPosition;
     p.sumColour2 = a.sumColour2 + b.sumColour2;
     p.sumNormal = a.sumNormal + b.sumNormal;
     p.withNormal = a.withNormal + b.withNormal;
@@ -277,15 +280,29 @@ class Builder {
     }
     if (r.leaf || collapse) {
       clusters_ += collapse;
-      if (sorted_) {
-        // A Karras node covers a contiguous range of cells: from its leftmost to its rightmost.
-        Ref first = r, last = r;
-        while (!first.leaf) first = innerLinks_[first.index].left;
-        while (!last.leaf) last = innerLinks_[last.index].right;
+      // A Karras node covers a contiguous range of cells: from its leftmost to its rightmost.
+      Ref first = r, last = r;
+      while (!first.leaf) first = innerLinks_[first.index].left;
+      while (!last.leaf) last = innerLinks_[last.index].right;
+      if (sorted_)
         for (uint32_t k = cellFirst_[first.index]; k < cellFirst_[last.index + 1]; ++k) out.leafOf[(*sorted_)[k]] = index;
+      BshNode& n = out.nodes[index];
+      float disc = float(a.radius);
+      if (collapse) {
+        // A cluster is drawn as one disc in its mean plane, about its centroid (the bounding
+        // sphere's centre can lie off the surface), wide enough to cover every cell. (A disc of
+        // the area its cells stand for left half a closed sphere's micro-buffers uncovered:
+        // coarse levels' points stand for more than their spacing squared.)
+        const glm::dvec3 centroid = a.sumPosition / a.count;
+        double reach = 0;
+        for (uint32_t c = first.index; c <= last.index; ++c)
+          reach = std::max(reach, glm::length(cells_[c].centre - centroid) + cells_[c].radius);
+        const double mag = std::max({std::fabs(centroid.x), std::fabs(centroid.y), std::fabs(centroid.z), reach});
+        n.sphere = glm::vec4(glm::vec3(centroid), float(reach + 8.0 * mag * 1.2e-7));
+        disc = float(reach);
       }
-      out.nodes[index].links.x = BSH_LEAF;
-      out.nodes[index].links.y = 0;
+      n.links.x = BSH_LEAF;
+      n.links.y = std::bit_cast<uint32_t>(disc);
       return index;
     }
     const InnerNode& node = innerLinks_[r.index];

@@ -16,8 +16,9 @@ NL_STRUCT(BshNode) {
   vec4 sphere;   // xyz centre, w radius: contains every point's disc below it
   vec4 colour;   // rgb mean linear colour of the points below (scan units), w: the normal cone's
                  // half aperture in radians (0: one direction; BSH_CONE_NONE: no bound)
-  uvec4 links;   // x: left child index or BSH_LEAF, y: right child index (leaf: 0), z: points it
-                 // stands for, w: the cone's axis, octahedral 2 x 16 bits (0: none)
+  uvec4 links;   // x: left child index or BSH_LEAF, y: right child index (a leaf: its disc's radius
+                 // as float bits; a top tree's leaf: the node it enters), z: points it stands for,
+                 // w: the cone's axis, octahedral 2 x 16 bits (0: none)
 };
 
 // The gather's buffers (the GI frame's method slots).
@@ -25,9 +26,26 @@ NL_STRUCT(BshNode) {
 #define PBGI_SSBO_NODES (NL_SSBO_METHOD0 + 1)   // BshNode[]: every included node's hierarchy, one after another
 #define PBGI_SSBO_TABLE (NL_SSBO_METHOD0 + 2)   // PbgiNode[]: where each one starts, its frame and colour scale
 #define PBGI_SSBO_MICRO (NL_SSBO_METHOD0 + 3)   // vec4[M x M]: m-pixel mean directions and solid angles
+#define PBGI_SSBO_STATE (NL_SSBO_METHOD0 + 4)   // PbgiTraversal[]: each receiver's traversal in progress
+#define PBGI_SSBO_STACK (NL_SSBO_METHOD0 + 5)   // uvec2[PBGI_STACK]: each receiver's traversal stack
+#define PBGI_SSBO_MB (NL_SSBO_METHOD0 + 6)      // vec4[M x M]: each receiver's micro-buffer (rgb, distance)
+#define PBGI_SSBO_RECEIVERS (NL_SSBO_METHOD0 + 7) // uint[]: [0] receivers, [1] unfinished, [2] spare, [3]
+                                                // spare, then each receiver's pixel (x | y << 16)
+#define PBGI_STACK (2 * BSH_MAX_DEPTH + 8)      // a top tree and a node's tree, each at most BSH_MAX_DEPTH deep
+#define PBGI_DONE 0xffffffffu                   // PbgiTraversal.header.x of a finished receiver
 
 // A node of the cut as the gather enters it from a top-tree leaf.
 NL_STRUCT(PbgiNode) {
   vec4 origin;   // xyz: the node cube's corner in the scene frame (its hierarchy's frame), w: colour scale
   uvec4 range;   // x: index of its root in PBGI_SSBO_NODES, y: its node count
+};
+
+// A receiver's traversal between dispatches: its stack depth and the splat in progress (a node
+// larger than an m-pixel is rasterised one m-pixel per step).
+NL_STRUCT(PbgiTraversal) {
+  uvec4 header;  // x: stack depth (PBGI_DONE: finished), y: splat in progress (0/1), z: its cursor, w: hit (0/1)
+  vec4 sphere;   // the splat's node: centre (scene frame), radius
+  vec4 colour;   // rgb, w: 1 for a leaf (its disc), 0 for an inner node (its silhouette)
+  vec4 normal;   // xyz: the node's plane normal, w: a leaf's disc radius
+  ivec4 box;     // m-pixel box: lo.x, lo.y, hi.x, hi.y
 };

@@ -26,6 +26,7 @@ namespace nestlight::gi::pbgi {
 namespace glsl {
 using vec4 = glm::vec4;
 using uvec4 = glm::uvec4;
+using ivec4 = glm::ivec4;
 #include "gi/pbgi/bsh_interface.glsl"
 }  // namespace glsl
 

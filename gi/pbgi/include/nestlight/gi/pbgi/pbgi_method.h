@@ -1,0 +1,39 @@
+// `pbgi`: point-based global illumination on a bounding-sphere hierarchy of the resident cut
+// (Sabbadin et al., "High Dynamic Range Point Clouds for Real-Time Relighting", 2019, section 5),
+// on the raster frame: each streamed node carries its own hierarchy (bsh_layer.h, built on the
+// loader threads), a top tree over the lights' cut joins them (bsh.h, rebuilt when the cut
+// changes), and receivers gather the scan's radiance through micro-buffers (micro_buffer.h).
+// docs/SCENE.md describes the parameters.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nestlight/gi/method.h"
+#include "nestlight/gi/scene.h"
+
+namespace nestlight::gi {
+
+struct PbgiParameters {
+  // The traversal: "classic" (per receiver, depth first; the one built so far), "mip", "x".
+  enum class Variant { Classic, Mip, X } variant = Variant::Classic;
+  int microBuffer = 16;          // M: m-pixels per side of a micro-buffer ("micro_buffer", 4 to 64)
+  bool conservative = false;     // refine only above 4 m-pixel solid angles (the paper's option against holes)
+  // What an m-pixel nothing covered holds: "average" (the paper: the cloud's average colour) or
+  // "black" (measures the micro-buffers' coverage).
+  enum class Empty { Average, Black } empty = Empty::Average;
+  bool prune = true;             // prune the hierarchies at the paper's thresholds
+  // Traversal steps one dispatch takes per receiver before it yields (0: as many as the device
+  // allows: on llvmpipe what its 65,535-iteration loop limit leaves, elsewhere 2^20). The
+  // traversal resumes where it stopped, so the image does not depend on it.
+  int stepsPerDispatch = 0;
+};
+
+// From scene.gi.parameters; throws nestlight::Error naming scene.gi.parameters.<key>.
+PbgiParameters pbgiParameters(const Scene& scene);
+const std::vector<std::string>& pbgiParameterKeys();
+
+std::unique_ptr<Method> createPbgiMethod(const Scene& scene, const MethodContext& ctx);
+
+}  // namespace nestlight::gi

@@ -1,0 +1,277 @@
+// The `pbgi` method (nestlight/gi/pbgi/pbgi_method.h): Sabbadin, Palma, Banterle, Boubekeur and
+// Cignoni, "High Dynamic Range Point Clouds for Real-Time Relighting" (2019), section 5: the
+// classic traversal (section 5.2) with micro-buffers and BRDF convolution (section 5.3), over the
+// resident cut's per-node hierarchies joined by a top tree.
+#include "nestlight/gi/pbgi/pbgi_method.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+
+#include "nestlight/frame/frame_graph.h"
+#include "nestlight/gi/pbgi/bsh.h"
+#include "nestlight/gi/pbgi/bsh_layer.h"
+#include "nestlight/gi/pbgi/micro_buffer.h"
+#include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gl/program.h"
+#include "nestlight/gl/resources.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/json_field.h"
+
+namespace nestlight::gi {
+
+namespace {
+
+using pbgi::BshNode;
+using PbgiNode = pbgi::glsl::PbgiNode;
+static_assert(sizeof(PbgiNode) == 32, "PbgiNode must keep std430's layout");
+
+class PbgiExtension : public RasterExtension {
+ public:
+  explicit PbgiExtension(const Scene& scene) : params_(pbgiParameters(scene)) {}
+
+  std::string name() const override { return "pbgi"; }
+  std::vector<std::string> parameterKeys() const override { return pbgiParameterKeys(); }
+
+  std::vector<std::pair<std::string, std::string>> parameters() const override {
+    return {{"variant", "classic"},
+            {"micro_buffer", std::to_string(params_.microBuffer)},
+            {"conservative", params_.conservative ? "true" : "false"},
+            {"empty", params_.empty == PbgiParameters::Empty::Average ? "average" : "black"},
+            {"prune", params_.prune ? "true" : "false"},
+            {"steps_per_dispatch", std::to_string(budget_)}};
+  }
+
+  std::string setUp(RasterFrame& f) override {
+    const Scene& scene = f.scene();
+    if (scene.gi.mode == RadianceMode::Albedo)
+      throw Error(scene.file.string(), "gi.mode",
+                  "pbgi gathers the scan's recorded radiance (\"radiance_cache\"); lighting the scan first "
+                  "(\"albedo\") is not built yet");
+    pbgi::BshOptions options;
+    options.prune = params_.prune;
+    layer_ = f.addNodeLayer([options](const Metadata& meta) { return std::make_shared<pbgi::BshLayer>(meta, options); });
+    const pbgi::MicroBufferTable table = pbgi::microBufferTable(params_.microBuffer);
+    micro_ = gl::Buffer(table.texels.size() * sizeof(glm::vec4), table.texels.data(), 0);
+    const std::vector<std::pair<std::string, std::string>> defines = {{"PBGI_MB", std::to_string(params_.microBuffer)}};
+    receiversProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_receivers.comp"}}, defines);
+    classic_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_classic.comp"}}, defines);
+    // llvmpipe ends a shader invocation's loops after 65,535 iterations in all (see
+    // pbgi_classic.comp): its dispatches take fewer steps, leaving room for the micro-buffer's
+    // clearing and convolution loops.
+    const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const int m2 = params_.microBuffer * params_.microBuffer;
+    budget_ = renderer && std::strstr(renderer, "llvmpipe") ? 65535 - 2 * m2 - 256 : (1 << 20);
+    if (params_.stepsPerDispatch > 0) budget_ = std::min(budget_, params_.stepsPerDispatch);
+    addPasses(f);
+    return "radiance_gi";
+  }
+
+  void beforeFrame(RasterFrame& f) override {
+    if (f.cutGeneration() != generation_ || topCount_ == 0) rebuild(f);
+    receiverCount_ = dispatches_ = stackOverflows_ = 0;
+  }
+
+  void describe(const RasterFrame&, MethodFrame& f) const override {
+    f.attributes["nestlight:pbgi_variant"] = "classic";
+    f.attributes["nestlight:pbgi_micro_buffer"] = std::to_string(params_.microBuffer);
+    f.attributes["nestlight:pbgi_cut_nodes"] = std::to_string(cutNodes_);
+    f.attributes["nestlight:pbgi_nodes_left_out"] = std::to_string(leftOut_);
+    f.attributes["nestlight:pbgi_bsh_nodes"] = std::to_string(bshNodes_);
+    f.attributes["nestlight:pbgi_top_nodes"] = std::to_string(topCount_);
+    f.attributes["nestlight:pbgi_top_ms"] = std::to_string(topMs_);
+    f.attributes["nestlight:pbgi_receivers"] = std::to_string(receiverCount_);
+    f.attributes["nestlight:pbgi_dispatches"] = std::to_string(dispatches_);
+    f.attributes["nestlight:pbgi_traversal_bytes"] = std::to_string(stateBytes_);
+    f.attributes["nestlight:pbgi_stack_overflows"] = std::to_string(stackOverflows_);
+    char line[256];
+    std::snprintf(line, sizeof line, "; pbgi classic, %dx%d micro-buffers, %llu hierarchy nodes over %llu cut nodes",
+                  params_.microBuffer, params_.microBuffer, (unsigned long long)bshNodes_,
+                  (unsigned long long)cutNodes_);
+    f.summary += line;
+    f.summary += "; " + std::to_string(receiverCount_) + " receivers in " + std::to_string(dispatches_) + " dispatches";
+    if (leftOut_)
+      f.summary += "; " + std::to_string(leftOut_) + " cut nodes left out (their hierarchies exceed one 128 MiB range)";
+    if (stackOverflows_) f.summary += "; " + std::to_string(stackOverflows_) + " traversal stack overflows (nodes skipped)";
+  }
+
+ private:
+  // The cut's hierarchies into one buffer, their roots into the top tree.
+  void rebuild(RasterFrame& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    generation_ = f.cutGeneration();
+    const auto& cut = f.lightsCut();
+    std::vector<PbgiNode> table;
+    std::vector<BshNode> roots;
+    std::vector<size_t> included;
+    uint64_t total = 0;
+    leftOut_ = 0;
+    // Parents come before children in the cut: when the hierarchies outgrow one buffer range,
+    // the finest nodes are the ones left out (and counted).
+    for (size_t i = 0; i < cut.size(); ++i) {
+      const size_t bytes = f.layerBytes(cut[i], layer_);
+      const uint64_t count = bytes / sizeof(BshNode);
+      if (count == 0) continue;
+      if ((total + count) * sizeof(BshNode) > gl::kMaxSsboRange) {
+        leftOut_++;
+        continue;
+      }
+      PbgiNode e{};
+      e.origin = glm::vec4(cut[i].origin, cut[i].colourScale);
+      e.range = glm::uvec4(uint32_t(total), uint32_t(count), 0, 0);
+      table.push_back(e);
+      included.push_back(i);
+      total += count;
+    }
+    cutNodes_ = cut.size();
+    bshNodes_ = total;
+    nodes_.reserve(std::max<size_t>(total, 1) * sizeof(BshNode));
+    for (size_t k = 0; k < included.size(); ++k) {
+      const CutNode& n = cut[included[k]];
+      const GLuint src = f.layerBuffer(n, layer_);
+      const size_t bytes = size_t(table[k].range.y) * sizeof(BshNode);
+      glCopyNamedBufferSubData(src, nodes_.id(), 0, GLintptr(size_t(table[k].range.x) * sizeof(BshNode)),
+                               GLsizeiptr(bytes));
+      BshNode root;
+      glGetNamedBufferSubData(src, 0, sizeof(BshNode), &root);
+      root.sphere = glm::vec4(glm::vec3(root.sphere) + n.origin, root.sphere.w);
+      root.colour = glm::vec4(glm::vec3(root.colour) * n.colourScale, root.colour.w);
+      roots.push_back(root);
+    }
+    const pbgi::Bsh topTree = pbgi::buildTopTree(roots);
+    topCount_ = topTree.nodes.size();
+    top_.reserve(std::max<size_t>(topCount_, 1) * sizeof(BshNode));
+    if (topCount_) top_.upload(topTree.nodes.data(), topCount_ * sizeof(BshNode));
+    table_.reserve(std::max<size_t>(table.size(), 1) * sizeof(PbgiNode));
+    if (!table.empty()) table_.upload(table.data(), table.size() * sizeof(PbgiNode));
+    average_ = topCount_ ? glm::vec3(topTree.nodes[0].colour) : glm::vec3(0);
+    topMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  void addPasses(RasterFrame& f) {
+    frame::FrameGraph& g = f.graph();
+    g.addTarget("radiance_gi", {GL_RGBA32F});
+    g.addPass(
+        "pbgi_gather", frame::Scope::Tile,
+        [](frame::PassBuilder& b) {
+          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"}) b.read(t);
+          b.write("radiance_gi");
+        },
+        [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
+  }
+
+  // Lists the tile's receivers, then gathers for them in chunks that fit one buffer range, each
+  // dispatched until every receiver of the chunk has finished its traversal.
+  void gather(RasterFrame& f, const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    const size_t pixels = size_t(tile.width) * size_t(tile.height);
+    receivers_.reserve((4 + pixels) * 4);
+    const uint32_t zeros[4] = {0, 0, 0, 0};
+    receivers_.upload(zeros, sizeof zeros);
+    f.bindSceneBuffers();
+    ctx.bindTexture("depth", 0);
+    ctx.bindTexture("base_colour", 1);
+    ctx.bindTexture("normal", 2);
+    ctx.bindTexture("material", 3);
+    ctx.bindTexture("radiance", 4);
+    glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+    receiversProgram_.use();
+    glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    uint32_t count = 0;
+    glGetNamedBufferSubData(receivers_.id(), 0, 4, &count);
+    receiverCount_ += count;
+    if (count > 0 && topCount_ > 0) {
+      const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);
+      const size_t perReceiver = sizeof(pbgi::glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
+      size_t chunk = std::min<size_t>(count, gl::kMaxSsboRange / (m2 * 16));
+      chunk = std::min<size_t>(chunk, 1 << 16);
+      state_.reserve(chunk * sizeof(pbgi::glsl::PbgiTraversal));
+      stack_.reserve(chunk * PBGI_STACK * 8);
+      mb_.reserve(chunk * m2 * 16);
+      stateBytes_ = std::max<uint64_t>(stateBytes_, chunk * perReceiver);
+      top_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, top_.bytes());
+      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodes_.bytes());
+      table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+      micro_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MICRO, 0, micro_.bytes());
+      state_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STATE, 0, state_.bytes());
+      stack_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STACK, 0, stack_.bytes());
+      mb_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MB, 0, mb_.bytes());
+      classic_.use();
+      glUniform1i(classic_.uniform("uBudget"), budget_);
+      glUniform1i(classic_.uniform("uTopCount"), int(topCount_));
+      glUniform1f(classic_.uniform("uOmegaCut"),
+                  pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
+      const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average_ : glm::vec3(0);
+      glUniform3f(classic_.uniform("uEmpty"), empty.r, empty.g, empty.b);
+      for (size_t first = 0; first < count; first += chunk) {
+        const size_t n = std::min(chunk, count - first);
+        glUniform1i(classic_.uniform("uFirst"), int(first));
+        glUniform1i(classic_.uniform("uCount"), int(n));
+        for (int dispatch = 0;; ++dispatch) {
+          receivers_.upload(zeros, 4, 4);  // unfinished receivers, counted by this dispatch
+          glUniform1i(classic_.uniform("uInit"), dispatch == 0 ? 1 : 0);
+          glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
+          glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
+                          GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+          dispatches_++;
+          uint32_t unfinished = 0;
+          glGetNamedBufferSubData(receivers_.id(), 4, 4, &unfinished);
+          if (unfinished == 0) break;
+          if (dispatch > 1000000)
+            throw Error("pbgi: a traversal did not finish after a million dispatches (a cycle in a hierarchy?)");
+        }
+      }
+      uint32_t overflow = 0;
+      glGetNamedBufferSubData(receivers_.id(), 8, 4, &overflow);
+      stackOverflows_ += overflow;
+    }
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+  }
+
+  PbgiParameters params_;
+  size_t layer_ = 0;
+  gl::ShaderProgram receiversProgram_, classic_;
+  gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_;
+  int budget_ = 1 << 20;
+  uint64_t receiverCount_ = 0, dispatches_ = 0, stateBytes_ = 0, stackOverflows_ = 0;
+  uint64_t generation_ = ~0ull;
+  uint64_t cutNodes_ = 0, leftOut_ = 0, bshNodes_ = 0;
+  size_t topCount_ = 0;
+  double topMs_ = 0;
+  glm::vec3 average_{0};
+};
+
+}  // namespace
+
+const std::vector<std::string>& pbgiParameterKeys() {
+  static const std::vector<std::string> keys = {"variant", "micro_buffer", "conservative", "empty", "prune",
+                                                "steps_per_dispatch"};
+  return keys;
+}
+
+PbgiParameters pbgiParameters(const Scene& scene) {
+  PbgiParameters p;
+  if (scene.gi.parameters.is_null()) return p;
+  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+  if (f.has("variant")) {
+    const JsonField v = f.at("variant");
+    const std::string name = v.choice({"classic", "mip", "x"});
+    if (name != "classic") v.fail("the \"" + name + "\" traversal is not built yet: use \"classic\"");
+  }
+  if (f.has("micro_buffer")) p.microBuffer = int(f.at("micro_buffer").integer(4, 64));
+  if (f.has("conservative")) p.conservative = f.at("conservative").boolean();
+  if (f.has("empty")) p.empty = f.at("empty").choice({"average", "black"}) == "average" ? PbgiParameters::Empty::Average
+                                                                                       : PbgiParameters::Empty::Black;
+  if (f.has("prune")) p.prune = f.at("prune").boolean();
+  if (f.has("steps_per_dispatch")) p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
+  return p;
+}
+
+std::unique_ptr<Method> createPbgiMethod(const Scene& scene, const MethodContext& ctx) {
+  return createRasterMethod(scene, ctx, std::make_unique<PbgiExtension>(scene));
+}
+
+}  // namespace nestlight::gi

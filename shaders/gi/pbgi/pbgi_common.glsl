@@ -1,0 +1,45 @@
+// What the `pbgi` passes share: the hierarchy's layout and buffers, the micro-buffer size, and the
+// receiver a G-buffer pixel stands for.
+#include "../common/gbuffer_in.glsl"
+#include "../../common/octahedral.glsl"
+#include "bsh_interface.glsl"
+#ifndef PBGI_MB
+#define PBGI_MB 16  // the method compiles with its micro_buffer; this is for validators
+#endif
+#define M PBGI_MB
+layout(binding = 0) uniform sampler2D uDepth;
+layout(binding = 1) uniform sampler2D uBaseColour;
+layout(binding = 2) uniform sampler2D uNormal;
+layout(binding = 3) uniform usampler2D uMaterial;
+layout(binding = 4) uniform sampler2D uDirect;
+layout(std430, binding = PBGI_SSBO_RECEIVERS) buffer Receivers { uint receivers[]; };
+layout(rgba32f, binding = 0) uniform writeonly image2D uOut;
+
+// In the radiance-cache mode a scan point's colour is all its light: only inserted objects gather.
+bool isReceiver(ivec2 px) {
+  if (!(texelFetch(uDepth, px, 0).r < 1.0)) return false;
+  return gbufferSource(texelFetch(uMaterial, px, 0)) != NL_SOURCE_SCAN;
+}
+
+struct Receiver {
+  vec3 x;   // position, lifted off its surface by a hair (its own plane must not occlude it)
+  vec3 n;   // normal, facing the camera
+  vec3 wo;  // towards the camera
+  MaterialParams mat;
+};
+
+Receiver receiverAt(ivec2 px) {
+  Receiver R;
+  float depth = texelFetch(uDepth, px, 0).r;
+  vec2 ndc = ((vec2(px) + 0.5) / frame.tile.zw) * 2.0 - 1.0;
+  vec4 wp = frame.worldFromClip * vec4(ndc, depth * 2.0 - 1.0, 1.0);
+  R.x = wp.xyz / wp.w;
+  R.wo = normalize(frame.eye.xyz - R.x);
+  vec4 nn = texelFetch(uNormal, px, 0);
+  R.n = nn.w > 0.0 ? normalize(nn.xyz) : R.wo;
+  if (dot(R.n, R.wo) < 0.0) R.n = -R.n;
+  vec3 emission;
+  R.mat = gbufferMaterial(texelFetch(uBaseColour, px, 0).rgb, texelFetch(uMaterial, px, 0), emission);
+  R.x += R.n * 1e-4 * max(length(R.x - frame.eye.xyz), 1e-3);
+  return R;
+}
