@@ -21,21 +21,8 @@ namespace {
 
 using json = nlohmann::json;
 
-// A grey Lambert box of albedo rho inside a sphere of scan points emitting L (radiance-cache
-// mode), seen from inside the sphere.
 Scene furnaceScene(const nestlight::test::TempDir& t, double rho, const json& parameters) {
-  writeBoxObj(t.path() / "box.obj");
-  json j = {{"version", 1},
-            {"octrees", {{{"path", "sphere.octree"}}}},
-            {"materials", {{"grey", {{"type", "lambert"}, {"base_color", rho}}}}},
-            {"meshes", json::array({json{{"path", "box.obj"},
-                                         {"transform", {{"translate", {-0.2, -0.2, -0.2}}, {"scale", {0.4, 0.4, 0.4}}}},
-                                         {"material", "grey"}}})},
-            {"camera", {{"eye", {-0.55, 0.0, 0.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 30.0},
-                        {"width", 32}, {"height", 32}}},
-            {"gi", {{"method", "pbgi"}, {"mode", "radiance_cache"}, {"parameters", parameters}}}};
-  std::ofstream(t.file("scene.json")) << j.dump(2);
-  return loadScene(t.file("scene.json"));
+  return boxInSphereScene(t, rho, "pbgi", parameters);
 }
 
 // The box's mean over the central pixels (the box fills them).

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <fstream>
 
+#include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/sampling.h"
+#include "nestlight/gi/scene.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -30,6 +32,27 @@ inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, i
     }
   }
   nestlight::test::buildOctreeFrom(t.file("sphere.ply"), t.path() / "sphere.octree");
+}
+
+// A grey Lambert box of albedo rho (0.4 m, at the origin) inside the sphere scan (radiance-cache
+// mode: the scan's colour is its light), seen from inside the sphere at 32 x 32, rendered by
+// `method` with `parameters`.
+inline Scene boxInSphereScene(const nestlight::test::TempDir& t, double rho, const std::string& method,
+                              const nlohmann::json& parameters) {
+  writeBoxObj(t.path() / "box.obj");
+  nlohmann::json j = {
+      {"version", 1},
+      {"octrees", {{{"path", "sphere.octree"}}}},
+      {"materials", {{"grey", {{"type", "lambert"}, {"base_color", rho}}}}},
+      {"meshes", nlohmann::json::array({nlohmann::json{
+                     {"path", "box.obj"},
+                     {"transform", {{"translate", {-0.2, -0.2, -0.2}}, {"scale", {0.4, 0.4, 0.4}}}},
+                     {"material", "grey"}}})},
+      {"camera", {{"eye", {-0.55, 0.0, 0.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 30.0},
+                  {"width", 32}, {"height", 32}}},
+      {"gi", {{"method", method}, {"mode", "radiance_cache"}, {"parameters", parameters}}}};
+  std::ofstream(t.file("scene.json")) << j.dump(2);
+  return loadScene(t.file("scene.json"));
 }
 
 }  // namespace nestlight::gi

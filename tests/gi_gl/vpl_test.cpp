@@ -248,19 +248,8 @@ TEST(Vpl, IsmVisibilityAgreesWithExactRays) {
 TEST(Vpl, RadianceCacheScanLightsAnInsertedObject) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 80000, 2.0f, 150);
-  writeBoxObj(t.path() / "box.obj");
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
-  json j = {{"version", 1},
-            {"octrees", {{{"path", "sphere.octree"}}}},
-            {"materials", {{"grey", {{"type", "lambert"}, {"base_color", rho}}}}},
-            {"meshes", json::array({json{{"path", "box.obj"},
-                                         {"transform", {{"translate", {-0.2, -0.2, -0.2}}, {"scale", {0.4, 0.4, 0.4}}}},
-                                         {"material", "grey"}}})},
-            {"camera", {{"eye", {-0.55, 0.0, 0.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 30.0},
-                        {"width", 32}, {"height", 32}}},
-            {"gi", {{"method", "vpl"}, {"mode", "radiance_cache"}, {"parameters", {{"vpls", 1024}}}}}};
-  std::ofstream(t.file("scene.json")) << j.dump(2);
-  Scene s = loadScene(t.file("scene.json"));
+  Scene s = boxInSphereScene(t, rho, "vpl", {{"vpls", 1024}});
   // The scan's light reaching the box is its first bounce, as the reference counts bounces; a
   // second changes nothing here (the box is convex, and light reaching the scan ends there).
   for (int bounces : {1, 2}) {

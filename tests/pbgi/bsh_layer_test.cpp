@@ -56,11 +56,12 @@ TEST(BshLayer, EveryNodeOfANationalGridScanAccountsForItsPoints) {
     }
     // Spheres that must contain their children's spheres grow level by level beyond the points'
     // smallest enclosing sphere (at most the cube's half diagonal, plus a leaf), and pruned
-    // clusters' spheres are centred on their centroids, not their smallest: 1.61 times at worst
-    // on this scan, 1.12 on average. Looser spheres cost traversal time (solid angles grow as
-    // r^2), never correctness; this bounds a regression.
+    // clusters' spheres are centred on their centroids, not their smallest: 1.82 times at worst
+    // on this scan, 1.13 on average (the worst case moves with the tree's shape: 1.61 with the
+    // Morton codes' axes in another order). Looser spheres cost traversal time (solid angles grow
+    // as r^2), never correctness; this bounds a regression.
     const double bound = cube * std::sqrt(3.0) / 2 + leaf;
-    EXPECT_LE(bsh[0].sphere.w, 1.7 * bound);
+    EXPECT_LE(bsh[0].sphere.w, 2.0 * bound);
     worstRoot = std::max(worstRoot, bsh[0].sphere.w / bound);
     sumRoot += bsh[0].sphere.w / bound;
     // Leaves are at least the level's spacing wide.

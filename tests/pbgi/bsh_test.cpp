@@ -35,15 +35,15 @@ glm::vec3 randomUnit(std::mt19937& rng) {
   return glm::normalize(v);
 }
 
-TEST(Morton, InterleavesBitsXLowest) {
-  EXPECT_EQ(mortonCode(1, 0, 0), 1u);
+TEST(Morton, InterleavesBitsZLowest) {
+  EXPECT_EQ(mortonCode(0, 0, 1), 1u);
   EXPECT_EQ(mortonCode(0, 1, 0), 2u);
-  EXPECT_EQ(mortonCode(0, 0, 1), 4u);
-  EXPECT_EQ(mortonCode(3, 0, 0), 9u);
+  EXPECT_EQ(mortonCode(1, 0, 0), 4u);
+  EXPECT_EQ(mortonCode(0, 0, 3), 9u);
   EXPECT_EQ(mortonCode(kMortonAxisMax, kMortonAxisMax, kMortonAxisMax), (1ull << 63) - 1);
-  // Bit k of x lands at 3k: the highest x bit at 60.
-  EXPECT_EQ(mortonCode(1u << 20, 0, 0), 1ull << 60);
-  EXPECT_EQ(mortonCode(0, 0, 1u << 20), 1ull << 62);
+  // Bit k of z lands at 3k: the highest z bit at 60, x's at 62.
+  EXPECT_EQ(mortonCode(0, 0, 1u << 20), 1ull << 60);
+  EXPECT_EQ(mortonCode(1u << 20, 0, 0), 1ull << 62);
 }
 
 TEST(Morton, RadixSortMatchesStableSortWithDuplicates) {

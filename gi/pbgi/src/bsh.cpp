@@ -37,7 +37,7 @@ struct InnerNode {
 
 // The smallest sphere containing both children's spheres (exact for two spheres). Bottom-up it
 // grows beyond the points' own smallest enclosing sphere (on a converted scan's nodes the root
-// is 1.10 times the node cube's half diagonal on average, 1.55 at worst); a sphere about the
+// is 1.13 times the node cube's half diagonal on average, 1.8 at worst); a sphere about the
 // points' bounding-box centre containing both children was tried and was never smaller there.
 void enclose(const Aggregate& a, const Aggregate& b, glm::dvec3& centre, double& radius) {
   const glm::dvec3 d = b.centre - a.centre;

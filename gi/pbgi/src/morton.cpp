@@ -3,27 +3,13 @@
 #include <array>
 
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/node_key.h"
 
 namespace nestlight::gi::pbgi {
 
-namespace {
-
-// Spreads the low 21 bits of v so that two zero bits follow each.
-uint64_t spread3(uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffull;
-  v = (v | v << 16) & 0x1f0000ff0000ffull;
-  v = (v | v << 8) & 0x100f00f00f00f00full;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-  v = (v | v << 2) & 0x1249249249249249ull;
-  return v;
-}
-
-}  // namespace
-
 uint64_t mortonCode(uint32_t x, uint32_t y, uint32_t z) {
   NL_CHECK(x <= kMortonAxisMax && y <= kMortonAxisMax && z <= kMortonAxisMax);
-  return spread3(x) | spread3(y) << 1 | spread3(z) << 2;
+  return mortonEncode21(x, y, z);
 }
 
 void radixSortPairs(std::vector<uint64_t>& keys, std::vector<uint32_t>& values) {

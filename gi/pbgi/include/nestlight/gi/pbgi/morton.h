@@ -12,7 +12,7 @@ namespace nestlight::gi::pbgi {
 inline constexpr int kMortonBitsPerAxis = 21;
 inline constexpr uint32_t kMortonAxisMax = (1u << kMortonBitsPerAxis) - 1;
 
-// x, y, z in [0, 2^21): their bits interleaved, x lowest.
+// x, y, z in [0, 2^21): their bits interleaved, z lowest (the octree's mortonEncode21, checked).
 uint64_t mortonCode(uint32_t x, uint32_t y, uint32_t z);
 
 // Sorts `keys` ascending and applies the same permutation to `values` (stable: equal keys keep
