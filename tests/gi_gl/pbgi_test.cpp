@@ -92,6 +92,39 @@ TEST(Pbgi, HalfASphereOfEmittersLightsHalfTheHemisphere) {
     }
 }
 
+// Half a sphere emitting L above, a uniform sky Le below (a constant environment): a side face
+// of the box sees each over half its hemisphere, and reflects rho (L + Le) / 2 (against the
+// reference's rendering of the same scene, which sees the same). With "environment" (the default
+// when the scene has one) the gather fills what no node covers with the sky and takes out the
+// unshadowed sky irradiance direct light gave the face (rho Le: it would count the sky behind the
+// scan); with "average" the sky's half takes the cloud's mean colour instead, and the face keeps
+// raster's unshadowed sky on top: rho L + rho Le. Tolerance as the half-sphere test's (3%).
+TEST(Pbgi, EnvironmentFillsWhatTheScanDoesNotCover) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 60000, 2.0f, 150, 0.0f);
+  const double L = srgbDecode(150.0f / 255.0f), rho = 0.5, Le = 0.3;
+  for (const char* empty : {"auto", "environment", "average"}) {
+    Scene s = furnaceScene(t, rho, {{"micro_buffer", 16}, {"empty", empty}, {"prune", false}});
+    s.environment = SceneEnvironment{};
+    s.environment->constant = Rgb(float(Le));
+    MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+    const double got = boxMean(f.image);
+    const double want = std::string(empty) == "average" ? rho * (L + Le) : rho * (L + Le) / 2;
+    std::printf("pbgi, upper half emitting over a sky, empty %s: box %.4f, expected %.4f (ratio %.4f); %s\n", empty,
+                got, want, got / want, f.attributes.at("nestlight:pbgi_empty").c_str());
+    EXPECT_NEAR(got / want, 1.0, 0.03) << empty;
+  }
+  // Raster alone gives the face the unshadowed sky over its whole hemisphere: rho Le (a constant
+  // sky is one texel; its irradiance was once integrated as a single equator sample, 6.7 times
+  // too bright on a face looking at it).
+  Scene s = furnaceScene(t, rho, json::object());
+  s.environment = SceneEnvironment{};
+  s.environment->constant = Rgb(float(Le));
+  s.gi.method = "raster";
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  EXPECT_NEAR(boxMean(f.image) / (rho * Le), 1.0, 0.01);
+}
+
 // The traversal yields after steps_per_dispatch steps and resumes where it stopped (its stack,
 // micro-buffer and splat in progress kept between dispatches): a few hundred steps per dispatch
 // give the same image, bit for bit, as one dispatch.

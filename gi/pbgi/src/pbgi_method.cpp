@@ -38,13 +38,25 @@ class PbgiExtension : public RasterExtension {
     return {{"variant", "classic"},
             {"micro_buffer", std::to_string(params_.microBuffer)},
             {"conservative", params_.conservative ? "true" : "false"},
-            {"empty", params_.empty == PbgiParameters::Empty::Average ? "average" : "black"},
+            {"empty", emptyName()},
             {"prune", params_.prune ? "true" : "false"},
             {"steps_per_dispatch", std::to_string(budget_)}};
   }
 
+  const char* emptyName() const {
+    switch (params_.empty) {
+      case PbgiParameters::Empty::Auto: return "auto";
+      case PbgiParameters::Empty::Average: return "average";
+      case PbgiParameters::Empty::Environment: return "environment";
+      case PbgiParameters::Empty::Black: return "black";
+    }
+    return "?";
+  }
+
   std::string setUp(RasterFrame& f) override {
     const Scene& scene = f.scene();
+    if (params_.empty == PbgiParameters::Empty::Auto)
+      params_.empty = f.hasEnvironment() ? PbgiParameters::Empty::Environment : PbgiParameters::Empty::Average;
     if (scene.gi.mode == RadianceMode::Albedo)
       throw Error(scene.file.string(), "gi.mode",
                   "pbgi gathers the scan's recorded radiance (\"radiance_cache\"); lighting the scan first "
@@ -76,6 +88,7 @@ class PbgiExtension : public RasterExtension {
   void describe(const RasterFrame&, MethodFrame& f) const override {
     f.attributes["nestlight:pbgi_variant"] = "classic";
     f.attributes["nestlight:pbgi_micro_buffer"] = std::to_string(params_.microBuffer);
+    f.attributes["nestlight:pbgi_empty"] = emptyName();
     f.attributes["nestlight:pbgi_cut_nodes"] = std::to_string(cutNodes_);
     f.attributes["nestlight:pbgi_nodes_left_out"] = std::to_string(leftOut_);
     f.attributes["nestlight:pbgi_bsh_nodes"] = std::to_string(bshNodes_);
@@ -206,6 +219,8 @@ class PbgiExtension : public RasterExtension {
                   pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
       const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average_ : glm::vec3(0);
       glUniform3f(classic_.uniform("uEmpty"), empty.r, empty.g, empty.b);
+      glUniform1i(classic_.uniform("uEmptyEnvironment"), params_.empty == PbgiParameters::Empty::Environment ? 1 : 0);
+      f.bindEnvironment(classic_);
       for (size_t first = 0; first < count; first += chunk) {
         const size_t n = std::min(chunk, count - first);
         glUniform1i(classic_.uniform("uFirst"), int(first));
@@ -263,8 +278,13 @@ PbgiParameters pbgiParameters(const Scene& scene) {
   }
   if (f.has("micro_buffer")) p.microBuffer = int(f.at("micro_buffer").integer(4, 64));
   if (f.has("conservative")) p.conservative = f.at("conservative").boolean();
-  if (f.has("empty")) p.empty = f.at("empty").choice({"average", "black"}) == "average" ? PbgiParameters::Empty::Average
-                                                                                       : PbgiParameters::Empty::Black;
+  if (f.has("empty")) {
+    const std::string e = f.at("empty").choice({"auto", "average", "environment", "black"});
+    p.empty = e == "auto"          ? PbgiParameters::Empty::Auto
+              : e == "average"     ? PbgiParameters::Empty::Average
+              : e == "environment" ? PbgiParameters::Empty::Environment
+                                   : PbgiParameters::Empty::Black;
+  }
   if (f.has("prune")) p.prune = f.at("prune").boolean();
   if (f.has("steps_per_dispatch")) p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
   return p;

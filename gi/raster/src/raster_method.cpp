@@ -60,13 +60,19 @@ std::array<glm::vec3, 9> irradianceSh(const EnvironmentMap& env) {
   std::array<glm::dvec3, 9> L{};
   const HdrImage& img = env.image();
   const double rot = double(env.rotationDegrees()) * kPiD / 180;
-  for (int y = 0; y < img.height; ++y) {
-    const double theta = kPiD * (y + 0.5) / img.height;
-    const double dOmega = (2 * kPiD / img.width) * (kPiD / img.height) * std::sin(theta);
-    for (int x = 0; x < img.width; ++x) {
-      const double phi = 2 * kPiD * (x + 0.5) / img.width + rot;
+  // Each texel is integrated over its own area: sub-samples make the quadrature at least 128 x 64
+  // (a constant sky is one texel, which a single sample would put all on the equator's -x
+  // point: irradiance 6.7 times too high on a face looking that way), each weighted by its
+  // exact solid angle (cos theta0 - cos theta1) dphi.
+  const int sx = std::max(1, (128 + img.width - 1) / img.width), sy = std::max(1, (64 + img.height - 1) / img.height);
+  const int W = img.width * sx, H = img.height * sy;
+  for (int y = 0; y < H; ++y) {
+    const double t0 = kPiD * y / H, t1 = kPiD * (y + 1) / H, theta = 0.5 * (t0 + t1);
+    const double dOmega = (2 * kPiD / W) * (std::cos(t0) - std::cos(t1));
+    for (int x = 0; x < W; ++x) {
+      const double phi = 2 * kPiD * (x + 0.5) / W + rot;
       const double dx = std::sin(theta) * std::cos(phi), dy = std::sin(theta) * std::sin(phi), dz = std::cos(theta);
-      const Rgb c = img.get(x, y);
+      const Rgb c = img.get(x / sx, y / sy);
       const glm::dvec3 v = glm::dvec3(c.r, c.g, c.b) * double(env.scale()) * dOmega;
       if (!std::isfinite(v.x + v.y + v.z)) continue;
       const double Y[9] = {0.282095, 0.488603 * dy, 0.488603 * dz, 0.488603 * dx, 1.092548 * dx * dy,
@@ -151,6 +157,14 @@ class RasterMethod : public Method, public RasterFrame {
     shadowViewsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SHADOW_VIEWS);
     materialsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_MATERIALS);
   }
+  void bindEnvironment(const gl::ShaderProgram& program) const override {
+    glBindTextureUnit(5, environment_ ? environment_.id() : 0);
+    glUniform1i(program.uniform("uHasEnvironment"), hasEnvironment_ ? 1 : 0);
+    glUniform1f(program.uniform("uEnvRotation"), envRotation_);
+    glUniform1f(program.uniform("uEnvScale"), envScale_);
+    glUniform3fv(program.uniform("uEnvSh"), 9, &sh_[0].x);
+  }
+  bool hasEnvironment() const override { return hasEnvironment_; }
   const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
   uint64_t cutGeneration() const override { return cutGeneration_; }
   void bindLightsCutTree(int scan) const override { scans_.at(size_t(scan)).shadowTree.bind(); }
@@ -492,8 +506,14 @@ class RasterMethod : public Method, public RasterFrame {
     std::vector<float> rgba(img.pixels() * 4, 1.0f);
     for (size_t p = 0; p < img.pixels(); ++p)
       for (int k = 0; k < 3; ++k) rgba[4 * p + k] = img.rgb[3 * p + k];
-    environment_ = gl::Texture(GL_RGBA32F, img.width, img.height);
+    // Mip levels for lookups averaged over a solid angle (environment.glsl's environmentOver: a
+    // GI method's micro-buffer m-pixel, which point samples would alias on a small bright sun).
+    int levels = 1;
+    while ((std::max(img.width, img.height) >> levels) > 0) ++levels;
+    environment_ = gl::Texture(GL_RGBA32F, img.width, img.height, levels);
     glTextureSubImage2D(environment_.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT, rgba.data());
+    glGenerateTextureMipmap(environment_.id());
+    environment_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
   }
 
   void uploadMaterials() {
@@ -820,11 +840,7 @@ class RasterMethod : public Method, public RasterFrame {
           maps.setFilter(GL_LINEAR, GL_LINEAR);
           maps.setDepthCompare(true);
           glBindTextureUnit(4, maps.id());
-          glBindTextureUnit(5, environment_ ? environment_.id() : 0);
-          glUniform1i(directLight_.uniform("uHasEnvironment"), hasEnvironment_ ? 1 : 0);
-          glUniform1f(directLight_.uniform("uEnvRotation"), envRotation_);
-          glUniform1f(directLight_.uniform("uEnvScale"), envScale_);
-          glUniform3fv(directLight_.uniform("uEnvSh"), 9, &sh_[0].x);
+          bindEnvironment(directLight_);
           lightsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_LIGHTS);
           shadowViewsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SHADOW_VIEWS);
           materialsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_MATERIALS);

@@ -18,7 +18,8 @@
 // direction at distance d - r; a wider one covers the m-pixels whose central ray hits it: a leaf
 // as its disc (its normal, its disc radius), an inner node as its sphere's silhouette at the depth of
 // its mean plane; one that covers no m-pixel centre still lands in its centre's m-pixel.
-// Empty m-pixels take uEmpty (the paper: the cloud's average colour).
+// Empty m-pixels take uEmpty (the paper: the cloud's average colour, for holes in the cloud), or
+// the environment's radiance in their direction (open scenes: what no point covers is sky).
 //
 // One invocation per receiver; the traversal is resumable. llvmpipe ends every loop of a shader
 // invocation after 65,535 iterations in all (Mesa's LP_MAX_TGSI_LOOP_ITERATIONS, shared by every
@@ -41,7 +42,11 @@ uniform int uInit;            // 1: the chunk's first dispatch (clear micro-buff
 uniform int uBudget;          // traversal steps per dispatch
 uniform int uTopCount;        // nodes in the top tree (0: nothing resident)
 uniform float uOmegaCut;      // the refinement threshold (m-pixel solid angle, x 4 conservative)
-uniform vec3 uEmpty;          // radiance of an m-pixel nothing covered
+uniform vec3 uEmpty;          // radiance of an m-pixel nothing covered (uEmptyEnvironment 0)
+// 1: an m-pixel nothing covered sees the environment; the gather then owns the environment's
+// light on receivers, and takes out the unshadowed irradiance direct light gave their diffuse
+// lobes (it would count the sky behind the scan).
+uniform int uEmptyEnvironment;
 
 const float kFar = 3.0e38;
 const float kTwoPi = 6.2831853;
@@ -207,11 +212,13 @@ void main() {
       vec4 m = micro[k];
       if (m.w <= 0.0) continue;
       vec4 b = mbs[mbBase + uint(k)];
-      vec3 C = b.a < kFar ? b.rgb : uEmpty;
-      L += evalBsdf(R.mat, woL, normalize(m.xyz)) * C * m.w * m.z;
+      vec3 wi = normalize(m.xyz);
+      vec3 C = b.a < kFar ? b.rgb : (uEmptyEnvironment != 0 ? environmentOver(F * wi, m.w) : uEmpty);
+      L += evalBsdf(R.mat, woL, wi) * C * m.w * m.z;
     }
     vec4 direct = texelFetch(uDirect, px, 0);
-    imageStore(uOut, px, vec4(direct.rgb + L, direct.a));
+    if (uEmptyEnvironment != 0 && uHasEnvironment) direct.rgb -= diffuseAlbedo(R.mat) * kInvPi * irradiance(R.n);
+    imageStore(uOut, px, vec4(max(direct.rgb, vec3(0.0)) + L, direct.a));
     st.header.x = PBGI_DONE;
   } else {
     atomicAdd(receivers[1], 1u);

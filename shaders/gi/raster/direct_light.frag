@@ -10,30 +10,8 @@ layout(binding = 0) uniform sampler2D uDepth;
 layout(binding = 1) uniform sampler2D uBaseColour;
 layout(binding = 2) uniform sampler2D uNormal;
 layout(binding = 3) uniform usampler2D uMaterial;
-layout(binding = 5) uniform sampler2D uEnvironment;  // lat-long, as gi::EnvironmentMap
-uniform bool uHasEnvironment;
-uniform float uEnvRotation;   // radians
-uniform float uEnvScale;
-uniform vec3 uEnvSh[9];       // irradiance SH coefficients (already convolved, times scale)
+#include "../common/environment.glsl"
 layout(location = 0) out vec4 outRadiance;
-
-vec3 environment(vec3 d) {
-  if (!uHasEnvironment) return vec3(0.0);
-  float theta = atan(length(d.xy), d.z);
-  float u = (atan(d.y, d.x) - uEnvRotation) / (2.0 * kPi);
-  u -= floor(u);
-  float v = clamp(theta / kPi, 0.0, 1.0);
-  ivec2 size = textureSize(uEnvironment, 0);
-  ivec2 texel = min(ivec2(vec2(u, v) * vec2(size)), size - 1);
-  return texelFetch(uEnvironment, texel, 0).rgb * uEnvScale;
-}
-
-vec3 irradiance(vec3 n) {
-  return max(uEnvSh[0] + uEnvSh[1] * n.y + uEnvSh[2] * n.z + uEnvSh[3] * n.x + uEnvSh[4] * n.x * n.y +
-                 uEnvSh[5] * n.y * n.z + uEnvSh[6] * (3.0 * n.z * n.z - 1.0) + uEnvSh[7] * n.x * n.z +
-                 uEnvSh[8] * (n.x * n.x - n.y * n.y),
-             vec3(0.0));
-}
 
 void main() {
   ivec2 px = ivec2(gl_FragCoord.xy);

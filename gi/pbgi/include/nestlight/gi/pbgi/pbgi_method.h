@@ -20,9 +20,11 @@ struct PbgiParameters {
   enum class Variant { Classic, Mip, X } variant = Variant::Classic;
   int microBuffer = 16;          // M: m-pixels per side of a micro-buffer ("micro_buffer", 4 to 64)
   bool conservative = false;     // refine only above 4 m-pixel solid angles (the paper's option against holes)
-  // What an m-pixel nothing covered holds: "average" (the paper: the cloud's average colour) or
-  // "black" (measures the micro-buffers' coverage).
-  enum class Empty { Average, Black } empty = Empty::Average;
+  // What an m-pixel nothing covered holds: "average" (the paper: the cloud's average colour, for
+  // holes), "environment" (its radiance in that direction: what no point covers is sky; the
+  // gather then owns the environment's light on receivers), "black" (measures coverage), or
+  // "auto": environment when the scene has one, else average.
+  enum class Empty { Auto, Average, Environment, Black } empty = Empty::Auto;
   bool prune = true;             // prune the hierarchies at the paper's thresholds
   // Traversal steps one dispatch takes per receiver before it yields (0: as many as the device
   // allows: on llvmpipe what its 65,535-iteration loop limit leaves, elsewhere 2^20). The

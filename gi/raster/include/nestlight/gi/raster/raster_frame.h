@@ -56,6 +56,11 @@ class RasterFrame {
   // Binds the lights (NL_SSBO_LIGHTS), light views (NL_SSBO_SHADOW_VIEWS) and materials
   // (NL_SSBO_MATERIALS).
   virtual void bindSceneBuffers() const = 0;
+  // Sets shaders/gi/common/environment.glsl's uniforms of the bound `program` and binds the map
+  // to texture unit 5. Direct light already holds the environment's unshadowed irradiance on
+  // diffuse lobes (and what the camera sees of it behind the scene).
+  virtual void bindEnvironment(const gl::ShaderProgram& program) const = 0;
+  virtual bool hasEnvironment() const = 0;
   // Draws the scans' splats (shaders/gi/raster/scan.vert with `program`'s fragment stage): the
   // camera's cut or the lights' cut.
   virtual void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
