@@ -46,7 +46,9 @@ const std::vector<MethodInfo>& registeredMethods() {
                    g.parameters["micro_buffer"] = q;
                  },
                  createPbgiMethod,
-                 {{"no pruning", [](GiSettings& g) { g.parameters["prune"] = false; }},
+                 {{"classic", [](GiSettings& g) { g.parameters["variant"] = "classic"; }},
+                  {"mip", [](GiSettings& g) { g.parameters["variant"] = "mip"; }},
+                  {"no pruning", [](GiSettings& g) { g.parameters["prune"] = false; }},
                   {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }}},
                  /*albedoMode=*/false});
     return m;

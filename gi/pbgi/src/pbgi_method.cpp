@@ -35,12 +35,22 @@ class PbgiExtension : public RasterExtension {
   std::vector<std::string> parameterKeys() const override { return pbgiParameterKeys(); }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
-    return {{"variant", "classic"},
+    return {{"variant", variantName()},
+            {"pair_capacity", std::to_string(params_.pairCapacity)},
             {"micro_buffer", std::to_string(params_.microBuffer)},
             {"conservative", params_.conservative ? "true" : "false"},
             {"empty", emptyName()},
             {"prune", params_.prune ? "true" : "false"},
             {"steps_per_dispatch", std::to_string(budget_)}};
+  }
+
+  const char* variantName() const {
+    switch (params_.variant) {
+      case PbgiParameters::Variant::Classic: return "classic";
+      case PbgiParameters::Variant::Mip: return "mip";
+      case PbgiParameters::Variant::X: return "x";
+    }
+    return "?";
   }
 
   const char* emptyName() const {
@@ -69,6 +79,10 @@ class PbgiExtension : public RasterExtension {
     const std::vector<std::pair<std::string, std::string>> defines = {{"PBGI_MB", std::to_string(params_.microBuffer)}};
     receiversProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_receivers.comp"}}, defines);
     classic_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_classic.comp"}}, defines);
+    if (params_.variant != PbgiParameters::Variant::Classic) {
+      pyramidProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pyramid.comp"}}, defines);
+      pairsProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pairs.comp"}}, defines);
+    }
     // llvmpipe ends a shader invocation's loops after 65,535 iterations in all (see
     // pbgi_classic.comp): its dispatches take fewer steps, leaving room for the micro-buffer's
     // clearing and convolution loops.
@@ -83,10 +97,15 @@ class PbgiExtension : public RasterExtension {
   void beforeFrame(RasterFrame& f) override {
     if (f.cutGeneration() != generation_ || topCount_ == 0) rebuild(f);
     receiverCount_ = dispatches_ = stackOverflows_ = 0;
+    pairGenerations_ = pairOverflows_ = pairBytes_ = listEntries_ = 0;
   }
 
   void describe(const RasterFrame&, MethodFrame& f) const override {
-    f.attributes["nestlight:pbgi_variant"] = "classic";
+    f.attributes["nestlight:pbgi_variant"] = variantName();
+    f.attributes["nestlight:pbgi_pair_generations"] = std::to_string(pairGenerations_);
+    f.attributes["nestlight:pbgi_pair_overflows"] = std::to_string(pairOverflows_);
+    f.attributes["nestlight:pbgi_pair_bytes"] = std::to_string(pairBytes_);
+    f.attributes["nestlight:pbgi_list_entries"] = std::to_string(listEntries_);
     f.attributes["nestlight:pbgi_micro_buffer"] = std::to_string(params_.microBuffer);
     f.attributes["nestlight:pbgi_empty"] = emptyName();
     f.attributes["nestlight:pbgi_cut_nodes"] = std::to_string(cutNodes_);
@@ -99,10 +118,16 @@ class PbgiExtension : public RasterExtension {
     f.attributes["nestlight:pbgi_traversal_bytes"] = std::to_string(stateBytes_);
     f.attributes["nestlight:pbgi_stack_overflows"] = std::to_string(stackOverflows_);
     char line[256];
-    std::snprintf(line, sizeof line, "; pbgi classic, %dx%d micro-buffers, %llu hierarchy nodes over %llu cut nodes",
-                  params_.microBuffer, params_.microBuffer, (unsigned long long)bshNodes_,
+    std::snprintf(line, sizeof line, "; pbgi %s, %dx%d micro-buffers, %llu hierarchy nodes over %llu cut nodes",
+                  variantName(), params_.microBuffer, params_.microBuffer, (unsigned long long)bshNodes_,
                   (unsigned long long)cutNodes_);
     f.summary += line;
+    if (params_.variant != PbgiParameters::Variant::Classic)
+      f.summary += "; " + std::to_string(pairGenerations_) + " pair generations, " + std::to_string(pairBytes_ >> 10) +
+                   " KiB of pairs and lists";
+    if (pairOverflows_)
+      f.summary += "; pairs outgrew pair_capacity (" + std::to_string(pairOverflows_) +
+                   " not written): gathered from the root instead";
     f.summary += "; " + std::to_string(receiverCount_) + " receivers in " + std::to_string(dispatches_) + " dispatches";
     if (leftOut_)
       f.summary += "; " + std::to_string(leftOut_) + " cut nodes left out (their hierarchies exceed one 128 MiB range)";
@@ -196,6 +221,18 @@ class PbgiExtension : public RasterExtension {
     uint32_t count = 0;
     glGetNamedBufferSubData(receivers_.id(), 0, 4, &count);
     receiverCount_ += count;
+    bool lists = false;
+    if (count > 0 && topCount_ > 0 && params_.variant != PbgiParameters::Variant::Classic) {
+      top_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, top_.bytes());
+      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodes_.bytes());
+      table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+      lists = refinePairs(tile);
+      receivers_.upload(zeros, sizeof zeros);  // the pairs' counters reused the receivers' header
+    }
+    if (listHead_.bytes() == 0) listHead_.reserve(16);
+    if (list_.bytes() == 0) list_.reserve(16);
+    listHead_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD, 0, listHead_.bytes());
+    list_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST, 0, list_.bytes());
     if (count > 0 && topCount_ > 0) {
       const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);
       const size_t perReceiver = sizeof(pbgi::glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
@@ -215,6 +252,7 @@ class PbgiExtension : public RasterExtension {
       classic_.use();
       glUniform1i(classic_.uniform("uBudget"), budget_);
       glUniform1i(classic_.uniform("uTopCount"), int(topCount_));
+      glUniform1i(classic_.uniform("uLists"), lists ? 1 : 0);
       glUniform1f(classic_.uniform("uOmegaCut"),
                   pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
       const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average_ : glm::vec3(0);
@@ -246,10 +284,88 @@ class PbgiExtension : public RasterExtension {
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
   }
 
+  // MIP-PBGI / X-PBGI: the receivers' pyramid, then (node, block) pairs refined generation by
+  // generation until every pair has reached a single receiver's list. Returns false when the
+  // pairs or the lists outgrew their buffers (counted): the frame then gathers from the root.
+  bool refinePairs(const frame::Tile& tile) {
+    std::vector<glm::ivec2> sizes{{tile.width, tile.height}};
+    while ((sizes.back().x > 1 || sizes.back().y > 1) && sizes.size() < 16)
+      sizes.push_back({(sizes.back().x + 1) / 2, (sizes.back().y + 1) / 2});
+    std::vector<int> offsets;
+    int texels = 0;
+    for (const auto& sz : sizes) offsets.push_back(texels), texels += sz.x * sz.y;
+    const int levels = int(sizes.size());
+    pyramid_.reserve(size_t(texels) * 32);
+    pyramid_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PYRAMID, 0, pyramid_.bytes());
+    pyramidProgram_.use();
+    for (int l = 0; l < levels; ++l) {
+      glUniform1i(pyramidProgram_.uniform("uLevel"), l);
+      glUniform2i(pyramidProgram_.uniform("uSize"), sizes[size_t(l)].x, sizes[size_t(l)].y);
+      glUniform1i(pyramidProgram_.uniform("uOffset"), offsets[size_t(l)]);
+      if (l > 0) {
+        glUniform2i(pyramidProgram_.uniform("uChildSize"), sizes[size_t(l) - 1].x, sizes[size_t(l) - 1].y);
+        glUniform1i(pyramidProgram_.uniform("uChildOffset"), offsets[size_t(l) - 1]);
+      }
+      glDispatchCompute(GLuint((sizes[size_t(l)].x + 7) / 8), GLuint((sizes[size_t(l)].y + 7) / 8), 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    const size_t capacity = size_t(params_.pairCapacity);
+    pairsA_.reserve(capacity * 16);
+    pairsB_.reserve(capacity * 16);
+    list_.reserve(capacity * 16);
+    listHead_.reserve(size_t(tile.width) * size_t(tile.height) * 4);
+    const uint32_t end = PBGI_END;
+    glClearNamedBufferData(listHead_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &end);
+    const uint32_t top = uint32_t(levels - 1);
+    const glm::uvec4 root(0, 0, top << 28, 0);
+    pairsA_.upload(&root, sizeof root);
+    const uint32_t zeros[4] = {0, 0, 0, 0};
+    receivers_.upload(zeros, sizeof zeros);
+    listHead_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD, 0, listHead_.bytes());
+    list_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST, 0, list_.bytes());
+    pairsProgram_.use();
+    const float omegaM = pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f);
+    glUniform1f(pairsProgram_.uniform("uOmegaTr"),
+                params_.variant == PbgiParameters::Variant::X ? 32.0f * pbgi::mPixelSolidAngle(params_.microBuffer)
+                                                              : omegaM);
+    glUniform1ui(pairsProgram_.uniform("uPairCapacity"), GLuint(capacity));
+    glUniform1ui(pairsProgram_.uniform("uListCapacity"), GLuint(capacity));
+    glUniform1iv(pairsProgram_.uniform("uLevelOffset"), levels, offsets.data());
+    glUniform2iv(pairsProgram_.uniform("uLevelSize"), levels, &sizes[0].x);
+    uint32_t inCount = 1;
+    gl::Buffer* in = &pairsA_;
+    gl::Buffer* out = &pairsB_;
+    uint64_t peak = 1;
+    for (int generation = 0; inCount > 0; ++generation) {
+      NL_CHECK_MSG(generation < 4096, "pbgi: pair refinement did not end (a cycle in a hierarchy?)");
+      receivers_.upload(zeros, 8);  // pairs written, pairs that did not fit
+      in->bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_IN, 0, in->bytes());
+      out->bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_OUT, 0, out->bytes());
+      glUniform1i(pairsProgram_.uniform("uInCount"), int(inCount));
+      glDispatchCompute(GLuint((inCount + 63) / 64), 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+      pairGenerations_++;
+      uint32_t c[4];
+      glGetNamedBufferSubData(receivers_.id(), 0, sizeof c, c);
+      if (c[1] > 0 || c[3] > 0) {
+        pairOverflows_ += c[1] + c[3];
+        return false;
+      }
+      inCount = c[0];
+      peak = std::max<uint64_t>(peak, inCount);
+      listEntries_ = c[2];
+      std::swap(in, out);
+    }
+    pairBytes_ = std::max<uint64_t>(pairBytes_, 2 * peak * 16 + listEntries_ * 16 + uint64_t(texels) * 32);
+    return true;
+  }
+
   PbgiParameters params_;
   size_t layer_ = 0;
-  gl::ShaderProgram receiversProgram_, classic_;
+  gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
   gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_;
+  gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
+  uint64_t pairGenerations_ = 0, pairOverflows_ = 0, pairBytes_ = 0, listEntries_ = 0;
   int budget_ = 1 << 20;
   uint64_t receiverCount_ = 0, dispatches_ = 0, stateBytes_ = 0, stackOverflows_ = 0;
   uint64_t generation_ = ~0ull;
@@ -262,8 +378,8 @@ class PbgiExtension : public RasterExtension {
 }  // namespace
 
 const std::vector<std::string>& pbgiParameterKeys() {
-  static const std::vector<std::string> keys = {"variant", "micro_buffer", "conservative", "empty", "prune",
-                                                "steps_per_dispatch"};
+  static const std::vector<std::string> keys = {"variant",    "micro_buffer", "conservative",      "empty",
+                                                "prune",      "pair_capacity", "steps_per_dispatch"};
   return keys;
 }
 
@@ -274,7 +390,9 @@ PbgiParameters pbgiParameters(const Scene& scene) {
   if (f.has("variant")) {
     const JsonField v = f.at("variant");
     const std::string name = v.choice({"classic", "mip", "x"});
-    if (name != "classic") v.fail("the \"" + name + "\" traversal is not built yet: use \"classic\"");
+    p.variant = name == "classic" ? PbgiParameters::Variant::Classic
+                : name == "mip"   ? PbgiParameters::Variant::Mip
+                                  : PbgiParameters::Variant::X;
   }
   if (f.has("micro_buffer")) p.microBuffer = int(f.at("micro_buffer").integer(4, 64));
   if (f.has("conservative")) p.conservative = f.at("conservative").boolean();
@@ -286,6 +404,7 @@ PbgiParameters pbgiParameters(const Scene& scene) {
                                    : PbgiParameters::Empty::Black;
   }
   if (f.has("prune")) p.prune = f.at("prune").boolean();
+  if (f.has("pair_capacity")) p.pairCapacity = int(f.at("pair_capacity").integer(1, 1 << 23));
   if (f.has("steps_per_dispatch")) p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
   return p;
 }

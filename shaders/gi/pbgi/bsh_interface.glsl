@@ -31,6 +31,15 @@ NL_STRUCT(BshNode) {
 #define PBGI_SSBO_MB (NL_SSBO_METHOD0 + 6)      // vec4[M x M]: each receiver's micro-buffer (rgb, distance)
 #define PBGI_SSBO_RECEIVERS (NL_SSBO_METHOD0 + 7) // uint[]: [0] receivers, [1] unfinished, [2] spare, [3]
                                                 // spare, then each receiver's pixel (x | y << 16)
+// MIP-PBGI and X-PBGI (pbgi_pyramid.comp, pbgi_pairs.comp) reuse the slots the classic pass
+// binds for its traversal, and the classic pass reads their per-receiver lists at the node-layer
+// slots, which no GI pass binds.
+#define PBGI_SSBO_PYRAMID (NL_SSBO_METHOD0 + 4) // vec4[2 per texel]: receiver blocks (sphere, normal cone) of every level
+#define PBGI_SSBO_PAIRS_IN (NL_SSBO_METHOD0 + 5)  // uvec4[]: (node index, tree, texel, 0) pairs to refine
+#define PBGI_SSBO_PAIRS_OUT (NL_SSBO_METHOD0 + 6) // uvec4[]: the pairs they refine into
+#define PBGI_SSBO_LIST_HEAD NL_SSBO_NODE_LAYER1    // uint[tile pixels]: each receiver's first list entry
+#define PBGI_SSBO_LIST NL_SSBO_NODE_LAYER2         // uvec4[]: (node index, tree, next entry, 0)
+#define PBGI_END 0xffffffffu                       // the end of a receiver's list
 #define PBGI_STACK (2 * BSH_MAX_DEPTH + 8)      // a top tree and a node's tree, each at most BSH_MAX_DEPTH deep
 #define PBGI_DONE 0xffffffffu                   // PbgiTraversal.header.x of a finished receiver
 
@@ -48,4 +57,5 @@ NL_STRUCT(PbgiTraversal) {
   vec4 colour;   // rgb, w: 1 for a leaf (its disc), 0 for an inner node (its silhouette)
   vec4 normal;   // xyz: the node's plane normal, w: a leaf's disc radius
   ivec4 box;     // m-pixel box: lo.x, lo.y, hi.x, hi.y
+  uvec4 list;    // x: the next entry of the receiver's list of sub-trees (PBGI_END: none left)
 };

@@ -29,9 +29,9 @@
 // and the frame dispatches until every receiver has finished.
 layout(local_size_x = 64) in;
 #include "pbgi_common.glsl"
-layout(std430, binding = PBGI_SSBO_TOP) readonly buffer Top { BshNode top[]; };
-layout(std430, binding = PBGI_SSBO_NODES) readonly buffer Nodes { BshNode nodes[]; };
-layout(std430, binding = PBGI_SSBO_TABLE) readonly buffer Table { PbgiNode cutNodes[]; };
+#include "pbgi_nodes.glsl"
+layout(std430, binding = PBGI_SSBO_LIST_HEAD) readonly buffer ListHead { uint listHead[]; };
+layout(std430, binding = PBGI_SSBO_LIST) readonly buffer List { uvec4 list[]; };
 layout(std430, binding = PBGI_SSBO_MICRO) readonly buffer Micro { vec4 micro[]; };
 layout(std430, binding = PBGI_SSBO_STATE) buffer State { PbgiTraversal states[]; };
 layout(std430, binding = PBGI_SSBO_STACK) buffer Stack { uvec2 stacks[]; };
@@ -43,6 +43,7 @@ uniform int uBudget;          // traversal steps per dispatch
 uniform int uTopCount;        // nodes in the top tree (0: nothing resident)
 uniform float uOmegaCut;      // the refinement threshold (m-pixel solid angle, x 4 conservative)
 uniform vec3 uEmpty;          // radiance of an m-pixel nothing covered (uEmptyEnvironment 0)
+uniform int uLists;           // 1: start from the receiver's list of sub-trees (MIP-PBGI, X-PBGI), 0: from the root
 // 1: an m-pixel nothing covered sees the environment; the gather then owns the environment's
 // light on receivers, and takes out the unshadowed irradiance direct light gave their diffuse
 // lobes (it would count the sky behind the scan).
@@ -142,8 +143,9 @@ void main() {
   PbgiTraversal st;
   if (uInit != 0) {
     for (int k = 0; k < M * M; ++k) mbs[mbBase + uint(k)] = vec4(0.0, 0.0, 0.0, kFar);
-    st.header = uvec4(uTopCount > 0 ? 1u : 0u, 0u, 0u, 0u);
+    st.header = uvec4(uTopCount > 0 && uLists == 0 ? 1u : 0u, 0u, 0u, 0u);
     stacks[stackBase] = uvec2(0u, 0u);
+    st.list = uvec4(uLists != 0 ? listHead[uint(px.y) * uint(frame.tile.z) + uint(px.x)] : PBGI_END, 0u, 0u, 0u);
   } else {
     st = states[idx];
   }
@@ -157,24 +159,21 @@ void main() {
       splatStep(R, F, st);
       continue;
     }
+    uvec2 e;
     if (st.header.x == 0u) {
-      finished = true;
-      break;
-    }
-    st.header.x--;
-    uvec2 e = stacks[stackBase + st.header.x];
-    BshNode A;
-    vec3 origin = vec3(0.0);
-    float scale = 1.0;
-    if (e.y == 0u) {
-      A = top[e.x];
+      if (st.list.x == PBGI_END) {
+        finished = true;
+        break;
+      }
+      uvec4 entry = list[st.list.x];  // the next sub-tree the pairs left this receiver
+      e = entry.xy;
+      st.list.x = entry.z;
     } else {
-      PbgiNode cn = cutNodes[e.y - 1u];
-      A = nodes[cn.range.x + e.x];
-      origin = cn.origin.xyz;
-      scale = cn.origin.w;
+      st.header.x--;
+      e = stacks[stackBase + st.header.x];
     }
-    vec3 c = origin + A.sphere.xyz;
+    BshNode A = fetchNode(e);
+    vec3 c = A.sphere.xyz;
     float r = A.sphere.w;
     vec3 d = c - R.x;
     float dist = length(d);
@@ -194,7 +193,7 @@ void main() {
     float omega = inside ? kTwoPi : kTwoPi * (1.0 - sqrt(max(1.0 - (r / dist) * (r / dist), 0.0)));
     if (leaf || omega <= uOmegaCut) {
       float disc = leaf ? min(uintBitsToFloat(A.links.y), r) : r;
-      startSplat(R, F, c, r, disc, hasAxis ? axis : -d / max(dist, 1e-30), leaf, A.colour.rgb * scale, st);
+      startSplat(R, F, c, r, disc, hasAxis ? axis : -d / max(dist, 1e-30), leaf, A.colour.rgb, st);
     } else if (st.header.x + 2u <= uint(PBGI_STACK)) {
       stacks[stackBase + st.header.x++] = uvec2(A.links.y, e.y);
       stacks[stackBase + st.header.x++] = uvec2(A.links.x, e.y);
@@ -202,7 +201,7 @@ void main() {
       atomicAdd(receivers[2], 1u);  // cannot happen within BSH_MAX_DEPTH; counted, never silent
     }
   }
-  if (!finished && st.header.x == 0u && st.header.y == 0u) finished = true;
+  if (!finished && st.header.x == 0u && st.header.y == 0u && st.list.x == PBGI_END) finished = true;
 
   if (finished) {
     // Eq. 7: L = sum brdf(w_ij, wo) C_ij Omega_ij cos(theta_ij).

@@ -16,8 +16,11 @@
 namespace nestlight::gi {
 
 struct PbgiParameters {
-  // The traversal: "classic" (per receiver, depth first; the one built so far), "mip", "x".
-  enum class Variant { Classic, Mip, X } variant = Variant::Classic;
+  // The traversal: "classic" (per receiver, depth first), "mip" (pairs of nodes and receiver
+  // blocks refined in parallel down to m-pixel-sized nodes), "x" (pairs while nodes exceed 32
+  // m-pixel solid angles, then classic per receiver: the paper's X-PBGI).
+  enum class Variant { Classic, Mip, X } variant = Variant::X;
+  int pairCapacity = 1 << 21;    // pairs per pair buffer, and entries of the receivers' lists (MIP, X)
   int microBuffer = 16;          // M: m-pixels per side of a micro-buffer ("micro_buffer", 4 to 64)
   bool conservative = false;     // refine only above 4 m-pixel solid angles (the paper's option against holes)
   // What an m-pixel nothing covered holds: "average" (the paper: the cloud's average colour, for
