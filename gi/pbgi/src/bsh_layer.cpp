@@ -1,5 +1,6 @@
 #include "nestlight/gi/pbgi/bsh_layer.h"
 
+#include <chrono>
 #include <cstring>
 
 #include "nestlight/gi/srgb.h"
@@ -38,9 +39,16 @@ Bsh BshLayer::build(const NodeKey& key, const PointBuffer& points, const std::ve
 
 void BshLayer::prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
                        std::vector<uint8_t>& out) const {
+  const auto t0 = std::chrono::steady_clock::now();
   const Bsh bsh = build(key, points, gpuPoints);
+  nanoseconds_ += uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+  builds_++;
+  points_ += points.size();
+  nodes_ += bsh.nodes.size();
   out.resize(bsh.nodes.size() * sizeof(BshNode));
   if (!out.empty()) std::memcpy(out.data(), bsh.nodes.data(), out.size());
 }
+
+BshLayer::Totals BshLayer::totals() const { return {builds_.load(), points_.load(), nodes_.load(), nanoseconds_.load()}; }
 
 }  // namespace nestlight::gi::pbgi

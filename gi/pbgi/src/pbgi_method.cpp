@@ -73,7 +73,11 @@ class PbgiExtension : public RasterExtension {
                   "(\"albedo\") is not built yet");
     pbgi::BshOptions options;
     options.prune = params_.prune;
-    layer_ = f.addNodeLayer([options](const Metadata& meta) { return std::make_shared<pbgi::BshLayer>(meta, options); });
+    layer_ = f.addNodeLayer([options, this](const Metadata& meta) {
+      auto layer = std::make_shared<pbgi::BshLayer>(meta, options);
+      layers_.push_back(layer);
+      return layer;
+    });
     const pbgi::MicroBufferTable table = pbgi::microBufferTable(params_.microBuffer);
     micro_ = gl::Buffer(table.texels.size() * sizeof(glm::vec4), table.texels.data(), 0);
     const std::vector<std::pair<std::string, std::string>> defines = {{"PBGI_MB", std::to_string(params_.microBuffer)}};
@@ -113,6 +117,15 @@ class PbgiExtension : public RasterExtension {
     f.attributes["nestlight:pbgi_bsh_nodes"] = std::to_string(bshNodes_);
     f.attributes["nestlight:pbgi_top_nodes"] = std::to_string(topCount_);
     f.attributes["nestlight:pbgi_top_ms"] = std::to_string(topMs_);
+    pbgi::BshLayer::Totals built;
+    for (const auto& l : layers_) {
+      const auto t = l->totals();
+      built.builds += t.builds, built.points += t.points, built.nodes += t.nodes, built.nanoseconds += t.nanoseconds;
+    }
+    f.attributes["nestlight:pbgi_bsh_builds"] = std::to_string(built.builds);
+    f.attributes["nestlight:pbgi_bsh_points"] = std::to_string(built.points);
+    f.attributes["nestlight:pbgi_bsh_built_nodes"] = std::to_string(built.nodes);
+    f.attributes["nestlight:pbgi_bsh_seconds"] = std::to_string(double(built.nanoseconds) * 1e-9);
     f.attributes["nestlight:pbgi_receivers"] = std::to_string(receiverCount_);
     f.attributes["nestlight:pbgi_dispatches"] = std::to_string(dispatches_);
     f.attributes["nestlight:pbgi_traversal_bytes"] = std::to_string(stateBytes_);
@@ -362,6 +375,7 @@ class PbgiExtension : public RasterExtension {
 
   PbgiParameters params_;
   size_t layer_ = 0;
+  std::vector<std::shared_ptr<const pbgi::BshLayer>> layers_;  // one per scan, for their build totals
   gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
   gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_;
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;

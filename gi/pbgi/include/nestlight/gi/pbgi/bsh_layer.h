@@ -3,6 +3,8 @@
 // and freed with it, so a gather can only ever read the hierarchy of a node that is resident.
 #pragma once
 
+#include <atomic>
+#include <cstdint>
 #include <string>
 
 #include "nestlight/frame/gl_node_store.h"
@@ -24,10 +26,18 @@ class BshLayer : public frame::NodeLayer {
   // The same build, returned whole (tests, tools).
   Bsh build(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints) const;
 
+  // What the loader threads built so far: nodes, points, hierarchy nodes, and the thread time it
+  // took (the paper's Table 1 times one build over a whole cloud; here builds run per node).
+  struct Totals {
+    uint64_t builds = 0, points = 0, nodes = 0, nanoseconds = 0;
+  };
+  Totals totals() const;
+
  private:
   Metadata meta_;
   BshOptions options_;
   int rgb_ = -1, normal_ = -1;
+  mutable std::atomic<uint64_t> builds_{0}, points_{0}, nodes_{0}, nanoseconds_{0};
 };
 
 }  // namespace nestlight::gi::pbgi
