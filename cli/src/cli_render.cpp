@@ -133,6 +133,10 @@ void addRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--mode", *mode, "Scenes: radiance_cache (scan points emit their colour) or albedo (scan points "
                                    "reflect with their colour as albedo)")
       ->check(CLI::IsMember({"radiance_cache", "albedo"}))->group(group);
+  auto variant = std::make_shared<std::string>();
+  cmd->add_option("--variant", *variant, "Scenes, method pbgi: its traversal, x (X-PBGI, default), mip (MIP-PBGI) or "
+                                         "classic (gi.parameters.variant)")
+      ->check(CLI::IsMember({"classic", "mip", "x"}))->group(group);
   cmd->add_option("--spp", sc->spp, "Scenes: samples per pixel at most")->check(CLI::Range(1, 1 << 24))->group(group);
   cmd->add_option("--target-error", sc->targetError,
                   "Scenes: stop when the estimated relative error (two half-sample images) falls below")
@@ -153,6 +157,7 @@ void addRender(CLI::App& app, int& exitCode) {
         sc->fov = job->fovYDegrees;
       }
       if (!mode->empty()) sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
+      if (!variant->empty()) sc->parameters["variant"] = *variant;
       sc->output = job->output;
       gi::renderSceneFile(*octree, *sc);
       exitCode = 0;

@@ -222,6 +222,39 @@ TEST(Pbgi, StreamingCutIsGatheredOnlyWhileResident) {
   EXPECT_NEAR(boxMean(still.image) / (rho * L), 1.0, 0.02);
 }
 
+// Hard cases of the gather: colour far beyond half-float range (the scan's colour scaled by 1e6:
+// hierarchies and micro-buffers keep float colour) and a scan without normals (every node's cone
+// bounds nothing: discs face each receiver, eq. 5 culls nothing). Both still give rho L.
+TEST(Pbgi, HdrColourAndScansWithoutNormalsKeepTheFurnace) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 60000, 2.0f, 150);
+  const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
+  Scene s = furnaceScene(t, rho, {{"micro_buffer", 8}, {"empty", "black"}});
+  s.octrees[0].colourScale = 1e6f;
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  EXPECT_NEAR(boxMean(f.image) / (rho * L * 1e6), 1.0, 0.01);
+
+  nestlight::test::TempDir u;
+  {
+    std::ofstream ply(u.file("sphere.ply"));
+    const int n = 60000;
+    ply << "ply\nformat ascii 1.0\nelement vertex " << n
+        << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
+           "property uchar blue\nend_header\n";
+    const double golden = kPi * (3 - std::sqrt(5.0));
+    for (int i = 0; i < n; ++i) {
+      const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = golden * i;
+      ply << 2 * r * std::cos(phi) << " " << 2 * r * std::sin(phi) << " " << 2 * z << " 150 150 150\n";
+    }
+  }
+  nestlight::test::buildOctreeFrom(u.file("sphere.ply"), u.path() / "sphere.octree");
+  Scene bare = furnaceScene(u, rho, {{"micro_buffer", 8}, {"empty", "black"}});
+  MethodFrame g = createMethod(bare, {true, false})->render(bare.camera);
+  std::printf("colour x 1e6: %.4f of rho L 1e6; no normals: %.4f of rho L\n", boxMean(f.image) / (rho * L * 1e6),
+              boxMean(g.image) / (rho * L));
+  EXPECT_NEAR(boxMean(g.image) / (rho * L), 1.0, 0.02);
+}
+
 // The traversal yields after steps_per_dispatch steps and resumes where it stopped (its stack,
 // micro-buffer and splat in progress kept between dispatches): a few hundred steps per dispatch
 // give the same image, bit for bit, as one dispatch.
