@@ -235,19 +235,7 @@ TEST(Pbgi, HdrColourAndScansWithoutNormalsKeepTheFurnace) {
   EXPECT_NEAR(boxMean(f.image) / (rho * L * 1e6), 1.0, 0.01);
 
   nestlight::test::TempDir u;
-  {
-    std::ofstream ply(u.file("sphere.ply"));
-    const int n = 60000;
-    ply << "ply\nformat ascii 1.0\nelement vertex " << n
-        << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\n"
-           "property uchar blue\nend_header\n";
-    const double golden = kPi * (3 - std::sqrt(5.0));
-    for (int i = 0; i < n; ++i) {
-      const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = golden * i;
-      ply << 2 * r * std::cos(phi) << " " << 2 * r * std::sin(phi) << " " << 2 * z << " 150 150 150\n";
-    }
-  }
-  nestlight::test::buildOctreeFrom(u.file("sphere.ply"), u.path() / "sphere.octree");
+  buildSphereScan(u, 60000, 2.0f, 150, -1.0f, /*normals=*/false);
   Scene bare = furnaceScene(u, rho, {{"micro_buffer", 8}, {"empty", "black"}});
   MethodFrame g = createMethod(bare, {true, false})->render(bare.camera);
   std::printf("colour x 1e6: %.4f of rho L 1e6; no normals: %.4f of rho L\n", boxMean(f.image) / (rho * L * 1e6),

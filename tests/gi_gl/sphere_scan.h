@@ -13,22 +13,24 @@ namespace nestlight::gi {
 
 // A Fibonacci sphere of `n` scan points of radius R about the origin, normals inward, grey
 // `grey` (8-bit sRGB), built into an octree at t/sphere.octree; only its points with z >= minZ
-// (unit sphere) when minZ > -1.
-inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, int grey, float minZ = -1.0f) {
+// (unit sphere) when minZ > -1; without normals when `normals` is false.
+inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, int grey, float minZ = -1.0f,
+                            bool normals = true) {
   {
     std::ofstream ply(t.file("sphere.ply"));
     int kept = 0;
     for (int i = 0; i < n; ++i) kept += 1 - 2 * (i + 0.5) / n >= minZ;
-    ply << "ply\nformat ascii 1.0\nelement vertex " << kept
-        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
-           "property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+    ply << "ply\nformat ascii 1.0\nelement vertex " << kept << "\nproperty float x\nproperty float y\nproperty float z\n"
+        << (normals ? "property float nx\nproperty float ny\nproperty float nz\n" : "")
+        << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
     const double golden = kPi * (3 - std::sqrt(5.0));
     for (int i = 0; i < n; ++i) {
       const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = golden * i;
       const double x = r * std::cos(phi), y = r * std::sin(phi);
       if (z < minZ) continue;
-      ply << R * x << " " << R * y << " " << R * z << " " << -x << " " << -y << " " << -z << " " << grey << " " << grey
-          << " " << grey << "\n";
+      ply << R * x << " " << R * y << " " << R * z << " ";
+      if (normals) ply << -x << " " << -y << " " << -z << " ";
+      ply << grey << " " << grey << " " << grey << "\n";
     }
   }
   nestlight::test::buildOctreeFrom(t.file("sphere.ply"), t.path() / "sphere.octree");
