@@ -49,8 +49,7 @@ const std::vector<MethodInfo>& registeredMethods() {
                  {{"classic", [](GiSettings& g) { g.parameters["variant"] = "classic"; }},
                   {"mip", [](GiSettings& g) { g.parameters["variant"] = "mip"; }},
                   {"no pruning", [](GiSettings& g) { g.parameters["prune"] = false; }},
-                  {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }}},
-                 /*albedoMode=*/false});
+                  {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }}}});
     return m;
   }();
   return methods;

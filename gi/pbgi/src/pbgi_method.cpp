@@ -67,10 +67,8 @@ class PbgiExtension : public RasterExtension {
     const Scene& scene = f.scene();
     if (params_.empty == PbgiParameters::Empty::Auto)
       params_.empty = f.hasEnvironment() ? PbgiParameters::Empty::Environment : PbgiParameters::Empty::Average;
-    if (scene.gi.mode == RadianceMode::Albedo)
-      throw Error(scene.file.string(), "gi.mode",
-                  "pbgi gathers the scan's recorded radiance (\"radiance_cache\"); lighting the scan first "
-                  "(\"albedo\") is not built yet");
+    albedo_ = scene.gi.mode == RadianceMode::Albedo;
+    bounces_ = std::max(scene.gi.maxBounces, 1);
     pbgi::BshOptions options;
     options.prune = params_.prune;
     layer_ = f.addNodeLayer([options, this](const Metadata& meta) {
@@ -83,6 +81,10 @@ class PbgiExtension : public RasterExtension {
     const std::vector<std::pair<std::string, std::string>> defines = {{"PBGI_MB", std::to_string(params_.microBuffer)}};
     receiversProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_receivers.comp"}}, defines);
     classic_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_classic.comp"}}, defines);
+    if (albedo_) {
+      lightProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light.comp"}}, defines);
+      lightUpProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light_up.comp"}}, defines);
+    }
     if (params_.variant != PbgiParameters::Variant::Classic) {
       pyramidProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pyramid.comp"}}, defines);
       pairsProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pairs.comp"}}, defines);
@@ -142,6 +144,8 @@ class PbgiExtension : public RasterExtension {
       f.summary += "; pairs outgrew pair_capacity (" + std::to_string(pairOverflows_) +
                    " not written): gathered from the root instead";
     f.summary += "; " + std::to_string(receiverCount_) + " receivers in " + std::to_string(dispatches_) + " dispatches";
+    if (albedo_ && bounces_ > 2)
+      f.summary += "; albedo mode: one bounce gathered of the " + std::to_string(bounces_ - 1) + " asked";
     if (leftOut_)
       f.summary += "; " + std::to_string(leftOut_) + " cut nodes left out (their hierarchies exceed one 128 MiB range)";
     if (stackOverflows_) f.summary += "; " + std::to_string(stackOverflows_) + " traversal stack overflows (nodes skipped)";
@@ -196,6 +200,18 @@ class PbgiExtension : public RasterExtension {
     if (topCount_) top_.upload(topTree.nodes.data(), topCount_ * sizeof(BshNode));
     table_.reserve(std::max<size_t>(table.size(), 1) * sizeof(PbgiNode));
     if (!table.empty()) table_.upload(table.data(), table.size() * sizeof(PbgiNode));
+    tableCount_ = table.size();
+    maxRange_ = 0;
+    treeSizes_.clear();
+    for (const auto& e : table) maxRange_ = std::max<uint64_t>(maxRange_, e.range.y), treeSizes_.push_back(e.range.y);
+    if (albedo_) {
+      // The lit copies are in the scene's units already: the gather scales them by 1.
+      for (auto& e : table) e.origin.w = 1.0f;
+      tableLit_.reserve(std::max<size_t>(table.size(), 1) * sizeof(PbgiNode));
+      if (!table.empty()) tableLit_.upload(table.data(), table.size() * sizeof(PbgiNode));
+      nodesLit_.reserve(nodes_.bytes());
+      topLit_.reserve(top_.bytes());
+    }
     average_ = topCount_ ? glm::vec3(topTree.nodes[0].colour) : glm::vec3(0);
     topMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
@@ -203,13 +219,78 @@ class PbgiExtension : public RasterExtension {
   void addPasses(RasterFrame& f) {
     frame::FrameGraph& g = f.graph();
     g.addTarget("radiance_gi", {GL_RGBA32F});
+    if (albedo_) {
+      g.addBuffer("pbgi_lit");
+      g.addPass(
+          "pbgi_light", frame::Scope::Frame,
+          [](frame::PassBuilder& b) {
+            b.read("shadow_maps");
+            b.write("pbgi_lit");
+          },
+          [this, &f](const frame::PassContext& ctx) { lightNodes(f, ctx); });
+    }
     g.addPass(
         "pbgi_gather", frame::Scope::Tile,
-        [](frame::PassBuilder& b) {
+        [this](frame::PassBuilder& b) {
           for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"}) b.read(t);
+          if (albedo_) b.read("pbgi_lit");
           b.write("radiance_gi");
         },
         [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
+  }
+
+  // The albedo mode: every node's radiance from the lights (pbgi_light.comp), into lit copies of
+  // the hierarchies and the top tree that the gather reads instead.
+  void lightNodes(RasterFrame& f, const frame::PassContext& ctx) {
+    if (topCount_ == 0) return;
+    const gl::Texture& maps = ctx.target("shadow_maps");
+    maps.setFilter(GL_LINEAR, GL_LINEAR);
+    maps.setDepthCompare(true);
+    glBindTextureUnit(4, maps.id());
+    f.bindSceneBuffers();
+    lightProgram_.use();
+    f.bindEnvironment(lightProgram_);
+    table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+    if (tableCount_ > 0 && maxRange_ > 0) {
+      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodes_.bytes());
+      nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, nodesLit_.bytes());
+      glDispatchCompute(GLuint((maxRange_ + 63) / 64), GLuint(tableCount_), 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    // Bottom-up sweeps: every hierarchy, then the top tree over their lit roots.
+    const int budget = std::max(budget_ - 1024, 1024);
+    receivers_.reserve(16);
+    receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+    lightUpProgram_.use();
+    glUniform1i(lightUpProgram_.uniform("uTrees"), int(tableCount_));
+    glUniform1i(lightUpProgram_.uniform("uTopCount"), int(topCount_));
+    glUniform1i(lightUpProgram_.uniform("uBudget"), budget);
+    auto sweep = [&](bool topTree, const gl::Buffer& tree, size_t trees, const std::vector<uint32_t>& start) {
+      cursors_.reserve(std::max<size_t>(trees, 1) * 4);
+      cursors_.upload(start.data(), start.size() * 4);
+      cursors_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS, 0, cursors_.bytes());
+      tree.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, tree.bytes());
+      nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodesLit_.bytes());
+      glUniform1i(lightUpProgram_.uniform("uTopTree"), topTree ? 1 : 0);
+      for (int dispatch = 0;; ++dispatch) {
+        const uint32_t zero = 0;
+        receivers_.upload(&zero, 4, 4);
+        glDispatchCompute(GLuint((trees + 63) / 64), 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        uint32_t unfinished = 0;
+        glGetNamedBufferSubData(receivers_.id(), 4, 4, &unfinished);
+        if (unfinished == 0) break;
+        NL_CHECK_MSG(dispatch < 100000, "pbgi: a light sweep did not end");
+      }
+    };
+    if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, treeSizes_);
+    top_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, top_.bytes());
+    glCopyNamedBufferSubData(top_.id(), topLit_.id(), 0, 0, GLsizeiptr(topCount_ * sizeof(BshNode)));
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    sweep(true, topLit_, 1, {uint32_t(topCount_)});
+    BshNode root;
+    glGetNamedBufferSubData(topLit_.id(), 0, sizeof root, &root);
+    averageLit_ = glm::vec3(root.colour);
   }
 
   // Lists the tile's receivers, then gathers for them in chunks that fit one buffer range, each
@@ -234,11 +315,16 @@ class PbgiExtension : public RasterExtension {
     uint32_t count = 0;
     glGetNamedBufferSubData(receivers_.id(), 0, 4, &count);
     receiverCount_ += count;
+    // Albedo mode: the lit copies; one bounce asked (direct light only): nothing to gather.
+    const gl::Buffer& topIn = albedo_ ? topLit_ : top_;
+    const gl::Buffer& nodesIn = albedo_ ? nodesLit_ : nodes_;
+    const gl::Buffer& tableIn = albedo_ ? tableLit_ : table_;
+    if (albedo_ && bounces_ < 2) count = 0;
     bool lists = false;
     if (count > 0 && topCount_ > 0 && params_.variant != PbgiParameters::Variant::Classic) {
-      top_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, top_.bytes());
-      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodes_.bytes());
-      table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+      topIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, topIn.bytes());
+      nodesIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesIn.bytes());
+      tableIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableIn.bytes());
       lists = refinePairs(tile);
       receivers_.upload(zeros, sizeof zeros);  // the pairs' counters reused the receivers' header
     }
@@ -255,9 +341,9 @@ class PbgiExtension : public RasterExtension {
       stack_.reserve(chunk * PBGI_STACK * 8);
       mb_.reserve(chunk * m2 * 16);
       stateBytes_ = std::max<uint64_t>(stateBytes_, chunk * perReceiver);
-      top_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, top_.bytes());
-      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodes_.bytes());
-      table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+      topIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, topIn.bytes());
+      nodesIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesIn.bytes());
+      tableIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableIn.bytes());
       micro_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MICRO, 0, micro_.bytes());
       state_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STATE, 0, state_.bytes());
       stack_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STACK, 0, stack_.bytes());
@@ -268,7 +354,8 @@ class PbgiExtension : public RasterExtension {
       glUniform1i(classic_.uniform("uLists"), lists ? 1 : 0);
       glUniform1f(classic_.uniform("uOmegaCut"),
                   pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
-      const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average_ : glm::vec3(0);
+      const glm::vec3 average = albedo_ ? averageLit_ : average_;
+      const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average : glm::vec3(0);
       glUniform3f(classic_.uniform("uEmpty"), empty.r, empty.g, empty.b);
       glUniform1i(classic_.uniform("uEmptyEnvironment"), params_.empty == PbgiParameters::Empty::Environment ? 1 : 0);
       f.bindEnvironment(classic_);
@@ -379,6 +466,15 @@ class PbgiExtension : public RasterExtension {
   gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
   gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_;
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
+  gl::ShaderProgram lightProgram_, lightUpProgram_;
+  gl::Buffer cursors_;
+  std::vector<uint32_t> treeSizes_;
+  gl::Buffer nodesLit_, topLit_, tableLit_;  // albedo mode: the hierarchies with their lit radiance
+  bool albedo_ = false;
+  int bounces_ = 1;
+  size_t tableCount_ = 0;
+  uint64_t maxRange_ = 0;
+  glm::vec3 averageLit_{0};
   uint64_t pairGenerations_ = 0, pairOverflows_ = 0, pairBytes_ = 0, listEntries_ = 0;
   int budget_ = 1 << 20;
   uint64_t receiverCount_ = 0, dispatches_ = 0, stateBytes_ = 0, stackOverflows_ = 0;

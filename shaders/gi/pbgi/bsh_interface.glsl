@@ -37,6 +37,9 @@ NL_STRUCT(BshNode) {
 #define PBGI_SSBO_PYRAMID (NL_SSBO_METHOD0 + 4) // vec4[2 per texel]: receiver blocks (sphere, normal cone) of every level
 #define PBGI_SSBO_PAIRS_IN (NL_SSBO_METHOD0 + 5)  // uvec4[]: (node index, tree, texel, 0) pairs to refine
 #define PBGI_SSBO_PAIRS_OUT (NL_SSBO_METHOD0 + 6) // uvec4[]: the pairs they refine into
+#define PBGI_SSBO_LIGHT_IN (NL_SSBO_METHOD0 + 4)  // BshNode[]: the albedo mode's lighting pass: nodes in...
+#define PBGI_SSBO_LIGHT_OUT (NL_SSBO_METHOD0 + 5) // ...and the same nodes with their radiance as colour
+#define PBGI_SSBO_CURSORS (NL_SSBO_METHOD0 + 6)   // uint[]: the bottom-up sweep's cursor per hierarchy
 #define PBGI_SSBO_LIST_HEAD NL_SSBO_NODE_LAYER1    // uint[tile pixels]: each receiver's first list entry
 #define PBGI_SSBO_LIST NL_SSBO_NODE_LAYER2         // uvec4[]: (node index, tree, next entry, 0)
 #define PBGI_END 0xffffffffu                       // the end of a receiver's list

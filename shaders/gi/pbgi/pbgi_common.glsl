@@ -16,10 +16,11 @@ layout(binding = 4) uniform sampler2D uDirect;
 layout(std430, binding = PBGI_SSBO_RECEIVERS) buffer Receivers { uint receivers[]; };
 layout(rgba32f, binding = 0) uniform writeonly image2D uOut;
 
-// In the radiance-cache mode a scan point's colour is all its light: only inserted objects gather.
+// In the radiance-cache mode a scan point's colour is all its light: only inserted objects
+// gather. In the albedo mode (frame.counts.y 1) scan points gather too.
 bool isReceiver(ivec2 px) {
   if (!(texelFetch(uDepth, px, 0).r < 1.0)) return false;
-  return gbufferSource(texelFetch(uMaterial, px, 0)) != NL_SOURCE_SCAN;
+  return frame.counts.y == 1 || gbufferSource(texelFetch(uMaterial, px, 0)) != NL_SOURCE_SCAN;
 }
 
 struct Receiver {

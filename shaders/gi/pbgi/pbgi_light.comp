@@ -1,0 +1,44 @@
+// The albedo mode's first step: every hierarchy node's radiance from the scene's lights, as the
+// scan's points reflect it (Lambert, their colour as albedo clamped to 1, as the raster frame's
+// G-buffer treats scan points): the lights through the frame's shadow maps at the node's centre
+// with its cone axis as normal (a node whose normals bound nothing faces each light), and the
+// environment's unshadowed irradiance as raster's direct light gives diffuse lobes. Leaves only
+// (a point or a uniform cluster, shaded at its centroid); inner nodes then take their children's
+// mean (pbgi_light_up.comp): an inner node's centre can lie far off its surface (the middle of a
+// curved wall, or on the light itself). Writes a copy of the nodes with the radiance as colour.
+layout(local_size_x = 64) in;
+#include "pbgi_common.glsl"
+#include "../common/lights.glsl"
+layout(std430, binding = PBGI_SSBO_TABLE) readonly buffer Table { PbgiNode cutNodes[]; };
+layout(std430, binding = PBGI_SSBO_LIGHT_IN) readonly buffer In { BshNode nodesIn[]; };
+layout(std430, binding = PBGI_SSBO_LIGHT_OUT) writeonly buffer Out { BshNode nodesOut[]; };
+
+void main() {
+  PbgiNode cn = cutNodes[gl_WorkGroupID.y];
+  if (gl_GlobalInvocationID.x >= cn.range.y) return;
+  uint i = cn.range.x + gl_GlobalInvocationID.x;
+  vec3 origin = cn.origin.xyz;
+  float scale = cn.origin.w;
+  BshNode A = nodesIn[i];
+  if (A.links.x != BSH_LEAF) {
+    nodesOut[i] = A;  // its children's mean, by the sweep
+    return;
+  }
+  vec3 p = origin + A.sphere.xyz;
+  vec3 albedo = min(A.colour.rgb * scale, vec3(1.0));
+  bool hasAxis = A.links.w != 0u;
+  vec3 axis = hasAxis ? decodeNormal(A.links.w) : vec3(0.0);
+  float splat = min(uintBitsToFloat(A.links.y), A.sphere.w);
+  vec3 E = vec3(0.0);
+  for (int l = 0; l < frame.counts.x; ++l) {
+    LightSample s = sampleLight(l, p);
+    vec3 n = hasAxis ? axis : s.wi;
+    float c = dot(n, s.wi);
+    if (c <= 0.0) continue;
+    E += s.radiance * c * visibility(l, p, n, splat, s);
+  }
+  // Without normals: the irradiance averaged over all orientations, the harmonics' constant term.
+  if (uHasEnvironment) E += hasAxis ? irradiance(axis) : max(uEnvSh[0], vec3(0.0));
+  A.colour.rgb = albedo * kInvPi * E;
+  nodesOut[i] = A;
+}
