@@ -24,7 +24,7 @@ bool isReceiver(ivec2 px) {
 }
 
 struct Receiver {
-  vec3 x;   // position, lifted off its surface by a hair (its own plane must not occlude it)
+  vec3 x;   // position, lifted off its surface (its own surface must not occlude it)
   vec3 n;   // normal, facing the camera
   vec3 wo;  // towards the camera
   MaterialParams mat;
@@ -41,7 +41,14 @@ Receiver receiverAt(ivec2 px) {
   R.n = nn.w > 0.0 ? normalize(nn.xyz) : R.wo;
   if (dot(R.n, R.wo) < 0.0) R.n = -R.n;
   vec3 emission;
-  R.mat = gbufferMaterial(texelFetch(uBaseColour, px, 0).rgb, texelFetch(uMaterial, px, 0), emission);
-  R.x += R.n * 1e-4 * max(length(R.x - frame.eye.xyz), 1e-3);
+  vec4 base = texelFetch(uBaseColour, px, 0);
+  R.mat = gbufferMaterial(base.rgb, texelFetch(uMaterial, px, 0), emission);
+  // A scan point receiving (albedo mode) lies among the discs of its own surface, which scan
+  // noise offsets by millimetres above and below its plane: from just above it, a neighbour's
+  // disc a few millimetres higher covers every ray but the most grazing, and the micro-buffer
+  // sees the surface itself instead of the room (the cornell room's gathered bounce was 23% dark).
+  // It leaves from 1.5 splat radii above its surface (base.a: its splat radius; 0 on meshes,
+  // which leave by a hair).
+  R.x += R.n * max(1e-4 * max(length(R.x - frame.eye.xyz), 1e-3), 1.5 * base.a);
   return R;
 }

@@ -34,6 +34,7 @@ void main() {
     LightSample s = sampleLight(l, p);
     vec3 n = hasAxis ? axis : s.wi;
     float c = dot(n, s.wi);
+    if (c < 0.0) n = -n, c = -c;  // scanned surfaces are lit from either side, as the G-buffer's
     if (c <= 0.0) continue;
     E += s.radiance * c * visibility(l, p, n, splat, s);
   }
