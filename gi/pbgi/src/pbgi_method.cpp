@@ -69,6 +69,10 @@ class PbgiExtension : public RasterExtension {
       params_.empty = f.hasEnvironment() ? PbgiParameters::Empty::Environment : PbgiParameters::Empty::Average;
     albedo_ = scene.gi.mode == RadianceMode::Albedo;
     bounces_ = std::max(scene.gi.maxBounces, 1);
+    // Empty m-pixels that see the sky gather it occluded by the scan: direct light then leaves it
+    // off the receivers' diffuse lobes (every pixel direct light shades is a receiver here).
+    skyOwned_ = params_.empty == PbgiParameters::Empty::Environment && f.hasEnvironment() && (!albedo_ || bounces_ >= 2);
+    if (skyOwned_) f.setSkyOnDiffuseLobes(false);
     pbgi::BshOptions options;
     options.prune = params_.prune;
     layer_ = f.addNodeLayer([options, this](const Metadata& meta) {
@@ -284,7 +288,6 @@ class PbgiExtension : public RasterExtension {
       }
     };
     if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, treeSizes_);
-    top_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, top_.bytes());
     glCopyNamedBufferSubData(top_.id(), topLit_.id(), 0, 0, GLsizeiptr(topCount_ * sizeof(BshNode)));
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     sweep(true, topLit_, 1, {uint32_t(topCount_)});
@@ -332,7 +335,8 @@ class PbgiExtension : public RasterExtension {
     if (list_.bytes() == 0) list_.reserve(16);
     listHead_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD, 0, listHead_.bytes());
     list_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST, 0, list_.bytes());
-    if (count > 0 && topCount_ > 0) {
+    // With nothing resident a receiver that owns the sky still gathers it (every m-pixel empty).
+    if (count > 0 && (topCount_ > 0 || skyOwned_)) {
       const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);
       const size_t perReceiver = sizeof(pbgi::glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
       size_t chunk = std::min<size_t>(count, gl::kMaxSsboRange / (m2 * 16));
@@ -471,6 +475,7 @@ class PbgiExtension : public RasterExtension {
   std::vector<uint32_t> treeSizes_;
   gl::Buffer nodesLit_, topLit_, tableLit_;  // albedo mode: the hierarchies with their lit radiance
   bool albedo_ = false;
+  bool skyOwned_ = false;  // the gather, not direct light, gives receivers the sky
   int bounces_ = 1;
   size_t tableCount_ = 0;
   uint64_t maxRange_ = 0;

@@ -165,6 +165,7 @@ class RasterMethod : public Method, public RasterFrame {
     glUniform3fv(program.uniform("uEnvSh"), 9, &sh_[0].x);
   }
   bool hasEnvironment() const override { return hasEnvironment_; }
+  void setSkyOnDiffuseLobes(bool on) override { skyOnDiffuse_ = on; }
   const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
   uint64_t cutGeneration() const override { return cutGeneration_; }
   void bindLightsCutTree(int scan) const override { scans_.at(size_t(scan)).shadowTree.bind(); }
@@ -841,6 +842,7 @@ class RasterMethod : public Method, public RasterFrame {
           maps.setDepthCompare(true);
           glBindTextureUnit(4, maps.id());
           bindEnvironment(directLight_);
+          glUniform1i(directLight_.uniform("uSkyOnDiffuse"), skyOnDiffuse_ ? 1 : 0);
           lightsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_LIGHTS);
           shadowViewsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SHADOW_VIEWS);
           materialsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_MATERIALS);
@@ -879,6 +881,7 @@ class RasterMethod : public Method, public RasterFrame {
   gl::Framebuffer shadowFbo_;
   frame::FrameGraph graph_;
   std::shared_ptr<float> exposure_ = std::make_shared<float>(0.0f);
+  bool skyOnDiffuse_ = true;
   int frameNumber_ = 0;
   std::string output_;  // the target the graph was compiled for
 };

@@ -45,8 +45,8 @@ uniform float uOmegaCut;      // the refinement threshold (m-pixel solid angle, 
 uniform vec3 uEmpty;          // radiance of an m-pixel nothing covered (uEmptyEnvironment 0)
 uniform int uLists;           // 1: start from the receiver's list of sub-trees (MIP-PBGI, X-PBGI), 0: from the root
 // 1: an m-pixel nothing covered sees the environment; the gather then owns the environment's
-// light on receivers, and takes out the unshadowed irradiance direct light gave their diffuse
-// lobes (it would count the sky behind the scan).
+// light on receivers (direct light leaves the sky off their diffuse lobes: unshadowed, it would
+// count the sky behind the scan).
 uniform int uEmptyEnvironment;
 
 const float kFar = 3.0e38;
@@ -216,8 +216,7 @@ void main() {
       L += evalBsdf(R.mat, woL, wi) * C * m.w * m.z;
     }
     vec4 direct = texelFetch(uDirect, px, 0);
-    if (uEmptyEnvironment != 0 && uHasEnvironment) direct.rgb -= diffuseAlbedo(R.mat) * kInvPi * irradiance(R.n);
-    imageStore(uOut, px, vec4(max(direct.rgb, vec3(0.0)) + L, direct.a));
+    imageStore(uOut, px, vec4(direct.rgb + L, direct.a));
     st.header.x = PBGI_DONE;
   } else {
     atomicAdd(receivers[1], 1u);

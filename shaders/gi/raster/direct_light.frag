@@ -11,6 +11,7 @@ layout(binding = 1) uniform sampler2D uBaseColour;
 layout(binding = 2) uniform sampler2D uNormal;
 layout(binding = 3) uniform usampler2D uMaterial;
 #include "../common/environment.glsl"
+uniform bool uSkyOnDiffuse;  // RasterFrame::setSkyOnDiffuseLobes
 layout(location = 0) out vec4 outRadiance;
 
 void main() {
@@ -79,8 +80,8 @@ void main() {
     if (all(lessThanEqual(f, vec3(0.0)))) continue;
     L += f * s.radiance * wiL.z * visibility(i, p, n, baseAndRadius.a, s);
   }
-  if (uHasEnvironment) {
-    // The diffuse lobe's share only.
+  if (uHasEnvironment && uSkyOnDiffuse) {
+    // The diffuse lobe's share only (unless a GI method gathers the sky itself).
     L += diffuseAlbedo(mat) * kInvPi * irradiance(n);
   }
   outRadiance = vec4(L, 1.0);

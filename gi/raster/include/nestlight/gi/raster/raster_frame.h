@@ -61,6 +61,9 @@ class RasterFrame {
   // diffuse lobes (and what the camera sees of it behind the scene).
   virtual void bindEnvironment(const gl::ShaderProgram& program) const = 0;
   virtual bool hasEnvironment() const = 0;
+  // Whether direct light adds the sky's unshadowed irradiance to diffuse lobes (the default); an
+  // extension that gathers the sky itself, occluded by the scene, turns it off in setUp.
+  virtual void setSkyOnDiffuseLobes(bool on) = 0;
   // Draws the scans' splats (shaders/gi/raster/scan.vert with `program`'s fragment stage): the
   // camera's cut or the lights' cut.
   virtual void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
