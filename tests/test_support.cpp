@@ -73,8 +73,10 @@ bool anyContains(const std::vector<std::string>& v, const std::string& s) {
   return false;
 }
 
-void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output) {
+void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output,
+                     uint32_t maxNodePoints) {
   BuildOptions b;
+  if (maxNodePoints) b.maxNodePoints = maxNodePoints;
   b.output = output;
   b.progress = ProgressMode::Quiet;
   std::filesystem::remove_all(output);

@@ -37,7 +37,10 @@ void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);
 // Converts one point file (any reader's format) into an octree at `output`, quietly, replacing
 // what is there.
-void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output);
+// maxNodePoints: the converter's leaf size (its default when 0); small values make many nodes,
+// for streaming tests.
+void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output,
+                     uint32_t maxNodePoints = 0);
 
 // Every point a reader gave, its batches concatenated.
 struct Points {

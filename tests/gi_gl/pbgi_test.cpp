@@ -189,17 +189,20 @@ TEST(Pbgi, PairOverflowFallsBackToTheClassicTraversal) {
   EXPECT_EQ(differ, 0);
 }
 
-// Interactive frames gather from whatever of the lights' cut is resident while it streams in
-// (under budgets small enough that nodes are evicted as the camera circles): each frame's
-// hierarchies are copied from nodes resident at that moment, so a node evicted later is never
-// read (the loader threads' hierarchy builds run under ASan in CI). How far the cut has grown at
-// each frame depends on the loader threads' pace (printed, not asserted); every frame runs
-// without stack overflows, and once streamed the still gives the furnace's rho L.
+// Interactive frames gather from whatever of the lights' cut is resident while it streams in,
+// while the camera's cut streams in and out as the camera circles (a narrow field of view and
+// small budgets, so every frame wants other fine nodes and old ones are evicted, their hierarchy
+// layers freed with them: the layers are built and freed on the loader threads under ASan in CI).
+// The lights' cut's view is fixed (the whole scan from outside), so it only grows; each frame's
+// hierarchies are copied from nodes resident at that moment. Asserted: the camera's cut really
+// evicted nodes, the lights' cut was gathered in more than one state, no frame overflowed its
+// stack, and once streamed the still gives the furnace's rho L.
 TEST(Pbgi, StreamingCutIsGatheredOnlyWhileResident) {
   nestlight::test::TempDir t;
-  buildSphereScan(t, 150000, 2.0f, 150);
+  buildSphereScan(t, 300000, 2.0f, 150, -1.0f, true, 2000);
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
-  Scene s = furnaceScene(t, rho, {{"micro_buffer", 8}, {"point_budget", 60000}, {"gpu_budget_mb", 4}});
+  Scene s = furnaceScene(t, rho, {{"micro_buffer", 8}, {"point_budget", 60000}, {"gpu_budget_mb", 1}});
+  s.camera.fovYDegrees = 5.0;
   auto method = createMethod(s, {true, false});
   std::set<std::string> sizes;
   for (int frame = 0; frame < 24; ++frame) {
@@ -213,9 +216,11 @@ TEST(Pbgi, StreamingCutIsGatheredOnlyWhileResident) {
   }
   const MethodFrame still = method->render(s.camera);
   const uint64_t builds = std::stoull(still.attributes.at("nestlight:pbgi_bsh_builds"));
-  std::printf("%zu different cuts gathered over 24 frames; %llu hierarchies built\n", sizes.size(),
-              (unsigned long long)builds);
-  EXPECT_GT(builds, 0u);
+  const uint64_t evicted = std::stoull(still.attributes.at("nestlight:evicted_nodes"));
+  std::printf("%zu different cuts gathered over 24 frames; %llu hierarchies built; %llu nodes evicted\n", sizes.size(),
+              (unsigned long long)builds, (unsigned long long)evicted);
+  EXPECT_GT(evicted, 0u);
+  EXPECT_GT(sizes.size(), 1u);
   for (int y = 0; y < still.image.height; ++y)
     for (int x = 0; x < still.image.width; ++x) ASSERT_TRUE(std::isfinite(still.image.get(x, y).r));
   EXPECT_NEAR(boxMean(still.image) / (rho * L), 1.0, 0.02);

@@ -13,9 +13,10 @@ namespace nestlight::gi {
 
 // A Fibonacci sphere of `n` scan points of radius R about the origin, normals inward, grey
 // `grey` (8-bit sRGB), built into an octree at t/sphere.octree; only its points with z >= minZ
-// (unit sphere) when minZ > -1; without normals when `normals` is false.
+// (unit sphere) when minZ > -1; without normals when `normals` is false; nodes of at most
+// maxNodePoints points (the converter's default when 0).
 inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, int grey, float minZ = -1.0f,
-                            bool normals = true) {
+                            bool normals = true, uint32_t maxNodePoints = 0) {
   {
     std::ofstream ply(t.file("sphere.ply"));
     int kept = 0;
@@ -33,7 +34,7 @@ inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, i
       ply << grey << " " << grey << " " << grey << "\n";
     }
   }
-  nestlight::test::buildOctreeFrom(t.file("sphere.ply"), t.path() / "sphere.octree");
+  nestlight::test::buildOctreeFrom(t.file("sphere.ply"), t.path() / "sphere.octree", maxNodePoints);
 }
 
 // A grey Lambert box of albedo rho (0.4 m, at the origin) inside the sphere scan (radiance-cache

@@ -357,6 +357,11 @@ class RasterMethod : public Method, public RasterFrame {
     for (const auto& t : graph_.timings())
       if (t.wallMs > 0) f.attributes["nestlight:pass_wall_ms:" + t.name] = std::to_string(t.wallMs);
     if (extension_) f.attributes["nestlight:method"] = extension_->name();
+    // Nodes evicted so far (both cuts): streaming tests assert that eviction really happened.
+    uint64_t evicted = 0, lightsEvicted = 0;
+    for (const auto& s : scans_) evicted += s.streamer->totals().evicted, lightsEvicted += s.shadowStreamer->totals().evicted;
+    f.attributes["nestlight:evicted_nodes"] = std::to_string(evicted);
+    f.attributes["nestlight:lights_cut_evicted_nodes"] = std::to_string(lightsEvicted);
     char line[256];
     std::snprintf(line, sizeof line, "%llu points, %zu lights, %d px shadow maps, %.1f ms (stream %.2f s)",
                   (unsigned long long)drawPoints, lightRecords_.size(), params_.shadowMapSize, f.seconds * 1e3,
