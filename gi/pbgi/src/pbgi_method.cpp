@@ -5,6 +5,7 @@
 #include "nestlight/gi/pbgi/pbgi_method.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -12,6 +13,7 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/pbgi/bsh.h"
 #include "nestlight/gi/pbgi/bsh_layer.h"
+#include "nestlight/gi/pbgi/mesh_trees.h"
 #include "nestlight/gi/pbgi/micro_buffer.h"
 #include "nestlight/gi/raster/raster_frame.h"
 #include "nestlight/gl/program.h"
@@ -41,6 +43,7 @@ class PbgiExtension : public RasterExtension {
             {"conservative", params_.conservative ? "true" : "false"},
             {"empty", emptyName()},
             {"prune", params_.prune ? "true" : "false"},
+            {"meshes", params_.meshes ? "true" : "false"},
             {"steps_per_dispatch", std::to_string(budget_)}};
   }
 
@@ -80,12 +83,25 @@ class PbgiExtension : public RasterExtension {
       layers_.push_back(layer);
       return layer;
     });
+    if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene, params_.prune);
+    std::vector<BshNode> meshNodes;
+    for (const auto& t : meshTrees_) {
+      meshOffsets_.push_back(meshNodes.size());
+      meshNodes.insert(meshNodes.end(), t.nodes.begin(), t.nodes.end());
+      meshLiftMax_ = std::max(meshLiftMax_, t.discRadius);
+      if (t.material < meshLift_.size()) meshLift_[t.material] = std::max(meshLift_[t.material], t.discRadius);
+      meshSurfels_ += t.surfels;
+    }
+    if (!meshNodes.empty()) meshNodes_ = gl::Buffer(meshNodes.size() * sizeof(BshNode), meshNodes.data(), 0);
+    // The gather reads lit copies of the hierarchies when anything needs lighting: every node in
+    // the albedo mode, the meshes' surfels in both.
+    lit_ = albedo_ || !meshTrees_.empty();
     const pbgi::MicroBufferTable table = pbgi::microBufferTable(params_.microBuffer);
     micro_ = gl::Buffer(table.texels.size() * sizeof(glm::vec4), table.texels.data(), 0);
     const std::vector<std::pair<std::string, std::string>> defines = {{"PBGI_MB", std::to_string(params_.microBuffer)}};
     receiversProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_receivers.comp"}}, defines);
     classic_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_classic.comp"}}, defines);
-    if (albedo_) {
+    if (lit_) {
       lightProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light.comp"}}, defines);
       lightUpProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light_up.comp"}}, defines);
     }
@@ -123,6 +139,8 @@ class PbgiExtension : public RasterExtension {
     f.attributes["nestlight:pbgi_bsh_nodes"] = std::to_string(bshNodes_);
     f.attributes["nestlight:pbgi_top_nodes"] = std::to_string(topCount_);
     f.attributes["nestlight:pbgi_top_ms"] = std::to_string(topMs_);
+    f.attributes["nestlight:pbgi_mesh_trees"] = std::to_string(meshTrees_.size());
+    f.attributes["nestlight:pbgi_mesh_surfels"] = std::to_string(meshSurfels_);
     pbgi::BshLayer::Totals built;
     for (const auto& l : layers_) {
       const auto t = l->totals();
@@ -141,6 +159,9 @@ class PbgiExtension : public RasterExtension {
                   variantName(), params_.microBuffer, params_.microBuffer, (unsigned long long)bshNodes_,
                   (unsigned long long)cutNodes_);
     f.summary += line;
+    if (!meshTrees_.empty())
+      f.summary += "; " + std::to_string(meshTrees_.size()) + " mesh hierarchies (" + std::to_string(meshSurfels_) +
+                   " surfels)";
     if (params_.variant != PbgiParameters::Variant::Classic)
       f.summary += "; " + std::to_string(pairGenerations_) + " pair generations, " + std::to_string(pairBytes_ >> 10) +
                    " KiB of pairs and lists";
@@ -184,6 +205,22 @@ class PbgiExtension : public RasterExtension {
       total += count;
     }
     cutNodes_ = cut.size();
+    scanTrees_ = table.size();
+    // The meshes' hierarchies after the cut's (range.z: material + 1, which marks them).
+    std::vector<size_t> meshIncluded;
+    for (size_t k = 0; k < meshTrees_.size(); ++k) {
+      const uint64_t count = meshTrees_[k].nodes.size();
+      if ((total + count) * sizeof(BshNode) > gl::kMaxSsboRange) {
+        leftOut_++;
+        continue;
+      }
+      PbgiNode e{};
+      e.origin = glm::vec4(meshTrees_[k].origin, 1.0f);
+      e.range = glm::uvec4(uint32_t(total), uint32_t(count), meshTrees_[k].material + 1, 0);
+      table.push_back(e);
+      meshIncluded.push_back(k);
+      total += count;
+    }
     bshNodes_ = total;
     nodes_.reserve(std::max<size_t>(total, 1) * sizeof(BshNode));
     for (size_t k = 0; k < included.size(); ++k) {
@@ -198,6 +235,15 @@ class PbgiExtension : public RasterExtension {
       root.colour = glm::vec4(glm::vec3(root.colour) * n.colourScale, root.colour.w);
       roots.push_back(root);
     }
+    for (size_t j = 0; j < meshIncluded.size(); ++j) {
+      const pbgi::MeshTree& t = meshTrees_[meshIncluded[j]];
+      const PbgiNode& e = table[scanTrees_ + j];
+      glCopyNamedBufferSubData(meshNodes_.id(), nodes_.id(), GLintptr(meshOffsets_[meshIncluded[j]] * sizeof(BshNode)),
+                               GLintptr(size_t(e.range.x) * sizeof(BshNode)), GLsizeiptr(t.nodes.size() * sizeof(BshNode)));
+      BshNode root = t.nodes[0];
+      root.sphere = glm::vec4(glm::vec3(root.sphere) + t.origin, root.sphere.w);
+      roots.push_back(root);
+    }
     const pbgi::Bsh topTree = pbgi::buildTopTree(roots);
     topCount_ = topTree.nodes.size();
     top_.reserve(std::max<size_t>(topCount_, 1) * sizeof(BshNode));
@@ -207,23 +253,32 @@ class PbgiExtension : public RasterExtension {
     tableCount_ = table.size();
     maxRange_ = 0;
     treeSizes_.clear();
-    for (const auto& e : table) maxRange_ = std::max<uint64_t>(maxRange_, e.range.y), treeSizes_.push_back(e.range.y);
-    if (albedo_) {
-      // The lit copies are in the scene's units already: the gather scales them by 1.
-      for (auto& e : table) e.origin.w = 1.0f;
+    treeStart_.clear();
+    for (const auto& e : table) {
+      maxRange_ = std::max<uint64_t>(maxRange_, e.range.y);
+      treeSizes_.push_back(e.range.y);
+      treeStart_.push_back(e.range.x);
+    }
+    if (lit_) {
+      // The albedo mode's lit copies are in the scene's units already: the gather scales them by
+      // 1. In the radiance-cache mode the scan's nodes are copied as they are, scales kept.
+      if (albedo_)
+        for (auto& e : table) e.origin.w = 1.0f;
       tableLit_.reserve(std::max<size_t>(table.size(), 1) * sizeof(PbgiNode));
       if (!table.empty()) tableLit_.upload(table.data(), table.size() * sizeof(PbgiNode));
       nodesLit_.reserve(nodes_.bytes());
       topLit_.reserve(top_.bytes());
     }
-    average_ = topCount_ ? glm::vec3(topTree.nodes[0].colour) : glm::vec3(0);
+    meshRoots_.clear();
+    for (size_t j = 0; j < meshIncluded.size(); ++j) meshRoots_.push_back(roots[scanTrees_ + j]);
+    average_ = topCount_ ? scanAverage(topTree.nodes[0], meshRoots_) : glm::vec3(0);
     topMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
 
   void addPasses(RasterFrame& f) {
     frame::FrameGraph& g = f.graph();
     g.addTarget("radiance_gi", {GL_RGBA32F});
-    if (albedo_) {
+    if (lit_) {
       g.addBuffer("pbgi_lit");
       g.addPass(
           "pbgi_light", frame::Scope::Frame,
@@ -237,16 +292,22 @@ class PbgiExtension : public RasterExtension {
         "pbgi_gather", frame::Scope::Tile,
         [this](frame::PassBuilder& b) {
           for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"}) b.read(t);
-          if (albedo_) b.read("pbgi_lit");
+          if (lit_) b.read("pbgi_lit");
           b.write("radiance_gi");
         },
         [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
   }
 
-  // The albedo mode: every node's radiance from the lights (pbgi_light.comp), into lit copies of
-  // the hierarchies and the top tree that the gather reads instead.
+  // Lit copies of the hierarchies and the top tree, which the gather reads instead: in the albedo
+  // mode every node's radiance from the lights (pbgi_light.comp); in the radiance-cache mode the
+  // scan's nodes as they are (their colour is their radiance) and the meshes' surfels lit.
   void lightNodes(RasterFrame& f, const frame::PassContext& ctx) {
     if (topCount_ == 0) return;
+    const size_t firstLit = albedo_ ? 0 : scanTrees_;
+    if (!albedo_ && bshNodes_ > 0)
+      glCopyNamedBufferSubData(nodes_.id(), nodesLit_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
+    uint64_t litRange = 0;
+    for (size_t k = firstLit; k < treeSizes_.size(); ++k) litRange = std::max<uint64_t>(litRange, treeSizes_[k]);
     const gl::Texture& maps = ctx.target("shadow_maps");
     maps.setFilter(GL_LINEAR, GL_LINEAR);
     maps.setDepthCompare(true);
@@ -255,10 +316,12 @@ class PbgiExtension : public RasterExtension {
     lightProgram_.use();
     f.bindEnvironment(lightProgram_);
     table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
-    if (tableCount_ > 0 && maxRange_ > 0) {
+    glUniform1i(lightProgram_.uniform("uFirstTree"), int(firstLit));
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    if (tableCount_ > firstLit && litRange > 0) {
       nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodes_.bytes());
       nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, nodesLit_.bytes());
-      glDispatchCompute(GLuint((maxRange_ + 63) / 64), GLuint(tableCount_), 1);
+      glDispatchCompute(GLuint((litRange + 63) / 64), GLuint(tableCount_ - firstLit), 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
     // Bottom-up sweeps: every hierarchy, then the top tree over their lit roots.
@@ -287,13 +350,31 @@ class PbgiExtension : public RasterExtension {
         NL_CHECK_MSG(dispatch < 100000, "pbgi: a light sweep did not end");
       }
     };
-    if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, treeSizes_);
+    std::vector<uint32_t> start = treeSizes_;
+    std::fill(start.begin(), start.begin() + std::ptrdiff_t(firstLit), 0u);  // the scan's, copied as they were
+    if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, start);
+    // The top tree's leaves take their nodes' lit roots, scaled as the gather scales them.
+    tableLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableLit_.bytes());
     glCopyNamedBufferSubData(top_.id(), topLit_.id(), 0, 0, GLsizeiptr(topCount_ * sizeof(BshNode)));
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     sweep(true, topLit_, 1, {uint32_t(topCount_)});
     BshNode root;
     glGetNamedBufferSubData(topLit_.id(), 0, sizeof root, &root);
-    averageLit_ = glm::vec3(root.colour);
+    std::vector<BshNode> meshRoots = meshRoots_;
+    for (size_t j = 0; j < meshRoots.size(); ++j) {
+      const GLintptr at = GLintptr(size_t(treeStart_[scanTrees_ + j]) * sizeof(BshNode));
+      glGetNamedBufferSubData(nodesLit_.id(), at, sizeof(BshNode), &meshRoots[j]);
+    }
+    averageLit_ = scanAverage(root, meshRoots);
+  }
+
+  // The paper's colour for empty m-pixels is the cloud's average: the top tree's root holds the
+  // count-weighted mean over the scan and the meshes' surfels, so the meshes' share comes out.
+  static glm::vec3 scanAverage(const BshNode& root, const std::vector<BshNode>& meshRoots) {
+    glm::dvec3 sum = glm::dvec3(glm::vec3(root.colour)) * double(root.links.z);
+    double count = double(root.links.z);
+    for (const BshNode& m : meshRoots) sum -= glm::dvec3(glm::vec3(m.colour)) * double(m.links.z), count -= m.links.z;
+    return count > 0.5 ? glm::max(glm::vec3(sum / count), glm::vec3(0.0f)) : glm::vec3(0.0f);
   }
 
   // Lists the tile's receivers, then gathers for them in chunks that fit one buffer range, each
@@ -319,9 +400,9 @@ class PbgiExtension : public RasterExtension {
     glGetNamedBufferSubData(receivers_.id(), 0, 4, &count);
     receiverCount_ += count;
     // Albedo mode: the lit copies; one bounce asked (direct light only): nothing to gather.
-    const gl::Buffer& topIn = albedo_ ? topLit_ : top_;
-    const gl::Buffer& nodesIn = albedo_ ? nodesLit_ : nodes_;
-    const gl::Buffer& tableIn = albedo_ ? tableLit_ : table_;
+    const gl::Buffer& topIn = lit_ ? topLit_ : top_;
+    const gl::Buffer& nodesIn = lit_ ? nodesLit_ : nodes_;
+    const gl::Buffer& tableIn = lit_ ? tableLit_ : table_;
     if (albedo_ && bounces_ < 2) count = 0;
     bool lists = false;
     if (count > 0 && topCount_ > 0 && params_.variant != PbgiParameters::Variant::Classic) {
@@ -356,9 +437,10 @@ class PbgiExtension : public RasterExtension {
       glUniform1i(classic_.uniform("uBudget"), budget_);
       glUniform1i(classic_.uniform("uTopCount"), int(topCount_));
       glUniform1i(classic_.uniform("uLists"), lists ? 1 : 0);
+      setLift(classic_);
       glUniform1f(classic_.uniform("uOmegaCut"),
                   pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
-      const glm::vec3 average = albedo_ ? averageLit_ : average_;
+      const glm::vec3 average = lit_ ? averageLit_ : average_;
       const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average : glm::vec3(0);
       glUniform3f(classic_.uniform("uEmpty"), empty.r, empty.g, empty.b);
       glUniform1i(classic_.uniform("uEmptyEnvironment"), params_.empty == PbgiParameters::Empty::Environment ? 1 : 0);
@@ -402,6 +484,7 @@ class PbgiExtension : public RasterExtension {
     pyramid_.reserve(size_t(texels) * 32);
     pyramid_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PYRAMID, 0, pyramid_.bytes());
     pyramidProgram_.use();
+    setLift(pyramidProgram_);
     for (int l = 0; l < levels; ++l) {
       glUniform1i(pyramidProgram_.uniform("uLevel"), l);
       glUniform2i(pyramidProgram_.uniform("uSize"), sizes[size_t(l)].x, sizes[size_t(l)].y);
@@ -472,9 +555,23 @@ class PbgiExtension : public RasterExtension {
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
   gl::ShaderProgram lightProgram_, lightUpProgram_;
   gl::Buffer cursors_;
-  std::vector<uint32_t> treeSizes_;
+  std::vector<uint32_t> treeSizes_, treeStart_;
+  std::vector<BshNode> meshRoots_;  // the meshes' roots as the top tree holds them (scene frame)
   gl::Buffer nodesLit_, topLit_, tableLit_;  // albedo mode: the hierarchies with their lit radiance
   bool albedo_ = false;
+  bool lit_ = false;  // the gather reads lit copies (albedo mode, or meshes' surfels)
+  std::vector<pbgi::MeshTree> meshTrees_;
+  std::vector<size_t> meshOffsets_;  // each one's first node in meshNodes_
+  gl::Buffer meshNodes_;
+  uint64_t meshSurfels_ = 0;
+  // Mesh receivers leave from this far above their surface, per material (pbgi_common.glsl).
+  std::array<float, PBGI_LIFTS> meshLift_{};
+  float meshLiftMax_ = 0;
+  void setLift(const gl::ShaderProgram& p) const {
+    glUniform1fv(p.uniform("uMeshLift[0]"), PBGI_LIFTS, meshLift_.data());
+    glUniform1f(p.uniform("uMeshLiftMax"), meshLiftMax_);
+  }
+  size_t scanTrees_ = 0;  // the table's first entries are the cut's nodes, then the meshes' 
   bool skyOwned_ = false;  // the gather, not direct light, gives receivers the sky
   int bounces_ = 1;
   size_t tableCount_ = 0;
@@ -493,8 +590,8 @@ class PbgiExtension : public RasterExtension {
 }  // namespace
 
 const std::vector<std::string>& pbgiParameterKeys() {
-  static const std::vector<std::string> keys = {"variant",    "micro_buffer", "conservative",      "empty",
-                                                "prune",      "pair_capacity", "steps_per_dispatch"};
+  static const std::vector<std::string> keys = {"variant", "micro_buffer",  "conservative",       "empty",
+                                                "prune",   "meshes",        "pair_capacity",      "steps_per_dispatch"};
   return keys;
 }
 
@@ -519,6 +616,7 @@ PbgiParameters pbgiParameters(const Scene& scene) {
                                    : PbgiParameters::Empty::Black;
   }
   if (f.has("prune")) p.prune = f.at("prune").boolean();
+  if (f.has("meshes")) p.meshes = f.at("meshes").boolean();
   if (f.has("pair_capacity")) p.pairCapacity = int(f.at("pair_capacity").integer(1, 1 << 23));
   if (f.has("steps_per_dispatch")) p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
   return p;

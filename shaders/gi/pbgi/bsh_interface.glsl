@@ -42,6 +42,7 @@ NL_STRUCT(BshNode) {
 #define PBGI_SSBO_CURSORS (NL_SSBO_METHOD0 + 6)   // uint[]: the bottom-up sweep's cursor per hierarchy
 #define PBGI_SSBO_LIST_HEAD NL_SSBO_NODE_LAYER1    // uint[tile pixels]: each receiver's first list entry
 #define PBGI_SSBO_LIST NL_SSBO_NODE_LAYER2         // uvec4[]: (node index, tree, next entry, 0)
+#define PBGI_LIFTS 16                              // materials with a receiver lift of their own (pbgi_common.glsl)
 #define PBGI_END 0xffffffffu                       // the end of a receiver's list
 #define PBGI_STACK (2 * BSH_MAX_DEPTH + 8)      // a top tree and a node's tree, each at most BSH_MAX_DEPTH deep
 #define PBGI_DONE 0xffffffffu                   // PbgiTraversal.header.x of a finished receiver

@@ -15,6 +15,12 @@ layout(binding = 3) uniform usampler2D uMaterial;
 layout(binding = 4) uniform sampler2D uDirect;
 layout(std430, binding = PBGI_SSBO_RECEIVERS) buffer Receivers { uint receivers[]; };
 layout(rgba32f, binding = 0) uniform writeonly image2D uOut;
+// How far above its surface a mesh pixel receives, per material (the first PBGI_LIFTS; the rest
+// take the largest): the surfel disc radius of the meshes made of it when their surfels join the
+// gather (a convex surface's neighbouring discs, tangent a little way off, rise above its tangent
+// plane by up to that much), else 0.
+uniform float uMeshLift[PBGI_LIFTS];
+uniform float uMeshLiftMax;
 
 // In the radiance-cache mode a scan point's colour is all its light: only inserted objects
 // gather. In the albedo mode (frame.counts.y 1) scan points gather too.
@@ -48,7 +54,9 @@ Receiver receiverAt(ivec2 px) {
   // disc a few millimetres higher covers every ray but the most grazing, and the micro-buffer
   // sees the surface itself instead of the room (the cornell room's gathered bounce was 23% dark).
   // It leaves from 1.5 splat radii above its surface (base.a: its splat radius; 0 on meshes,
-  // which leave by a hair).
-  R.x += R.n * max(1e-4 * max(length(R.x - frame.eye.xyz), 1e-3), 1.5 * base.a);
+  // which leave from uMeshLift, or by a hair).
+  uint material = texelFetch(uMaterial, px, 0).w;
+  float meshLift = material < uint(PBGI_LIFTS) ? uMeshLift[material] : uMeshLiftMax;
+  R.x += R.n * max(1e-4 * max(length(R.x - frame.eye.xyz), 1e-3), base.a > 0.0 ? 1.5 * base.a : meshLift);
   return R;
 }

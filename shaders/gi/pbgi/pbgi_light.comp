@@ -1,6 +1,8 @@
-// The albedo mode's first step: every hierarchy node's radiance from the scene's lights, as the
-// scan's points reflect it (Lambert, their colour as albedo clamped to 1, as the raster frame's
-// G-buffer treats scan points): the lights through the frame's shadow maps at the node's centre
+// Lighting the hierarchies' nodes: in the albedo mode every node (scan and meshes), in the
+// radiance-cache mode the meshes' surfels only (uFirstTree: the first table entry to light). Each
+// node's radiance from the scene's lights, as the scan's points reflect it (Lambert, their colour
+// as albedo clamped to 1, as the raster frame's G-buffer treats scan points; a mesh's surfels by
+// their material's directional albedo, lit from the front only, plus its emission): the lights through the frame's shadow maps at the node's centre
 // with its cone axis as normal (a node whose normals bound nothing faces each light), and the
 // environment's unshadowed irradiance as raster's direct light gives diffuse lobes. Leaves only
 // (a point or a uniform cluster, shaded at its centroid); inner nodes then take their children's
@@ -12,9 +14,11 @@ layout(local_size_x = 64) in;
 layout(std430, binding = PBGI_SSBO_TABLE) readonly buffer Table { PbgiNode cutNodes[]; };
 layout(std430, binding = PBGI_SSBO_LIGHT_IN) readonly buffer In { BshNode nodesIn[]; };
 layout(std430, binding = PBGI_SSBO_LIGHT_OUT) writeonly buffer Out { BshNode nodesOut[]; };
+uniform int uFirstTree;
 
 void main() {
-  PbgiNode cn = cutNodes[gl_WorkGroupID.y];
+  PbgiNode cn = cutNodes[gl_WorkGroupID.y + uint(uFirstTree)];
+  bool mesh = cn.range.z > 0u;  // material + 1
   if (gl_GlobalInvocationID.x >= cn.range.y) return;
   uint i = cn.range.x + gl_GlobalInvocationID.x;
   vec3 origin = cn.origin.xyz;
@@ -25,7 +29,7 @@ void main() {
     return;
   }
   vec3 p = origin + A.sphere.xyz;
-  vec3 albedo = min(A.colour.rgb * scale, vec3(1.0));
+  vec3 albedo = mesh ? A.colour.rgb : min(A.colour.rgb * scale, vec3(1.0));
   bool hasAxis = A.links.w != 0u;
   vec3 axis = hasAxis ? decodeNormal(A.links.w) : vec3(0.0);
   float splat = min(uintBitsToFloat(A.links.y), A.sphere.w);
@@ -34,12 +38,13 @@ void main() {
     LightSample s = sampleLight(l, p);
     vec3 n = hasAxis ? axis : s.wi;
     float c = dot(n, s.wi);
+    if (c < 0.0 && mesh) continue;
     if (c < 0.0) n = -n, c = -c;  // scanned surfaces are lit from either side, as the G-buffer's
     if (c <= 0.0) continue;
     E += s.radiance * c * visibility(l, p, n, splat, s);
   }
   // Without normals: the irradiance averaged over all orientations, the harmonics' constant term.
   if (uHasEnvironment) E += hasAxis ? irradiance(axis) : max(uEnvSh[0], vec3(0.0));
-  A.colour.rgb = albedo * kInvPi * E;
+  A.colour.rgb = albedo * kInvPi * E + (mesh ? materials[cn.range.z - 1u].emission.rgb : vec3(0.0));
   nodesOut[i] = A;
 }

@@ -28,7 +28,8 @@ void main() {
     c--;
     BshNode A = tree[first + c];
     if (A.links.x == BSH_LEAF) {
-      if (uTopTree != 0) tree[c].colour.rgb = nodesLit[cutNodes[A.links.y].range.x].colour.rgb;
+      // The table bound is the gather's: its scale is 1 where the lit copy is in scene units.
+      if (uTopTree != 0) tree[c].colour.rgb = nodesLit[cutNodes[A.links.y].range.x].colour.rgb * cutNodes[A.links.y].origin.w;
       continue;
     }
     BshNode l = tree[first + A.links.x], r = tree[first + A.links.y];

@@ -29,6 +29,9 @@ struct PbgiParameters {
   // "auto": environment when the scene has one, else average.
   enum class Empty { Auto, Average, Environment, Black } empty = Empty::Auto;
   bool prune = true;             // prune the hierarchies at the paper's thresholds
+  // Inserted meshes' surfels as hierarchies of their own (mesh_trees.h): they occlude, reflect
+  // the lights and emit; false: meshes only receive (the paper's setting).
+  bool meshes = true;
   // Traversal steps one dispatch takes per receiver before it yields (0: as many as the device
   // allows: on llvmpipe what its 65,535-iteration loop limit leaves, elsewhere 2^20). The
   // traversal resumes where it stopped, so the image does not depend on it.

@@ -1,0 +1,37 @@
+// Inserted meshes in point-based GI: each mesh's surfels (nestlight/gi/mesh.h) become a
+// bounding-sphere hierarchy of their own beside the scan's, joined under the same top tree, so
+// the meshes occlude the scan's light, reflect the scene's lights and emit their own onto every
+// receiver. Sabbadin et al., "High Dynamic Range Point Clouds for Real-Time Relighting" (2019),
+// section 5, lights inserted objects as receivers only; a polygon model taking part in point-based
+// GI through points sampled on its surface is Preiner, "Real-Time Global Illumination in Point
+// Clouds" (section 6), whose sampler (mesh_sampling.cpp) this reuses.
+//
+// A surfel reflects as a Lambertian surface whose albedo is the material's directional albedo at
+// normal incidence (its whole reflectance, glossy lobes included, spread over the hemisphere):
+// what a micro-buffer pixel can store, one colour per node. Its emission is the material's.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "nestlight/gi/pbgi/bsh.h"
+#include "nestlight/gi/scene.h"
+
+namespace nestlight::gi::pbgi {
+
+struct MeshTree {
+  std::vector<BshNode> nodes;  // positions relative to `origin`; colour: the surfels' albedo
+  glm::vec3 origin{0.0f};      // scene (local) frame: the surfels' bounding-box minimum
+  uint32_t material = 0;       // index into the scene's materials (emission, at light time)
+  uint64_t surfels = 0;
+  float discRadius = 0;        // the leaves' disc radius: the surfels' mean spacing
+};
+
+// One hierarchy per mesh with at least one surfel, in scene order (a mesh whose triangles are
+// all degenerate has none and is left out). Reads the meshes again (their files); throws the
+// readers' errors.
+std::vector<MeshTree> buildMeshTrees(const Scene& scene, bool prune);
+
+}  // namespace nestlight::gi::pbgi
