@@ -49,7 +49,8 @@ const std::vector<MethodInfo>& registeredMethods() {
                  {{"classic", [](GiSettings& g) { g.parameters["variant"] = "classic"; }},
                   {"mip", [](GiSettings& g) { g.parameters["variant"] = "mip"; }},
                   {"no pruning", [](GiSettings& g) { g.parameters["prune"] = false; }},
-                  {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }}}});
+                  {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }},
+                  {"no meshes", [](GiSettings& g) { g.parameters["meshes"] = false; }}}});
     return m;
   }();
   return methods;

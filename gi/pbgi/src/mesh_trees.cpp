@@ -7,7 +7,7 @@
 
 namespace nestlight::gi::pbgi {
 
-std::vector<MeshTree> buildMeshTrees(const Scene& scene, bool prune) {
+std::vector<MeshTree> buildMeshTrees(const Scene& scene) {
   std::vector<MeshTree> trees;
   for (const SceneMesh& m : scene.meshes) {
     const TriangleMesh mesh = readMesh(m.path.string());
@@ -41,7 +41,7 @@ std::vector<MeshTree> buildMeshTrees(const Scene& scene, bool prune) {
     t.discRadius = float(std::sqrt(area / double(s.positions.size())));
     BshOptions opt;
     opt.leafRadius = t.discRadius;
-    opt.prune = prune;
+    opt.prune = false;  // see mesh_trees.h
     t.nodes = buildBsh(in, opt).nodes;
     if (!t.nodes.empty()) trees.push_back(std::move(t));
   }

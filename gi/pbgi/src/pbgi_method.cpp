@@ -83,7 +83,7 @@ class PbgiExtension : public RasterExtension {
       layers_.push_back(layer);
       return layer;
     });
-    if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene, params_.prune);
+    if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene);
     std::vector<BshNode> meshNodes;
     for (const auto& t : meshTrees_) {
       meshOffsets_.push_back(meshNodes.size());

@@ -9,6 +9,11 @@
 // A surfel reflects as a Lambertian surface whose albedo is the material's directional albedo at
 // normal incidence (its whole reflectance, glossy lobes included, spread over the hemisphere):
 // what a micro-buffer pixel can store, one colour per node. Its emission is the material's.
+//
+// Never pruned: a pruned cluster is one flat disc as wide as its sub-tree, and on a curved mesh
+// (whose surfels receive too) such a disc's rim rises above the tangent planes of the surface's
+// own receivers: a sphere mesh in a uniform furnace came out 20% dark with the paper's pruning,
+// exact without. A mesh's surfels are few (its `surfels.count`), so pruning saves little.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +37,6 @@ struct MeshTree {
 // One hierarchy per mesh with at least one surfel, in scene order (a mesh whose triangles are
 // all degenerate has none and is left out). Reads the meshes again (their files); throws the
 // readers' errors.
-std::vector<MeshTree> buildMeshTrees(const Scene& scene, bool prune);
+std::vector<MeshTree> buildMeshTrees(const Scene& scene);
 
 }  // namespace nestlight::gi::pbgi

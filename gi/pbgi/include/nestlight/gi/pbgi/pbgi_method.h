@@ -28,7 +28,7 @@ struct PbgiParameters {
   // gather then owns the environment's light on receivers), "black" (measures coverage), or
   // "auto": environment when the scene has one, else average.
   enum class Empty { Auto, Average, Environment, Black } empty = Empty::Auto;
-  bool prune = true;             // prune the hierarchies at the paper's thresholds
+  bool prune = true;             // prune the scan's hierarchies at the paper's thresholds (meshes' never)
   // Inserted meshes' surfels as hierarchies of their own (mesh_trees.h): they occlude, reflect
   // the lights and emit; false: meshes only receive (the paper's setting).
   bool meshes = true;
