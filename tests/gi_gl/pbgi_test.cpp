@@ -400,12 +400,14 @@ TEST(Pbgi, HdrColourAndScansWithoutNormalsKeepTheFurnace) {
 
 // The albedo mode: inside a closed diffuse sphere of albedo rho and radius R around a point light
 // of intensity I, every wall point receives I / R^2 directly and reflects (rho / pi) I / R^2;
-// every other wall point it sees sends it that, so one gathered bounce adds rho times it:
-// (rho / pi)(I / R^2)(1 + rho). The hierarchy's nodes are lit through the shadow maps at their
-// centres (a node's interior casts no shadow on itself here: the light is at the centre), the
-// quadrature is exact; bound 3% (the shadow maps' normal offsets at clusters' centres, the
-// clusters' discs at the micro-buffer's rim), as the VPLs' test.
-TEST(Pbgi, AlbedoModeClosedSphereGathersOneBounce) {
+// every other wall point it sees sends it that, so one gathered bounce adds rho times it, and
+// each further bounce rho times the last: (rho / pi)(I / R^2)(1 + rho + ... + rho^(n-1)) at n
+// bounces. The hierarchy's nodes are lit through the shadow maps at their centres (a node's
+// interior casts no shadow on itself here: the light is at the centre), the quadrature is exact;
+// bound 3% (the shadow maps' normal offsets at clusters' centres, the clusters' discs at the
+// micro-buffer's rim), as the VPLs' test. Bounces beyond the second are gathered at hierarchy
+// nodes of at most 256 points, which the sphere's uniform light makes exact too.
+TEST(Pbgi, AlbedoModeClosedSphereGathersEveryBounce) {
   nestlight::test::TempDir t;
   const float R = 2.0f, I = 10.0f;
   buildSphereScan(t, 80000, R, 188);
@@ -418,13 +420,19 @@ TEST(Pbgi, AlbedoModeClosedSphereGathersOneBounce) {
             {"gi", {{"method", "pbgi"}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", {{"micro_buffer", 8}}}}}};
   std::ofstream(t.file("scene.json")) << j.dump(2);
   Scene s = loadScene(t.file("scene.json"));
-  for (int bounces : {1, 2}) {
+  for (int bounces : {1, 2, 3, 4}) {
     s.gi.maxBounces = bounces;
     MethodFrame f = createMethod(s, {true, false})->render(s.camera);
     double sum = 0;
     for (int y = 0; y < 32; ++y)
       for (int x = 0; x < 32; ++x) sum += f.image.get(x, y).r;
-    const double got = sum / 1024, want = rho / kPi * I / (R * R) * (bounces == 2 ? 1 + rho : 1.0);
+    double series = 0;
+    for (int k = 0; k < bounces; ++k) series += std::pow(rho, k);
+    const double got = sum / 1024, want = rho / kPi * I / (R * R) * series;
+    EXPECT_EQ(f.attributes.at("nestlight:pbgi_bounces_gathered"), std::to_string(bounces - 1));
+    if (bounces >= 3) {
+      EXPECT_NE(f.attributes.at("nestlight:pbgi_bounce_receivers"), "0");
+    }
     std::printf("pbgi albedo, %d bounce(s): %.5f, closed form %.5f (ratio %.4f); %s\n", bounces, got, want, got / want,
                 f.summary.c_str());
     EXPECT_NEAR(got / want, 1.0, 0.03) << bounces;

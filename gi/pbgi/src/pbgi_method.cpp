@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -44,6 +45,7 @@ class PbgiExtension : public RasterExtension {
             {"empty", emptyName()},
             {"prune", params_.prune ? "true" : "false"},
             {"meshes", params_.meshes ? "true" : "false"},
+            {"bounce_points", std::to_string(params_.bouncePoints)},
             {"steps_per_dispatch", std::to_string(budget_)}};
   }
 
@@ -104,6 +106,10 @@ class PbgiExtension : public RasterExtension {
     if (lit_) {
       lightProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light.comp"}}, defines);
       lightUpProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light_up.comp"}}, defines);
+      if (albedo_ && bounces_ >= 3) {
+        selectProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_bounce_select.comp"}}, defines);
+        downProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_bounce_down.comp"}}, defines);
+      }
     }
     if (params_.variant != PbgiParameters::Variant::Classic) {
       pyramidProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pyramid.comp"}}, defines);
@@ -140,6 +146,8 @@ class PbgiExtension : public RasterExtension {
     f.attributes["nestlight:pbgi_top_nodes"] = std::to_string(topCount_);
     f.attributes["nestlight:pbgi_top_ms"] = std::to_string(topMs_);
     f.attributes["nestlight:pbgi_mesh_trees"] = std::to_string(meshTrees_.size());
+    f.attributes["nestlight:pbgi_bounces_gathered"] = std::to_string(albedo_ && bounces_ >= 2 ? 1 + gatheredBounces_ : 0);
+    f.attributes["nestlight:pbgi_bounce_receivers"] = std::to_string(bounceReceivers_);
     f.attributes["nestlight:pbgi_mesh_surfels"] = std::to_string(meshSurfels_);
     pbgi::BshLayer::Totals built;
     for (const auto& l : layers_) {
@@ -170,7 +178,9 @@ class PbgiExtension : public RasterExtension {
                    " not written): gathered from the root instead";
     f.summary += "; " + std::to_string(receiverCount_) + " receivers in " + std::to_string(dispatches_) + " dispatches";
     if (albedo_ && bounces_ > 2)
-      f.summary += "; albedo mode: one bounce gathered of the " + std::to_string(bounces_ - 1) + " asked";
+      f.summary += "; albedo mode: " + std::to_string(gatheredBounces_) + " further bounce(s) gathered at " +
+                   std::to_string(bounceReceivers_) + " hierarchy nodes of at most " +
+                   std::to_string(params_.bouncePoints) + " points";
     if (leftOut_)
       f.summary += "; " + std::to_string(leftOut_) + " cut nodes left out (their hierarchies exceed one 128 MiB range)";
     if (stackOverflows_) f.summary += "; " + std::to_string(stackOverflows_) + " traversal stack overflows (nodes skipped)";
@@ -199,7 +209,7 @@ class PbgiExtension : public RasterExtension {
       }
       PbgiNode e{};
       e.origin = glm::vec4(cut[i].origin, cut[i].colourScale);
-      e.range = glm::uvec4(uint32_t(total), uint32_t(count), 0, 0);
+      e.range = glm::uvec4(uint32_t(total), uint32_t(count), 0, std::bit_cast<uint32_t>(cut[i].spacing));
       table.push_back(e);
       included.push_back(i);
       total += count;
@@ -216,7 +226,8 @@ class PbgiExtension : public RasterExtension {
       }
       PbgiNode e{};
       e.origin = glm::vec4(meshTrees_[k].origin, 1.0f);
-      e.range = glm::uvec4(uint32_t(total), uint32_t(count), meshTrees_[k].material + 1, 0);
+      e.range = glm::uvec4(uint32_t(total), uint32_t(count), meshTrees_[k].material + 1,
+                           std::bit_cast<uint32_t>(meshTrees_[k].discRadius));
       table.push_back(e);
       meshIncluded.push_back(k);
       total += count;
@@ -302,6 +313,7 @@ class PbgiExtension : public RasterExtension {
   // mode every node's radiance from the lights (pbgi_light.comp); in the radiance-cache mode the
   // scan's nodes as they are (their colour is their radiance) and the meshes' surfels lit.
   void lightNodes(RasterFrame& f, const frame::PassContext& ctx) {
+    gatheredBounces_ = bounceReceivers_ = 0;
     if (topCount_ == 0) return;
     const size_t firstLit = albedo_ ? 0 : scanTrees_;
     if (!albedo_ && bshNodes_ > 0)
@@ -324,34 +336,32 @@ class PbgiExtension : public RasterExtension {
       glDispatchCompute(GLuint((litRange + 63) / 64), GLuint(tableCount_ - firstLit), 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
-    // Bottom-up sweeps: every hierarchy, then the top tree over their lit roots.
-    const int budget = std::max(budget_ - 1024, 1024);
     receivers_.reserve(16);
+    std::vector<uint32_t> start = treeSizes_;
+    std::fill(start.begin(), start.begin() + std::ptrdiff_t(firstLit), 0u);  // the scan's, copied as they were
+    sweepUp(start);
+    if (albedo_ && bounces_ >= 3) gatherBounces(f);
+  }
+
+  // Bottom-up sweeps: the hierarchies from `start` (each one's node count, or 0 to leave it), then
+  // the top tree over their lit roots; then the empty m-pixels' average.
+  void sweepUp(const std::vector<uint32_t>& start) {
+    const int budget = std::max(budget_ - 1024, 1024);
     receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
     lightUpProgram_.use();
     glUniform1i(lightUpProgram_.uniform("uTrees"), int(tableCount_));
     glUniform1i(lightUpProgram_.uniform("uTopCount"), int(topCount_));
     glUniform1i(lightUpProgram_.uniform("uBudget"), budget);
-    auto sweep = [&](bool topTree, const gl::Buffer& tree, size_t trees, const std::vector<uint32_t>& start) {
+    auto sweep = [&](bool topTree, const gl::Buffer& tree, size_t trees, const std::vector<uint32_t>& from) {
       cursors_.reserve(std::max<size_t>(trees, 1) * 4);
-      cursors_.upload(start.data(), start.size() * 4);
+      cursors_.upload(from.data(), from.size() * 4);
       cursors_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS, 0, cursors_.bytes());
       tree.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, tree.bytes());
       nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodesLit_.bytes());
       glUniform1i(lightUpProgram_.uniform("uTopTree"), topTree ? 1 : 0);
-      for (int dispatch = 0;; ++dispatch) {
-        const uint32_t zero = 0;
-        receivers_.upload(&zero, 4, 4);
-        glDispatchCompute(GLuint((trees + 63) / 64), 1, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-        uint32_t unfinished = 0;
-        glGetNamedBufferSubData(receivers_.id(), 4, 4, &unfinished);
-        if (unfinished == 0) break;
-        NL_CHECK_MSG(dispatch < 100000, "pbgi: a light sweep did not end");
-      }
+      runUntilDone(trees, "a light sweep");
     };
-    std::vector<uint32_t> start = treeSizes_;
-    std::fill(start.begin(), start.begin() + std::ptrdiff_t(firstLit), 0u);  // the scan's, copied as they were
+    table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
     if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, start);
     // The top tree's leaves take their nodes' lit roots, scaled as the gather scales them.
     tableLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableLit_.bytes());
@@ -366,6 +376,70 @@ class PbgiExtension : public RasterExtension {
       glGetNamedBufferSubData(nodesLit_.id(), at, sizeof(BshNode), &meshRoots[j]);
     }
     averageLit_ = scanAverage(root, meshRoots);
+  }
+
+  // Dispatches the program in use over `invocations` (64 a group) until none reports unfinished
+  // work in receivers_[1] (the resumable sweeps).
+  void runUntilDone(size_t invocations, const char* what) {
+    for (int dispatch = 0;; ++dispatch) {
+      const uint32_t zero = 0;
+      receivers_.upload(&zero, 4, 4);
+      glDispatchCompute(GLuint((invocations + 63) / 64), 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+      uint32_t unfinished = 0;
+      glGetNamedBufferSubData(receivers_.id(), 4, 4, &unfinished);
+      if (unfinished == 0) break;
+      NL_CHECK_MSG(dispatch < 100000, std::string("pbgi: ") + what + " did not end");
+    }
+  }
+
+  // The albedo mode's bounces beyond the one every pixel gathers: the nodes standing for at most
+  // `bounce_points` points gather the lit hierarchies (pbgi_bounce_select.comp, then the classic
+  // traversal with nodes as receivers), every leaf below takes its direct light plus its albedo
+  // times what its receiver gathered (pbgi_bounce_down.comp), and the sweeps rebuild the inner
+  // nodes: each pass adds one bounce to the light the pixels then gather.
+  void gatherBounces(RasterFrame& f) {
+    if (tableCount_ == 0 || bshNodes_ == 0) return;
+    nodesDirect_.reserve(nodesLit_.bytes());
+    glCopyNamedBufferSubData(nodesLit_.id(), nodesDirect_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
+    receivers_.reserve((4 + 2 * bshNodes_) * 4);
+    const uint32_t zeros[4] = {0, 0, 0, 0};
+    receivers_.upload(zeros, sizeof zeros);
+    receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+    selectProgram_.use();
+    glUniform1ui(selectProgram_.uniform("uPoints"), GLuint(params_.bouncePoints));
+    table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+    nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodes_.bytes());
+    glDispatchCompute(GLuint((maxRange_ + 63) / 64), GLuint(tableCount_), 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    uint32_t count = 0;
+    glGetNamedBufferSubData(receivers_.id(), 0, 4, &count);
+    bounceReceivers_ = count;
+    gathered_.reserve(bshNodes_ * 16);
+    const std::vector<uint32_t> zeroCursors(tableCount_, 0u);
+    for (int b = 0; b + 2 < bounces_; ++b) {
+      const float none[4] = {0, 0, 0, 0};
+      glClearNamedBufferData(gathered_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, none);
+      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+      gathered_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_BOUNCE, 0, gathered_.bytes());
+      traverse(f, count, true, false, topLit_, nodesLit_, tableLit_);
+      downProgram_.use();
+      glUniform1i(downProgram_.uniform("uTrees"), int(tableCount_));
+      glUniform1i(downProgram_.uniform("uBudget"), std::max(budget_ - 1024, 1024));
+      cursors_.reserve(tableCount_ * 4);
+      cursors_.upload(zeroCursors.data(), zeroCursors.size() * 4);
+      cursors_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS, 0, cursors_.bytes());
+      table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodes_.bytes());
+      nodesDirect_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesDirect_.bytes());
+      nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, nodesLit_.bytes());
+      receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+      runUntilDone(tableCount_, "a bounce's down sweep");
+      sweepUp(treeSizes_);
+      gatheredBounces_++;
+      // traverse() reads the receivers' list again next time: the sweeps only used its header.
+      receivers_.upload(&count, 4);
+    }
   }
 
   // The paper's colour for empty m-pixels is the cloud's average: the top tree's root holds the
@@ -412,62 +486,74 @@ class PbgiExtension : public RasterExtension {
       lists = refinePairs(tile);
       receivers_.upload(zeros, sizeof zeros);  // the pairs' counters reused the receivers' header
     }
+    if (gathered_.bytes() == 0) gathered_.reserve(16);  // read only with nodes as receivers; bound all the same
+    gathered_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_BOUNCE, 0, gathered_.bytes());
     if (listHead_.bytes() == 0) listHead_.reserve(16);
     if (list_.bytes() == 0) list_.reserve(16);
     listHead_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD, 0, listHead_.bytes());
     list_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST, 0, list_.bytes());
     // With nothing resident a receiver that owns the sky still gathers it (every m-pixel empty).
-    if (count > 0 && (topCount_ > 0 || skyOwned_)) {
-      const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);
-      const size_t perReceiver = sizeof(pbgi::glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
-      size_t chunk = std::min<size_t>(count, gl::kMaxSsboRange / (m2 * 16));
-      chunk = std::min<size_t>(chunk, 1 << 16);
-      state_.reserve(chunk * sizeof(pbgi::glsl::PbgiTraversal));
-      stack_.reserve(chunk * PBGI_STACK * 8);
-      mb_.reserve(chunk * m2 * 16);
-      stateBytes_ = std::max<uint64_t>(stateBytes_, chunk * perReceiver);
-      topIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, topIn.bytes());
-      nodesIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesIn.bytes());
-      tableIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableIn.bytes());
-      micro_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MICRO, 0, micro_.bytes());
-      state_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STATE, 0, state_.bytes());
-      stack_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STACK, 0, stack_.bytes());
-      mb_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MB, 0, mb_.bytes());
-      classic_.use();
-      glUniform1i(classic_.uniform("uBudget"), budget_);
-      glUniform1i(classic_.uniform("uTopCount"), int(topCount_));
-      glUniform1i(classic_.uniform("uLists"), lists ? 1 : 0);
-      setLift(classic_);
-      glUniform1f(classic_.uniform("uOmegaCut"),
-                  pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
-      const glm::vec3 average = lit_ ? averageLit_ : average_;
-      const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average : glm::vec3(0);
-      glUniform3f(classic_.uniform("uEmpty"), empty.r, empty.g, empty.b);
-      glUniform1i(classic_.uniform("uEmptyEnvironment"), params_.empty == PbgiParameters::Empty::Environment ? 1 : 0);
-      f.bindEnvironment(classic_);
-      for (size_t first = 0; first < count; first += chunk) {
-        const size_t n = std::min(chunk, count - first);
-        glUniform1i(classic_.uniform("uFirst"), int(first));
-        glUniform1i(classic_.uniform("uCount"), int(n));
-        for (int dispatch = 0;; ++dispatch) {
-          receivers_.upload(zeros, 4, 4);  // unfinished receivers, counted by this dispatch
-          glUniform1i(classic_.uniform("uInit"), dispatch == 0 ? 1 : 0);
-          glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
-          glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
-                          GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-          dispatches_++;
-          uint32_t unfinished = 0;
-          glGetNamedBufferSubData(receivers_.id(), 4, 4, &unfinished);
-          if (unfinished == 0) break;
-          if (dispatch > 1000000)
-            throw Error("pbgi: a traversal did not finish after a million dispatches (a cycle in a hierarchy?)");
-        }
-      }
-      uint32_t overflow = 0;
-      glGetNamedBufferSubData(receivers_.id(), 8, 4, &overflow);
-      stackOverflows_ += overflow;
-    }
+    if (count > 0 && (topCount_ > 0 || skyOwned_)) traverse(f, count, false, lists, topIn, nodesIn, tableIn);
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+  }
+
+  // The classic traversal for `count` receivers listed in receivers_ (pixels, or hierarchy nodes),
+  // in chunks that fit one buffer range, each dispatched until every receiver has finished.
+  void traverse(RasterFrame& f, size_t count, bool nodeReceivers, bool lists, const gl::Buffer& topIn,
+                const gl::Buffer& nodesIn, const gl::Buffer& tableIn) {
+    const uint32_t zero = 0;
+    const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);
+    const size_t perReceiver = sizeof(pbgi::glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
+    size_t chunk = std::min<size_t>(count, gl::kMaxSsboRange / (m2 * 16));
+    chunk = std::min<size_t>(chunk, 1 << 16);
+    state_.reserve(chunk * sizeof(pbgi::glsl::PbgiTraversal));
+    stack_.reserve(chunk * PBGI_STACK * 8);
+    mb_.reserve(chunk * m2 * 16);
+    stateBytes_ = std::max<uint64_t>(stateBytes_, chunk * perReceiver);
+    topIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, topIn.bytes());
+    nodesIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesIn.bytes());
+    tableIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableIn.bytes());
+    micro_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MICRO, 0, micro_.bytes());
+    state_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STATE, 0, state_.bytes());
+    stack_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STACK, 0, stack_.bytes());
+    mb_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MB, 0, mb_.bytes());
+    classic_.use();
+    glUniform1i(classic_.uniform("uBudget"), budget_);
+    glUniform1i(classic_.uniform("uTopCount"), int(topCount_));
+    glUniform1i(classic_.uniform("uLists"), lists ? 1 : 0);
+    glUniform1i(classic_.uniform("uNodeReceivers"), nodeReceivers ? 1 : 0);
+    setLift(classic_);
+    glUniform1f(classic_.uniform("uOmegaCut"),
+                pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
+    const glm::vec3 average = lit_ ? averageLit_ : average_;
+    const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average : glm::vec3(0);
+    // Hierarchy nodes receiving (further bounces) have the sky in their direct light already.
+    const glm::vec3 e = nodeReceivers ? glm::vec3(0) : empty;
+    glUniform3f(classic_.uniform("uEmpty"), e.r, e.g, e.b);
+    glUniform1i(classic_.uniform("uEmptyEnvironment"),
+                !nodeReceivers && params_.empty == PbgiParameters::Empty::Environment ? 1 : 0);
+    f.bindEnvironment(classic_);
+    for (size_t first = 0; first < count; first += chunk) {
+      const size_t n = std::min(chunk, count - first);
+      glUniform1i(classic_.uniform("uFirst"), int(first));
+      glUniform1i(classic_.uniform("uCount"), int(n));
+      for (int dispatch = 0;; ++dispatch) {
+        receivers_.upload(&zero, 4, 4);  // unfinished receivers, counted by this dispatch
+        glUniform1i(classic_.uniform("uInit"), dispatch == 0 ? 1 : 0);
+        glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
+                        GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        dispatches_++;
+        uint32_t unfinished = 0;
+        glGetNamedBufferSubData(receivers_.id(), 4, 4, &unfinished);
+        if (unfinished == 0) break;
+        if (dispatch > 1000000)
+          throw Error("pbgi: a traversal did not finish after a million dispatches (a cycle in a hierarchy?)");
+      }
+    }
+    uint32_t overflow = 0;
+    glGetNamedBufferSubData(receivers_.id(), 8, 4, &overflow);
+    stackOverflows_ += overflow;
   }
 
   // MIP-PBGI / X-PBGI: the receivers' pyramid, then (node, block) pairs refined generation by
@@ -553,7 +639,9 @@ class PbgiExtension : public RasterExtension {
   gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
   gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_;
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
-  gl::ShaderProgram lightProgram_, lightUpProgram_;
+  gl::ShaderProgram lightProgram_, lightUpProgram_, selectProgram_, downProgram_;
+  gl::Buffer nodesDirect_, gathered_;  // further bounces: the leaves' direct light, each node's gathered light
+  uint64_t gatheredBounces_ = 0, bounceReceivers_ = 0;
   gl::Buffer cursors_;
   std::vector<uint32_t> treeSizes_, treeStart_;
   std::vector<BshNode> meshRoots_;  // the meshes' roots as the top tree holds them (scene frame)
@@ -590,8 +678,9 @@ class PbgiExtension : public RasterExtension {
 }  // namespace
 
 const std::vector<std::string>& pbgiParameterKeys() {
-  static const std::vector<std::string> keys = {"variant", "micro_buffer",  "conservative",       "empty",
-                                                "prune",   "meshes",        "pair_capacity",      "steps_per_dispatch"};
+  static const std::vector<std::string> keys = {"variant", "micro_buffer", "conservative",  "empty",
+                                                "prune",   "meshes",       "bounce_points", "pair_capacity",
+                                                "steps_per_dispatch"};
   return keys;
 }
 
@@ -617,6 +706,7 @@ PbgiParameters pbgiParameters(const Scene& scene) {
   }
   if (f.has("prune")) p.prune = f.at("prune").boolean();
   if (f.has("meshes")) p.meshes = f.at("meshes").boolean();
+  if (f.has("bounce_points")) p.bouncePoints = int(f.at("bounce_points").integer(1, 1 << 24));
   if (f.has("pair_capacity")) p.pairCapacity = int(f.at("pair_capacity").integer(1, 1 << 23));
   if (f.has("steps_per_dispatch")) p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
   return p;

@@ -42,6 +42,9 @@ NL_STRUCT(BshNode) {
 #define PBGI_SSBO_CURSORS (NL_SSBO_METHOD0 + 6)   // uint[]: the bottom-up sweep's cursor per hierarchy
 #define PBGI_SSBO_LIST_HEAD NL_SSBO_NODE_LAYER1    // uint[tile pixels]: each receiver's first list entry
 #define PBGI_SSBO_LIST NL_SSBO_NODE_LAYER2         // uvec4[]: (node index, tree, next entry, 0)
+#define PBGI_SSBO_BOUNCE 3                         // vec4[] per hierarchy node: the albedo mode's gathered bounce
+                                                // (rgb: irradiance / pi at the node's receiver, w: 1 where set);
+                                                // node-layer slot 3, which no GI pass binds
 #define PBGI_LIFTS 16                              // materials with a receiver lift of their own (pbgi_common.glsl)
 #define PBGI_END 0xffffffffu                       // the end of a receiver's list
 #define PBGI_STACK (2 * BSH_MAX_DEPTH + 8)      // a top tree and a node's tree, each at most BSH_MAX_DEPTH deep
@@ -50,7 +53,8 @@ NL_STRUCT(BshNode) {
 // A node of the cut as the gather enters it from a top-tree leaf.
 NL_STRUCT(PbgiNode) {
   vec4 origin;   // xyz: the node cube's corner in the scene frame (its hierarchy's frame), w: colour scale
-  uvec4 range;   // x: index of its root in PBGI_SSBO_NODES, y: its node count
+  uvec4 range;   // x: index of its root in PBGI_SSBO_NODES, y: its node count, z: 0 for a scan
+                 // node, a mesh's material + 1; w: its leaves' disc radius (float bits)
 };
 
 // A receiver's traversal between dispatches: its stack depth and the splat in progress (a node

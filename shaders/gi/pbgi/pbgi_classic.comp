@@ -21,6 +21,12 @@
 // Empty m-pixels take uEmpty (the paper: the cloud's average colour, for holes in the cloud), or
 // the environment's radiance in their direction (open scenes: what no point covers is sky).
 //
+// Receivers are G-buffer pixels, or (uNodeReceivers, the albedo mode's further bounces) hierarchy
+// nodes listed by pbgi_bounce_select.comp: a node receives at its centre, on the side of its cone's
+// axis (a node without normals faces +z), lifted 1.5 leaf disc radii, through a white Lambert
+// BRDF (its irradiance / pi), into PBGI_SSBO_BOUNCE; its empty m-pixels stay black (the nodes'
+// direct light already has the sky, unshadowed).
+//
 // One invocation per receiver; the traversal is resumable. llvmpipe ends every loop of a shader
 // invocation after 65,535 iterations in all (Mesa's LP_MAX_TGSI_LOOP_ITERATIONS, shared by every
 // loop), and a traversal takes more at fine micro-buffers: so the traversal is one flat loop
@@ -36,6 +42,8 @@ layout(std430, binding = PBGI_SSBO_MICRO) readonly buffer Micro { vec4 micro[]; 
 layout(std430, binding = PBGI_SSBO_STATE) buffer State { PbgiTraversal states[]; };
 layout(std430, binding = PBGI_SSBO_STACK) buffer Stack { uvec2 stacks[]; };
 layout(std430, binding = PBGI_SSBO_MB) buffer Mb { vec4 mbs[]; };
+layout(std430, binding = PBGI_SSBO_BOUNCE) buffer Bounce { vec4 gathered[]; };
+uniform int uNodeReceivers;   // 1: receivers are hierarchy nodes (tree, node), 0: pixels
 uniform int uFirst;           // first receiver of this chunk
 uniform int uCount;           // receivers in this chunk
 uniform int uInit;            // 1: the chunk's first dispatch (clear micro-buffers, push the root)
@@ -133,11 +141,31 @@ void splatStep(Receiver R, mat3 F, inout PbgiTraversal st) {
   }
 }
 
+Receiver nodeReceiver(uvec2 e) {
+  BshNode A = fetchNode(e);
+  Receiver R;
+  R.n = A.links.w != 0u ? decodeNormal(A.links.w) : vec3(0.0, 0.0, 1.0);
+  R.wo = R.n;
+  R.x = A.sphere.xyz + R.n * (1.5 * uintBitsToFloat(cutNodes[e.y - 1u].range.w));
+  R.mat.type = NL_MATERIAL_LAMBERT;
+  R.mat.baseColor = vec3(1.0);
+  R.mat.roughness = 1.0, R.mat.metallic = 0.0, R.mat.specular = 0.5, R.mat.specularTint = 0.0;
+  R.mat.sheen = 0.0, R.mat.sheenTint = 0.5, R.mat.clearcoat = 0.0, R.mat.clearcoatGloss = 1.0;
+  return R;
+}
+
 void main() {
   int idx = int(gl_GlobalInvocationID.x);
   if (idx >= uCount) return;
-  uint p = receivers[4u + uint(uFirst + idx)];
-  ivec2 px = ivec2(int(p & 0xffffu), int(p >> 16));
+  uint receiver = uint(uFirst + idx);
+  uvec2 node = uvec2(0u);
+  ivec2 px = ivec2(0);
+  if (uNodeReceivers != 0) {
+    node = uvec2(receivers[5u + 2u * receiver], receivers[4u + 2u * receiver]);  // (index, tree)
+  } else {
+    uint p = receivers[4u + receiver];
+    px = ivec2(int(p & 0xffffu), int(p >> 16));
+  }
   mbBase = uint(idx) * uint(M * M);
   stackBase = uint(idx) * uint(PBGI_STACK);
   PbgiTraversal st;
@@ -150,7 +178,7 @@ void main() {
     st = states[idx];
   }
   if (st.header.x == PBGI_DONE) return;
-  Receiver R = receiverAt(px);
+  Receiver R = uNodeReceivers != 0 ? nodeReceiver(node) : receiverAt(px);
   mat3 F = frameFromNormal(R.n);
 
   bool finished = false;
@@ -215,8 +243,12 @@ void main() {
       vec3 C = b.a < kFar ? b.rgb : (uEmptyEnvironment != 0 ? environmentOver(F * wi, m.w) : uEmpty);
       L += evalBsdf(R.mat, woL, wi) * C * m.w * m.z;
     }
-    vec4 direct = texelFetch(uDirect, px, 0);
-    imageStore(uOut, px, vec4(direct.rgb + L, direct.a));
+    if (uNodeReceivers != 0) {
+      gathered[cutNodes[node.y - 1u].range.x + node.x] = vec4(L, 1.0);
+    } else {
+      vec4 direct = texelFetch(uDirect, px, 0);
+      imageStore(uOut, px, vec4(direct.rgb + L, direct.a));
+    }
     st.header.x = PBGI_DONE;
   } else {
     atomicAdd(receivers[1], 1u);

@@ -32,6 +32,9 @@ struct PbgiParameters {
   // Inserted meshes' surfels as hierarchies of their own (mesh_trees.h): they occlude, reflect
   // the lights and emit; false: meshes only receive (the paper's setting).
   bool meshes = true;
+  // The albedo mode's bounces beyond the first gather at hierarchy nodes standing for at most this
+  // many points (every leaf below takes what its node gathered), not at every point.
+  int bouncePoints = 256;
   // Traversal steps one dispatch takes per receiver before it yields (0: as many as the device
   // allows: on llvmpipe what its 65,535-iteration loop limit leaves, elsewhere 2^20). The
   // traversal resumes where it stopped, so the image does not depend on it.
