@@ -71,14 +71,15 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   while (std::getline(csv, line)) rows++;
   // Every registered method: reference and direct at 1 and 4 spp, raster at 2 shadow-map sizes,
   // vpl at 16 VPLs as the scene sets it and in its 4 variants (1 to 3 bounces, exact visibility),
-  // pbgi (X-PBGI) at 8 x 8 micro-buffers and in its 4 variants (classic, mip, no pruning,
-  // conservative).
-  EXPECT_EQ(rows, 16);
+  // pbgi (X-PBGI) at 8 x 8 micro-buffers and in its 5 variants (classic, mip, no pruning,
+  // conservative, no meshes).
+  EXPECT_EQ(rows, 17);
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 16u);
+  ASSERT_EQ(j["rows"].size(), 17u);
   EXPECT_EQ(j["rows"][11]["method"], "pbgi");
   EXPECT_EQ(j["rows"][12]["variant"], "classic");
   EXPECT_EQ(j["rows"][15]["variant"], "conservative");
+  EXPECT_EQ(j["rows"][16]["variant"], "no meshes");
   EXPECT_TRUE(j["rows"][11]["gpu_pass_ms"].contains("pbgi_gather")) << j["rows"][11].dump();
   EXPECT_EQ(j["rows"][6]["method"], "vpl");
   EXPECT_EQ(j["rows"][6]["variant"], "");
