@@ -85,7 +85,7 @@ class PbgiExtension : public RasterExtension {
       layers_.push_back(layer);
       return layer;
     });
-    if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene);
+    if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene, f.meshes());
     std::vector<BshNode> meshNodes;
     for (const auto& t : meshTrees_) {
       meshOffsets_.push_back(meshNodes.size());
@@ -234,17 +234,24 @@ class PbgiExtension : public RasterExtension {
     }
     bshNodes_ = total;
     nodes_.reserve(std::max<size_t>(total, 1) * sizeof(BshNode));
+    // The roots come back in one read (one read per node would stall the pipeline each time).
+    roots.resize(included.size());
+    rootsStaging_.reserve(std::max<size_t>(included.size(), 1) * sizeof(BshNode));
     for (size_t k = 0; k < included.size(); ++k) {
-      const CutNode& n = cut[included[k]];
-      const GLuint src = f.layerBuffer(n, layer_);
+      const GLuint src = f.layerBuffer(cut[included[k]], layer_);
       const size_t bytes = size_t(table[k].range.y) * sizeof(BshNode);
       glCopyNamedBufferSubData(src, nodes_.id(), 0, GLintptr(size_t(table[k].range.x) * sizeof(BshNode)),
                                GLsizeiptr(bytes));
-      BshNode root;
-      glGetNamedBufferSubData(src, 0, sizeof(BshNode), &root);
-      root.sphere = glm::vec4(glm::vec3(root.sphere) + n.origin, root.sphere.w);
-      root.colour = glm::vec4(glm::vec3(root.colour) * n.colourScale, root.colour.w);
-      roots.push_back(root);
+      glCopyNamedBufferSubData(src, rootsStaging_.id(), 0, GLintptr(k * sizeof(BshNode)), sizeof(BshNode));
+    }
+    if (!included.empty()) {
+      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+      glGetNamedBufferSubData(rootsStaging_.id(), 0, GLsizeiptr(roots.size() * sizeof(BshNode)), roots.data());
+    }
+    for (size_t k = 0; k < included.size(); ++k) {
+      const CutNode& n = cut[included[k]];
+      roots[k].sphere = glm::vec4(glm::vec3(roots[k].sphere) + n.origin, roots[k].sphere.w);
+      roots[k].colour = glm::vec4(glm::vec3(roots[k].colour) * n.colourScale, roots[k].colour.w);
     }
     for (size_t j = 0; j < meshIncluded.size(); ++j) {
       const pbgi::MeshTree& t = meshTrees_[meshIncluded[j]];
@@ -279,6 +286,10 @@ class PbgiExtension : public RasterExtension {
       if (!table.empty()) tableLit_.upload(table.data(), table.size() * sizeof(PbgiNode));
       nodesLit_.reserve(nodes_.bytes());
       topLit_.reserve(top_.bytes());
+      // The radiance-cache mode lights only the meshes' surfels: the scan's nodes are copied once
+      // per cut, not every frame.
+      if (!albedo_ && bshNodes_ > 0)
+        glCopyNamedBufferSubData(nodes_.id(), nodesLit_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
     }
     meshRoots_.clear();
     for (size_t j = 0; j < meshIncluded.size(); ++j) meshRoots_.push_back(roots[scanTrees_ + j]);
@@ -315,9 +326,7 @@ class PbgiExtension : public RasterExtension {
   void lightNodes(RasterFrame& f, const frame::PassContext& ctx) {
     gatheredBounces_ = bounceReceivers_ = 0;
     if (topCount_ == 0) return;
-    const size_t firstLit = albedo_ ? 0 : scanTrees_;
-    if (!albedo_ && bshNodes_ > 0)
-      glCopyNamedBufferSubData(nodes_.id(), nodesLit_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
+    const size_t firstLit = albedo_ ? 0 : scanTrees_;  // the scan's were copied at rebuild()
     uint64_t litRange = 0;
     for (size_t k = firstLit; k < treeSizes_.size(); ++k) litRange = std::max<uint64_t>(litRange, treeSizes_[k]);
     const gl::Texture& maps = ctx.target("shadow_maps");
@@ -327,12 +336,12 @@ class PbgiExtension : public RasterExtension {
     f.bindSceneBuffers();
     lightProgram_.use();
     f.bindEnvironment(lightProgram_);
-    table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+    table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
     glUniform1i(lightProgram_.uniform("uFirstTree"), int(firstLit));
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     if (tableCount_ > firstLit && litRange > 0) {
-      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodes_.bytes());
-      nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, nodesLit_.bytes());
+      nodes_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN);
+      nodesLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT);
       glDispatchCompute(GLuint((litRange + 63) / 64), GLuint(tableCount_ - firstLit), 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
@@ -347,7 +356,7 @@ class PbgiExtension : public RasterExtension {
   // the top tree over their lit roots; then the empty m-pixels' average.
   void sweepUp(const std::vector<uint32_t>& start) {
     const int budget = std::max(budget_ - 1024, 1024);
-    receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+    receivers_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS);
     lightUpProgram_.use();
     glUniform1i(lightUpProgram_.uniform("uTrees"), int(tableCount_));
     glUniform1i(lightUpProgram_.uniform("uTopCount"), int(topCount_));
@@ -355,16 +364,16 @@ class PbgiExtension : public RasterExtension {
     auto sweep = [&](bool topTree, const gl::Buffer& tree, size_t trees, const std::vector<uint32_t>& from) {
       cursors_.reserve(std::max<size_t>(trees, 1) * 4);
       cursors_.upload(from.data(), from.size() * 4);
-      cursors_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS, 0, cursors_.bytes());
-      tree.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, tree.bytes());
-      nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodesLit_.bytes());
+      cursors_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS);
+      tree.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT);
+      nodesLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN);
       glUniform1i(lightUpProgram_.uniform("uTopTree"), topTree ? 1 : 0);
       runUntilDone(trees, "a light sweep");
     };
-    table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
+    table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
     if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, start);
     // The top tree's leaves take their nodes' lit roots, scaled as the gather scales them.
-    tableLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableLit_.bytes());
+    tableLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
     glCopyNamedBufferSubData(top_.id(), topLit_.id(), 0, 0, GLsizeiptr(topCount_ * sizeof(BshNode)));
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     sweep(true, topLit_, 1, {uint32_t(topCount_)});
@@ -405,11 +414,11 @@ class PbgiExtension : public RasterExtension {
     receivers_.reserve((4 + 2 * bshNodes_) * 4);
     const uint32_t zeros[4] = {0, 0, 0, 0};
     receivers_.upload(zeros, sizeof zeros);
-    receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+    receivers_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS);
     selectProgram_.use();
     glUniform1ui(selectProgram_.uniform("uPoints"), GLuint(params_.bouncePoints));
-    table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
-    nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodes_.bytes());
+    table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+    nodes_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
     glDispatchCompute(GLuint((maxRange_ + 63) / 64), GLuint(tableCount_), 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     uint32_t count = 0;
@@ -421,19 +430,19 @@ class PbgiExtension : public RasterExtension {
       const float none[4] = {0, 0, 0, 0};
       glClearNamedBufferData(gathered_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, none);
       glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-      gathered_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_BOUNCE, 0, gathered_.bytes());
+      gathered_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_BOUNCE);
       traverse(f, count, true, false, topLit_, nodesLit_, tableLit_);
       downProgram_.use();
       glUniform1i(downProgram_.uniform("uTrees"), int(tableCount_));
       glUniform1i(downProgram_.uniform("uBudget"), std::max(budget_ - 1024, 1024));
       cursors_.reserve(tableCount_ * 4);
       cursors_.upload(zeroCursors.data(), zeroCursors.size() * 4);
-      cursors_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS, 0, cursors_.bytes());
-      table_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, table_.bytes());
-      nodes_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN, 0, nodes_.bytes());
-      nodesDirect_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesDirect_.bytes());
-      nodesLit_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT, 0, nodesLit_.bytes());
-      receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+      cursors_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS);
+      table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+      nodes_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN);
+      nodesDirect_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
+      nodesLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT);
+      receivers_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS);
       runUntilDone(tableCount_, "a bounce's down sweep");
       sweepUp(treeSizes_);
       gatheredBounces_++;
@@ -466,7 +475,7 @@ class PbgiExtension : public RasterExtension {
     ctx.bindTexture("material", 3);
     ctx.bindTexture("radiance", 4);
     glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    receivers_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS, 0, receivers_.bytes());
+    receivers_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS);
     receiversProgram_.use();
     glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
@@ -480,18 +489,18 @@ class PbgiExtension : public RasterExtension {
     if (albedo_ && bounces_ < 2) count = 0;
     bool lists = false;
     if (count > 0 && topCount_ > 0 && params_.variant != PbgiParameters::Variant::Classic) {
-      topIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, topIn.bytes());
-      nodesIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesIn.bytes());
-      tableIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableIn.bytes());
+      topIn.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP);
+      nodesIn.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
+      tableIn.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
       lists = refinePairs(tile);
       receivers_.upload(zeros, sizeof zeros);  // the pairs' counters reused the receivers' header
     }
     if (gathered_.bytes() == 0) gathered_.reserve(16);  // read only with nodes as receivers; bound all the same
-    gathered_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_BOUNCE, 0, gathered_.bytes());
+    gathered_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_BOUNCE);
     if (listHead_.bytes() == 0) listHead_.reserve(16);
     if (list_.bytes() == 0) list_.reserve(16);
-    listHead_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD, 0, listHead_.bytes());
-    list_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST, 0, list_.bytes());
+    listHead_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD);
+    list_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST);
     // With nothing resident a receiver that owns the sky still gathers it (every m-pixel empty).
     if (count > 0 && (topCount_ > 0 || skyOwned_)) traverse(f, count, false, lists, topIn, nodesIn, tableIn);
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
@@ -510,13 +519,13 @@ class PbgiExtension : public RasterExtension {
     stack_.reserve(chunk * PBGI_STACK * 8);
     mb_.reserve(chunk * m2 * 16);
     stateBytes_ = std::max<uint64_t>(stateBytes_, chunk * perReceiver);
-    topIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP, 0, topIn.bytes());
-    nodesIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES, 0, nodesIn.bytes());
-    tableIn.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE, 0, tableIn.bytes());
-    micro_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MICRO, 0, micro_.bytes());
-    state_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STATE, 0, state_.bytes());
-    stack_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STACK, 0, stack_.bytes());
-    mb_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MB, 0, mb_.bytes());
+    topIn.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP);
+    nodesIn.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
+    tableIn.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+    micro_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MICRO);
+    state_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STATE);
+    stack_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_STACK);
+    mb_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_MB);
     classic_.use();
     glUniform1i(classic_.uniform("uBudget"), budget_);
     glUniform1i(classic_.uniform("uTopCount"), int(topCount_));
@@ -568,7 +577,7 @@ class PbgiExtension : public RasterExtension {
     for (const auto& sz : sizes) offsets.push_back(texels), texels += sz.x * sz.y;
     const int levels = int(sizes.size());
     pyramid_.reserve(size_t(texels) * 32);
-    pyramid_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PYRAMID, 0, pyramid_.bytes());
+    pyramid_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PYRAMID);
     pyramidProgram_.use();
     setLift(pyramidProgram_);
     for (int l = 0; l < levels; ++l) {
@@ -594,8 +603,8 @@ class PbgiExtension : public RasterExtension {
     pairsA_.upload(&root, sizeof root);
     const uint32_t zeros[4] = {0, 0, 0, 0};
     receivers_.upload(zeros, sizeof zeros);
-    listHead_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD, 0, listHead_.bytes());
-    list_.bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST, 0, list_.bytes());
+    listHead_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD);
+    list_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST);
     pairsProgram_.use();
     const float omegaM = pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f);
     glUniform1f(pairsProgram_.uniform("uOmegaTr"),
@@ -612,8 +621,8 @@ class PbgiExtension : public RasterExtension {
     for (int generation = 0; inCount > 0; ++generation) {
       NL_CHECK_MSG(generation < 4096, "pbgi: pair refinement did not end (a cycle in a hierarchy?)");
       receivers_.upload(zeros, 8);  // pairs written, pairs that did not fit
-      in->bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_IN, 0, in->bytes());
-      out->bindRange(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_OUT, 0, out->bytes());
+      in->bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_IN);
+      out->bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_OUT);
       glUniform1i(pairsProgram_.uniform("uInCount"), int(inCount));
       glDispatchCompute(GLuint((inCount + 63) / 64), 1, 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
@@ -637,7 +646,7 @@ class PbgiExtension : public RasterExtension {
   size_t layer_ = 0;
   std::vector<std::shared_ptr<const pbgi::BshLayer>> layers_;  // one per scan, for their build totals
   gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
-  gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_;
+  gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_, rootsStaging_;
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
   gl::ShaderProgram lightProgram_, lightUpProgram_, selectProgram_, downProgram_;
   gl::Buffer nodesDirect_, gathered_;  // further bounces: the leaves' direct light, each node's gathered light
