@@ -4,13 +4,16 @@
 
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/mesh.h"
+#include "nestlight/octree/error.h"
 
 namespace nestlight::gi::pbgi {
 
-std::vector<MeshTree> buildMeshTrees(const Scene& scene) {
+std::vector<MeshTree> buildMeshTrees(const Scene& scene, const std::vector<TriangleMesh>& meshes) {
+  NL_CHECK(meshes.size() == scene.meshes.size());
   std::vector<MeshTree> trees;
-  for (const SceneMesh& m : scene.meshes) {
-    const TriangleMesh mesh = readMesh(m.path.string());
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    const SceneMesh& m = scene.meshes[i];
+    const TriangleMesh& mesh = meshes[i];
     SurfelOptions o;
     o.method = m.surfelMethod;
     o.count = m.surfelCount;

@@ -182,6 +182,7 @@ class RasterMethod : public Method, public RasterFrame {
     return scans_.at(size_t(n.scan)).store->layerBytes(n.handle, layer);
   }
   bool quiet() const override { return quiet_; }
+  const std::vector<TriangleMesh>& meshes() const override { return cpuMeshes_; }
 
   MethodFrame render(const SceneCamera& camera) override {
     if (context_) context_->makeCurrent();
@@ -409,7 +410,8 @@ class RasterMethod : public Method, public RasterFrame {
 
   void loadMeshes() {
     for (const auto& m : scene_.meshes) {
-      TriangleMesh mesh = readMesh(m.path.string());
+      cpuMeshes_.push_back(readMesh(m.path.string()));
+      const TriangleMesh& mesh = cpuMeshes_.back();
       const glm::mat4 localFromObject = scene_.localFromObject(m);
       const glm::mat3 normalFrom = glm::transpose(glm::inverse(glm::mat3(localFromObject)));
       std::vector<float> v;
@@ -855,6 +857,7 @@ class RasterMethod : public Method, public RasterFrame {
           glDrawArrays(GL_TRIANGLES, 0, 3);
         });
     if (extension_) radianceTarget_ = extension_->setUp(*this);
+    cpuMeshes_ = {};  // meshes() is for setUp only
     frame::addToneMapPass(graph_, radianceTarget_, "display", exposure_);
   }
 
@@ -869,6 +872,7 @@ class RasterMethod : public Method, public RasterFrame {
   LocalBox bounds_;
   std::vector<GpuScan> scans_;
   std::vector<GpuMesh> meshes_;
+  std::vector<TriangleMesh> cpuMeshes_;  // the files' meshes, until the extension's setUp is done
   std::vector<frame::LightRecord> lightRecords_;
   std::vector<glm::mat4> shadowViews_;         // clip from world, per shadow-map layer
   std::vector<glm::mat4> shadowViewFromWorld_;  // the view alone (splat sizes)

@@ -262,8 +262,9 @@ class VplExtension : public RasterExtension {
   // The meshes' surfels join the ISM occluders (and the bounces' hit points) as nodes of their own.
   void setUpSurfels(RasterFrame& f) {
     const Scene& scene = f.scene();
-    for (const auto& m : scene.meshes) {
-      TriangleMesh mesh = readMesh(m.path.string());
+    for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+      const SceneMesh& m = scene.meshes[mi];
+      const TriangleMesh& mesh = f.meshes().at(mi);
       SurfelOptions o;
       o.method = m.surfelMethod;
       o.count = m.surfelCount;

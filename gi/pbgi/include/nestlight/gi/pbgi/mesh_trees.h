@@ -21,6 +21,7 @@
 
 #include <glm/glm.hpp>
 
+#include "nestlight/gi/mesh.h"
 #include "nestlight/gi/pbgi/bsh.h"
 #include "nestlight/gi/scene.h"
 
@@ -35,8 +36,8 @@ struct MeshTree {
 };
 
 // One hierarchy per mesh with at least one surfel, in scene order (a mesh whose triangles are
-// all degenerate has none and is left out). Reads the meshes again (their files); throws the
-// readers' errors.
-std::vector<MeshTree> buildMeshTrees(const Scene& scene);
+// all degenerate has none and is left out). `meshes`: the scene's meshes as read, one per
+// scene.meshes entry.
+std::vector<MeshTree> buildMeshTrees(const Scene& scene, const std::vector<TriangleMesh>& meshes);
 
 }  // namespace nestlight::gi::pbgi

@@ -17,6 +17,7 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
 #include "nestlight/frame/interface.h"
+#include "nestlight/gi/mesh.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/raster/raster_method.h"
 #include "nestlight/gl/program.h"
@@ -87,6 +88,10 @@ class RasterFrame {
   virtual unsigned layerBuffer(const CutNode& node, size_t layer) const = 0;
   virtual size_t layerBytes(const CutNode& node, size_t layer) const = 0;
   virtual bool quiet() const = 0;
+  // The scene's meshes as read from their files, one per scene mesh in scene order (surfel
+  // samplers start from them instead of reading the files again). Only during setUp: the frame
+  // drops them afterwards.
+  virtual const std::vector<TriangleMesh>& meshes() const = 0;
 };
 
 class RasterExtension {
