@@ -256,8 +256,15 @@ TEST(Bsh, UniformSpherePrunesLocallyFlatPatchesOnly) {
   EXPECT_GT(bsh.stats.clusters, 10u);
   EXPECT_LT(bsh.nodes.size(), bsh.stats.nodesBeforePruning / 4);  // flat patches collapse
   EXPECT_FALSE(isLeaf(bsh.nodes[0]));
-  EXPECT_TRUE(std::isnan(coneAxis(bsh.nodes[0]).x) == false);
-  EXPECT_FLOAT_EQ(bsh.nodes[0].colour.w, float(BSH_CONE_NONE));  // the whole sphere: every direction
+  // The whole sphere: every direction, so the root's cone bounds nothing and has no axis.
+  EXPECT_FLOAT_EQ(bsh.nodes[0].colour.w, float(BSH_CONE_NONE));
+  EXPECT_EQ(coneAxis(bsh.nodes[0]), glm::vec3(0.0f));
+  // Every cluster is a locally flat patch: its cone is narrow, its axis a unit vector.
+  for (const BshNode& n : bsh.nodes)
+    if (isLeaf(n) && n.links.z > 1) {
+      EXPECT_LT(n.colour.w, 0.5f);
+      EXPECT_NEAR(glm::length(coneAxis(n)), 1.0f, 1e-3f);
+    }
 }
 
 TEST(Bsh, FlatUniformPlaneIsOneLeafAndTwoColoursAreNot) {
