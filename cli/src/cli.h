@@ -40,6 +40,7 @@ void addBenchStream(CLI::App& app, int& exitCode);  // after addBench: a sub-com
 void addMakeScene(CLI::App& app, int& exitCode);
 void addSurfels(CLI::App& app, int& exitCode);
 void addCompare(CLI::App& app, int& exitCode);
+void addExpandHdr(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");

@@ -64,6 +64,17 @@ void addInfo(CLI::App& app, int& exitCode) {
       std::printf(" %s:%s%s", at.name.c_str(), scalarName(at.type),
                   at.components > 1 ? ("x" + std::to_string(at.components)).c_str() : "");
     std::printf("\n");
+    for (const auto& l : m.layers) {
+      std::printf("layer      %s: %s colour, %llu points in %llu nodes, %s (%s, %s)", l.name.c_str(),
+                  l.kind == "colour" ? "linear RGB" : l.kind.c_str(), (unsigned long long)l.points,
+                  (unsigned long long)l.nodes, l.encoding.c_str(), l.file.c_str(), humanBytes(double(l.bytes)).c_str());
+      if (l.scale != 1) std::printf(", values x %g", l.scale);
+      std::printf("\n");
+      if (l.build.is_object())
+        for (const char* key : {"command", "mode", "photo", "exposure_log2", "expanded_points", "infilled_points",
+                                "island_points", "max_luminance"})
+          if (l.build.contains(key)) std::printf("           %s: %s\n", key, l.build[key].dump().c_str());
+    }
     if (m.normalsEstimated) std::printf("normals    estimated (%s)\n", m.normalEstimation.dump().c_str());
     if (!m.crs.is_null()) std::printf("crs        %s\n", m.crs.contains("wkt") ? "WKT" : "GeoTIFF keys");
     for (const auto& s : m.sources) {
@@ -76,15 +87,19 @@ void addInfo(CLI::App& app, int& exitCode) {
 
 void addVerify(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
-      "verify", "Check an octree: structure, checksums, point accounting, points inside their nodes");
+      "verify", "Check an octree: structure, checksums, point accounting, points inside their nodes, "
+      "attribute layers (HDR colour)");
   auto dir = std::make_shared<std::string>();
   cmd->add_option("octree", *dir, "Octree folder")->required();
   cmd->callback([=, &exitCode]() {
     VerifyReport r = verifyOctree(*dir);
     for (const auto& f : r.failures) std::fprintf(stderr, "FAIL %s\n", f.c_str());
+    for (const auto& n : r.notes) std::fprintf(stderr, "note %s\n", n.c_str());
     if (r.ok()) {
-      std::printf("OK %s: %llu nodes, %llu points, %s of payload checked\n", dir->c_str(),
-                  (unsigned long long)r.nodes, (unsigned long long)r.points, humanBytes(double(r.payloadBytes)).c_str());
+      std::printf("OK %s: %llu nodes, %llu points, %s of payload checked", dir->c_str(), (unsigned long long)r.nodes,
+                  (unsigned long long)r.points, humanBytes(double(r.payloadBytes)).c_str());
+      if (r.layers) std::printf(", %llu layer(s) checked", (unsigned long long)r.layers);
+      std::printf("\n");
       exitCode = 0;
     } else {
       std::fprintf(stderr, "verify failed: %zu problem(s) in %s\n", r.failures.size(), dir->c_str());

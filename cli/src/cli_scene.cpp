@@ -4,6 +4,7 @@
 
 #include "cli.h"
 #include "nestlight/converters/test_scenes.h"
+#include "nestlight/gi/hdr/protocol.h"
 
 namespace nestlight::cli {
 
@@ -17,12 +18,18 @@ void addMakeScene(CLI::App& app, int& exitCode) {
       "  cornell  a closed 4 m room of coloured walls (a Cornell-box-like scan) with a glossy sphere\n"
       "  nave     a 40 m nave with two colonnades and a marble statue on a pedestal\n"
       "  object   the synthetic town scan with a gold torus, under a sky and a sun (albedo mode)\n"
+      "  hdr-room the HDR expansion protocol: a textured room whose true HDR colour is known (the\n"
+      "           octree's 'truth' layer), clipped to LDR by an exposure, and an HDR photograph of it\n"
+      "           (DIR/photo.exr); `nestlight expand-hdr DIR/scan.octree --photo DIR/photo.exr`\n"
+      "           restores it and `nestlight bench hdr` measures the error\n"
       "Example: nestlight make-scene cornell -o cornell && nestlight render cornell/scene.json");
   auto kind = std::make_shared<std::string>();
   auto dir = std::make_shared<std::string>();
   auto opt = std::make_shared<TestSceneOptions>();
   auto points = std::make_shared<std::string>("1M");
-  cmd->add_option("kind", *kind, "cornell, nave or object")->required()->check(CLI::IsMember({"cornell", "nave", "object"}));
+  cmd->add_option("kind", *kind, "cornell, nave, object or hdr-room")
+      ->required()
+      ->check(CLI::IsMember({"cornell", "nave", "object", "hdr-room"}));
   cmd->add_option("-o,--output", *dir, "Folder to write (created)")->required();
   cmd->add_option("-n,--points", *points, "Points in the scan (e.g. 200k, 2M)")->capture_default_str();
   cmd->add_option("--seed", opt->seed, "Seed of the synthetic scan")->capture_default_str();
@@ -32,6 +39,17 @@ void addMakeScene(CLI::App& app, int& exitCode) {
   cmd->add_flag("-q,--quiet", opt->quiet, "No progress output");
   cmd->callback([=, &exitCode]() {
     opt->points = parseCount(*points, "--points");
+    if (*kind == "hdr-room") {
+      gi::hdr::ProtocolOptions po;
+      po.points = opt->points;
+      po.seed = opt->seed;
+      po.overwrite = opt->overwrite;
+      po.quiet = opt->quiet;
+      const fs::path file = gi::hdr::makeHdrProtocol(*dir, po);
+      std::printf("make-scene: wrote %s (scan.octree with its 'truth' layer, photo.exr)\n", file.c_str());
+      exitCode = 0;
+      return;
+    }
     fs::path file = makeTestScene(*parseTestSceneKind(*kind), *dir, *opt);
     std::printf("make-scene: wrote %s\n", file.c_str());
     exitCode = 0;

@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
       "  nestlight make-scene cornell -o room           a GI test scene (scan, meshes, scene.json)\n"
       "  nestlight render room/scene.json               path-traced reference of a scene, linear EXR\n"
       "  nestlight compare render.exr reference.exr     error metrics against a reference image\n"
-      "  nestlight bench gi room/scene.json             speed against error of the GI methods\n",
+      "  nestlight bench gi room/scene.json             speed against error of the GI methods\n"
+      "  nestlight expand-hdr scan.octree --photo p.exr HDR colour layer from one HDR photograph\n",
       "nestlight"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "nestlight 0.1.0");
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addMakeScene(app, code);
   nestlight::cli::addSurfels(app, code);
   nestlight::cli::addCompare(app, code);
+  nestlight::cli::addExpandHdr(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

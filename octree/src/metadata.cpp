@@ -84,6 +84,21 @@ json Metadata::toJson() const {
         {"root_chunk_checksum", rootChunkChecksum}}},
   };
   if (normalsEstimated) j["normal_estimation"] = normalEstimation;
+  if (!layers.empty()) {
+    json jl = json::array();
+    for (const auto& l : layers)
+      jl.push_back({{"name", l.name},
+                    {"kind", l.kind},
+                    {"encoding", l.encoding},
+                    {"file", l.file},
+                    {"bytes", l.bytes},
+                    {"index", {{"offset", l.indexOffset}, {"bytes", l.indexBytes}, {"checksum", l.indexChecksum}}},
+                    {"nodes", l.nodes},
+                    {"points", l.points},
+                    {"scale", l.scale},
+                    {"build", l.build}});
+    j["layers"] = jl;
+  }
   return j;
 }
 
@@ -164,10 +179,37 @@ Metadata Metadata::fromJson(const json& j, const std::string& file) {
   m.hierarchyBytes = h.at("bytes").count();
   m.rootChunkSize = h.at("root_chunk_size").count();
   m.rootChunkChecksum = h.at("root_chunk_checksum").count();
-  for (const JsonField& name : {pl.at("file"), h.at("file")}) {
+  auto plainName = [](const JsonField& name) {
     const std::string n = name.string();
-    if (n.find('/') != std::string::npos || n.find("..") != std::string::npos)
+    if (n.empty() || n.find('/') != std::string::npos || n.find("..") != std::string::npos)
       name.fail("must be a plain file name inside the octree folder");
+    return n;
+  };
+  plainName(pl.at("file"));
+  plainName(h.at("file"));
+  if (f.has("layers")) {
+    const JsonField ls = f.at("layers");
+    for (size_t i = 0, n = ls.arraySize(); i < n; ++i) {
+      const JsonField l = ls.at(i);
+      LayerRecord r;
+      r.name = l.at("name").string();
+      if (m.layer(r.name)) l.at("name").fail("repeats layer '" + r.name + "'");
+      r.kind = l.at("kind").choice({"colour"});
+      r.encoding = l.at("encoding").choice({"half_rgb_zstd"});
+      r.file = plainName(l.at("file"));
+      r.bytes = l.at("bytes").count();
+      const JsonField idx = l.at("index");
+      r.indexOffset = idx.at("offset").count();
+      r.indexBytes = idx.at("bytes").count();
+      r.indexChecksum = idx.at("checksum").count();
+      if (r.indexOffset + r.indexBytes > r.bytes || r.indexOffset + r.indexBytes < r.indexOffset)
+        idx.fail("lies beyond the layer file's " + std::to_string(r.bytes) + " bytes");
+      r.nodes = l.at("nodes").count();
+      r.points = l.at("points").count();
+      r.scale = l.at("scale").number(1e-30, 1e30);
+      if (l.has("build")) r.build = l.value()["build"];
+      m.layers.push_back(std::move(r));
+    }
   }
   return m;
 }

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "nestlight/octree/attribute.h"
@@ -54,6 +55,21 @@ struct SourceRecord {
   nlohmann::json details;
 };
 
+// A per-point attribute layer stored beside the payloads, never inside them (DESIGN.md: HDR
+// colour never overwrites the scan's LDR colour). `file` holds one checksummed payload per node
+// and, at `indexOffset`, the index of those payloads (colour_layer.h; docs/FORMAT.md).
+struct LayerRecord {
+  std::string name;       // "hdr"
+  std::string kind;       // "colour": linear RGB
+  std::string encoding;   // "half_rgb_zstd": 3 half floats per point, zstd per node
+  std::string file;
+  uint64_t bytes = 0;     // the file's size
+  uint64_t indexOffset = 0, indexBytes = 0, indexChecksum = 0;
+  uint64_t nodes = 0, points = 0;
+  double scale = 1;       // linear value = stored half * scale (keeps values beyond 65504)
+  nlohmann::json build;   // how it was made: parameters, statistics, timings
+};
+
 struct Metadata {
   int version = kFormatVersion;
   std::string generator;
@@ -81,6 +97,15 @@ struct Metadata {
   uint64_t hierarchyBytes = 0;
   uint64_t rootChunkSize = 0;
   uint64_t rootChunkChecksum = 0;
+
+  std::vector<LayerRecord> layers;
+
+  // The layer named `name`, or nullptr.
+  const LayerRecord* layer(std::string_view name) const {
+    for (const auto& l : layers)
+      if (l.name == name) return &l;
+    return nullptr;
+  }
 
   double cubeWorldSize() const { return cubeSize * scale; }
   // The nominal sample spacing of a level: the root's `spacing` halved per level.

@@ -1,0 +1,124 @@
+// `nestlight expand-hdr`: HDR expansion of a scan's colour from one HDR photograph.
+#include <cstdio>
+#include <mutex>
+
+#include "cli.h"
+#include "nestlight/gi/hdr/expand.h"
+#include "nestlight/gi/hdr/protocol.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::cli {
+
+namespace fs = std::filesystem;
+
+void addExpandHdr(CLI::App& app, int& exitCode) {
+  auto* cmd = app.add_subcommand(
+      "expand-hdr",
+      "Expand a scan's clipped LDR colour to HDR from one HDR photograph of part of the scene\n"
+      "(Sabbadin et al. 2019): renders the scan from views that see its over-exposed points, "
+      "finds\n"
+      "the photograph's exposure, matches each rendering to the photograph with generalised\n"
+      "PatchMatch (rotation and scale), back-projects the photograph's HDR values onto the points\n"
+      "whose LDR luminance exceeds 0.9, and in-fills the rest in the gradient domain. The result "
+      "is\n"
+      "the octree's 'hdr' colour layer, written atomically beside the scan's colour (which is "
+      "never\n"
+      "changed); `verify` checks it, `info` shows it, `render --colour hdr` and scene files use "
+      "it.\n"
+      "The photograph needs no registration. Memory is bounded whatever the scan's size.\n"
+      "Example: nestlight expand-hdr scan.octree --photo window.exr --auto-views 2");
+  auto dir = std::make_shared<std::string>();
+  auto photo = std::make_shared<std::string>();
+  auto viewsFile = std::make_shared<std::string>();
+  auto mode = std::make_shared<std::string>("rgb");
+  auto debug = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  auto quiet = std::make_shared<bool>(false);
+  auto o = std::make_shared<gi::hdr::ExpandOptions>();
+  cmd->add_option("octree", *dir, "Octree folder (its points need rgb colour)")->required();
+  cmd->add_option("--photo", *photo, "HDR photograph of part of the scene, linear (.exr or .hdr)")
+      ->required();
+  auto* views =
+      cmd->add_option("--views", *viewsFile,
+                      "Views to render the scan from (cams.json: docs/HDR.md); default: automatic");
+  cmd->add_option("--auto-views", o->autoViews,
+                  "Cube maps placed automatically to see the over-exposed points (when no --views)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64))
+      ->excludes(views);
+  cmd->add_option("--face-size", o->faceSize, "Face size of automatic cube maps (pixels)")
+      ->capture_default_str()
+      ->check(CLI::Range(32, 4096));
+  cmd->add_option(
+         "--mode", *mode,
+         "rgb: the photograph's colour (PMATCHRGB); luminance: its luminance only, the scan's "
+         "chromaticity kept (PMATCHLUM)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"rgb", "luminance"}));
+  cmd->add_option("--threshold", o->overexposed,
+                  "t_l: LDR luminance (linear) above which a point is expanded")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--max-ssd", o->maxSsd,
+                  "t_h: matches whose 7x7 patch SSD exceeds this are rejected")
+      ->capture_default_str();
+  cmd->add_option("--neighbours", o->neighbours, "k of the in-fill's nearest-neighbour graph")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 64));
+  cmd->add_option("--chunk-points", o->chunkPoints, "Points per in-fill chunk (bounds memory)")
+      ->capture_default_str();
+  cmd->add_option("--scratch", o->scratchDir,
+                  "Folder of the scratch file (16 bytes a point; default: the octree's)");
+  cmd->add_option("--debug", *debug, "Write the renderings, expanded renderings and views here");
+  cmd->add_flag("--json", *json, "Print the report as JSON");
+  cmd->add_flag("-q,--quiet", *quiet, "No progress output");
+  cmd->callback([=, &exitCode]() {
+    if (!viewsFile->empty()) o->views = gi::hdr::readViews(*viewsFile);
+    o->mode = *mode == "rgb" ? gi::hdr::ExpansionMode::Rgb : gi::hdr::ExpansionMode::Luminance;
+    o->debugDir = *debug;
+    o->commandLine = {
+        {"photo", *photo}, {"mode", *mode}, {"views", viewsFile->empty() ? "auto" : *viewsFile}};
+    auto mutex = std::make_shared<std::mutex>();
+    auto last = std::make_shared<std::pair<std::string, int>>("", -1);
+    if (!*quiet)
+      o->progress = [mutex, last](const std::string& stage, double f) {
+        std::lock_guard<std::mutex> lock(*mutex);
+        const int pct = int(f * 100);
+        if (stage == last->first && pct / 10 == last->second / 10 && pct < 100) return;
+        *last = {stage, pct};
+        std::fprintf(stderr, "expand-hdr: %-16s %3d%%\n", stage.c_str(), pct);
+      };
+    const gi::HdrImage image = gi::readHdrImage(*photo);
+    const gi::hdr::ExpandReport r = gi::hdr::expandHdr(*dir, image, *o);
+    if (*json) {
+      std::printf("%s\n", r.toJson().dump(2).c_str());
+    } else {
+      std::printf("expand-hdr: %s, mode %s\n", dir->c_str(), *mode == "rgb" ? "rgb" : "luminance");
+      std::printf("  exposure      2^%.3f (Wasserstein distance %.4f)\n", r.log2Exposure,
+                  r.exposureDistance);
+      std::printf("  views         %zu (%llu of %llu covered pixels matched under t_h)\n",
+                  r.views.size(), (unsigned long long)r.matchedPixels,
+                  (unsigned long long)r.coveredPixels);
+      std::printf(
+          "  points        %llu, over-exposed %llu: expanded %llu, unseen %llu, matches rejected "
+          "%llu\n",
+          (unsigned long long)r.points, (unsigned long long)r.overexposed,
+          (unsigned long long)r.projected, (unsigned long long)r.unseen,
+          (unsigned long long)r.rejectedMatches);
+      std::printf(
+          "  in-fill       %llu points in %llu chunk(s) (largest %llu points), %llu island(s) of "
+          "%llu points "
+          "kept LDR\n",
+          (unsigned long long)r.infilled, (unsigned long long)r.chunks,
+          (unsigned long long)r.chunkMaxPoints, (unsigned long long)r.islands,
+          (unsigned long long)r.islandPoints);
+      std::printf("  largest value %.4g (1 = the scan's clipping)\n", r.maxValue);
+      std::printf("  seconds      ");
+      for (auto& [k, v] : r.seconds.items()) std::printf(" %s %.2f", k.c_str(), v.get<double>());
+      std::printf("\n  peak memory   %s\n", humanBytes(double(r.peakRssBytes)).c_str());
+    }
+    exitCode = 0;
+  });
+}
+
+}  // namespace nestlight::cli
