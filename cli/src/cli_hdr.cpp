@@ -67,6 +67,8 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       ->check(CLI::Range(2, 64));
   cmd->add_option("--chunk-points", o->chunkPoints, "Points per in-fill chunk (bounds memory)")
       ->capture_default_str();
+  cmd->add_option("--layer", o->layerName, "Name of the colour layer to write")
+      ->capture_default_str();
   cmd->add_option("--scratch", o->scratchDir,
                   "Folder of the scratch file (16 bytes a point; default: the octree's)");
   cmd->add_option("--debug", *debug, "Write the renderings, expanded renderings and views here");

@@ -44,6 +44,8 @@ int main(int argc, char** argv) {
   nestlight::cli::addSurfels(app, code);
   nestlight::cli::addCompare(app, code);
   nestlight::cli::addExpandHdr(app, code);
+  nestlight::cli::addColourMatch(app, code);
+  nestlight::cli::addBenchHdr(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

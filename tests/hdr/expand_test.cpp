@@ -16,6 +16,7 @@
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/synthetic.h"
 #include "nestlight/converters/verify.h"
+#include "nestlight/gi/hdr/colour_compensation.h"
 #include "nestlight/gi/hdr/protocol.h"
 #include "nestlight/gi/hdr/renderings.h"
 #include "nestlight/octree/colour_layer.h"
@@ -123,6 +124,28 @@ TEST(Protocol, TheScanIsClippedAndTheTruthKeepsItsRange) {
   float maxY = 0;
   for (size_t i = 0; i < photo.pixels(); ++i) maxY = std::max(maxY, photo.rgb[3 * i]);
   EXPECT_GT(maxY, 500.0f);  // the lamp is in the photograph, far beyond the clipping
+}
+
+TEST(Protocol, ColourCompensationFindsTheScansExposureFromThePhotograph) {
+  // The photograph records the true radiance; the scan recorded it times 0.5 (then clipped):
+  // between the two, the colour map is 0.5 I on every pixel the scan did not clip.
+  const fs::path dir = protocolDir();
+  const HdrImage photo = readHdrImage((dir / "photo.exr").string());
+  OctreeReader reader(dir / "scan.octree");
+  ScanAccess scan(reader);
+  const auto rendering =
+      renderViews(scan, {protocolPhotoView(photo.width, photo.height)}, Payload::Display8);
+  ColourCompensationOptions o;
+  o.inputsLinear = true;
+  const ColourCompensation c = estimateColourCompensation(
+      photo, linearFromDisplay(rendering[0].image(), 2.2), rendering[0].coverage(), o);
+  ASSERT_TRUE(c.usable);
+  EXPECT_FALSE(c.approximated);
+  // The rendering's 8-bit display values quantise each pair by up to 0.2% (at mid grey); over
+  // thousands of pairs the fit's error stays an order below: 2e-3 per element.
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(c.matrix(r, k), r == k ? 0.5 : 0.0, 2e-3) << r << "," << k;
 }
 
 TEST(Expand, RestoresClippedColourBetterThanLdrAndGlobalInverseToneMapping) {

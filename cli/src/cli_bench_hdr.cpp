@@ -1,0 +1,172 @@
+// `nestlight bench hdr`: HDR expansion on the ground-truth protocol (Sabbadin et al. 2019,
+// section 6.2): stage timings against point count (their Table 1) and the cloud colour's error
+// against the truth beside the baselines (their Table 2's point-cloud column), for both modes.
+// Each expansion runs as a child `nestlight expand-hdr` so that its peak memory is its own.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <thread>
+
+#include "cli.h"
+#include "nestlight/gi/hdr/expand.h"
+#include "nestlight/gi/hdr/protocol.h"
+#include "nestlight/octree/error.h"
+
+extern char** environ;
+
+namespace nestlight::cli {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+// Runs this program with `args`; returns its standard output. Throws on failure.
+std::string runSelf(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<std::string> all{"/proc/self/exe"};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const fs::path out = log;
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  pid_t pid;
+  const int rc = posix_spawn(&pid, "/proc/self/exe", &fa, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (rc != 0) throw Error("", "", "cannot start nestlight expand-hdr");
+  int status = 0;
+  waitpid(pid, &status, 0);
+  std::ifstream in(out);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw Error(out.string(), "", "nestlight expand-hdr failed (its output is in this file)");
+  return text;
+}
+
+}  // namespace
+
+void addBenchHdr(CLI::App& app, int& exitCode) {
+  CLI::App* bench = app.get_subcommand("bench");
+  auto* cmd = bench->add_subcommand(
+      "hdr",
+      "HDR expansion on the ground-truth protocol (make-scene hdr-room): stage timings and peak\n"
+      "memory against point count, and the cloud colour's error against the truth for the LUM and\n"
+      "RGB modes beside the LDR colour and a global inverse tone mapping (LANDIS-PC)");
+  auto sizes = std::make_shared<std::string>("300k,1M");
+  auto work = std::make_shared<std::string>("bench-data");
+  auto out = std::make_shared<std::string>("bench-hdr.json");
+  auto runs = std::make_shared<int>(3);
+  auto autoViews = std::make_shared<int>(2);
+  auto faceSize = std::make_shared<int>(384);
+  auto modes = std::make_shared<std::string>("rgb,luminance");
+  cmd->add_option("--points", *sizes, "Scan sizes, comma-separated (e.g. 300k,1M,10M,100M)")
+      ->capture_default_str();
+  cmd->add_option("--runs", *runs, "Expansions per size and mode (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 50));
+  cmd->add_option("--auto-views", *autoViews, "Cube maps per expansion")->capture_default_str();
+  cmd->add_option("--face-size", *faceSize, "Cube-map face size")->capture_default_str();
+  cmd->add_option("--modes", *modes, "rgb, luminance or both")->capture_default_str();
+  cmd->add_option("--dir", *work, "Folder for the protocol scenes (reused when present)")
+      ->capture_default_str();
+  cmd->add_option("--json", *out, "Where to write the results")->capture_default_str();
+  cmd->callback([=, &exitCode]() {
+    json results = {{"device", cpuName()},    {"threads", std::thread::hardware_concurrency()},
+                    {"runs", *runs},          {"auto_views", *autoViews},
+                    {"face_size", *faceSize}, {"sizes", json::array()}};
+    std::vector<std::string> modeList;
+    for (const auto& m : {"rgb", "luminance"})
+      if (modes->find(m) != std::string::npos) modeList.push_back(m);
+    std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8s %9s\n", "points", "method",
+                "render", "match", "project", "infill", "layer", "total", "s/Mpts", "peak",
+                "RMSclip", "stopsclip");
+    std::vector<uint64_t> counts;
+    {
+      std::string s = *sizes;
+      size_t at = 0;
+      while (at <= s.size()) {
+        const size_t comma = std::min(s.find(',', at), s.size());
+        counts.push_back(parseCount(s.substr(at, comma - at), "--points"));
+        at = comma + 1;
+      }
+    }
+    for (const uint64_t points : counts) {
+      const fs::path dir = fs::path(*work) / ("hdr_protocol_" + std::to_string(points));
+      if (!fs::exists(dir / "protocol.json")) {
+        gi::hdr::ProtocolOptions po;
+        po.points = points;
+        po.overwrite = true;
+        po.quiet = true;
+        std::printf("making the protocol scene of %s points in %s\n",
+                    humanCount(double(points)).c_str(), dir.c_str());
+        gi::hdr::makeHdrProtocol(dir, po);
+      }
+      const fs::path octree = dir / "scan.octree";
+      json size = {{"points", points}, {"methods", json::object()}};
+      const gi::HdrImage photo = gi::readHdrImage((dir / "photo.exr").string());
+      double photoMax = 0;
+      for (size_t i = 0; i < photo.pixels(); ++i)
+        photoMax =
+            std::max(photoMax, double(0.2126f * photo.rgb[3 * i] + 0.7152f * photo.rgb[3 * i + 1] +
+                                      0.0722f * photo.rgb[3 * i + 2]));
+      double log2Exposure = 0;
+      for (const auto& mode : modeList) {
+        const std::string layer = mode == "rgb" ? "pmatch_rgb" : "pmatch_lum";
+        std::map<std::string, std::vector<double>> stages;
+        double peak = 0;
+        json last;
+        for (int r = 0; r < *runs; ++r) {
+          const std::string text =
+              runSelf({"expand-hdr", octree.string(), "--photo", (dir / "photo.exr").string(),
+                       "--mode", mode, "--auto-views", std::to_string(*autoViews), "--face-size",
+                       std::to_string(*faceSize), "--layer", layer, "--json", "-q"},
+                      dir / ("expand-" + layer + ".log"));
+          last = json::parse(text);
+          for (auto& [k, v] : last["seconds"].items()) stages[k].push_back(v.get<double>());
+          peak = std::max(peak, last["peak_rss_bytes"].get<double>());
+        }
+        log2Exposure = last["log2_exposure"].get<double>();
+        const gi::hdr::LayerError err = gi::hdr::compareWithTruth(octree, layer);
+        json m = {{"seconds_median", json::object()},
+                  {"peak_rss_bytes", peak},
+                  {"error", err.toJson()},
+                  {"report", last}};
+        for (auto& [k, v] : stages) m["seconds_median"][k] = median(v);
+        const double total = m["seconds_median"].value("total", 0.0);
+        std::printf(
+            "%-8s %-10s %8.2f %8.2f %8.2f %8.2f %8.2f %8.2f  %9.2f %9s %8.3f %9.3f\n",
+            humanCount(double(points)).c_str(),
+            ("PMATCH" + std::string(mode == "rgb" ? "RGB" : "LUM")).c_str(),
+            m["seconds_median"].value("render", 0.0), m["seconds_median"].value("patchmatch", 0.0),
+            m["seconds_median"].value("back_projection", 0.0),
+            m["seconds_median"].value("infill", 0.0), m["seconds_median"].value("write_layer", 0.0),
+            total, total / (double(points) / 1e6), humanBytes(peak).c_str(), err.rmsClipped,
+            err.stopsClipped);
+        size["methods"][mode == "rgb" ? "PMATCHRGB" : "PMATCHLUM"] = m;
+      }
+      for (const std::string base : {"ldr", "landis"}) {
+        const gi::hdr::LayerError err =
+            gi::hdr::compareWithTruth(octree, base, 0.9, std::exp2(log2Exposure) * photoMax);
+        std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8.3f %9.3f\n",
+                    humanCount(double(points)).c_str(), base == "ldr" ? "LDR" : "LANDIS-PC", "", "",
+                    "", "", "", "", "", "", err.rmsClipped, err.stopsClipped);
+        size["methods"][base == "ldr" ? "LDR" : "LANDISPC"] = {{"error", err.toJson()}};
+      }
+      results["sizes"].push_back(size);
+      std::fflush(stdout);
+    }
+    std::ofstream(*out) << results.dump(2) << "\n";
+    std::printf("results written to %s\n", out->c_str());
+    exitCode = 0;
+  });
+}
+
+}  // namespace nestlight::cli
