@@ -16,7 +16,10 @@
 #include "cli.h"
 #include "nestlight/gi/hdr/expand.h"
 #include "nestlight/gi/hdr/protocol.h"
+#include "nestlight/gi/hdr/renderings.h"
+#include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
 
 extern char** environ;
 
@@ -51,6 +54,43 @@ std::string runSelf(const std::vector<std::string>& args, const fs::path& log) {
   return text;
 }
 
+// A scan's own colour, linear, with its highlights pushed beyond 1: what an HDR photograph of a
+// scene whose scanner clipped would record. Luminance above 0.5 is raised smoothly, up to 16
+// times at 1.
+glm::vec3 pushedHighlights(const glm::vec3& ldr) {
+  const float y = 0.2126f * ldr.r + 0.7152f * ldr.g + 0.0722f * ldr.b;
+  const float t = std::clamp((y - 0.5f) / 0.5f, 0.0f, 1.0f);
+  return ldr * (1.0f + 15.0f * t * t * (3.0f - 2.0f * t));
+}
+
+// Renders `layer` ("ldr": the scan's colour) from `view` and writes it tone-mapped at two
+// exposures (1 and 1/8, so that values beyond 1 show their shape).
+void writeBeforeAfter(const fs::path& octree, const gi::hdr::View& view, const std::string& layer,
+                      const fs::path& stem) {
+  OctreeReader reader(octree);
+  gi::hdr::ScanAccess scan(reader);
+  std::unique_ptr<ColourLayerReader> colours;
+  if (layer != "ldr")
+    colours = std::make_unique<ColourLayerReader>(octree, reader.metadata(), layer);
+  gi::hdr::SplatOptions so;
+  so.colour = [&](const gi::hdr::ScanNode& n, std::vector<uint32_t>& out) {
+    out.resize(n.world.size());
+    std::vector<float> rgb;
+    if (colours) rgb = colours->readNode(n.key, uint32_t(n.world.size()));
+    for (size_t i = 0; i < out.size(); ++i)
+      out[i] = gi::hdr::packRgb9e5(colours ? glm::vec3(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2])
+                                           : n.ldr[i]);
+  };
+  const gi::HdrImage img =
+      gi::hdr::renderViews(scan, {view}, gi::hdr::Payload::Rgb9e5, so)[0].image();
+  gi::writeExr(stem.string() + ".exr", img);
+  for (const float e : {1.0f, 0.125f}) {
+    gi::HdrImage d = img;
+    for (float& v : d.rgb) v = gi::hdr::displayFromLinear(std::min(1.0f, v * e));
+    gi::writePng(stem.string() + (e == 1.0f ? "-e1.png" : "-e1_8.png"), d);
+  }
+}
+
 }  // namespace
 
 void addBenchHdr(CLI::App& app, int& exitCode) {
@@ -62,6 +102,7 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
       "RGB modes beside the LDR colour and a global inverse tone mapping (LANDIS-PC)");
   auto sizes = std::make_shared<std::string>("300k,1M");
   auto work = std::make_shared<std::string>("bench-data");
+  auto work_ = work;
   auto out = std::make_shared<std::string>("bench-hdr.json");
   auto runs = std::make_shared<int>(3);
   auto autoViews = std::make_shared<int>(2);
@@ -78,7 +119,70 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
   cmd->add_option("--dir", *work, "Folder for the protocol scenes (reused when present)")
       ->capture_default_str();
   cmd->add_option("--json", *out, "Where to write the results")->capture_default_str();
+  auto scanDemo = std::make_shared<std::string>();
+  auto threshold = std::make_shared<double>(0.9);
+  cmd->add_option(
+      "--scan", *scanDemo,
+      "Instead of the protocol: expand a copy of this scan with an HDR photograph rendered from\n"
+      "its own colour with the highlights pushed beyond 1 (up to 16x), and write images before "
+      "and\n"
+      "after into --dir");
+  cmd->add_option("--threshold", *threshold, "t_l for --scan")->capture_default_str();
   cmd->callback([=, &exitCode]() {
+    if (!scanDemo->empty()) {
+      const fs::path work = *work_;
+      fs::create_directories(work);
+      const fs::path copy = work / "scan.octree";
+      fs::remove_all(copy);
+      fs::copy(*scanDemo, copy, fs::copy_options::recursive);
+      OctreeReader reader(copy);
+      const Box3d& b = reader.metadata().bounds;
+      const glm::dvec3 lo{b.min.x, b.min.y, b.min.z}, hi{b.max.x, b.max.y, b.max.z};
+      const glm::dvec3 centre = (lo + hi) * 0.5;
+      const double diagonal = glm::length(hi - lo);
+      // The photograph from one side, the images from another 60 degrees round.
+      const gi::hdr::View photoView = gi::hdr::lookAt(centre + diagonal * glm::dvec3(1.0, 0.6, 0.5),
+                                                      centre, {0, 0, 1}, 40.0, 640, 480);
+      const gi::hdr::View imageView = gi::hdr::lookAt(
+          centre + diagonal * glm::dvec3(-0.3, 1.1, 0.5), centre, {0, 0, 1}, 40.0, 640, 480);
+      {
+        gi::hdr::ScanAccess scan(reader);
+        gi::hdr::SplatOptions so;
+        so.colour = [](const gi::hdr::ScanNode& n, std::vector<uint32_t>& out) {
+          out.resize(n.world.size());
+          for (size_t i = 0; i < out.size(); ++i)
+            out[i] = gi::hdr::packRgb9e5(pushedHighlights(n.ldr[i]));
+        };
+        gi::writeExr(
+            (work / "photo.exr").string(),
+            gi::hdr::renderViews(scan, {photoView}, gi::hdr::Payload::Rgb9e5, so)[0].image());
+      }
+      const std::string text = runSelf(
+          {"expand-hdr", copy.string(), "--photo", (work / "photo.exr").string(), "--auto-views",
+           std::to_string(*autoViews), "--face-size", std::to_string(*faceSize), "--threshold",
+           std::to_string(*threshold), "--json", "-q"},
+          work / "expand.log");
+      const json report = json::parse(text);
+      writeBeforeAfter(copy, imageView, "ldr", work / "before");
+      writeBeforeAfter(copy, imageView, "hdr", work / "after");
+      std::printf(
+          "%s: %llu points, %llu over-exposed (LDR luminance > %g): %llu expanded, %llu in-filled; "
+          "exposure "
+          "2^%.3f; largest value %.3g; %.2f s, peak %s\n",
+          scanDemo->c_str(), (unsigned long long)report["points"].get<uint64_t>(),
+          (unsigned long long)report["overexposed_points"].get<uint64_t>(), *threshold,
+          (unsigned long long)report["expanded_points"].get<uint64_t>(),
+          (unsigned long long)report["infilled_points"].get<uint64_t>(),
+          report["log2_exposure"].get<double>(), report["max_value"].get<double>(),
+          report["seconds"]["total"].get<double>(),
+          humanBytes(report["peak_rss_bytes"].get<double>()).c_str());
+      std::printf(
+          "images: %s/before-e1.png, before-e1_8.png, after-e1.png, after-e1_8.png (and .exr)\n",
+          work_->c_str());
+      std::ofstream(*out) << report.dump(2) << "\n";
+      exitCode = 0;
+      return;
+    }
     json results = {{"device", cpuName()},    {"threads", std::thread::hardware_concurrency()},
                     {"runs", *runs},          {"auto_views", *autoViews},
                     {"face_size", *faceSize}, {"sizes", json::array()}};

@@ -310,9 +310,15 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
 
   // The exposure of the photograph that looks most like the scan (eq. 1, 2).
   t = Clock::now();
-  std::vector<float> photoY(photo.pixels());
+  // Pixels of exactly zero carry no measurement (a rendered photograph's background, a masked
+  // area): counted, they would pull the histogram, and so the exposure, towards black.
+  std::vector<float> photoY;
+  photoY.reserve(photo.pixels());
   for (size_t i = 0; i < photo.pixels(); ++i)
-    photoY[i] = luminance(Rgb(photo.rgb[3 * i], photo.rgb[3 * i + 1], photo.rgb[3 * i + 2]));
+    if (const float y =
+            luminance(Rgb(photo.rgb[3 * i], photo.rgb[3 * i + 1], photo.rgb[3 * i + 2]));
+        y != 0.0f)
+      photoY.push_back(y);
   const ExposureSearch ex = findBestExposure(photoY, scanHistogram);
   if (!ex.usable)
     throw Error(
