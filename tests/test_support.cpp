@@ -1,6 +1,8 @@
 #include "test_support.h"
 
 #include "nestlight/converters/builder.h"
+#include "nestlight/octree/colour_layer.h"
+#include "nestlight/octree/octree_reader.h"
 
 #include <unistd.h>
 
@@ -83,6 +85,21 @@ void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::
   std::vector<std::unique_ptr<PointReader>> src;
   src.push_back(openReader(input.string()));
   buildOctree(std::move(src), b);
+}
+
+void writeColourLayer(const std::filesystem::path& dir, const std::string& name,
+                      const std::function<std::array<float, 3>(const NodeKey&, size_t)>& colour, double scale) {
+  OctreeReader r(dir);
+  ColourLayerWriter w(dir, name, scale);
+  for (const auto& [key, e] : r.allNodes()) {
+    std::vector<float> rgb(size_t(e.numPoints) * 3);
+    for (size_t i = 0; i < e.numPoints; ++i) {
+      const auto c = colour(key, i);
+      rgb[3 * i] = c[0], rgb[3 * i + 1] = c[1], rgb[3 * i + 2] = c[2];
+    }
+    w.writeNode(key, rgb.data(), e.numPoints);
+  }
+  w.finish({{"test", true}});
 }
 
 }  // namespace nestlight::test

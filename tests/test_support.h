@@ -5,13 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <array>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/node_key.h"
 
 namespace nestlight::test {
 
@@ -41,6 +44,11 @@ std::string readFile(const std::string& path);
 // for streaming tests.
 void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output,
                      uint32_t maxNodePoints = 0);
+
+// Writes colour layer `name` into the octree at `dir`: `colour(key, i)` for point i of each node
+// (linear RGB), stored divided by `scale` (nestlight/octree/colour_layer.h).
+void writeColourLayer(const std::filesystem::path& dir, const std::string& name,
+                      const std::function<std::array<float, 3>(const NodeKey&, size_t)>& colour, double scale = 1.0);
 
 // Every point a reader gave, its batches concatenated.
 struct Points {

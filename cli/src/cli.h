@@ -18,6 +18,7 @@ namespace nestlight::cli {
 struct RenderOptionText {
   std::string camera, view = "35,30", rasteriser = "points", splatting = "hqs", colour;
   std::string pointBudget = "5M", gpuBudget = "512M", uploadBudget = "32M";
+  CLI::Option* edl = nullptr;  // --colour hdr turns eye-dome lighting off unless --edl is given
 };
 void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<RenderOptionText> text);
 void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text);

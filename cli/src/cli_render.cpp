@@ -56,14 +56,22 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<Ren
                   "surface blend, weighted; smooth colour and depth, about twice the cost) or basic (the "
                   "nearest splat wins each pixel)")
       ->capture_default_str();
-  cmd->add_option("--colour", text->colour, "rgb, intensity, classification, elevation or normal (default: rgb "
-                                            "when the scan has colour, else elevation)");
+  cmd->add_option("--colour", text->colour,
+                  "rgb, intensity, classification, elevation, normal or hdr (default: rgb when the scan has "
+                  "colour, else elevation). hdr: the scan's HDR colour layer (nestlight expand-hdr), drawn "
+                  "in linear colour: EXR files hold it whole, PNG files show it through --exposure; eye-dome "
+                  "lighting is off unless --edl is given");
+  cmd->add_option("--layer", job.colourLayer, "The colour layer --colour hdr draws")->capture_default_str();
+  cmd->add_option("--exposure", job.settings.exposureStops,
+                  "Exposure in stops: colour times 2^stops (HDR highlights lie above 1)")
+      ->capture_default_str();
   cmd->add_option("--point-size", job.settings.sizeScale,
                   "Splat diameter in point spacings: the measured spacing of the finest drawn node at each "
                   "point (points rasteriser)")
       ->capture_default_str();
   cmd->add_option("--fixed-point-size", job.settings.fixedPointSize, "Every splat this many pixels (0: by spacing)");
-  cmd->add_option("--edl", job.settings.edlStrength, "Eye-dome lighting strength (0: off)")->capture_default_str();
+  text->edl =
+      cmd->add_option("--edl", job.settings.edlStrength, "Eye-dome lighting strength (0: off)")->capture_default_str();
   cmd->add_option("--point-budget", text->pointBudget, "Points in the cut")->capture_default_str();
   cmd->add_option("--gpu-budget", text->gpuBudget, "GPU memory for resident nodes")->capture_default_str();
   cmd->add_option("--upload-budget", text->uploadBudget, "Bytes uploaded per frame")->capture_default_str();
@@ -88,6 +96,7 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   job.settings.rasteriser = viewer::parseRasteriser(text.rasteriser);
   job.settings.splatting = viewer::parseSplatting(text.splatting);
   if (!text.colour.empty()) job.colour = frame::parseColourMode(text.colour);
+  if (job.colour == frame::ColourMode::Hdr && text.edl && text.edl->count() == 0) job.settings.edlStrength = 0;
   job.budgets.points = parseCount(text.pointBudget, "--point-budget");
   job.budgets.gpuBytes = parseBytes(text.gpuBudget);
   job.budgets.uploadBytesPerFrame = parseBytes(text.uploadBudget);

@@ -72,6 +72,7 @@ void addView(CLI::App& app, int& exitCode) {
     opt->settings = job->settings;
     opt->budgets = job->budgets;
     opt->colour = job->colour;
+    opt->colourLayer = job->colourLayer;
     if (std::filesystem::path(*input).extension() == ".json")
       applyScene(*input, *opt, [cmd](const char* name) { return cmd->count(name) > 0; });
     opt->startWithPoints = *show == "points";

@@ -17,4 +17,8 @@ vec3 pointCamRel(uint i) { return uNodeOffset + pointLocal(i); }
 uint pointColour(uint i) { return node.words[NL_POINT_WORDS * i + 3u]; }
 uint pointNormalWord(uint i) { return node.words[NL_POINT_WORDS * i + 4u]; }
 
+#include "colour_word.glsl"
+// Linear colour: the recorded colour decoded, or the store's colour layer.
+vec3 pointLinearColour(uint i) { return colourWordLinear(pointColour(i)); }
+
 #include "octahedral.glsl"

@@ -11,6 +11,8 @@ uniform float uFar;
 uniform float uStrength;     // 0 disables
 uniform float uRadius;       // pixels
 uniform vec3 uBackground;   // display-referred
+uniform bool uLinearOutput;  // write linear colour (HDR files), else the sRGB display value
+uniform float uExposure;     // linear factor, 2^stops
 uniform vec2 uViewport;      // the tile's pixels, at the targets' lower left (targets may be larger)
 
 out vec4 outColour;
@@ -42,11 +44,13 @@ void main() {
   if (!isScan) {
     // Background next to the scan: a dark outline around silhouettes (as Potree does).
     float outline = uStrength > 0.0 && neighbours > 0 ? 1.0 - exp(-float(neighbours) * uStrength) : 0.0;
-    outColour = vec4(uBackground * (1.0 - outline), 1.0);
+    vec3 bg = uLinearOutput ? srgbDecode(uBackground) : uBackground;
+    outColour = vec4(bg * (1.0 - outline), 1.0);
     return;
   }
   vec3 colour = texture(uColour, here).rgb;
-  colour = srgbEncode(colour);
+  colour *= uExposure;
+  if (!uLinearOutput) colour = srgbEncode(colour);
   if (uStrength > 0.0) colour *= exp(-response / 8.0 * 300.0 * uStrength);
   outColour = vec4(colour, 1.0);
 }

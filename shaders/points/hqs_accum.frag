@@ -2,7 +2,6 @@
 // depth of the splat fragments within epsilon of the front surface (depth test against pass 1,
 // no depth writes). The weight falls from 1 at a splat's centre to nearly 0 at its rim
 // (1 - r^2, an Epanechnikov kernel), so neighbouring splats fade into each other.
-#include "../common/srgb.glsl"
 in vec4 vColour;
 in vec3 vNormal;
 flat in vec3 vViewPos;
@@ -16,6 +15,6 @@ void main() {
   if (r2 > 1.0) discard;
   // A floor keeps a lone splat's rim visible: the weight only has to order neighbours.
   float w = max(1.0 - r2, 1.0 / 64.0);
-  outColour = vec4(srgbDecode(vColour.rgb) * w, w);  // blended in linear light
+  outColour = vec4(vColour.rgb * w, w);  // blended in linear light (the vertex shader decodes)
   outNormal = vec4(vNormal * w, -vViewPos.z * w);
 }

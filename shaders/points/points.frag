@@ -1,6 +1,5 @@
-// Basic splats: the nearest splat wins each pixel. Writes the G-buffer: linear colour (the scan's
-// recorded sRGB colour decoded) and view-space normal.
-#include "../common/srgb.glsl"
+// Basic splats: the nearest splat wins each pixel. Writes the G-buffer: linear colour (decoded by
+// the vertex shader) and view-space normal.
 in vec4 vColour;
 in vec3 vNormal;
 uniform bool uRound;
@@ -13,6 +12,6 @@ void main() {
     vec2 d = gl_PointCoord * 2.0 - 1.0;
     if (dot(d, d) > 1.0) discard;
   }
-  outColour = vec4(srgbDecode(vColour.rgb), 1.0);
+  outColour = vec4(vColour.rgb, 1.0);
   outNormal = vec4(vNormal, dot(vNormal, vNormal) > 0.0 ? 1.0 : 0.0);
 }

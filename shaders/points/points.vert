@@ -25,6 +25,6 @@ void main() {
   gl_PointSize = size;
   vRadius = 0.5 * size * depth / uPixelsPerUnit;
   vViewPos = view.xyz;
-  vColour = unpackUnorm4x8(pointColour(i));
+  vColour = vec4(pointLinearColour(i), 1.0);
   vNormal = mat3(uViewFromCamRel) * decodeNormal(pointNormalWord(i));
 }

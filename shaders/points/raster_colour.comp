@@ -7,8 +7,7 @@ void main() {
   float d;
   if (!projectPoint(i, pixel, d)) return;
   if (d > uintBitsToFloat(fb.depth[pixel]) * 1.01) return;
-  vec4 c = unpackUnorm4x8(pointColour(i));
-  uvec3 c8 = uvec3(round(c.rgb * 255.0));
+  uvec3 c8 = colourWordToSum(pointColour(i));
   atomicAdd(acc.accum[4u * pixel], c8.r);
   atomicAdd(acc.accum[4u * pixel + 1u], c8.g);
   atomicAdd(acc.accum[4u * pixel + 2u], c8.b);

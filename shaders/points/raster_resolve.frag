@@ -5,7 +5,7 @@ layout(std430, binding = NL_SSBO_RASTER_ACCUM) readonly buffer Accum { uint accu
 layout(std430, binding = NL_SSBO_RASTER_NORMAL) readonly buffer Normals { uint normal[]; } nb;
 
 #include "../common/octahedral.glsl"
-#include "../common/srgb.glsl"
+#include "../common/colour_word.glsl"
 
 uniform ivec2 uViewport;
 uniform mat4 uClipFromView;
@@ -19,8 +19,8 @@ void main() {
   uint pixel = uint(p.y * uViewport.x + p.x);
   uint count = acc.accum[4u * pixel + 3u];
   if (count == 0u) discard;
-  outColour = vec4(srgbDecode(vec3(acc.accum[4u * pixel], acc.accum[4u * pixel + 1u], acc.accum[4u * pixel + 2u]) /
-                                  (255.0 * float(count))), 1.0);
+  outColour = vec4(colourSumToLinear(vec3(acc.accum[4u * pixel], acc.accum[4u * pixel + 1u], acc.accum[4u * pixel + 2u]),
+                                     float(count)), 1.0);
   vec3 n = mat3(uViewFromCamRel) * decodeNormal(nb.normal[pixel]);
   outNormal = vec4(n, dot(n, n) > 0.0 ? 1.0 : 0.0);
   float d = uintBitsToFloat(fb.depth[pixel]);

@@ -6,7 +6,7 @@ layout(std430, binding = NL_SSBO_RASTER_PACKED) readonly buffer Packed { uint64_
 layout(std430, binding = NL_SSBO_RASTER_PACKED_NORMAL) readonly buffer PackedNormals { uint64_t packed[]; } nb64;
 
 #include "../common/octahedral.glsl"
-#include "../common/srgb.glsl"
+#include "../common/colour_word.glsl"
 
 uniform ivec2 uViewport;
 uniform mat4 uClipFromView;
@@ -20,7 +20,7 @@ void main() {
   uint pixel = uint(p.y * uViewport.x + p.x);
   uint64_t v = fb64.packed[pixel];
   if (v == 0xffffffffffffffffUL) discard;
-  outColour = vec4(srgbDecode(unpackUnorm4x8(uint(v & 0xffffffffUL)).rgb), 1.0);
+  outColour = vec4(colourWordLinear(uint(v & 0xffffffffUL)), 1.0);
   // The nearest point's normal (ties at equal depth: the smaller code, a point at that depth too).
   vec3 n = mat3(uViewFromCamRel) * decodeNormal(uint(nb64.packed[pixel] & 0xffffffffUL));
   outNormal = vec4(n, dot(n, n) > 0.0 ? 1.0 : 0.0);

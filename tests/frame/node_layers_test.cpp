@@ -3,13 +3,17 @@
 // that flies over a streamed octree with small budgets.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <thread>
 
 #include "nestlight/frame/gl_node_store.h"
 #include "nestlight/gl/context.h"
+#include "nestlight/octree/rgb9e5.h"
 #include "streaming/streaming_support.h"
 #include "test_support.h"
 
@@ -90,6 +94,55 @@ TEST(NodeLayers, AtMostThreeBesideThePoints) {
   GlNodeStore store(meta, ColourMode::Elevation);
   for (int i = 0; i < NL_MAX_NODE_LAYERS - 1; ++i) store.addLayer(std::make_shared<TestLayer>());
   EXPECT_THROW(store.addLayer(std::make_shared<TestLayer>()), Error);
+}
+
+// ColourMode::Hdr: each point's colour word is its layer colour as RGB9E5, point for point in the
+// node's order. The colour changes from point to point and node to node over 1e-3 to 6e4 (beyond
+// 8 bits and half of half-float range), so a mixed-up order or a wrong scale shows. Tolerance:
+// RGB9E5 rounds each channel to half a step, the step being 2^-9 of the power of two above the
+// largest channel (so at most the largest / 512), after the layer's half floats (2^-11).
+TEST(GlNodeStoreHdr, ColourWordsAreTheLayersColourPointForPoint) {
+  test::TempDir t;
+  SyntheticSpec spec;
+  spec.points = 30'000;
+  spec.seed = 4;
+  test::buildSyntheticOctree(t.path() / "o", spec, 2000);
+  auto colourOf = [](const NodeKey& k, size_t i) {
+    const float v = float(std::pow(10.0, std::fmod(double(k.x * 5 + k.y * 3 + k.z + k.level * 7) + 0.13 * double(i % 61),
+                                                   7.7) - 3.0));
+    return std::array<float, 3>{v, 0.5f * v, 0.125f * v};
+  };
+  {
+    const auto before = availableColourModes(OctreeReader(t.path() / "o").metadata());
+    EXPECT_EQ(std::find(before.begin(), before.end(), ColourMode::Hdr), before.end());
+  }
+  test::writeColourLayer(t.path() / "o", "hdr", colourOf, 1.0);
+  OctreeReader reader(t.path() / "o");
+  const auto modes = availableColourModes(reader.metadata());
+  EXPECT_NE(std::find(modes.begin(), modes.end(), ColourMode::Hdr), modes.end());
+  EXPECT_EQ(parseColourMode("hdr"), ColourMode::Hdr);
+  auto layer = std::make_shared<const ColourLayerReader>(t.path() / "o", reader.metadata(), "hdr");
+  GlNodeStore store(reader.metadata(), ColourMode::Hdr, layer);
+  EXPECT_TRUE(store.hdrColour());
+  uint64_t checked = 0;
+  for (const auto& [key, e] : reader.allNodes()) {
+    streaming::PreparedNode out;
+    store.prepare(key, reader.readNode(key), out);
+    ASSERT_EQ(out.numPoints, e.numPoints);
+    for (size_t i = 0; i < e.numPoints; ++i) {
+      uint32_t word;
+      std::memcpy(&word, &out.bytes[i * kGpuPointBytes + 12], 4);
+      float got[3];
+      unpackRgb9e5(word, got);
+      // The layer holds half floats: 2^-11 relative, then RGB9E5's step.
+      const auto want = colourOf(key, i);
+      for (int c = 0; c < 3; ++c)
+        ASSERT_NEAR(got[c], want[c], want[0] / 512.0f + want[c] / 2048.0f) << key.name() << " point " << i;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, reader.metadata().points);
+  EXPECT_GT(checked, 20'000u);
 }
 
 }  // namespace

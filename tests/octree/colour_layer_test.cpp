@@ -48,17 +48,13 @@ std::array<float, 3> colourOf(const NodeKey& k, size_t i) {
 }
 
 void writeLayer(const fs::path& dir, const std::string& name, double scale, float offset = 0) {
-  OctreeReader r(dir);
-  ColourLayerWriter w(dir, name, scale);
-  for (const auto& [key, e] : r.allNodes()) {
-    std::vector<float> rgb(size_t(e.numPoints) * 3);
-    for (size_t i = 0; i < e.numPoints; ++i) {
-      const auto c = colourOf(key, i);
-      rgb[3 * i] = c[0] + offset, rgb[3 * i + 1] = c[1] + offset, rgb[3 * i + 2] = c[2] + offset;
-    }
-    w.writeNode(key, rgb.data(), e.numPoints);
-  }
-  w.finish({{"test", true}});
+  test::writeColourLayer(
+      dir, name,
+      [&](const NodeKey& key, size_t i) {
+        const auto c = colourOf(key, i);
+        return std::array<float, 3>{c[0] + offset, c[1] + offset, c[2] + offset};
+      },
+      scale);
 }
 
 TEST(ColourLayer, RoundTripsAtHalfPrecisionBeyondHalfRange) {

@@ -10,6 +10,7 @@
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/synthetic.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/gi/hdr_image.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/viewer/headless.h"
 #include "test_support.h"
@@ -231,6 +232,49 @@ TEST(Render, ExrOutputIsLinear) {
   // readImage converts EXR back to display values: both files hold the same picture.
   ImageDiff d = compareImages(readImage(a.output), readImage(b.output), 1.5f / 255);
   EXPECT_EQ(d.differing, 0u) << d.maxChannel;
+}
+
+// --colour hdr: the octree's HDR colour layer drawn in linear colour, so an EXR holds it whole,
+// far above 1, through both rasterisers and both splattings. The layer is one colour everywhere
+// (every way of averaging splats then gives it back): each covered pixel must hold it within
+// RGB9E5's rounding (half a step; the step is 2^-9 of the power of two above the largest
+// channel, so at most the largest / 512) plus two half-float roundings (G-buffer and output,
+// 2^-11 each). A scan without the layer is refused with the layer named.
+TEST(Render, HdrColourLayerIsWrittenLinearlyToExr) {
+  test::TempDir tmp;
+  const fs::path oct = syntheticOctree(tmp, "s.octree", 40'000, 2);
+  RenderJob j = smallJob(oct, tmp.file("h.exr"));
+  j.colour = frame::ColourMode::Hdr;
+  {
+    const Error e = test::errorOf([&] { renderHeadless(j); });
+    EXPECT_NE(std::string(e.what()).find("no colour layer 'hdr'"), std::string::npos) << e.what();
+  }
+  const std::array<float, 3> want = {300.0f, 150.0f, 37.5f};
+  test::writeColourLayer(oct, "hdr", [&](const NodeKey&, size_t) { return want; });
+  j.settings.edlStrength = 0;
+  struct Case {
+    Rasteriser r;
+    Splatting s;
+  };
+  for (Case c : {Case{Rasteriser::Points, Splatting::Basic}, Case{Rasteriser::Points, Splatting::Hqs},
+                 Case{Rasteriser::Compute, Splatting::Basic}}) {
+    j.settings.rasteriser = c.r;
+    j.settings.splatting = c.s;
+    j.settings.fixedPointSize = c.r == Rasteriser::Compute ? 1.0f : 0.0f;
+    renderHeadless(j);
+    const gi::HdrImage img = gi::readHdrImage(j.output);
+    size_t covered = 0;
+    double worst = 0;
+    for (size_t p = 0; p < img.pixels(); ++p) {
+      if (img.rgb[3 * p] < 1.0f) continue;  // the background (linear, below 0.01)
+      ++covered;
+      for (int k = 0; k < 3; ++k)
+        worst = std::max(worst, std::abs(double(img.rgb[3 * p + k]) - want[k]) / (want[0] / 512.0 + want[k] / 1024.0));
+    }
+    const std::string name = std::string(rasteriserName(c.r)) + "/" + splattingName(c.s);
+    EXPECT_GT(covered, img.pixels() / 10) << name;
+    EXPECT_LE(worst, 1.0) << name << ": worst error in units of the tolerance";
+  }
 }
 
 TEST(Render, UnknownFormatVersionFailsBeforeGl) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <unordered_map>
@@ -52,7 +53,7 @@ FrameRenderer::FrameRenderer()
   graph_.addTarget("normal", {GL_RGBA16F});     // view-space normal, a = 1 when known
   graph_.addTarget("hqs_colour", {GL_RGBA32F}); // HQS sums: rgb w, w
   graph_.addTarget("hqs_normal", {GL_RGBA32F}); // HQS sums: normal w, depth w
-  graph_.addTarget("output", {GL_RGBA16F});     // display-referred (sRGB)
+  graph_.addTarget("output", {GL_RGBA16F});     // display-referred (sRGB), or linear (linearOutput)
   graph_.addPass(
       "points", frame::Scope::Tile,
       [](frame::PassBuilder& b) {
@@ -80,6 +81,8 @@ FrameRenderer::FrameRenderer()
         glProgramUniform1f(e, edl_.uniform("uStrength"), s.edlStrength);
         glProgramUniform1f(e, edl_.uniform("uRadius"), std::min(s.edlRadius, RenderSettings::kMaxEdlRadius));
         glProgramUniform3f(e, edl_.uniform("uBackground"), s.background.x, s.background.y, s.background.z);
+        glProgramUniform1i(e, edl_.uniform("uLinearOutput"), s.linearOutput);
+        glProgramUniform1f(e, edl_.uniform("uExposure"), std::exp2(s.exposureStops));
         glProgramUniform2f(e, edl_.uniform("uViewport"), float(ctx.tile().width), float(ctx.tile().height));
         ctx.bindFramebuffer();
         glDisable(GL_DEPTH_TEST);
@@ -150,6 +153,7 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     setMat4(p, "uClipFromView", clipFromView);
     setMat4(p, "uViewFromCamRel", viewFromCamRel);
     glProgramUniform2i(p, pass.uniform("uViewport"), w, h);
+    glProgramUniform1i(p, pass.uniform("uHdrColour"), store.hdrColour());
     const GLint offLoc = pass.uniform("uNodeOffset"), nLoc = pass.uniform("uNumPoints");
     for (const auto& n : nodes) {
       if (!n.numPoints) continue;
@@ -185,6 +189,7 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
       glProgramUniform1f(p, prog.uniform("uSizeScale"), s.sizeScale);
       glProgramUniform2f(p, prog.uniform("uSizeRange"), s.minPointSize, s.maxPointSize);
       glProgramUniform1f(p, prog.uniform("uFixedSize"), s.fixedPointSize);
+      glProgramUniform1i(p, prog.uniform("uHdrColour"), store.hdrColour());
       const GLint offLoc = prog.uniform("uNodeOffset"), idxLoc = prog.uniform("uNodeIndex"),
                   sizeLoc = prog.uniform("uNodeSize"), nLoc = prog.uniform("uNumPoints");
       drawTree_.bind();
@@ -254,6 +259,7 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     dispatchNodes(*atomic64_, true);
     const GLuint r = resolve64_->id();
     resolve64_->use();
+    glProgramUniform1i(r, resolve64_->uniform("uHdrColour"), store.hdrColour());
     setMat4(r, "uClipFromView", clipFromView);
     setMat4(r, "uViewFromCamRel", viewFromCamRel);
     glProgramUniform2i(r, resolve64_->uniform("uViewport"), w, h);
@@ -275,6 +281,7 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     dispatchNodes(colourPass_, false);
     const GLuint r = resolve_.id();
     resolve_.use();
+    glProgramUniform1i(r, resolve_.uniform("uHdrColour"), store.hdrColour());
     setMat4(r, "uClipFromView", clipFromView);
     setMat4(r, "uViewFromCamRel", viewFromCamRel);
     glProgramUniform2i(r, resolve_.uniform("uViewport"), w, h);
@@ -341,6 +348,7 @@ Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const
   while (size_t(tile + 2 * margin) * (tile + 2 * margin) * 16 > gl::kMaxSsboRange) tile /= 2;
   Image img;
   img.width = width, img.height = height;
+  img.linear = s.linearOutput;
   img.rgba = graph_.execute(width, height, tile);
   if (t) t->msDraw += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return img;

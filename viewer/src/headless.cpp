@@ -34,14 +34,24 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
   const Metadata& meta = reader.metadata();
   const frame::ColourMode mode = job.colour ? *job.colour
                                      : (meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb : frame::ColourMode::Elevation);
-  const auto modes = frame::availableColourModes(meta);
+  const auto modes = frame::availableColourModes(meta, job.colourLayer);
+  if (mode == frame::ColourMode::Hdr && !meta.layer(job.colourLayer))
+    throw Error(job.octree.string(), "", "the scan has no colour layer '" + job.colourLayer +
+                                             "' (nestlight expand-hdr makes one)");
   if (std::find(modes.begin(), modes.end(), mode) == modes.end())
     throw Error(job.octree.string(), "", std::string("the scan has no attribute for colour mode '") +
                                              frame::colourModeName(mode) + "'");
+  // An HDR layer is drawn in linear colour: EXR files keep it whole, PNG files clamp it.
+  std::shared_ptr<const ColourLayerReader> layer;
+  RenderSettings settings = job.settings;
+  if (mode == frame::ColourMode::Hdr) {
+    layer = std::make_shared<const ColourLayerReader>(job.octree, meta, job.colourLayer);
+    settings.linearOutput = true;
+  }
   auto context = gl::createHeadlessContext();
   if (!job.quiet) std::printf("render: %s\n", context->description().c_str());
   {
-    frame::GlNodeStore store(meta, mode);
+    frame::GlNodeStore store(meta, mode, layer);
     FrameRenderer renderer;
     std::vector<RenderedFrame> out;
     {
@@ -84,7 +94,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
           }
         }
         DrawTimings timings;
-        Image img = renderer.render(streamer.drawList(), store, cam, job.width, job.height, job.settings, &timings);
+        Image img = renderer.render(streamer.drawList(), store, cam, job.width, job.height, settings, &timings);
         RenderedFrame rf;
         rf.file = job.path ? frameFile(job.output, f) : job.output;
         rf.stats = st;

@@ -19,7 +19,8 @@ std::string extensionOf(const std::string& path) {
 }  // namespace
 
 // The files are gi's (nestlight/gi/hdr_image.h): one EXR, PNG and sRGB implementation for the
-// whole program. This frame's pixels are display-referred, so EXR gets their linear values.
+// whole program. EXR files hold linear values, PNG files display values: whichever of the two the
+// image is not, it is converted by the sRGB curve (PNG clamps linear values above 1).
 void writeImage(const Image& img, const std::string& path) {
   const std::string ext = extensionOf(path);
   if (img.width <= 0 || img.height <= 0) throw Error(path, "", "cannot write an empty image");
@@ -28,10 +29,13 @@ void writeImage(const Image& img, const std::string& path) {
   for (size_t p = 0; p < out.pixels(); ++p)
     for (int k = 0; k < 3; ++k) {
       const float v = img.rgba[4 * p + k];
-      out.rgb[3 * p + k] = ext == ".exr" ? gi::srgbDecode(v) : v;
+      if (ext == ".exr") out.rgb[3 * p + k] = img.linear ? v : gi::srgbDecode(v);
+      else out.rgb[3 * p + k] = img.linear ? gi::srgbEncode(v) : v;
     }
   if (ext == ".png") gi::writePng(path, out);
-  else gi::writeExr(path, out, {{"nestlight:content", "point view, linear from display-referred sRGB"}});
+  else
+    gi::writeExr(path, out, {{"nestlight:content", img.linear ? "point view, linear colour (HDR colour layer)"
+                                                              : "point view, linear from display-referred sRGB"}});
 }
 
 Image readImage(const std::string& path) {

@@ -59,8 +59,14 @@ struct CameraController {
 int runViewer(const ViewerOptions& opt) {
   OctreeReader reader(opt.octree);  // a bad octree fails before a window opens
   const Metadata& meta = reader.metadata();
-  const auto modes = frame::availableColourModes(meta);
+  const auto modes = frame::availableColourModes(meta, opt.colourLayer);
   frame::ColourMode mode = opt.colour ? *opt.colour : modes.front();
+  if (std::find(modes.begin(), modes.end(), mode) == modes.end())
+    throw Error(opt.octree.string(), "", std::string("the scan has nothing to show for colour mode '") +
+                                             frame::colourModeName(mode) + "'" +
+                                             (mode == frame::ColourMode::Hdr ? " (no colour layer '" + opt.colourLayer + "')" : ""));
+  std::shared_ptr<const ColourLayerReader> hdrLayer;
+  if (meta.layer(opt.colourLayer)) hdrLayer = std::make_shared<const ColourLayerReader>(opt.octree, meta, opt.colourLayer);
   gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + opt.octree.filename().string());
   std::printf("view: %s\n", ctx.description().c_str());
 
@@ -92,7 +98,7 @@ int runViewer(const ViewerOptions& opt) {
       std::printf("view: %s through the GI frame%s\n", method->name().c_str(),
                   methodNote.empty() ? "" : (" (" + methodNote + ")").c_str());
     }
-    auto store = std::make_unique<frame::GlNodeStore>(meta, mode);
+    auto store = std::make_unique<frame::GlNodeStore>(meta, mode, hdrLayer);
     FrameRenderer renderer;
     RenderSettings settings = opt.settings;
     streaming::Budgets budgets = opt.budgets;
@@ -225,6 +231,7 @@ int runViewer(const ViewerOptions& opt) {
         if (ImGui::Combo("splatting", &splat, "high quality (blended)\0basic (nearest)\0"))
           settings.splatting = splat == 0 ? Splatting::Hqs : Splatting::Basic;
       }
+      if (mode == frame::ColourMode::Hdr) ImGui::SliderFloat("exposure (stops)", &settings.exposureStops, -12.f, 4.f);
       ImGui::SliderFloat("point size", &settings.sizeScale, 0.25f, 4.f);
       ImGui::SliderFloat("EDL strength", &settings.edlStrength, 0.f, 5.f);
       ImGui::SliderFloat("EDL radius", &settings.edlRadius, 0.5f, 4.f);

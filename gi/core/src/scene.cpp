@@ -217,13 +217,26 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
       if (o.value().is_string()) {
         t.path = resolvePath(o, file);
       } else {
-        o.expectObject({"path", "max_level", "memory_budget", "radius_scale", "colour_scale"});
+        o.expectObject({"path", "max_level", "memory_budget", "radius_scale", "colour_scale", "colour"});
         if (!o.has("path")) o.fail("missing \"path\"");
         t.path = resolvePath(o.at("path"), file);
         if (o.has("max_level")) t.maxLevel = int(o.at("max_level").integer(0, 30));
         if (o.has("memory_budget")) t.memoryBudget = o.at("memory_budget").bytes();
         if (o.has("radius_scale")) t.radiusScale = float(o.at("radius_scale").number(0, 100));
         if (o.has("colour_scale")) t.colourScale = float(o.at("colour_scale").number(0, 1e9));
+        if (o.has("colour")) {
+          Field c = o.at("colour");
+          if (!c.value().is_string() || c.value().get<std::string>().empty())
+            c.fail("expected \"rgb\" or the name of a colour layer of the octree (\"hdr\")");
+          t.colour = c.value().get<std::string>();
+          // A layer the octree lacks fails here, naming the field, not later in a method.
+          std::error_code ec;
+          if (t.colour != "rgb" && std::filesystem::exists(t.path / "metadata.json", ec)) {
+            const OctreeReader reader(t.path);
+            if (!reader.metadata().layer(t.colour))
+              c.fail("the octree has no colour layer '" + t.colour + "' (nestlight expand-hdr makes \"hdr\")");
+          }
+        }
       }
       s.octrees.push_back(std::move(t));
     }

@@ -13,9 +13,6 @@
 namespace nestlight::gi::hdr {
 
 namespace {
-constexpr int kMantissaBits = 9, kBias = 15, kMaxExponent = 31;
-constexpr float kRgb9e5Max = float((1 << kMantissaBits) - 1) / float(1 << kMantissaBits) *
-                             float(1 << (kMaxExponent - kBias));
 constexpr uint64_t kEmpty = ~uint64_t(0);
 
 uint32_t floatBits(float f) {
@@ -24,28 +21,6 @@ uint32_t floatBits(float f) {
   return u;
 }
 }  // namespace
-
-uint32_t packRgb9e5(glm::vec3 rgb) {
-  for (int c = 0; c < 3; ++c)
-    rgb[c] = std::isfinite(rgb[c]) ? std::clamp(rgb[c], 0.0f, kRgb9e5Max) : 0.0f;
-  const float maxc = std::max({rgb.r, rgb.g, rgb.b});
-  int exp = std::max(-kBias - 1, int(std::floor(std::log2(std::max(maxc, 1e-30f))))) + 1 + kBias;
-  double denom = std::ldexp(1.0, exp - kBias - kMantissaBits);
-  if (int(std::floor(maxc / denom + 0.5)) == (1 << kMantissaBits)) {
-    exp++;
-    denom *= 2;
-  }
-  uint32_t out = uint32_t(exp) << 27;
-  for (int c = 0; c < 3; ++c)
-    out |= uint32_t(std::min<double>(std::floor(rgb[c] / denom + 0.5), (1 << kMantissaBits) - 1))
-           << (9 * c);
-  return out;
-}
-
-glm::vec3 unpackRgb9e5(uint32_t v) {
-  const double scale = std::ldexp(1.0, int(v >> 27) - kBias - kMantissaBits);
-  return {float((v & 511) * scale), float((v >> 9 & 511) * scale), float((v >> 18 & 511) * scale)};
-}
 
 // ---------------------------------------------------------------------------------------------
 

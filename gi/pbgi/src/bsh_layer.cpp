@@ -3,13 +3,14 @@
 #include <chrono>
 #include <cstring>
 
-#include "nestlight/gi/srgb.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::gi::pbgi {
 
-BshLayer::BshLayer(const Metadata& meta, BshOptions options) : meta_(meta), options_(options) {
-  rgb_ = meta.layout.find(attr::kRgb);
+BshLayer::BshLayer(const Metadata& meta, BshOptions options, std::shared_ptr<const ScanColours> colours)
+    : meta_(meta), options_(options), colours_(std::move(colours)) {
+  // The recorded colour needs no octree path (only a layer is read from the folder).
+  if (!colours_) colours_ = std::make_shared<const ScanColours>(std::filesystem::path(), meta_, ScanColours::kRecorded);
   normal_ = meta.layout.find(attr::kNormal);
 }
 
@@ -18,18 +19,15 @@ Bsh BshLayer::build(const NodeKey& key, const PointBuffer& points, const std::ve
   NL_CHECK(gpuPoints.size() == n * frame::kGpuPointBytes);
   BshPoints in;
   in.position.resize(n);
-  in.colour.assign(n, glm::vec3(0.8f));
+  std::vector<float> rgb;
+  colours_->linear(key, points, rgb);
+  in.colour.resize(n);
+  std::memcpy(in.colour.data(), rgb.data(), n * sizeof(glm::vec3));
   if (normal_ >= 0) in.normal.resize(n);
-  const size_t rgbOff = rgb_ >= 0 ? meta_.layout.offset(rgb_) : 0;
   const size_t nOff = normal_ >= 0 ? meta_.layout.offset(normal_) : 0;
   for (size_t i = 0; i < n; ++i) {
     std::memcpy(&in.position[i], &gpuPoints[i * frame::kGpuPointBytes], 12);
     const uint8_t* a = points.attrsOf(i);
-    if (rgb_ >= 0) {
-      uint16_t v[3];
-      std::memcpy(v, a + rgbOff, 6);
-      in.colour[i] = glm::vec3(srgbDecode(v[0] / 65535.0f), srgbDecode(v[1] / 65535.0f), srgbDecode(v[2] / 65535.0f));
-    }
     if (normal_ >= 0) std::memcpy(&in.normal[i], a + nOff, 12);
   }
   BshOptions opt = options_;

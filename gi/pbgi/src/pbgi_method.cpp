@@ -80,8 +80,8 @@ class PbgiExtension : public RasterExtension {
     if (skyOwned_) f.setSkyOnDiffuseLobes(false);
     pbgi::BshOptions options;
     options.prune = params_.prune;
-    layer_ = f.addNodeLayer([options, this](const Metadata& meta) {
-      auto layer = std::make_shared<pbgi::BshLayer>(meta, options);
+    layer_ = f.addNodeLayer([options, this](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {
+      auto layer = std::make_shared<pbgi::BshLayer>(meta, options, std::move(colours));
       layers_.push_back(layer);
       return layer;
     });

@@ -25,6 +25,7 @@
 #include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/scan_colour.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/octree/error.h"
@@ -107,6 +108,7 @@ struct GpuScan {
   frame::DrawTree shadowTree;
   streaming::View shadowView;
   float colourScale = 1;
+  std::shared_ptr<const ScanColours> colours;  // the scene's octrees[].colour (a layer: drawn as HDR)
 };
 
 class RasterMethod : public Method, public RasterFrame {
@@ -122,10 +124,11 @@ class RasterMethod : public Method, public RasterFrame {
     loadScans();
     if (params_.computeRasteriser)
       for (const auto& o : scene_.octrees)
-        if (o.colourScale != scene_.octrees.front().colourScale)
+        if (o.colourScale != scene_.octrees.front().colourScale ||
+            (o.colour == ScanColours::kRecorded) != (scene_.octrees.front().colour == ScanColours::kRecorded))
           throw Error(scene_.file.string(), "gi.parameters.rasteriser",
                       "the compute rasteriser averages the scans' colours before scaling them: give every octree the "
-                      "same colour_scale, or use \"points\"");
+                      "same colour_scale and the same kind of colour (recorded or a layer), or use \"points\"");
     loadMeshes();
     setUpLights();
     setUpEnvironment();
@@ -172,7 +175,7 @@ class RasterMethod : public Method, public RasterFrame {
   size_t addNodeLayer(const NodeLayerFactory& make) override {
     NL_CHECK_MSG(frameNumber_ == 0, "node layers are added before the first frame streams");
     size_t index = 0;
-    for (auto& s : scans_) index = s.store->addLayer(make(s.reader->metadata()));
+    for (auto& s : scans_) index = s.store->addLayer(make(s.reader->metadata(), s.colours));
     return index;
   }
   unsigned layerBuffer(const CutNode& n, size_t layer) const override {
@@ -327,6 +330,7 @@ class RasterMethod : public Method, public RasterFrame {
         c.size = float(n.worldBounds.max.x - n.worldBounds.min.x);
         c.spacing = float(n.spacing);
         c.colourScale = s.colourScale;
+        c.hdrColour = s.store->hdrColour();
         if (n.key.level > 0) {
           auto it = index.find(n.key.parent());
           if (it != index.end()) c.parent = it->second;
@@ -376,10 +380,13 @@ class RasterMethod : public Method, public RasterFrame {
       GpuScan s;
       s.reader = std::make_unique<OctreeReader>(o.path);
       const Metadata& meta = s.reader->metadata();
-      const frame::ColourMode mode = meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb : frame::ColourMode::Elevation;
-      if (!meta.layout.has(attr::kRgb) && !quiet_)
+      s.colours = std::make_shared<const ScanColours>(o.path, meta, o.colour);
+      const frame::ColourMode mode = s.colours->layer()              ? frame::ColourMode::Hdr
+                                     : meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb
+                                                                   : frame::ColourMode::Elevation;
+      if (!s.colours->hasColour() && !quiet_)
         std::fprintf(stderr, "raster: %s has no colour; drawn by elevation\n", o.path.c_str());
-      s.store = std::make_unique<frame::GlNodeStore>(meta, mode);
+      s.store = std::make_unique<frame::GlNodeStore>(meta, mode, s.colours->layer());
       streaming::Budgets b;
       b.points = params_.pointBudget;
       b.gpuBytes = params_.gpuBytes;
@@ -566,10 +573,11 @@ class RasterMethod : public Method, public RasterFrame {
                    bool lightsCut = false) {
     const GLint nodeOrigin = program.uniform("uNodeOrigin"), nodeIndex = program.uniform("uNodeIndex"),
                 nodeSize = program.uniform("uNodeSize"), numPoints = program.uniform("uNumPoints"),
-                colourScale = program.uniform("uColourScale");
+                colourScale = program.uniform("uColourScale"), hdrColour = program.uniform("uHdrColour");
     for (auto& s : scans_) {
       (lightsCut ? s.shadowTree : s.tree).bind();
       glUniform1f(colourScale, s.colourScale);
+      glUniform1i(hdrColour, s.store->hdrColour());
       const auto& nodes = (lightsCut ? s.shadowStreamer : s.streamer)->drawList();
       for (size_t k = 0; k < nodes.size(); ++k) {
         const auto& n = nodes[k];
@@ -719,6 +727,7 @@ class RasterMethod : public Method, public RasterFrame {
     glUniform2i(computeResolve_.uniform("uViewport"), tile.width, tile.height);
     glUniformMatrix4fv(computeResolve_.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
     glUniform1f(computeResolve_.uniform("uColourScale"), scans_.empty() ? 1.0f : scans_.front().colourScale);
+    glUniform1i(computeResolve_.uniform("uHdrColour"), !scans_.empty() && scans_.front().store->hdrColour());
     glBindVertexArray(emptyVao_.id());
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }

@@ -12,7 +12,7 @@
 #include <tuple>
 #include <nanoflann.hpp>
 
-#include "nestlight/gi/srgb.h"
+#include "nestlight/gi/scan_colour.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 
@@ -173,8 +173,10 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
                                               " points do not fit the memory budget of " +
                                               std::to_string(octree.memoryBudget) + " bytes");
   stats.deepestLevel = level;
-  const int rgb = meta.layout.find(attr::kRgb), normal = meta.layout.find(attr::kNormal);
-  const size_t rgbOff = rgb >= 0 ? meta.layout.offset(rgb) : 0, nOff = normal >= 0 ? meta.layout.offset(normal) : 0;
+  const ScanColours colours(octree.path, meta, octree.colour);
+  std::vector<float> rgb;
+  const int normal = meta.layout.find(attr::kNormal);
+  const size_t nOff = normal >= 0 ? meta.layout.offset(normal) : 0;
   DiscCloud cloud;
   cloud.discs.reserve(total);
   cloud.colour.reserve(total);
@@ -185,6 +187,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
   for (auto& [key, e] : nodes) {
     if (int(key.level) > level || e.numPoints == 0) continue;
     PointBuffer pts = reader.readNode(key);
+    colours.linear(key, pts, rgb);
     stats.nodes++;
     // A node's sample keeps points at least its spacing apart, so it leaves no surface point
     // farther than that from a sample: no disc needs to be wider (with the same margin).
@@ -195,13 +198,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
       cloud.discs.emplace_back(glm::vec3(local), 0.0f);
       maxRadius.push_back(nodeSpacing);
       const uint8_t* a = pts.attrsOf(i);
-      Rgb c(0.8f);
-      if (rgb >= 0) {
-        uint16_t v[3];
-        std::memcpy(v, a + rgbOff, 6);
-        c = Rgb(srgbDecode(v[0] / 65535.0f), srgbDecode(v[1] / 65535.0f), srgbDecode(v[2] / 65535.0f));
-      }
-      cloud.colour.push_back(c * octree.colourScale);
+      cloud.colour.push_back(Rgb(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]) * octree.colourScale);
       if (normal >= 0) {
         glm::vec3 n;
         std::memcpy(&n, a + nOff, 12);

@@ -480,6 +480,7 @@ class VplExtension : public RasterExtension {
       glUniform1ui(gather_.uniform("uNumPoints"), c.numPoints);
       glUniform1f(gather_.uniform("uRadius"), 0.5f * c.spacing * splat * 0.5f);
       glUniform1f(gather_.uniform("uColourScale"), c.colourScale);
+      glUniform1i(gather_.uniform("uHdrColour"), c.hdrColour);
       glDispatchCompute((c.numPoints + 127) / 128, 1, 1);
     }
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);

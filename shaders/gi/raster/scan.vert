@@ -3,7 +3,6 @@
 // frame. Used for the camera's G-buffer and for the lights' shadow maps.
 #include "../../common/point_data.glsl"
 #include "../../points/splat_size.glsl"
-#include "../../common/srgb.glsl"
 uniform vec3 uNodeOrigin;        // the node's cube origin in the scene's local frame
 uniform mat4 uClipFromWorld;
 uniform mat4 uViewFromWorld;
@@ -27,7 +26,7 @@ void main() {
   gl_PointSize = clamp(finestSpacing(local) * uSizeScale * uPixelsPerUnit / depth, uSizeRange.x, uSizeRange.y);
   vRadius = 0.5 * gl_PointSize * depth / uPixelsPerUnit;
   vViewPos = (uViewFromWorld * vec4(world, 1.0)).xyz;
-  vColour = srgbDecode(unpackUnorm4x8(pointColour(i)).rgb) * uColourScale;
+  vColour = pointLinearColour(i) * uColourScale;
   vNormal = decodeNormal(pointNormalWord(i));
   vViewNormal = mat3(uViewFromWorld) * vNormal;
   vPointSize = gl_PointSize;

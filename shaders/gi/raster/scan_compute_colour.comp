@@ -10,7 +10,7 @@ void main() {
   float d;
   if (!projectPoint(i, pixel, d)) return;
   if (d > uintBitsToFloat(sd.depth[pixel]) * 1.01) return;
-  uvec3 c8 = uvec3(round(unpackUnorm4x8(pointColour(i)).rgb * 255.0));
+  uvec3 c8 = colourWordToSum(pointColour(i));
   atomicAdd(sa.accum[4u * pixel], c8.r);
   atomicAdd(sa.accum[4u * pixel + 1u], c8.g);
   atomicAdd(sa.accum[4u * pixel + 2u], c8.b);

@@ -4,7 +4,6 @@
 // points drawn there, octree/spacing.h), which radiance-cache VPLs emit from.
 layout(local_size_x = 128) in;
 #include "../../common/point_data.glsl"
-#include "../../common/srgb.glsl"
 #include "../../points/splat_size.glsl"
 #include "vpl_interface.glsl"
 layout(std430, binding = VPL_SSBO_POOL) writeonly buffer Pool { PoolPoint pool[]; };
@@ -14,7 +13,7 @@ uniform float uRadius, uColourScale;
 void main() {
   uint i = gl_GlobalInvocationID.x;
   if (i >= uNumPoints) return;
-  vec3 c = min(srgbDecode(unpackUnorm4x8(pointColour(i)).rgb) * uColourScale, vec3(65504.0));
+  vec3 c = min(pointLinearColour(i) * uColourScale, vec3(65504.0));
   PoolPoint q;
   q.position = vec4(uNodeOrigin + pointLocal(i), uRadius);
   float s = finestSpacing(pointLocal(i));

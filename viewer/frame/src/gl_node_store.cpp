@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/rgb9e5.h"
 
 namespace nestlight::frame {
 
@@ -85,28 +86,32 @@ const char* colourModeName(ColourMode m) {
     case ColourMode::Classification: return "classification";
     case ColourMode::Elevation: return "elevation";
     case ColourMode::Normal: return "normal";
+    case ColourMode::Hdr: return "hdr";
   }
   return "?";
 }
 
 ColourMode parseColourMode(const std::string& name) {
   for (ColourMode m : {ColourMode::Rgb, ColourMode::Intensity, ColourMode::Classification, ColourMode::Elevation,
-                       ColourMode::Normal})
+                       ColourMode::Normal, ColourMode::Hdr})
     if (name == colourModeName(m)) return m;
-  throw Error("unknown colour mode '" + name + "' (rgb, intensity, classification, elevation, normal)");
+  throw Error("unknown colour mode '" + name + "' (rgb, intensity, classification, elevation, normal, hdr)");
 }
 
-std::vector<ColourMode> availableColourModes(const Metadata& meta) {
+std::vector<ColourMode> availableColourModes(const Metadata& meta, const std::string& hdrLayer) {
   std::vector<ColourMode> out;
   if (meta.layout.has(attr::kRgb)) out.push_back(ColourMode::Rgb);
   if (meta.layout.has(attr::kIntensity)) out.push_back(ColourMode::Intensity);
   if (meta.layout.has(attr::kClassification)) out.push_back(ColourMode::Classification);
   out.push_back(ColourMode::Elevation);
   if (meta.layout.has(attr::kNormal)) out.push_back(ColourMode::Normal);
+  if (meta.layer(hdrLayer)) out.push_back(ColourMode::Hdr);
   return out;
 }
 
-GlNodeStore::GlNodeStore(const Metadata& meta, ColourMode mode) : meta_(meta), mode_(mode) {
+GlNodeStore::GlNodeStore(const Metadata& meta, ColourMode mode, std::shared_ptr<const ColourLayerReader> layer)
+    : meta_(meta), mode_(mode), colourLayer_(std::move(layer)) {
+  NL_CHECK_MSG(mode != ColourMode::Hdr || colourLayer_, "ColourMode::Hdr without a colour layer");
   rgb_ = meta.layout.find(attr::kRgb);
   normal_ = meta.layout.find(attr::kNormal);
   intensity_ = meta.layout.find(attr::kIntensity);
@@ -114,6 +119,13 @@ GlNodeStore::GlNodeStore(const Metadata& meta, ColourMode mode) : meta_(meta), m
 }
 
 GlNodeStore::~GlNodeStore() = default;
+
+void GlNodeStore::setColourMode(ColourMode m) {
+  NL_CHECK_MSG(m != ColourMode::Hdr || colourLayer_, "ColourMode::Hdr without a colour layer");
+  mode_ = m;
+}
+
+void GlNodeStore::setColourLayer(std::shared_ptr<const ColourLayerReader> layer) { colourLayer_ = std::move(layer); }
 
 void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::PreparedNode& out) const {
   const size_t n = pts.size();
@@ -127,6 +139,11 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
   const size_t iOff = intensity_ >= 0 ? L.offset(intensity_) : 0;
   const size_t cOff = classification_ >= 0 ? L.offset(classification_) : 0;
   const ColourMode mode = mode_;
+  std::vector<float> hdr;
+  if (mode == ColourMode::Hdr) {
+    NL_CHECK_MSG(colourLayer_, "ColourMode::Hdr without a colour layer");
+    hdr = colourLayer_->readNode(key, uint32_t(n));  // throws on a damaged node: the loader counts it bad
+  }
   const double zLo = meta_.bounds.min.z, zRange = std::max(meta_.bounds.max.z - meta_.bounds.min.z, 1e-9);
   for (size_t i = 0; i < n; ++i) {
     uint8_t* o = &out.bytes[i * kGpuPointBytes];
@@ -162,6 +179,9 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
         break;
       case ColourMode::Normal:
         colour = packRgba(nrm[0] * 0.5 + 0.5, nrm[1] * 0.5 + 0.5, nrm[2] * 0.5 + 0.5);
+        break;
+      case ColourMode::Hdr:
+        colour = packRgb9e5(hdr[3 * i], hdr[3 * i + 1], hdr[3 * i + 2]);
         break;
     }
     std::memcpy(o + 12, &colour, 4);

@@ -1,7 +1,8 @@
 // The point view: the resident cut drawn through the GI frame's graph (nestlight/frame/frame_graph.h)
 // as two tile passes: "points" (either rasteriser into a linear G-buffer: colour, view-space
 // normal, depth) and "eye_dome_lighting" (with a margin so tiles see their neighbours; it encodes
-// for display itself, the point view's tone map being exposure 0 and the sRGB curve). The graph
+// for display itself, the point view's tone map being an exposure and the sRGB curve, or writes
+// linear values for HDR files). The graph
 // renders large images in tiles and owns the targets.
 #pragma once
 
@@ -52,7 +53,12 @@ struct RenderSettings {
   float edlStrength = 1.0f;      // 0 disables eye-dome lighting
   float edlRadius = 1.4f;        // pixels, at most kMaxEdlRadius (tiles overlap by that much)
   static constexpr float kMaxEdlRadius = 6.0f;
-  glm::vec3 background{0.08f, 0.08f, 0.10f};
+  glm::vec3 background{0.08f, 0.08f, 0.10f};  // display-referred
+  // The colour times 2^exposureStops before display (an HDR colour layer's highlights lie above 1).
+  float exposureStops = 0.0f;
+  // The output holds linear colour (times the exposure and the eye-dome shading) instead of the
+  // sRGB-encoded display value: for EXR files of an HDR colour layer. Background in linear too.
+  bool linearOutput = false;
   int maxTile = 2048;            // larger images render in tiles (SSBO and FBO limits)
   bool allowAtomic64 = true;     // compute path: one 64-bit pass where the GPU has 64-bit atomics
 };

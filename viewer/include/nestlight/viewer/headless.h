@@ -28,6 +28,7 @@ struct RenderJob {
   RenderSettings settings;
   streaming::Budgets budgets;
   std::optional<frame::ColourMode> colour;   // none: rgb when the scan has it, else elevation
+  std::string colourLayer = frame::kHdrLayerName;  // the colour layer ColourMode::Hdr draws
   bool quiet = false;
 };
 

@@ -1,6 +1,6 @@
 // The point view's frames: RGBA floats, top row first, display-referred (the scan's recorded sRGB
-// colour). Files go through gi's image library (nestlight/gi/hdr_image.h); EXR files get linear
-// values.
+// colour), or linear (`linear`: an HDR colour layer drawn for an EXR file). Files go through gi's
+// image library (nestlight/gi/hdr_image.h); EXR files get linear values, PNG display values.
 #pragma once
 
 #include <cstdint>
@@ -12,6 +12,7 @@ namespace nestlight::viewer {
 struct Image {
   int width = 0, height = 0;
   std::vector<float> rgba;  // 4 per pixel
+  bool linear = false;      // rgb is linear (unbounded), not display-referred
   float* at(int x, int y) { return &rgba[4 * (size_t(y) * width + x)]; }
   const float* at(int x, int y) const { return &rgba[4 * (size_t(y) * width + x)]; }
 };

@@ -20,6 +20,7 @@ struct ViewerOptions {
   RenderSettings settings;
   streaming::Budgets budgets;
   std::optional<frame::ColourMode> colour;
+  std::string colourLayer = frame::kHdrLayerName;  // what ColourMode::Hdr draws
   // A scene file (`nestlight view scene.json`): its GI method renders the window (the scene's
   // gi.method when it has an interactive GL mode, else `raster`), with the method, its
   // parameters and per-pass GPU timings in the panel; the point view stays one click away.

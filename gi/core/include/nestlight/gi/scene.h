@@ -28,6 +28,9 @@ struct SceneOctree {
   uint64_t memoryBudget = 2ull << 30;  // bytes of points the reference may hold
   float radiusScale = 1.0f;          // disc radius = radiusScale * local spacing
   float colourScale = 1.0f;          // radiance (or albedo) per unit of recorded colour
+  // Where its colour comes from: "rgb" (recorded, sRGB decoded) or a colour layer ("hdr": the
+  // HDR colour nestlight expand-hdr writes; nestlight/gi/scan_colour.h).
+  std::string colour = "rgb";
 };
 
 struct SceneMesh {

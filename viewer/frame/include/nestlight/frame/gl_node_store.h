@@ -3,8 +3,10 @@
 //
 // GPU point format, NL_POINT_WORDS (5) words (shaders/interface/frame_interface.glsl): position
 // as 3 floats relative to the node's cube origin (world units: small numbers, so no precision is
-// lost at national-grid offsets), the display colour as RGBA8, and the normal
-// octahedron-encoded in 2 x 16 bits (0 when the scan has none).
+// lost at national-grid offsets), the colour word, and the normal octahedron-encoded in 2 x 16
+// bits (0 when the scan has none). The colour word is the display colour as sRGB RGBA8, or in
+// ColourMode::Hdr a colour layer's linear colour as RGB9E5 (shaders/common/colour_word.glsl
+// decodes both; programs set its uHdrColour from hdrColour()).
 //
 // Node layers: a GI method registers a NodeLayer (a hierarchy over the node's points, an HDR
 // colour) and every node prepared from then on carries it as a buffer of its own, built on the
@@ -23,6 +25,7 @@
 
 #include "nestlight/frame/interface.h"
 #include "nestlight/gl/resources.h"
+#include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/metadata.h"
 #include "nestlight/streaming/node_store.h"
 
@@ -44,16 +47,20 @@ uint32_t packNormal(float x, float y, float z);
 // Its inverse, as decodeNormal in shaders/common/octahedral.glsl: (0, 0, 0) for the word 0.
 glm::vec3 unpackNormal(uint32_t word);
 
-enum class ColourMode { Rgb, Intensity, Classification, Elevation, Normal };
+// Hdr: the octree's colour layer "hdr" (or another, setColourLayer), linear HDR.
+enum class ColourMode { Rgb, Intensity, Classification, Elevation, Normal, Hdr };
 const char* colourModeName(ColourMode m);
-// Parses "rgb", "intensity", "classification", "elevation", "normal"; throws on others.
+// Parses "rgb", "intensity", "classification", "elevation", "normal", "hdr"; throws on others.
 ColourMode parseColourMode(const std::string& name);
-// The modes this scan can show (elevation always; the rest when it has the attribute).
-std::vector<ColourMode> availableColourModes(const Metadata& meta);
+// The modes this scan can show (elevation always; the rest when it has the attribute, hdr when
+// it has the colour layer `hdrLayer`).
+inline constexpr const char* kHdrLayerName = "hdr";  // the layer ColourMode::Hdr reads unless told otherwise
+std::vector<ColourMode> availableColourModes(const Metadata& meta, const std::string& hdrLayer = kHdrLayerName);
 
 class GlNodeStore : public streaming::NodeStore {
  public:
-  GlNodeStore(const Metadata& meta, ColourMode mode);
+  // `layer`: what ColourMode::Hdr draws (required for it).
+  GlNodeStore(const Metadata& meta, ColourMode mode, std::shared_ptr<const ColourLayerReader> layer = nullptr);
   ~GlNodeStore() override;
   GlNodeStore(const GlNodeStore&) = delete;
   GlNodeStore& operator=(const GlNodeStore&) = delete;
@@ -63,8 +70,13 @@ class GlNodeStore : public streaming::NodeStore {
   void release(uint64_t handle) override;
 
   // Nodes prepared with another mode still upload; the streamer is flushed when it changes.
-  void setColourMode(ColourMode m) { mode_ = m; }
+  // ColourMode::Hdr needs a colour layer (setColourLayer) first.
+  void setColourMode(ColourMode m);
   ColourMode colourMode() const { return mode_; }
+  // The layer ColourMode::Hdr packs (read on loader threads; the reader is thread-safe).
+  void setColourLayer(std::shared_ptr<const ColourLayerReader> layer);
+  // Whether colour words are RGB9E5 (the shaders' uHdrColour).
+  bool hdrColour() const { return mode_ == ColourMode::Hdr; }
   // The node's points buffer.
   GLuint buffer(uint64_t handle) const { return layerBuffer(handle, 0); }
   // Layer 0 is the points, 1.. the registered layers in order; 0 when the node was prepared
@@ -88,6 +100,7 @@ class GlNodeStore : public streaming::NodeStore {
   };
   const Metadata& meta_;
   ColourMode mode_;
+  std::shared_ptr<const ColourLayerReader> colourLayer_;
   int rgb_ = -1, normal_ = -1, intensity_ = -1, classification_ = -1;
   mutable std::mutex layersMutex_;  // loader threads read the list while the render thread adds
   std::vector<std::shared_ptr<const NodeLayer>> layers_;

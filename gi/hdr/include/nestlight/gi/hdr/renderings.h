@@ -21,13 +21,17 @@
 #include "nestlight/gi/hdr/views.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/octree/rgb9e5.h"
 
 namespace nestlight::gi::hdr {
 
-// Shared-exponent RGB (9-bit mantissas, 5-bit exponent, as GL's RGB9_E5): non-negative, up to
-// 65408, relative precision about 2^-9 of the largest channel.
-uint32_t packRgb9e5(glm::vec3 rgb);
-glm::vec3 unpackRgb9e5(uint32_t v);
+// The octree's RGB9E5 (nestlight/octree/rgb9e5.h) on glm vectors.
+inline uint32_t packRgb9e5(glm::vec3 rgb) { return nestlight::packRgb9e5(rgb.r, rgb.g, rgb.b); }
+inline glm::vec3 unpackRgb9e5(uint32_t v) {
+  glm::vec3 c;
+  nestlight::unpackRgb9e5(v, &c.x);
+  return c;
+}
 
 // A decoded node in world terms.
 struct ScanNode {

@@ -9,17 +9,20 @@
 
 #include "nestlight/frame/gl_node_store.h"
 #include "nestlight/gi/pbgi/bsh.h"
+#include "nestlight/gi/scan_colour.h"
 #include "nestlight/octree/metadata.h"
 
 namespace nestlight::gi::pbgi {
 
-// Leaves: the node's points, linear colour from the scan's 16-bit sRGB colour (0.8 grey without
-// colour, as the reference), the scan's normals, disc radius the node level's nominal spacing
+// Leaves: the node's points, linear colour from the scan's colour source (nestlight/gi/scan_colour.h:
+// the recorded 16-bit sRGB colour decoded, 0.8 grey without colour as the reference, or a colour
+// layer such as the HDR colour), the scan's normals, disc radius the node level's nominal spacing
 // (the distance a level's sample keeps between its points, so discs of that radius leave no
 // surface uncovered where this node is the finest drawn).
 class BshLayer : public frame::NodeLayer {
  public:
-  explicit BshLayer(const Metadata& meta, BshOptions options = {});
+  // `colours`: where leaves take their colour; none: the recorded colour.
+  explicit BshLayer(const Metadata& meta, BshOptions options = {}, std::shared_ptr<const ScanColours> colours = nullptr);
   std::string name() const override { return "pbgi_bsh"; }
   void prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
                std::vector<uint8_t>& out) const override;
@@ -36,7 +39,8 @@ class BshLayer : public frame::NodeLayer {
  private:
   Metadata meta_;
   BshOptions options_;
-  int rgb_ = -1, normal_ = -1;
+  std::shared_ptr<const ScanColours> colours_;
+  int normal_ = -1;
   mutable std::atomic<uint64_t> builds_{0}, points_{0}, nodes_{0}, nanoseconds_{0};
 };
 

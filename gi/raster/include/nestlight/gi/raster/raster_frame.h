@@ -20,6 +20,7 @@
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/raster/raster_method.h"
+#include "nestlight/gi/scan_colour.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/octree/metadata.h"
 
@@ -35,6 +36,7 @@ struct CutNode {
   float spacing = 0;          // nominal spacing of its level
   int parent = -1;            // index of its parent in the same list (-1: a root)
   float colourScale = 1;      // its scan's colour_scale
+  bool hdrColour = false;     // its colour words are RGB9E5 (shaders/common/colour_word.glsl)
   int scan = 0;               // which scan (bindLightsCutTree)
   int indexInScan = 0;        // its entry in that scan's lights'-cut draw tree
   uint64_t handle = 0;        // its store handle (layerBuffer)
@@ -79,10 +81,11 @@ class RasterFrame {
   // finestSpacing() then works for that scan's CutNodes).
   virtual void bindLightsCutTree(int scan) const = 0;
   // Adds a per-node layer (a hierarchy over the node's points) to every scan's store, made for
-  // that scan's metadata: from then on loader threads build it with each node, it is uploaded
+  // that scan's metadata and colour source (the scene's octrees[].colour): from then on loader threads build it with each node, it is uploaded
   // and freed with the node and counted in the budgets. Call in setUp, before the first frame
   // streams anything. Returns the layer's index (the same for every scan).
-  using NodeLayerFactory = std::function<std::shared_ptr<const frame::NodeLayer>(const Metadata&)>;
+  using NodeLayerFactory =
+      std::function<std::shared_ptr<const frame::NodeLayer>(const Metadata&, std::shared_ptr<const ScanColours>)>;
   virtual size_t addNodeLayer(const NodeLayerFactory& make) = 0;
   // A cut node's layer buffer (GL name; 0 when it has none) and its bytes.
   virtual unsigned layerBuffer(const CutNode& node, size_t layer) const = 0;
