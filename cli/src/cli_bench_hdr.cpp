@@ -20,6 +20,7 @@
 #include "nestlight/gi/hdr/expand.h"
 #include "nestlight/gi/hdr/protocol.h"
 #include "nestlight/gi/hdr/relit.h"
+#include "nestlight/gi/hdr/self_photo.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/hdr/renderings.h"
 #include "nestlight/octree/colour_layer.h"
@@ -59,43 +60,6 @@ std::string runSelf(const std::vector<std::string>& args, const fs::path& log) {
   return text;
 }
 
-// A scan's own colour, linear, with its highlights pushed beyond 1: what an HDR photograph of a
-// scene whose scanner clipped would record. Luminance above 0.5 is raised smoothly, up to 16
-// times at 1.
-glm::vec3 pushedHighlights(const glm::vec3& ldr) {
-  const float y = 0.2126f * ldr.r + 0.7152f * ldr.g + 0.0722f * ldr.b;
-  const float t = std::clamp((y - 0.5f) / 0.5f, 0.0f, 1.0f);
-  return ldr * (1.0f + 15.0f * t * t * (3.0f - 2.0f * t));
-}
-
-// Renders `layer` ("ldr": the scan's colour) from `view` and writes it tone-mapped at two
-// exposures (1 and 1/8, so that values beyond 1 show their shape).
-void writeBeforeAfter(const fs::path& octree, const gi::hdr::View& view, const std::string& layer,
-                      const fs::path& stem) {
-  OctreeReader reader(octree);
-  gi::hdr::ScanAccess scan(reader);
-  std::unique_ptr<ColourLayerReader> colours;
-  if (layer != "ldr")
-    colours = std::make_unique<ColourLayerReader>(octree, reader.metadata(), layer);
-  gi::hdr::SplatOptions so;
-  so.colour = [&](const gi::hdr::ScanNode& n, std::vector<uint32_t>& out) {
-    out.resize(n.world.size());
-    std::vector<float> rgb;
-    if (colours) rgb = colours->readNode(n.key, uint32_t(n.world.size()));
-    for (size_t i = 0; i < out.size(); ++i)
-      out[i] = gi::hdr::packRgb9e5(colours ? glm::vec3(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2])
-                                           : n.ldr[i]);
-  };
-  const gi::HdrImage img =
-      gi::hdr::renderViews(scan, {view}, gi::hdr::Payload::Rgb9e5, so)[0].image();
-  gi::writeExr(stem.string() + ".exr", img);
-  for (const float e : {1.0f, 0.125f}) {
-    gi::HdrImage d = img;
-    for (float& v : d.rgb) v = gi::hdr::displayFromLinear(std::min(1.0f, v * e));
-    gi::writePng(stem.string() + (e == 1.0f ? "-e1.png" : "-e1_8.png"), d);
-  }
-}
-
 }  // namespace
 
 void addBenchHdr(CLI::App& app, int& exitCode) {
@@ -120,7 +84,15 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
       ->check(CLI::Range(1, 50));
   cmd->add_option("--auto-views", *autoViews, "Cube maps per expansion")->capture_default_str();
   cmd->add_option("--face-size", *faceSize, "Cube-map face size")->capture_default_str();
-  cmd->add_option("--modes", *modes, "rgb, luminance or both")->capture_default_str();
+  cmd->add_option("--modes", *modes, "rgb, luminance, both, or none (with --layers)")->capture_default_str();
+  auto layers = std::make_shared<std::string>();
+  auto unregistered = std::make_shared<bool>(false);
+  cmd->add_flag("--unregistered", *unregistered,
+                "Expand without the photograph's camera (auto views only), as for a photograph that is "
+                "not registered with the scan");
+  cmd->add_option("--layers", *layers,
+                  "Also judge these colour layers of the protocol octrees (comma-separated; e.g. made by "
+                  "expand-hdr with other options), with the cloud and relit errors");
   cmd->add_option("--dir", *work, "Folder for the protocol scenes (reused when present)")
       ->capture_default_str();
   cmd->add_option("--json", *out, "Where to write the results")->capture_default_str();
@@ -147,36 +119,17 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
       const fs::path copy = work / "scan.octree";
       fs::remove_all(copy);
       fs::copy(*scanDemo, copy, fs::copy_options::recursive);
-      OctreeReader reader(copy);
-      const Box3d& b = reader.metadata().bounds;
-      const glm::dvec3 lo{b.min.x, b.min.y, b.min.z}, hi{b.max.x, b.max.y, b.max.z};
-      const glm::dvec3 centre = (lo + hi) * 0.5;
-      const double diagonal = glm::length(hi - lo);
-      // The photograph from one side, the images from another 60 degrees round.
-      const gi::hdr::View photoView = gi::hdr::lookAt(centre + diagonal * glm::dvec3(1.0, 0.6, 0.5),
-                                                      centre, {0, 0, 1}, 40.0, 640, 480);
-      const gi::hdr::View imageView = gi::hdr::lookAt(
-          centre + diagonal * glm::dvec3(-0.3, 1.1, 0.5), centre, {0, 0, 1}, 40.0, 640, 480);
-      {
-        gi::hdr::ScanAccess scan(reader);
-        gi::hdr::SplatOptions so;
-        so.colour = [](const gi::hdr::ScanNode& n, std::vector<uint32_t>& out) {
-          out.resize(n.world.size());
-          for (size_t i = 0; i < out.size(); ++i)
-            out[i] = gi::hdr::packRgb9e5(pushedHighlights(n.ldr[i]));
-        };
-        gi::writeExr(
-            (work / "photo.exr").string(),
-            gi::hdr::renderViews(scan, {photoView}, gi::hdr::Payload::Rgb9e5, so)[0].image());
-      }
+      const gi::hdr::SelfPhotoViews views = gi::hdr::selfPhotoViews(OctreeReader(copy).metadata());
+      const gi::hdr::View& imageView = views.image;
+      gi::writeExr((work / "photo.exr").string(), gi::hdr::renderSelfPhoto(copy, views.photo));
       const std::string text = runSelf(
           {"expand-hdr", copy.string(), "--photo", (work / "photo.exr").string(), "--auto-views",
            std::to_string(*autoViews), "--face-size", std::to_string(*faceSize), "--threshold",
            std::to_string(*threshold), "--json", "-q"},
           work / "expand.log");
       const json report = json::parse(text);
-      writeBeforeAfter(copy, imageView, "ldr", work / "before");
-      writeBeforeAfter(copy, imageView, "hdr", work / "after");
+      gi::hdr::writeBeforeAfter(copy, imageView, "ldr", work / "before");
+      gi::hdr::writeBeforeAfter(copy, imageView, "hdr", work / "after");
       std::printf(
           "%s: %llu points, %llu over-exposed (LDR luminance > %g): %llu expanded, %llu in-filled; "
           "exposure "
@@ -200,7 +153,7 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
                     {"face_size", *faceSize}, {"sizes", json::array()}};
     std::vector<std::string> modeList;
     for (const auto& m : {"rgb", "luminance"})
-      if (modes->find(m) != std::string::npos) modeList.push_back(m);
+      if (*modes == "both" || modes->find(m) != std::string::npos) modeList.push_back(m);
     std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8s %9s\n", "points", "method",
                 "render", "match", "project", "infill", "layer", "total", "s/Mpts", "peak",
                 "RMSclip", "stopsclip");
@@ -233,18 +186,25 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
         photoMax =
             std::max(photoMax, double(0.2126f * photo.rgb[3 * i] + 0.7152f * photo.rgb[3 * i + 1] +
                                       0.0722f * photo.rgb[3 * i + 2]));
-      double log2Exposure = 0;
+      // Without an expansion run here, the exposure the protocol clipped with (the search finds
+      // it within a quarter stop).
+      double log2Exposure = std::log2(json::parse(std::ifstream(dir / "protocol.json")).value("exposure", 1.0));
       for (const auto& mode : modeList) {
         const std::string layer = mode == "rgb" ? "pmatch_rgb" : "pmatch_lum";
         std::map<std::string, std::vector<double>> stages;
         double peak = 0;
         json last;
         for (int r = 0; r < *runs; ++r) {
-          const std::string text =
-              runSelf({"expand-hdr", octree.string(), "--photo", (dir / "photo.exr").string(),
-                       "--mode", mode, "--auto-views", std::to_string(*autoViews), "--face-size",
-                       std::to_string(*faceSize), "--layer", layer, "--json", "-q"},
-                      dir / ("expand-" + layer + ".log"));
+          std::vector<std::string> args = {"expand-hdr", octree.string(), "--photo", (dir / "photo.exr").string(),
+                                           "--mode", mode, "--auto-views", std::to_string(*autoViews), "--face-size",
+                                           std::to_string(*faceSize), "--layer", layer, "--json", "-q"};
+          if (!*unregistered) {
+            // The protocol's photograph is registered: its camera is in protocol.json.
+            const json p = json::parse(std::ifstream(dir / "protocol.json"));
+            std::ofstream(dir / "photo-view.json") << json{{"views", json::array({p.at("photo_view")})}}.dump(2);
+            args.insert(args.end(), {"--photo-view", (dir / "photo-view.json").string()});
+          }
+          const std::string text = runSelf(args, dir / ("expand-" + layer + ".log"));
           last = json::parse(text);
           for (auto& [k, v] : last["seconds"].items()) stages[k].push_back(v.get<double>());
           peak = std::max(peak, last["peak_rss_bytes"].get<double>());
@@ -268,6 +228,19 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
             err.stopsClipped);
         size["methods"][mode == "rgb" ? "PMATCHRGB" : "PMATCHLUM"] = m;
       }
+      std::vector<std::pair<std::string, std::string>> judged;  // layer, name in the table
+      for (const auto& mode : modeList)
+        judged.emplace_back(mode == "rgb" ? "pmatch_rgb" : "pmatch_lum", mode == "rgb" ? "PMATCHRGB" : "PMATCHLUM");
+      for (size_t at = 0; !layers->empty() && at <= layers->size();) {
+        const size_t comma = std::min(layers->find(',', at), layers->size());
+        const std::string layer = layers->substr(at, comma - at);
+        at = comma + 1;
+        const gi::hdr::LayerError err = gi::hdr::compareWithTruth(octree, layer);
+        std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8.3f %9.3f\n", humanCount(double(points)).c_str(),
+                    layer.c_str(), "", "", "", "", "", "", "", "", err.rmsClipped, err.stopsClipped);
+        size["methods"][layer] = {{"error", err.toJson()}};
+        judged.emplace_back(layer, layer);
+      }
       for (const std::string base : {"ldr", "landis"}) {
         const gi::hdr::LayerError err =
             gi::hdr::compareWithTruth(octree, base, 0.9, std::exp2(log2Exposure) * photoMax);
@@ -287,16 +260,14 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
         };
         std::vector<uint8_t> mask;
         const gi::MethodFrame truth = render("truth", &mask);
-        const std::pair<const char*, const char*> sources[] = {
-            {"pmatch_rgb", "PMATCHRGB"}, {"pmatch_lum", "PMATCHLUM"}, {"ldr", "LDR"}, {"landis", "LANDISPC"}};
+        judged.emplace_back("ldr", "LDR");
+        judged.emplace_back("landis", "LANDISPC");
         std::printf("relit renders (%s, %dx%d, %.2f s a frame), %llu object pixels, against the truth's:",
                     relit->method.c_str(), relit->width, relit->height, truth.seconds,
                     (unsigned long long)std::count(mask.begin(), mask.end(), uint8_t(1)));
-        const Metadata meta = OctreeReader(octree).metadata();
-        for (const auto& [layer, name] : sources) {
-          if (!meta.layer(layer)) continue;
+        for (const auto& [layer, name] : judged) {
           const gi::hdr::RelitError e = gi::hdr::compareRelit(render(layer, nullptr).image, truth.image, mask);
-          std::printf("  %s RMS %.4f (%.1f%%)", name, e.rms, 100 * e.relativeRms);
+          std::printf("  %s RMS %.4f (%.1f%%)", name.c_str(), e.rms, 100 * e.relativeRms);
           size["methods"][name]["relit"] = {{"rms", e.rms}, {"relative_rms", e.relativeRms}, {"pixels", e.pixels},
                                             {"method", relit->method}};
         }

@@ -46,6 +46,11 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       ->capture_default_str()
       ->check(CLI::Range(1, 64))
       ->excludes(views);
+  auto photoViewFile = std::make_shared<std::string>();
+  cmd->add_option("--photo-view", *photoViewFile,
+                  "The photograph's camera, when registered with the scan (a cams.json with one view): the "
+                  "scan is also rendered from it (at the photograph's size), matched from the identity, and the points it matched take "
+                  "their colour from it alone; the other views (--views or --auto-views) reach the rest");
   cmd->add_option("--face-size", o->faceSize, "Face size of automatic cube maps (pixels)")
       ->capture_default_str()
       ->check(CLI::Range(32, 4096));
@@ -76,10 +81,17 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
   cmd->add_flag("-q,--quiet", *quiet, "No progress output");
   cmd->callback([=, &exitCode]() {
     if (!viewsFile->empty()) o->views = gi::hdr::readViews(*viewsFile);
+    if (!photoViewFile->empty()) {
+      const auto v = gi::hdr::readViews(*photoViewFile);
+      if (v.size() != 1)
+        throw Error(*photoViewFile, "", "--photo-view: expected one view, found " + std::to_string(v.size()));
+      o->photoView = v.front();
+    }
     o->mode = *mode == "rgb" ? gi::hdr::ExpansionMode::Rgb : gi::hdr::ExpansionMode::Luminance;
     o->debugDir = *debug;
     o->commandLine = {
-        {"photo", *photo}, {"mode", *mode}, {"views", viewsFile->empty() ? "auto" : *viewsFile}};
+        {"photo", *photo}, {"mode", *mode}, {"views", viewsFile->empty() ? "auto" : *viewsFile},
+        {"photo_view", *photoViewFile}};
     auto mutex = std::make_shared<std::mutex>();
     auto last = std::make_shared<std::pair<std::string, int>>("", -1);
     if (!*quiet)

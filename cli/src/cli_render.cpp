@@ -59,12 +59,13 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<Ren
   cmd->add_option("--colour", text->colour,
                   "rgb, intensity, classification, elevation, normal or hdr (default: rgb when the scan has "
                   "colour, else elevation). hdr: the scan's HDR colour layer (nestlight expand-hdr), drawn "
-                  "in linear colour: EXR files hold it whole, PNG files show it through --exposure; eye-dome "
+                  "in linear colour: EXR files hold it whole (times 2^--exposure), PNG files show it through --exposure; eye-dome "
                   "lighting is off unless --edl is given");
   cmd->add_option("--layer", job.colourLayer, "The colour layer --colour hdr draws")->capture_default_str();
   cmd->add_option("--exposure", job.settings.exposureStops,
                   "Exposure in stops: colour times 2^stops (HDR highlights lie above 1)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(-64.0, 64.0));
   cmd->add_option("--point-size", job.settings.sizeScale,
                   "Splat diameter in point spacings: the measured spacing of the finest drawn node at each "
                   "point (points rasteriser)")

@@ -1,5 +1,7 @@
 #include "nestlight/octree/octree_reader.h"
 
+#include "file_io.h"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -24,17 +26,7 @@ thread_local uint64_t tlsBytesRead = 0;
 
 void readAll(int fd, void* dst, size_t size, uint64_t offset, const std::string& path) {
   tlsBytesRead += size;
-  uint8_t* p = static_cast<uint8_t*>(dst);
-  while (size > 0) {
-    ssize_t r = ::pread(fd, p, size, static_cast<off_t>(offset));
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0)
-      throw Error(path, Error::atByte(offset),
-                  r == 0 ? "file ends early" : std::string("read failed: ") + std::strerror(errno));
-    p += r;
-    size -= static_cast<size_t>(r);
-    offset += static_cast<uint64_t>(r);
-  }
+  detail::preadAll(fd, dst, size, offset, path);
 }
 
 // Proxies are counted as entries too until their chunk is loaded: at most 512 per chunk.

@@ -1,5 +1,7 @@
 #include "nestlight/octree/octree_writer.h"
 
+#include "file_io.h"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -18,17 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 void writeAll(int fd, const void* data, size_t size, uint64_t offset, const fs::path& path) {
-  const uint8_t* p = static_cast<const uint8_t*>(data);
-  while (size > 0) {
-    ssize_t w = ::pwrite(fd, p, size, static_cast<off_t>(offset));
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      throw Error(path.string(), Error::atByte(offset), std::string("write failed: ") + std::strerror(errno));
-    }
-    p += w;
-    size -= static_cast<size_t>(w);
-    offset += static_cast<uint64_t>(w);
-  }
+  detail::pwriteAll(fd, data, size, offset, path.string());
 }
 }  // namespace
 

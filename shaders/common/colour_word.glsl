@@ -14,8 +14,8 @@ vec3 colourWordLinear(uint w) { return uHdrColour ? decodeRgb9e5(w) : srgbDecode
 // The compute rasterisers average the colours of the points nearest a pixel with 32-bit integer
 // atomics (no float atomics in GL 4.5). The recorded colour sums its 8-bit sRGB codes as it always
 // has; an HDR colour sums log2(1 + x) in 1/4096 steps (x <= 65504 gives at most 65535 per point,
-// so 65536 points fit a pixel), relative precision 2e-4 over the whole range, which makes the
-// average a geometric one: the points within 1% of a pixel's nearest depth are neighbours on one
+// so 65536 points fit a pixel): rounding moves x by at most 8.5e-5 (1 + x), 1.7e-4 absolute below
+// 1 and 8.5e-5 relative far above it. The average is a geometric one: the points within 1% of a pixel's nearest depth are neighbours on one
 // surface, whose colours differ little.
 uvec3 colourWordToSum(uint w) {
   if (!uHdrColour) return uvec3(round(unpackUnorm4x8(w).rgb * 255.0));

@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -18,6 +19,7 @@
 #include "nestlight/converters/verify.h"
 #include "nestlight/gi/hdr/colour_compensation.h"
 #include "nestlight/gi/hdr/protocol.h"
+#include "nestlight/gi/hdr/relit.h"
 #include "nestlight/gi/hdr/renderings.h"
 #include "nestlight/octree/colour_layer.h"
 #include "test_support.h"
@@ -170,14 +172,87 @@ TEST(Expand, RestoresClippedColourBetterThanLdrAndGlobalInverseToneMapping) {
       "%.3f\n",
       ldr.rmsClipped, ldr.stopsClipped, landis.rmsClipped, landis.stopsClipped, ours.rmsClipped,
       ours.stopsClipped);
-  // In stops, every clipped point counts alike: the expansion brings them a fifth closer to the
-  // truth than the LDR colour (measured 2.19 -> 1.76 stops at this size), and far closer than the
-  // global operator, which sends every clipped point to the photograph's maximum. RMS is ruled by
-  // the lamp's core (1000 times the clipping), which no method here recovers; it is measured
-  // and reported by `nestlight bench hdr`, not asserted.
+  // Unregistered (cube maps only): in stops, every clipped point counts alike: the expansion
+  // brings them closer to the truth than the LDR colour (measured 2.19 -> 1.74 stops at this
+  // size), and far closer than the global operator, which sends every clipped point to the
+  // photograph's maximum. RMS is ruled by the lamp's core (1000 times the clipping): matches
+  // whose patch is clipped all over are rejected (ExpandOptions::rejectBlindPatches), so the lamp
+  // is in-filled from its rim and the RMS stays at about LDR's (72.9 against 79.7 measured).
   EXPECT_LT(ours.stopsClipped, 0.9 * ldr.stopsClipped);
   EXPECT_LT(ours.stopsClipped, 0.5 * landis.stopsClipped);
-  EXPECT_LT(ours.rmsClipped, 0.2 * landis.rmsClipped);
+  EXPECT_LT(ours.rmsClipped, ldr.rmsClipped);
+  EXPECT_LT(ours.rmsClipped, 0.3 * landis.rmsClipped);
+}
+
+// Registered: the photograph's own camera among the views (ExpandOptions::photoView), as the
+// paper renders views that cover the photograph. The points it sees take their value from the
+// photograph at their own place, the lamp's core included; the rest is in-filled from there.
+// Measured at this size: stops 2.19 -> 1.22, RMS 79.7 -> 50.0 (and 54.5 / 0.77 at 300k points
+// and full size, docs/PERFORMANCE.md); bounds: 65% of the stops and 70% of the RMS.
+TEST(Expand, ARegisteredPhotographRestoresTheLampAndTheSunlitFloor) {
+  test::TempDir tmp;
+  const fs::path dir = copyOctree(protocolDir() / "scan.octree", tmp.path() / "scan.octree");
+  const HdrImage photo = readHdrImage((protocolDir() / "photo.exr").string());
+  ExpandOptions o = smallOptions();
+  o.photoView = protocolPhotoView(photo.width, photo.height);
+  const ExpandReport r = expandHdr(dir, photo, o);
+  EXPECT_EQ(r.views.front().name, "photo");
+  const LayerError ldr = compareWithTruth(dir, "ldr"), ours = compareWithTruth(dir, "hdr");
+  std::printf("registered: clipped points, RMS / stops: LDR %.3f / %.3f, PMATCH-RGB %.3f / %.3f\n", ldr.rmsClipped,
+              ldr.stopsClipped, ours.rmsClipped, ours.stopsClipped);
+  EXPECT_LT(ours.stopsClipped, 0.65 * ldr.stopsClipped);
+  EXPECT_LT(ours.rmsClipped, 0.7 * ldr.rmsClipped);
+}
+
+// The relit protocol's parts: the baselines become layers holding exactly what compareWithTruth
+// judges (the LDR colour linearised; LANDIS-PC), the boxes' mask covers the boxes seen from the
+// relit camera and nothing else, and the error is RMS over the mask relative to the truth's mean.
+TEST(Relit, BaselinesMaskAndError) {
+  test::TempDir tmp;
+  const fs::path room = tmp.path() / "room";
+  fs::create_directories(room);
+  const fs::path dir = copyOctree(protocolDir() / "scan.octree", room / "scan.octree");
+  writeBaselineLayers(dir, 0.9, 500.0);
+  OctreeReader reader(dir);
+  ScanAccess scan(reader);
+  const ColourLayerReader ldr(dir, reader.metadata(), "ldr"), landis(dir, reader.metadata(), "landis");
+  uint64_t checked = 0;
+  for (const auto& [key, e] : reader.allNodes()) {
+    const ScanNode n = scan.read(key, e);
+    const std::vector<float> a = ldr.readNode(key, e.numPoints), b = landis.readNode(key, e.numPoints);
+    for (size_t i = 0; i < n.ldr.size(); ++i) {
+      const glm::vec3 want = landisExpand(n.ldr[i], 0.9, 500.0);
+      for (int c = 0; c < 3; ++c) {
+        // Half floats: 2^-11 relative.
+        ASSERT_NEAR(a[3 * i + size_t(c)], n.ldr[i][c], n.ldr[i][c] / 1024.0f + 1e-7f);
+        ASSERT_NEAR(b[3 * i + size_t(c)], want[c], want[c] / 1024.0f + 1e-7f);
+      }
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, reader.metadata().points);
+
+  RelitOptions o;
+  o.width = 64, o.height = 48;
+  const Scene s = loadScene(writeRelitScene(room, "ldr", o));
+  ASSERT_EQ(s.octrees.size(), 1u);
+  EXPECT_EQ(s.octrees[0].colour, "ldr");
+  EXPECT_EQ(s.meshes.size(), 2u);
+  const std::vector<uint8_t> mask = relitObjectMask(s);
+  ASSERT_EQ(mask.size(), size_t(64 * 48));
+  const size_t covered = size_t(std::count(mask.begin(), mask.end(), uint8_t(1)));
+  // The camera looks at the boxes: they fill a good part of the frame, not all of it.
+  EXPECT_GT(covered, mask.size() / 8);
+  EXPECT_LT(covered, mask.size() * 3 / 4);
+  EXPECT_EQ(mask[size_t(24) * 64 + 32], 1);  // the centre ray meets the matte box
+  EXPECT_EQ(mask[0], 0);                     // the top left corner sees the room
+  HdrImage truth(64, 48), render(64, 48);
+  for (size_t i = 0; i < truth.rgb.size(); ++i) truth.rgb[i] = 2.0f, render.rgb[i] = mask[i / 3] ? 3.0f : 1e6f;
+  const RelitError e = compareRelit(render, truth, mask);
+  EXPECT_EQ(e.pixels, covered);
+  EXPECT_NEAR(e.rms, 1.0, 1e-9);  // only the masked pixels count
+  EXPECT_NEAR(e.relativeRms, 0.5, 1e-9);
+  EXPECT_EQ(compareRelit(truth, truth, mask).rms, 0.0);
 }
 
 TEST(Expand, APhotographOfSomethingElseMatchesLittleAndStillGivesAValidLayer) {

@@ -255,11 +255,13 @@ TEST(Render, HdrColourLayerIsWrittenLinearlyToExr) {
   struct Case {
     Rasteriser r;
     Splatting s;
+    bool atomic64;  // compute: the one-pass 64-bit variant where the GPU has it (llvmpipe never)
   };
-  for (Case c : {Case{Rasteriser::Points, Splatting::Basic}, Case{Rasteriser::Points, Splatting::Hqs},
-                 Case{Rasteriser::Compute, Splatting::Basic}}) {
+  for (Case c : {Case{Rasteriser::Points, Splatting::Basic, true}, Case{Rasteriser::Points, Splatting::Hqs, true},
+                 Case{Rasteriser::Compute, Splatting::Basic, true}, Case{Rasteriser::Compute, Splatting::Basic, false}}) {
     j.settings.rasteriser = c.r;
     j.settings.splatting = c.s;
+    j.settings.allowAtomic64 = c.atomic64;
     j.settings.fixedPointSize = c.r == Rasteriser::Compute ? 1.0f : 0.0f;
     renderHeadless(j);
     const gi::HdrImage img = gi::readHdrImage(j.output);
@@ -271,7 +273,7 @@ TEST(Render, HdrColourLayerIsWrittenLinearlyToExr) {
       for (int k = 0; k < 3; ++k)
         worst = std::max(worst, std::abs(double(img.rgb[3 * p + k]) - want[k]) / (want[0] / 512.0 + want[k] / 1024.0));
     }
-    const std::string name = std::string(rasteriserName(c.r)) + "/" + splattingName(c.s);
+    const std::string name = std::string(rasteriserName(c.r)) + "/" + splattingName(c.s) + (c.atomic64 ? "" : "/32-bit");
     EXPECT_GT(covered, img.pixels() / 10) << name;
     EXPECT_LE(worst, 1.0) << name << ": worst error in units of the tolerance";
   }

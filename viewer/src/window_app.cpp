@@ -59,14 +59,23 @@ struct CameraController {
 int runViewer(const ViewerOptions& opt) {
   OctreeReader reader(opt.octree);  // a bad octree fails before a window opens
   const Metadata& meta = reader.metadata();
-  const auto modes = frame::availableColourModes(meta, opt.colourLayer);
+  auto modes = frame::availableColourModes(meta, opt.colourLayer);
   frame::ColourMode mode = opt.colour ? *opt.colour : modes.front();
   if (std::find(modes.begin(), modes.end(), mode) == modes.end())
     throw Error(opt.octree.string(), "", std::string("the scan has nothing to show for colour mode '") +
                                              frame::colourModeName(mode) + "'" +
                                              (mode == frame::ColourMode::Hdr ? " (no colour layer '" + opt.colourLayer + "')" : ""));
   std::shared_ptr<const ColourLayerReader> hdrLayer;
-  if (meta.layer(opt.colourLayer)) hdrLayer = std::make_shared<const ColourLayerReader>(opt.octree, meta, opt.colourLayer);
+  if (meta.layer(opt.colourLayer)) {
+    try {
+      hdrLayer = std::make_shared<const ColourLayerReader>(opt.octree, meta, opt.colourLayer);
+    } catch (const Error& e) {
+      if (mode == frame::ColourMode::Hdr) throw;
+      // A damaged layer the user did not ask for: the scan still opens, without that colouring.
+      std::fprintf(stderr, "view: %s; colouring hdr unavailable\n", e.what());
+      modes.erase(std::find(modes.begin(), modes.end(), frame::ColourMode::Hdr));
+    }
+  }
   gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + opt.octree.filename().string());
   std::printf("view: %s\n", ctx.description().c_str());
 
@@ -231,7 +240,7 @@ int runViewer(const ViewerOptions& opt) {
         if (ImGui::Combo("splatting", &splat, "high quality (blended)\0basic (nearest)\0"))
           settings.splatting = splat == 0 ? Splatting::Hqs : Splatting::Basic;
       }
-      if (mode == frame::ColourMode::Hdr) ImGui::SliderFloat("exposure (stops)", &settings.exposureStops, -12.f, 4.f);
+      ImGui::SliderFloat("exposure (stops)", &settings.exposureStops, -12.f, 4.f);
       ImGui::SliderFloat("point size", &settings.sizeScale, 0.25f, 4.f);
       ImGui::SliderFloat("EDL strength", &settings.edlStrength, 0.f, 5.f);
       ImGui::SliderFloat("EDL radius", &settings.edlRadius, 0.5f, 4.f);

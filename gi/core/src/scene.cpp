@@ -233,8 +233,10 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
           std::error_code ec;
           if (t.colour != "rgb" && std::filesystem::exists(t.path / "metadata.json", ec)) {
             const OctreeReader reader(t.path);
-            if (!reader.metadata().layer(t.colour))
+            const LayerRecord* layer = reader.metadata().layer(t.colour);
+            if (!layer)
               c.fail("the octree has no colour layer '" + t.colour + "' (nestlight expand-hdr makes \"hdr\")");
+            if (layer->kind != "colour") c.fail("layer '" + t.colour + "' holds '" + layer->kind + "', not colour");
           }
         }
       }

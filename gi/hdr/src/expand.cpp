@@ -17,6 +17,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "nestlight/converters/builder.h"
 #include "nestlight/gi/hdr/exposure.h"
 #include "nestlight/gi/hdr/patchmatch.h"
 #include "nestlight/gi/hdr/poisson_infill.h"
@@ -55,6 +56,7 @@ json ExpandReport::toJson() const {
           {"cg_iterations_max", cgIterationsMax},
           {"matched_pixels", matchedPixels},
           {"covered_pixels", coveredPixels},
+          {"blind_pixels", blindPixels},
           {"max_value", maxValue},
           {"clamped_values", clampedValues},
           {"seconds", seconds},
@@ -71,6 +73,32 @@ glm::vec3 landisExpand(const glm::vec3& ldr, double threshold, double maxLuminan
 }
 
 namespace {
+
+// 1 where every covered pixel of the (2r+1)^2 patch around a covered pixel is over-exposed
+// (linear LDR luminance above t_l): a summed-area table of the pixels that are not.
+std::vector<uint8_t> blindPatches(const HdrImage& ldr, const std::vector<uint8_t>& covered, int r, double overexposed) {
+  const int w = ldr.width, h = ldr.height;
+  std::vector<uint32_t> sat(size_t(w + 1) * size_t(h + 1), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
+      const Rgb c = ldr.get(x, y);
+      const bool informative =
+          covered[i] && !(luminance(Rgb(linearFromDisplay(c.r), linearFromDisplay(c.g), linearFromDisplay(c.b))) > overexposed);
+      sat[size_t(y + 1) * size_t(w + 1) + size_t(x + 1)] = uint32_t(informative) + sat[size_t(y) * size_t(w + 1) + size_t(x + 1)] +
+                                                           sat[size_t(y + 1) * size_t(w + 1) + size_t(x)] -
+                                                           sat[size_t(y) * size_t(w + 1) + size_t(x)];
+    }
+  std::vector<uint8_t> out(ldr.pixels(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int x0 = std::max(0, x - r), x1 = std::min(w, x + r + 1), y0 = std::max(0, y - r), y1 = std::min(h, y + r + 1);
+      const uint32_t n = sat[size_t(y1) * size_t(w + 1) + size_t(x1)] - sat[size_t(y0) * size_t(w + 1) + size_t(x1)] -
+                         sat[size_t(y1) * size_t(w + 1) + size_t(x0)] + sat[size_t(y0) * size_t(w + 1) + size_t(x0)];
+      out[size_t(y) * size_t(w) + size_t(x)] = covered[size_t(y) * size_t(w) + size_t(x)] && n == 0;
+    }
+  return out;
+}
 
 // Per-point scratch record: the HDR colour so far and what happened to the point.
 enum PointState : uint32_t {
@@ -133,17 +161,6 @@ double seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-uint64_t peakRss() {
-  FILE* f = std::fopen("/proc/self/status", "r");
-  if (!f) return 0;
-  char line[256];
-  uint64_t kb = 0;
-  while (std::fgets(line, sizeof line, f))
-    if (std::strncmp(line, "VmHWM:", 6) == 0) kb = std::strtoull(line + 6, nullptr, 10);
-  std::fclose(f);
-  return kb * 1024;
-}
-
 // Box-filters `img` down by an integer factor until its long side is at most `maxSize`.
 HdrImage shrink(const HdrImage& img, int maxSize) {
   const int f = std::max(1, (std::max(img.width, img.height) + maxSize - 1) / maxSize);
@@ -164,10 +181,41 @@ HdrImage shrink(const HdrImage& img, int maxSize) {
   return out;
 }
 
+// A uniform sample of the over-exposed points that does not depend on the order threads visit
+// nodes in (reservoir sampling did, and so did the automatic views): every point gets a hash of
+// its index in the scan, and the sample keeps the smallest hashes (bottom-k sampling).
 struct Sample {
+  struct Entry {
+    uint64_t hash;
+    glm::dvec3 position;
+    glm::vec3 normal;
+    bool operator<(const Entry& o) const { return hash < o.hash; }
+  };
+  std::vector<Entry> heap;  // a max-heap on hash, at most the sample's size
   std::vector<glm::dvec3> positions;
   std::vector<glm::vec3> normals;
-  uint64_t seen = 0;
+
+  static uint64_t hashOf(uint64_t index) {  // splitmix64's finaliser
+    uint64_t x = index + 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+  }
+  void offer(const Entry& e, size_t capacity) {
+    if (heap.size() < capacity) {
+      heap.push_back(e);
+      std::push_heap(heap.begin(), heap.end());
+    } else if (e.hash < heap.front().hash) {
+      std::pop_heap(heap.begin(), heap.end());
+      heap.back() = e;
+      std::push_heap(heap.begin(), heap.end());
+    }
+  }
+  // The sample in hash order.
+  void finish() {
+    std::sort(heap.begin(), heap.end());
+    for (const Entry& e : heap) positions.push_back(e.position), normals.push_back(e.normal);
+  }
 };
 
 }  // namespace
@@ -268,7 +316,6 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   Sample sample;
   std::mutex mutex;
   const size_t kSampleMax = 20000;
-  std::mt19937_64 rng(7);
   std::atomic<uint64_t> nodesDone{0};
   tbb::parallel_for(size_t(0), nodes.size(), [&](size_t ni) {
     const auto& [key, entry] = nodes[ni];
@@ -284,24 +331,13 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     overexposed += over.size();
     std::lock_guard<std::mutex> lock(mutex);
     for (int b = 0; b < kHistogramBins; ++b) counts[size_t(b)] += local[size_t(b)];
-    for (size_t i : over) {  // reservoir sampling: a uniform sample of every over-exposed point
-      const uint64_t k = sample.seen++;
-      size_t slot = k;
-      if (k >= kSampleMax) {
-        slot = size_t(std::uniform_int_distribution<uint64_t>(0, k)(rng));
-        if (slot >= kSampleMax) continue;
-      }
-      if (slot >= sample.positions.size()) {
-        sample.positions.push_back(n.world[i]);
-        sample.normals.push_back(n.normal.empty() ? glm::vec3(0) : n.normal[i]);
-      } else {
-        sample.positions[slot] = n.world[i];
-        sample.normals[slot] = n.normal.empty() ? glm::vec3(0) : n.normal[i];
-      }
-    }
+    for (size_t i : over)
+      sample.offer({Sample::hashOf(base[ni] + i), n.world[i], n.normal.empty() ? glm::vec3(0) : n.normal[i]},
+                   kSampleMax);
     progress("statistics", double(++nodesDone) / double(nodes.size()));
   });
   rep.overexposed = overexposed;
+  sample.finish();
   Histogram scanHistogram;
   scanHistogram.counted = rep.points;
   for (int b = 0; b < kHistogramBins; ++b)
@@ -339,6 +375,22 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   rep.views = o.views.empty() ? automaticViews(sample.positions, sample.normals, centre, diagonal,
                                                o.autoViews, o.faceSize)
                               : o.views;
+  // The photograph as PatchMatch sees it (box-filtered down to maxPhotoSize).
+  const HdrImage small = shrink(photo, o.maxPhotoSize);
+  if (o.photoView) {
+    // Rendered at the matched photograph's size, so that its pixels are the photograph's and the
+    // identity start is the identity.
+    const View& v = *o.photoView;
+    const double aspect = double(v.width) / double(v.height), photoAspect = double(photo.width) / double(photo.height);
+    if (std::abs(aspect / photoAspect - 1.0) > 0.01)
+      throw Error("", "photo view",
+                  "is " + std::to_string(v.width) + " x " + std::to_string(v.height) + ", the photograph " +
+                      std::to_string(photo.width) + " x " + std::to_string(photo.height) +
+                      ": a registered camera has the photograph's aspect");
+    View sized = lookAt(v.position, v.position + v.forward, v.up, v.fovYDegrees, small.width, small.height);
+    sized.name = v.name.empty() ? "photo" : v.name;
+    rep.views.insert(rep.views.begin(), sized);
+  }
   if (rep.views.empty()) throw Error("", "", "no views to render the scan from");
 
   // Pass B: LDR renderings.
@@ -351,7 +403,6 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   // PatchMatch of each rendering against the exposed photograph (display values, as the scan's
   // camera recorded them), then the HDR mapping: the photograph's values at the matches.
   t = Clock::now();
-  const HdrImage small = shrink(photo, o.maxPhotoSize);
   HdrImage exposedDisplay(small.width, small.height);
   for (size_t i = 0; i < small.rgb.size(); ++i)
     exposedDisplay.rgb[i] = displayFromLinear(std::clamp(exposure * small.rgb[i], 0.0f, 1.0f));
@@ -367,13 +418,21 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     pm.patchRadius = o.patchRadius;
     pm.iterations = o.patchIterations;
     pm.seed = 1 + vi;
+    pm.identityStart = o.photoView && vi == 0;
     const PatchMatchField field = generalizedPatchMatch(ldr, exposedDisplay, pm, &mask);
     Expanded& e = expanded[vi];
     e.hdr = fetch(field, small);
     for (float& v : e.hdr.rgb) v = std::isfinite(v) ? std::max(0.0f, v * exposure) : 0.0f;
     e.ssd = field.ssd;
+    const std::vector<uint8_t> blind =
+        pm.identityStart || !o.rejectBlindPatches ? std::vector<uint8_t>() : blindPatches(ldr, mask, o.patchRadius, o.overexposed);
     for (size_t i = 0; i < e.ssd.size(); ++i) {
       if (!mask[i]) {
+        e.ssd[i] = INFINITY;
+        continue;
+      }
+      if (!blind.empty() && blind[i]) {
+        rep.blindPixels++;
         e.ssd[i] = INFINITY;
         continue;
       }
@@ -422,6 +481,8 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
       bool seen = false;
       candidates.clear();
       for (size_t vi = 0; vi < renderings.size(); ++vi) {
+        // The photograph's own view decides alone for the points it matched.
+        if (vi == 1 && o.photoView && !candidates.empty()) break;
         const View& v = renderings[vi].view;
         glm::dvec2 px;
         double d;
@@ -646,7 +707,7 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     });
     rep.seconds["write_layer"] = seconds(t);
     rep.seconds["total"] = seconds(t0);
-    rep.peakRssBytes = peakRss();
+    rep.peakRssBytes = peakRssBytes();
     rep.clampedValues = writer.clampedValues();
     json build = rep.toJson();
     build["mode"] = expansionModeName(o.mode);
@@ -658,7 +719,7 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     writer.finish(build);
   }
   rep.seconds["total"] = seconds(t0);
-  rep.peakRssBytes = peakRss();
+  rep.peakRssBytes = peakRssBytes();
   return rep;
 }
 

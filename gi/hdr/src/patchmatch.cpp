@@ -147,6 +147,12 @@ class LevelSolver {
         const size_t i = index(x, y);
         if (!mask_[i]) continue;
         gather(x, y, patch);
+        if (o_.identityStart) {
+          // The same place in the target, scaled by the images' size ratio.
+          const float ratio = float(t_.width) / float(s_.width);
+          const float scale = std::clamp(ratio, o_.minScale, o_.maxScale);
+          consider(field[i], patch, (glm::vec2(x, y) + 0.5f) * ratio - 0.5f, 0.0f, scale, glm::vec2(scale, 0.0f));
+        }
         Rng rng = pixelRng(o_.seed, level_, -1, i);
         const Match r = randomTransform(rng);
         consider(field[i], patch, r.centre, r.angle, r.scale, r.similarity);

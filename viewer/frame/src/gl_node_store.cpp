@@ -125,8 +125,6 @@ void GlNodeStore::setColourMode(ColourMode m) {
   mode_ = m;
 }
 
-void GlNodeStore::setColourLayer(std::shared_ptr<const ColourLayerReader> layer) { colourLayer_ = std::move(layer); }
-
 void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::PreparedNode& out) const {
   const size_t n = pts.size();
   out.key = key;

@@ -19,7 +19,8 @@ class ScanColours {
  public:
   // The source name of the recorded colour.
   static constexpr const char* kRecorded = "rgb";
-  // Grey for a scan with neither (drawn so, as the point view does).
+  // Grey for a scan with neither (as the reference lights it; the point view draws such a scan by
+  // elevation instead).
   static constexpr float kNoColour = 0.8f;
 
   // `source`: "rgb" or the name of a colour layer of the octree at `octree`. Opening a layer
@@ -39,9 +40,9 @@ class ScanColours {
   void linear(const NodeKey& key, const PointBuffer& points, std::vector<float>& rgb) const;
 
  private:
-  const Metadata& meta_;
   std::string source_;
   int rgb_ = -1;
+  size_t rgbOffset_ = 0;  // in a point's attribute bytes
   std::shared_ptr<const ColourLayerReader> layer_;
 };
 

@@ -47,7 +47,7 @@ uint32_t packNormal(float x, float y, float z);
 // Its inverse, as decodeNormal in shaders/common/octahedral.glsl: (0, 0, 0) for the word 0.
 glm::vec3 unpackNormal(uint32_t word);
 
-// Hdr: the octree's colour layer "hdr" (or another, setColourLayer), linear HDR.
+// Hdr: the octree's colour layer "hdr" (or another given to the store), linear HDR.
 enum class ColourMode { Rgb, Intensity, Classification, Elevation, Normal, Hdr };
 const char* colourModeName(ColourMode m);
 // Parses "rgb", "intensity", "classification", "elevation", "normal", "hdr"; throws on others.
@@ -70,11 +70,9 @@ class GlNodeStore : public streaming::NodeStore {
   void release(uint64_t handle) override;
 
   // Nodes prepared with another mode still upload; the streamer is flushed when it changes.
-  // ColourMode::Hdr needs a colour layer (setColourLayer) first.
+  // ColourMode::Hdr needs the store made with a colour layer.
   void setColourMode(ColourMode m);
   ColourMode colourMode() const { return mode_; }
-  // The layer ColourMode::Hdr packs (read on loader threads; the reader is thread-safe).
-  void setColourLayer(std::shared_ptr<const ColourLayerReader> layer);
   // Whether colour words are RGB9E5 (the shaders' uHdrColour).
   bool hdrColour() const { return mode_ == ColourMode::Hdr; }
   // The node's points buffer.

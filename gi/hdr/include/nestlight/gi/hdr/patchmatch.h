@@ -31,6 +31,11 @@ struct PatchMatchOptions {
   // sees the scene twice as large as the rendering). minScale == maxScale fixes the scale.
   float minScale = 0.5f, maxScale = 2.0f;
   bool rotation = true;  // search angles in [-pi, pi); false: angle 0 only
+  // Start every pixel from the same place in the target (scaled by the size ratio), not only a
+  // random transform: for a source rendered from the target's own camera. Matches that are only
+  // as good (the SSD-0 ties of clipped regions) then keep the registered place; better ones
+  // still replace it.
+  bool identityStart = false;
   uint64_t seed = 1;     // the same seed gives the same field, whatever the thread count
 };
 
