@@ -51,6 +51,10 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
                   "The photograph's camera, when registered with the scan (a cams.json with one view): the "
                   "scan is also rendered from it (at the photograph's size), matched from the identity, and the points it matched take "
                   "their colour from it alone; the other views (--views or --auto-views) reach the rest");
+  cmd->add_option("--photo-search", o->photoSearchRadius,
+                  "How far (pixels) matches of the --photo-view rendering may move from the identity; 0: anywhere")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 4096));
   cmd->add_option("--face-size", o->faceSize, "Face size of automatic cube maps (pixels)")
       ->capture_default_str()
       ->check(CLI::Range(32, 4096));

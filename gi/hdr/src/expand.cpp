@@ -419,6 +419,13 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     pm.iterations = o.patchIterations;
     pm.seed = 1 + vi;
     pm.identityStart = o.photoView && vi == 0;
+    if (pm.identityStart) {
+      // Registered: rendered at the photograph's size from its camera, so no rotation or scale,
+      // and matches only move locally (misregistration, the renderings' splats).
+      pm.rotation = false;
+      pm.minScale = pm.maxScale = 1.0f;
+      pm.searchRadius = float(o.photoSearchRadius);  // 0: anywhere
+    }
     const PatchMatchField field = generalizedPatchMatch(ldr, exposedDisplay, pm, &mask);
     Expanded& e = expanded[vi];
     e.hdr = fetch(field, small);

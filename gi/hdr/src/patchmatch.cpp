@@ -356,7 +356,9 @@ class LevelSolver {
   // them apart matters: a position already right to a pixel would be lost by a joint candidate
   // whose position window is still wide, and a good angle by one whose angle window is.
   void randomSearch(Match& best, Rng& rng, const Patch& patch) const {
-    for (float radius = float(std::max(t_.width, t_.height)); radius >= 1.0f; radius *= 0.5f) {
+    float start = float(std::max(t_.width, t_.height));
+    if (o_.searchRadius > 0) start = std::min(start, std::max(1.0f, o_.searchRadius / float(1 << level_)));
+    for (float radius = start; radius >= 1.0f; radius *= 0.5f) {
       const glm::vec2 u = 2.0f * rng.uniform2() - 1.0f;
       consider(best, patch, best.centre + radius * u, best.angle, best.scale, best.similarity);
     }

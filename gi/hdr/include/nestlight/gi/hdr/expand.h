@@ -44,6 +44,7 @@ struct ExpandOptions {
   // there; other views only reach what it did not match). It is rendered at the size PatchMatch
   // sees the photograph at and must have the photograph's aspect.
   std::optional<View> photoView;
+  int photoSearchRadius = 0;  // pixels: how far the photo view's matches may move from the identity (0: anywhere)
   // Deviation from the paper, measured (docs/HDR.md): a match whose source patch is over-exposed
   // in every pixel says nothing (inside a clipped region every white patch of the photograph
   // matches with SSD 0: a sunlit floor takes a lamp's values), so it is rejected and its points

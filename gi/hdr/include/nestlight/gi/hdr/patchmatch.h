@@ -36,6 +36,10 @@ struct PatchMatchOptions {
   // as good (the SSD-0 ties of clipped regions) then keep the registered place; better ones
   // still replace it.
   bool identityStart = false;
+  // > 0: random search only within this many target pixels of the current match (at full
+  // resolution, halved per coarser level), for a source registered with the target that only
+  // needs local refinement; 0: the whole target (the algorithm's own search).
+  float searchRadius = 0;
   uint64_t seed = 1;     // the same seed gives the same field, whatever the thread count
 };
 
