@@ -295,6 +295,25 @@ TEST(Expand, ABlackPhotographOrAScanWithoutColourIsAnError) {
   EXPECT_NE(std::string(grey.what()).find("no rgb colour"), std::string::npos) << grey.what();
 }
 
+// A saturated photograph (one value everywhere, as a camera that clipped throughout) carries no
+// detail to match: whatever the exposure search makes of it, no clipped point may take a value
+// from it that the LDR colour does not support. Every over-exposed point ends in-filled (or an
+// island), the layer is whole and valid, and nothing exceeds the LDR range by more than the
+// in-fill's rounding.
+TEST(Expand, ASaturatedPhotographExpandsNothingAndStillGivesAValidLayer) {
+  test::TempDir tmp;
+  const fs::path dir = copyOctree(protocolDir() / "scan.octree", tmp.path() / "scan.octree");
+  HdrImage photo(64, 48);
+  for (float& v : photo.rgb) v = 1000.0f;
+  const ExpandReport r = expandHdr(dir, photo, smallOptions());
+  EXPECT_GT(r.overexposed, 0u);
+  EXPECT_EQ(r.overexposed, r.projected + r.infilled + r.islandPoints);
+  EXPECT_EQ(r.projected, 0u) << "a flat photograph has nothing to match";
+  EXPECT_LE(r.maxValue, 1.0f + 1e-3f);
+  EXPECT_TRUE(verifyOctree(dir).ok());
+  EXPECT_NE(OctreeReader(dir).metadata().layer("hdr"), nullptr);
+}
+
 // Kills a child process running the expansion when it reaches `stage`.
 void killedAt(const fs::path& dir, const HdrImage& photo, const std::string& stage) {
   const pid_t pid = fork();
