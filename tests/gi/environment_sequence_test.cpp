@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "nestlight/gi/hdr_image.h"
+#include "nestlight/gi/scene.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -105,6 +106,32 @@ TEST(EnvironmentSequence, NoFramesOrNoRateIsAnErrorNamingTheSource) {
   spec.fps = 0;
   const Error rate = test::errorOf([&] { EnvironmentSequence s(spec); });
   EXPECT_NE(std::string(rate.what()).find("frame rate"), std::string::npos) << rate.what();
+}
+
+// A scene's environment may be a sequence: listed when the scene is read (a pattern naming no
+// frame fails with its field), lit with the frame at a time (a still: the first).
+TEST(EnvironmentSequence, ASceneNamesOneByPatternAndRate) {
+  test::TempDir t;
+  writeFrame(t.path() / "p_1.exr", 2.0f);
+  writeFrame(t.path() / "p_2.exr", 5.0f);
+  test::writeFile(t.file("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  auto scene = [&](const std::string& environment) {
+    test::writeFile(t.file("scene.json"),
+                    R"({"version": 1, "meshes": [{"path": "tri.obj"}], "environment": )" + environment + "}");
+    return t.file("scene.json");
+  };
+  const Scene s = loadScene(scene(R"({"sequence": "p_%d.exr", "fps": 10, "scale": 2})"));
+  ASSERT_TRUE(s.environment);
+  EXPECT_EQ(s.environment->sequence, t.path() / "p_%d.exr");
+  EXPECT_DOUBLE_EQ(s.environment->fps, 10.0);
+  EXPECT_FLOAT_EQ(radianceOf(loadEnvironmentAt(*s.environment)), 4.0f);
+  EXPECT_FLOAT_EQ(radianceOf(loadEnvironmentAt(*s.environment, 0.15)), 10.0f);
+  const Error none = test::errorOf([&] { loadScene(scene(R"({"sequence": "q_%d.exr"})")); });
+  EXPECT_NE(std::string(none.what()).find("environment.sequence"), std::string::npos) << none.what();
+  const Error both = test::errorOf([&] { loadScene(scene(R"({"sequence": "p_%d.exr", "path": "p_1.exr"})")); });
+  EXPECT_NE(std::string(both.what()).find("exactly one"), std::string::npos) << both.what();
+  const Error stray = test::errorOf([&] { loadScene(scene(R"({"path": "p_1.exr", "fps": 3})")); });
+  EXPECT_NE(std::string(stray.what()).find("belong to a"), std::string::npos) << stray.what();
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "nestlight/gi/environment_sequence.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/json_field.h"
@@ -292,10 +293,33 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
   }
   if (root.has("environment")) {
     Field e = root.at("environment");
-    e.expectObject({"path", "constant", "rotation", "scale"});
+    e.expectObject({"path", "constant", "sequence", "fps", "on_bad_frame", "rotation", "scale"});
     SceneEnvironment env;
-    if (e.has("path") == e.has("constant")) e.fail("give exactly one of \"path\" (EXR or HDR lat-long) and \"constant\"");
+    if (int(e.has("path")) + int(e.has("constant")) + int(e.has("sequence")) != 1)
+      e.fail("give exactly one of \"path\" (EXR or HDR lat-long), \"constant\" and \"sequence\" (a frame "
+             "pattern such as probe_%04d.exr, or a folder)");
     if (e.has("path")) env.path = resolvePath(e.at("path"), file);
+    if (e.has("sequence")) {
+      env.sequence = resolvePath(e.at("sequence"), file);
+      if (e.has("fps")) env.fps = e.at("fps").number(1e-6, 1e6);
+      if (e.has("on_bad_frame")) {
+        Field b = e.at("on_bad_frame");
+        const std::string v = b.value().is_string() ? b.value().get<std::string>() : "";
+        if (v != "error" && v != "previous") b.fail("expected \"error\" or \"previous\"");
+        env.keepPreviousOnBadFrame = v == "previous";
+      }
+      // The frames are listed now, so a sequence that names none fails with its field.
+      try {
+        EnvironmentSequenceSpec spec;
+        spec.source = env.sequence;
+        spec.fps = env.fps;
+        EnvironmentSequence probe(spec);
+      } catch (const Error& x) {
+        e.at("sequence").fail(x.what());
+      }
+    } else if (e.has("fps") || e.has("on_bad_frame")) {
+      e.fail("\"fps\" and \"on_bad_frame\" belong to a \"sequence\"");
+    }
     if (e.has("constant")) env.constant = e.at("constant").colour(0, 1e30);
     if (e.has("rotation")) env.rotationDegrees = float(e.at("rotation").number(-36000, 36000));
     if (e.has("scale")) env.scale = float(e.at("scale").number(0, 1e30));
@@ -358,6 +382,18 @@ bool sceneHasLight(const Scene& scene, RadianceMode mode) {
       if (e.r > 0 || e.g > 0 || e.b > 0) return true;
     }
   return false;
+}
+
+EnvironmentMap loadEnvironmentAt(const SceneEnvironment& e, double seconds) {
+  if (e.sequence.empty()) return EnvironmentMap::load(e.path.string(), e.rotationDegrees, e.scale);
+  EnvironmentSequenceSpec spec;
+  spec.source = e.sequence;
+  spec.fps = e.fps;
+  spec.rotationDegrees = e.rotationDegrees;
+  spec.scale = e.scale;
+  spec.keepPreviousOnBadFrame = e.keepPreviousOnBadFrame;
+  EnvironmentSequence seq(spec);
+  return *seq.frame(seq.frameAt(seconds));
 }
 
 std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {

@@ -512,7 +512,7 @@ class RasterMethod : public Method, public RasterFrame {
     if (!scene_.environment) return;
     const SceneEnvironment& e = *scene_.environment;
     EnvironmentMap env = e.constant ? EnvironmentMap::constant(*e.constant)
-                                    : EnvironmentMap::load(e.path.string(), e.rotationDegrees, e.scale);
+                                    : loadEnvironmentAt(e);
     hasEnvironment_ = !env.black();
     envRotation_ = glm::radians(env.rotationDegrees());
     envScale_ = env.scale();

@@ -269,9 +269,9 @@ std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene, void (*
     if (e.constant) {
       env = EnvironmentMap::constant(*e.constant * e.scale);
     } else {
-      env = EnvironmentMap::load(e.path.string(), e.rotationDegrees, e.scale);
+      env = loadEnvironmentAt(e);
       if (log) {
-        std::string line = e.path.string() + ": environment " + std::to_string(env.image().width) + "x" +
+        std::string line = (e.sequence.empty() ? e.path : e.sequence).string() + ": environment " + std::to_string(env.image().width) + "x" +
                            std::to_string(env.image().height);
         if (env.invalidTexels()) line += "; " + std::to_string(env.invalidTexels()) + " non-finite or negative texels set to 0";
         if (env.black()) line += "; all black: it adds no light";

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/camera_path.h"
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/mesh.h"
@@ -53,8 +54,13 @@ struct Light {
 };
 
 struct SceneEnvironment {
-  std::filesystem::path path;        // empty with `constant`
+  std::filesystem::path path;        // empty with `constant` or `sequence`
   std::optional<Rgb> constant;
+  // A video light probe (nestlight/gi/environment_sequence.h): a frame pattern or a folder, its
+  // frame rate, and whether a bad frame is an error or plays the previous one again.
+  std::filesystem::path sequence;
+  double fps = 24;
+  bool keepPreviousOnBadFrame = false;
   float rotationDegrees = 0;
   float scale = 1;
 };
@@ -120,6 +126,10 @@ struct Scene {
 // it has no path or `still`. Throws nestlight::Error naming the scene file and field when there
 // is no camera, the path asks for more than a million frames, or a frame's view is degenerate.
 std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still = false);
+
+// The environment map of `e` (path or sequence; not `constant`) at `seconds` into its sequence.
+// Renders of a still take the sequence's first frame. Throws nestlight::Error naming the file.
+EnvironmentMap loadEnvironmentAt(const SceneEnvironment& e, double seconds = 0);
 
 // Throws nestlight::Error("scene.json", "scene.meshes[0].transform.scale", reason) on any
 // fault. Relative paths resolve against the scene file's folder. Without "origin", the origin is
