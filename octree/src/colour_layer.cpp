@@ -45,12 +45,6 @@ uint64_t get64(const uint8_t* p) {
   return v;
 }
 
-void pwriteAll(int fd, const void* data, size_t size, uint64_t offset, const fs::path& path) {
-  detail::pwriteAll(fd, data, size, offset, path.string());
-}
-void preadAll(int fd, void* data, size_t size, uint64_t offset, const fs::path& path) {
-  detail::preadAll(fd, data, size, offset, path.string());
-}
 
 Metadata readMetadataFile(const fs::path& dir) {
   const fs::path mp = dir / "metadata.json";
@@ -206,7 +200,7 @@ void ColourLayerWriter::writeNode(const NodeKey& key, const float* rgb, size_t p
     offset_ += bytes.size();
     entries_.push_back(e);
   }
-  pwriteAll(fd_, bytes.data(), bytes.size(), e.byteOffset, tmp_);
+  detail::pwriteAll(fd_, bytes.data(), bytes.size(), e.byteOffset, tmp_.string());
 }
 
 LayerRecord ColourLayerWriter::finish(const nlohmann::json& build) {
@@ -245,7 +239,7 @@ LayerRecord ColourLayerWriter::finish(const nlohmann::json& build) {
     put32(p + 16, e.points), put32(p + 20, e.byteSize);
     put64(p + 24, e.byteOffset), put64(p + 32, e.checksum);
   }
-  pwriteAll(fd_, index.data(), index.size(), offset_, tmp_);
+  detail::pwriteAll(fd_, index.data(), index.size(), offset_, tmp_.string());
   if (::fsync(fd_) != 0)
     throw Error(tmp_.string(), "", std::string("fsync failed: ") + std::strerror(errno));
   ::close(fd_);
@@ -311,7 +305,7 @@ ColourLayerReader::ColourLayerReader(const fs::path& dir, const Metadata& meta,
     if (r->indexBytes > (uint64_t(1) << 34))
       throw Error(path_.string(), "", "index larger than 16 GiB");
     std::vector<uint8_t> index(r->indexBytes);
-    preadAll(fd_, index.data(), index.size(), r->indexOffset, path_);
+    detail::preadAll(fd_, index.data(), index.size(), r->indexOffset, path_.string());
     if (checksum64(index.data(), index.size()) != r->indexChecksum)
       throw Error(path_.string(), Error::atByte(r->indexOffset), "index checksum mismatch");
     std::string why = parseLayerIndex(index.data(), index.size(), entries_);
@@ -346,7 +340,7 @@ std::vector<float> ColourLayerReader::readNode(const NodeKey& key, uint32_t expe
                 "node " + key.name() + " has " + std::to_string(e->points) + " colours for " +
                     std::to_string(expectedPoints) + " points");
   std::vector<uint8_t> bytes(e->byteSize);
-  preadAll(fd_, bytes.data(), bytes.size(), e->byteOffset, path_);
+  detail::preadAll(fd_, bytes.data(), bytes.size(), e->byteOffset, path_.string());
   if (checksum64(bytes.data(), bytes.size()) != e->checksum)
     throw Error(path_.string(), Error::atByte(e->byteOffset),
                 "node " + key.name() + ": checksum mismatch");

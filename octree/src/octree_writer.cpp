@@ -18,11 +18,6 @@ namespace nestlight {
 
 namespace fs = std::filesystem;
 
-namespace {
-void writeAll(int fd, const void* data, size_t size, uint64_t offset, const fs::path& path) {
-  detail::pwriteAll(fd, data, size, offset, path.string());
-}
-}  // namespace
 
 void writeFileAtomic(const fs::path& path, const void* bytes, size_t size) {
   fs::path tmp = path;
@@ -30,7 +25,7 @@ void writeFileAtomic(const fs::path& path, const void* bytes, size_t size) {
   int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw Error(tmp.string(), "", std::string("cannot create: ") + std::strerror(errno));
   try {
-    writeAll(fd, bytes, size, 0, tmp);
+    detail::pwriteAll(fd, bytes, size, 0, tmp.string());
   } catch (...) {
     ::close(fd);
     throw;
@@ -80,7 +75,7 @@ void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points, uint
     nodes_.push_back(r);
   }
   // Offsets are reserved under the lock; the write itself runs in parallel.
-  writeAll(fd_, bytes.data(), bytes.size(), r.byteOffset, dir_ / "octree.bin.tmp");
+  detail::pwriteAll(fd_, bytes.data(), bytes.size(), r.byteOffset, (dir_ / "octree.bin.tmp").string());
 }
 
 void OctreeWriter::pruneEmptyLeaves() {

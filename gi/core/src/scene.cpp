@@ -310,10 +310,7 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
       }
       // The frames are listed now, so a sequence that names none fails with its field.
       try {
-        EnvironmentSequenceSpec spec;
-        spec.source = env.sequence;
-        spec.fps = env.fps;
-        EnvironmentSequence probe(spec);
+        EnvironmentSequence probe(sequenceSpec(env));
       } catch (const Error& x) {
         e.at("sequence").fail(x.what());
       }
@@ -384,15 +381,19 @@ bool sceneHasLight(const Scene& scene, RadianceMode mode) {
   return false;
 }
 
-EnvironmentMap loadEnvironmentAt(const SceneEnvironment& e, double seconds) {
-  if (e.sequence.empty()) return EnvironmentMap::load(e.path.string(), e.rotationDegrees, e.scale);
+EnvironmentSequenceSpec sequenceSpec(const SceneEnvironment& e) {
   EnvironmentSequenceSpec spec;
   spec.source = e.sequence;
   spec.fps = e.fps;
   spec.rotationDegrees = e.rotationDegrees;
   spec.scale = e.scale;
   spec.keepPreviousOnBadFrame = e.keepPreviousOnBadFrame;
-  EnvironmentSequence seq(spec);
+  return spec;
+}
+
+EnvironmentMap loadEnvironmentAt(const SceneEnvironment& e, double seconds) {
+  if (e.sequence.empty()) return EnvironmentMap::load(e.path.string(), e.rotationDegrees, e.scale);
+  EnvironmentSequence seq(sequenceSpec(e));
   return *seq.frame(seq.frameAt(seconds));
 }
 

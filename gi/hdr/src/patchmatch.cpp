@@ -138,25 +138,38 @@ class LevelSolver {
     logRange_ = std::log(o_.maxScale) - logMin_;
   }
 
-  // Random transforms everywhere (the coarsest level).
-  void initRandom(std::vector<Match>& field) const {
-    field.assign(s_.pixels(), Match{});
+  // Calls f(x, y, i, patch) for every masked-in source pixel, rows in parallel.
+  template <typename F>
+  void forEachPixel(F f) const {
     tbb::parallel_for(0, s_.height, [&](int y) {
       Patch patch;
       for (int x = 0; x < s_.width; ++x) {
         const size_t i = index(x, y);
         if (!mask_[i]) continue;
         gather(x, y, patch);
-        if (o_.identityStart) {
-          // The same place in the target, scaled by the images' size ratio.
-          const float ratio = float(t_.width) / float(s_.width);
-          const float scale = std::clamp(ratio, o_.minScale, o_.maxScale);
-          consider(field[i], patch, (glm::vec2(x, y) + 0.5f) * ratio - 0.5f, 0.0f, scale, glm::vec2(scale, 0.0f));
-        }
-        Rng rng = pixelRng(o_.seed, level_, -1, i);
-        const Match r = randomTransform(rng);
-        consider(field[i], patch, r.centre, r.angle, r.scale, r.similarity);
+        f(x, y, i, patch);
       }
+    });
+  }
+
+  // The pixel's random transform of a level's start, kept when it is better than `best`.
+  void considerRandom(Match& best, const Patch& patch, size_t i) const {
+    Rng rng = pixelRng(o_.seed, level_, -1, i);
+    const Match r = randomTransform(rng);
+    consider(best, patch, r.centre, r.angle, r.scale, r.similarity);
+  }
+
+  // Random transforms everywhere (the coarsest level).
+  void initRandom(std::vector<Match>& field) const {
+    field.assign(s_.pixels(), Match{});
+    forEachPixel([&](int x, int y, size_t i, const Patch& patch) {
+      if (o_.identityStart) {
+        // The same place in the target, scaled by the images' size ratio.
+        const float ratio = float(t_.width) / float(s_.width);
+        const float scale = std::clamp(ratio, o_.minScale, o_.maxScale);
+        consider(field[i], patch, (glm::vec2(x, y) + 0.5f) * ratio - 0.5f, 0.0f, scale, glm::vec2(scale, 0.0f));
+      }
+      considerRandom(field[i], patch, i);
     });
   }
 
@@ -166,25 +179,16 @@ class LevelSolver {
   void initFromCoarse(std::vector<Match>& field, const std::vector<Match>& coarse, int cw,
                       int ch) const {
     field.assign(s_.pixels(), Match{});
-    tbb::parallel_for(0, s_.height, [&](int y) {
-      Patch patch;
-      for (int x = 0; x < s_.width; ++x) {
-        const size_t i = index(x, y);
-        if (!mask_[i]) continue;
-        gather(x, y, patch);
-        Match best;
-        for (int k = 0; k < 4; ++k) {
-          const int qx = std::min(x / 2 + (k & 1), cw - 1), qy = std::min(y / 2 + (k >> 1), ch - 1);
-          const Match& n = coarse[size_t(qy) * cw + qx];
-          const glm::vec2 d = glm::vec2(x, y) - 2.0f * glm::vec2(qx, qy);
-          consider(best, patch, 2.0f * n.centre + apply(n.similarity, d), n.angle, n.scale,
-                   n.similarity);
-        }
-        Rng rng = pixelRng(o_.seed, level_, -1, i);
-        const Match r = randomTransform(rng);
-        consider(best, patch, r.centre, r.angle, r.scale, r.similarity);
-        field[i] = best;
+    forEachPixel([&](int x, int y, size_t i, const Patch& patch) {
+      Match best;
+      for (int k = 0; k < 4; ++k) {
+        const int qx = std::min(x / 2 + (k & 1), cw - 1), qy = std::min(y / 2 + (k >> 1), ch - 1);
+        const Match& n = coarse[size_t(qy) * cw + qx];
+        const glm::vec2 d = glm::vec2(x, y) - 2.0f * glm::vec2(qx, qy);
+        consider(best, patch, 2.0f * n.centre + apply(n.similarity, d), n.angle, n.scale, n.similarity);
       }
+      considerRandom(best, patch, i);
+      field[i] = best;
     });
   }
 

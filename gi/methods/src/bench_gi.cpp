@@ -46,11 +46,8 @@ std::string assetStamp(const Scene& s) {
   for (const auto& m : s.meshes) add(m.path);
   if (s.environment && !s.environment->path.empty()) add(s.environment->path);
   if (s.environment && !s.environment->sequence.empty()) {
-    EnvironmentSequenceSpec spec;
-    spec.source = s.environment->sequence;
-    spec.fps = s.environment->fps;
     try {
-      const EnvironmentSequence seq(spec);
+      const EnvironmentSequence seq(sequenceSpec(*s.environment));
       for (size_t i = 0; i < seq.frames(); ++i) add(seq.framePath(i));
     } catch (const Error&) {
       add(s.environment->sequence);  // the render names what is wrong with it

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "nestlight/gi/environment_map.h"
+#include "nestlight/gi/environment_sequence.h"
 #include "nestlight/gi/camera_path.h"
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/mesh.h"
@@ -127,6 +128,8 @@ struct Scene {
 // is no camera, the path asks for more than a million frames, or a frame's view is degenerate.
 std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still = false);
 
+// What `e`'s sequence plays (its source, rate, rotation, scale, bad-frame rule).
+EnvironmentSequenceSpec sequenceSpec(const SceneEnvironment& e);
 // The environment map of `e` (path or sequence; not `constant`) at `seconds` into its sequence.
 // Renders of a still take the sequence's first frame. Throws nestlight::Error naming the file.
 EnvironmentMap loadEnvironmentAt(const SceneEnvironment& e, double seconds = 0);
