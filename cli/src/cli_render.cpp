@@ -155,8 +155,9 @@ void addRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--bounces", sc->bounces, "Scenes: scattering events per path (1: direct light)")
       ->check(CLI::Range(0, 64))->group(group);
   cmd->add_option("--seed", sc->seed, "Scenes: random seed")->group(group);
-  cmd->add_flag("--still", sc->still, "Scenes: one image from the scene's camera even when it has a camera path "
-                                      "(a path renders one image per frame, NAME_0000.exr, ...)")
+  cmd->add_flag("--still", sc->still, "Scenes: one image from the scene's camera even when it has a camera path or an "
+                                      "environment sequence (each renders one image per frame, NAME_0000.exr, ...; "
+                                      "a sequence's frame follows each image's time)")
       ->group(group);
   cmd->callback([=, &exitCode]() {
     if (fs::path(*octree).extension() == ".json") {

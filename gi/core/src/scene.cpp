@@ -402,6 +402,16 @@ std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
   std::vector<SceneCamera> cameras;
   if (scene.cameraPath.empty() || still) {
     if (!scene.cameraSet) throw Error(file, "scene.camera", "missing: a render needs a camera (or a camera_path)");
+    if (!still && scene.environment && !scene.environment->sequence.empty()) {
+      const EnvironmentSequence seq(sequenceSpec(*scene.environment));
+      for (size_t f = 0; f < seq.frames(); ++f) {
+        SceneCamera c = scene.camera;
+        // The middle of the frame's interval: floor(time * fps) is f however fps rounds.
+        c.time = (double(f) + 0.5) / seq.fps();
+        cameras.push_back(c);
+      }
+      return cameras;
+    }
     cameras.push_back(scene.camera);
     return cameras;
   }
@@ -411,6 +421,7 @@ std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
     SceneCamera c = scene.camera;
     c.eye = k.eye;
     c.target = k.target;
+    c.time = double(f) / scene.cameraPath.fps;
     if (!viewIsValid(c.eye, c.target, c.up))
       throw Error(file, "scene.camera_path",
                   "frame " + std::to_string(f) + ": eye meets target or looks along \"up\" between keyframes");

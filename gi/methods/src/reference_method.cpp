@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "nestlight/gi/environment_source.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/reference/reference_scene.h"
 
@@ -21,6 +22,9 @@ class ReferenceMethod : public Method {
       : name_(scene.gi.method), quiet_(ctx.quiet), options_(referenceOptionsFrom(scene.gi)) {
     options_.maxBounces = std::min(options_.maxBounces, maxBounces);
     scene_ = ReferenceScene::load(scene, quiet_ ? nullptr : &logLine);
+    // A video light probe: each camera's time picks the frame (the load lit the first).
+    if (scene.environment && !scene.environment->sequence.empty())
+      environment_ = std::make_unique<EnvironmentSource>(scene.environment);
   }
   std::string name() const override { return name_; }
 
@@ -33,6 +37,11 @@ class ReferenceMethod : public Method {
       }
       return true;
     };
+    size_t envFrame = 0;
+    if (environment_) {
+      envFrame = environment_->frameAt(camera.time);
+      scene_->setEnvironment(environment_->at(camera.time));
+    }
     ReferenceResult r = renderReference(*scene_, camera, options_, progress);
     MethodFrame f;
     f.image = std::move(r.image);
@@ -48,6 +57,7 @@ class ReferenceMethod : public Method {
                     {"nestlight:rays", std::to_string(r.rays)},
                     {"nestlight:max_bounces", std::to_string(options_.maxBounces)},
                     {"nestlight:stop", r.stopReason}};
+    if (environment_) f.attributes["nestlight:environment_frame"] = std::to_string(envFrame);
     char line[256];
     std::snprintf(line, sizeof line, "%d samples/pixel in %.2f s (%s), estimated relative error %.4f, %.2f M rays/s, %.0f k samples/s",
                   f.samplesPerPixel, f.seconds, f.stopReason.c_str(), f.relativeError, f.raysPerSecond() / 1e6,
@@ -64,6 +74,7 @@ class ReferenceMethod : public Method {
   bool quiet_;
   ReferenceOptions options_;
   std::unique_ptr<ReferenceScene> scene_;
+  std::unique_ptr<EnvironmentSource> environment_;
 };
 
 }  // namespace

@@ -23,6 +23,7 @@
 #include "nestlight/frame/interface.h"
 #include "nestlight/frame/passes.h"
 #include "nestlight/gi/environment_map.h"
+#include "nestlight/gi/environment_source.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/raster/raster_frame.h"
 #include "nestlight/gi/scan_colour.h"
@@ -168,6 +169,8 @@ class RasterMethod : public Method, public RasterFrame {
     glUniform3fv(program.uniform("uEnvSh"), 9, &sh_[0].x);
   }
   bool hasEnvironment() const override { return hasEnvironment_; }
+  std::shared_ptr<const EnvironmentMap> environmentMap() const override { return envMap_; }
+  uint64_t environmentGeneration() const override { return envGeneration_; }
   void setSkyOnDiffuseLobes(bool on) override { skyOnDiffuse_ = on; }
   const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
   uint64_t cutGeneration() const override { return cutGeneration_; }
@@ -192,6 +195,7 @@ class RasterMethod : public Method, public RasterFrame {
     setOutput(radianceTarget_);
     const int W = camera.width, H = camera.height;
     if (W <= 0 || H <= 0) throw Error(scene_.file.string(), "camera", "the image size must be positive");
+    selectEnvironment(camera);
     const auto tStream = Clock::now();
     const uint64_t drawPoints = stream(camera, true);
     const double streamSeconds = secondsSince(tStream);
@@ -226,6 +230,7 @@ class RasterMethod : public Method, public RasterFrame {
                       " window is too large for the compute rasteriser's per-pixel buffers (128 MiB); use \"points\"");
     setOutput("display");
     *exposure_ = exposureStops;
+    selectEnvironment(camera);
     const auto t0 = Clock::now();
     const uint64_t drawPoints = stream(camera, false);
     graph_.executeToTarget(camera.width, camera.height);
@@ -354,6 +359,7 @@ class RasterMethod : public Method, public RasterFrame {
                     {"nestlight:splat_scale", std::to_string(params_.splatScale)},
                     {"nestlight:points", std::to_string(drawPoints)},
                     {"nestlight:seconds", std::to_string(f.seconds)}};
+    if (envSource_ && envSource_->isSequence()) f.attributes["nestlight:environment_frame"] = std::to_string(envFrame_);
     std::string passes;
     for (const auto& [name, ms] : f.passMs) {
       passes += (passes.empty() ? "" : ", ") + name + " " + std::to_string(ms).substr(0, 6) + " ms";
@@ -510,10 +516,26 @@ class RasterMethod : public Method, public RasterFrame {
 
   void setUpEnvironment() {
     if (!scene_.environment) return;
-    const SceneEnvironment& e = *scene_.environment;
-    EnvironmentMap env = e.constant ? EnvironmentMap::constant(*e.constant)
-                                    : loadEnvironmentAt(e);
-    hasEnvironment_ = !env.black();
+    envSource_ = std::make_unique<EnvironmentSource>(scene_.environment);
+    // A sequence lights every frame, even if its first is black: extensions plan for a sky.
+    uploadEnvironment(envSource_->at(0), envSource_->isSequence());
+    envFrame_ = 0;
+  }
+
+  // The frame of a video light probe that `camera.time` plays, uploaded when it changes.
+  void selectEnvironment(const SceneCamera& camera) {
+    if (!envSource_ || !envSource_->isSequence()) return;
+    const size_t frame = envSource_->frameAt(camera.time);
+    if (frame == envFrame_) return;
+    uploadEnvironment(envSource_->at(camera.time), true);
+    envFrame_ = frame;
+  }
+
+  void uploadEnvironment(std::shared_ptr<const EnvironmentMap> map, bool sequence) {
+    envMap_ = std::move(map);
+    const EnvironmentMap& env = *envMap_;
+    envGeneration_++;
+    hasEnvironment_ = sequence || !env.black();
     envRotation_ = glm::radians(env.rotationDegrees());
     envScale_ = env.scale();
     sh_ = irradianceSh(env);
@@ -525,10 +547,12 @@ class RasterMethod : public Method, public RasterFrame {
     // GI method's micro-buffer m-pixel, which point samples would alias on a small bright sun).
     int levels = 1;
     while ((std::max(img.width, img.height) >> levels) > 0) ++levels;
-    environment_ = gl::Texture(GL_RGBA32F, img.width, img.height, levels);
+    if (!environment_ || environment_.width() != img.width || environment_.height() != img.height) {
+      environment_ = gl::Texture(GL_RGBA32F, img.width, img.height, levels);
+      environment_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
+    }
     glTextureSubImage2D(environment_.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT, rgba.data());
     glGenerateTextureMipmap(environment_.id());
-    environment_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
   }
 
   void uploadMaterials() {
@@ -888,6 +912,10 @@ class RasterMethod : public Method, public RasterFrame {
   gl::Buffer lightsBuffer_, shadowViewsBuffer_, materialsBuffer_;
   gl::Texture environment_;
   bool hasEnvironment_ = false;
+  std::unique_ptr<EnvironmentSource> envSource_;
+  std::shared_ptr<const EnvironmentMap> envMap_ = std::make_shared<const EnvironmentMap>();
+  size_t envFrame_ = 0;
+  uint64_t envGeneration_ = 0;
   float envRotation_ = 0, envScale_ = 1;
   std::array<glm::vec3, 9> sh_{};
   gl::ShaderProgram meshGBuffer_, scanGBuffer_, meshShadow_, scanShadow_, directLight_;

@@ -294,7 +294,7 @@ ReferenceScene::ReferenceScene(std::vector<DiscCloud> clouds, std::vector<Triang
       meshMaterial_(std::move(meshMaterial)),
       materials_(std::move(materials)),
       lights_(std::move(lights)),
-      environment_(std::move(environment)),
+      environment_(std::make_shared<const EnvironmentMap>(std::move(environment))),
       origin_(origin) {
   NL_CHECK(meshMaterial_.size() == meshes_.size());
   for (uint32_t m : meshMaterial_) NL_CHECK(m < materials_.size());

@@ -70,6 +70,9 @@ struct SceneCamera {
   glm::dvec3 eye{0.0}, target{0, 0, -1}, up{0, 0, 1};
   double fovYDegrees = 45;
   int width = 640, height = 480;
+  // Seconds into the shot: which frame of an environment sequence lights this view
+  // (EnvironmentSource::at). A camera path's frame f is at f / fps.
+  double time = 0;
 };
 
 
@@ -122,9 +125,10 @@ struct Scene {
   glm::mat4 localFromObject(const SceneMesh& m) const;
 };
 
-// The cameras a render of `scene` draws: one per frame of its camera path (CameraPath::at), or
-// its camera alone when
-// it has no path or `still`. Throws nestlight::Error naming the scene file and field when there
+// The cameras a render of `scene` draws: one per frame of its camera path (CameraPath::at, at
+// time f / fps); without a path, one per frame of its environment sequence (the scene's camera at
+// each frame's time), so every frame of a video light probe has its image; its camera alone when
+// it has neither or `still` (time 0: a sequence's first frame). Throws nestlight::Error naming the scene file and field when there
 // is no camera, the path asks for more than a million frames, or a frame's view is degenerate.
 std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still = false);
 

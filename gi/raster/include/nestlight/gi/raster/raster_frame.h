@@ -17,6 +17,7 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
 #include "nestlight/frame/interface.h"
+#include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/raster/raster_method.h"
@@ -64,6 +65,10 @@ class RasterFrame {
   // diffuse lobes (and what the camera sees of it behind the scene).
   virtual void bindEnvironment(const gl::ShaderProgram& program) const = 0;
   virtual bool hasEnvironment() const = 0;
+  // The environment map the frame lights with now (a video light probe's current frame; a black
+  // map without an environment), and a count that changes whenever it does.
+  virtual std::shared_ptr<const EnvironmentMap> environmentMap() const = 0;
+  virtual uint64_t environmentGeneration() const = 0;
   // Whether direct light adds the sky's unshadowed irradiance to diffuse lobes (the default); an
   // extension that gathers the sky itself, occluded by the scene, turns it off in setUp.
   virtual void setSkyOnDiffuseLobes(bool on) = 0;

@@ -94,8 +94,12 @@ class ReferenceScene {
 
   const std::vector<Material>& materials() const { return materials_; }
   const std::vector<Light>& lights() const { return lights_; }
-  const EnvironmentMap& environment() const { return environment_; }
-  bool hasEnvironment() const { return !environment_.black(); }
+  const EnvironmentMap& environment() const { return *environment_; }
+  bool hasEnvironment() const { return !environment_->black(); }
+  // Another frame of a video light probe (the geometry stays).
+  void setEnvironment(std::shared_ptr<const EnvironmentMap> environment) {
+    if (environment) environment_ = std::move(environment);
+  }
   const glm::dvec3& origin() const { return origin_; }
   // Light positions in the local frame.
   glm::vec3 lightPosition(size_t i) const { return glm::vec3(lights_[i].position - origin_); }
@@ -115,7 +119,7 @@ class ReferenceScene {
   std::vector<uint32_t> meshMaterial_;
   std::vector<Material> materials_;
   std::vector<Light> lights_;
-  EnvironmentMap environment_;
+  std::shared_ptr<const EnvironmentMap> environment_;
   glm::dvec3 origin_{0.0};
   float extent_ = 1;
   std::vector<DiscCloudStats> cloudStats_;
