@@ -3,7 +3,7 @@
 namespace nestlight::gi {
 
 const std::vector<std::string>& methodNames() {
-  static const std::vector<std::string> names = {"reference", "direct", "raster", "vpl", "pbgi"};
+  static const std::vector<std::string> names = {"reference", "direct", "raster", "vpl", "pbgi", "ibl"};
   return names;
 }
 

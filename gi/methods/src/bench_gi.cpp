@@ -205,8 +205,9 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     for (int level : levels) {
       Scene s = prepared(m->name);
       s.gi.seed = 1;
-      m->applyQuality(s.gi, level);
+      // The variant first: a quality level may mean different settings under it (ibl's estimators).
       variant.apply(s.gi);
+      m->applyQuality(s.gi, level);
       std::unique_ptr<Method> method = createMethod(s, {true, false, true});
       BenchGiRow row;
       row.method = m->name;

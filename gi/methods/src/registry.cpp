@@ -2,6 +2,7 @@
 
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/raster/raster_method.h"
+#include "nestlight/gi/ibl/ibl_method.h"
 #include "nestlight/gi/pbgi/pbgi_method.h"
 #include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/octree/error.h"
@@ -51,6 +52,29 @@ const std::vector<MethodInfo>& registeredMethods() {
                   {"no pruning", [](GiSettings& g) { g.parameters["prune"] = false; }},
                   {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }},
                   {"no meshes", [](GiSettings& g) { g.parameters["meshes"] = false; }}}});
+    // Samples per pixel: MIS and the baselines split them between the BSDF and the environment
+    // (the paper's half each), BIS resamples them from 20 times as many proposals (the paper's
+    // 400 for 20), SMC carries them (at most 32) with the paper's 3 intermediate distributions.
+    m.push_back({"ibl", "real-time image-based lighting from HDR environment maps and video light probes: MIS, BIS, SMC (GL)",
+                 true, "samples per pixel", {2, 8, 32},
+                 [](GiSettings& g, int q) {
+                   if (!g.parameters.is_object()) g.parameters = nlohmann::json::object();
+                   const std::string e = g.parameters.value("estimator", std::string("mis"));
+                   if (e == "bis") {
+                     g.parameters["bis_samples"] = std::min(q, 64);
+                     g.parameters["bis_proposals"] = 20 * std::min(q, 64);
+                   } else if (e == "smc") {
+                     g.parameters["smc_particles"] = std::min(q, 32);
+                   } else {
+                     g.parameters["brdf_samples"] = e == "env" ? 0 : e == "brdf" ? q : (q + 1) / 2;
+                     g.parameters["env_samples"] = e == "env" ? q : e == "brdf" ? 0 : q / 2;
+                   }
+                 },
+                 createIblMethod,
+                 {{"bis", [](GiSettings& g) { g.parameters["estimator"] = "bis"; }},
+                  {"smc", [](GiSettings& g) { g.parameters["estimator"] = "smc"; }},
+                  {"environment sampling", [](GiSettings& g) { g.parameters["estimator"] = "env"; }},
+                  {"bsdf sampling", [](GiSettings& g) { g.parameters["estimator"] = "brdf"; }}}});
     return m;
   }();
   return methods;

@@ -1,0 +1,352 @@
+// The `ibl` method (nestlight/gi/ibl/ibl_method.h): Kronander, Dahlin, Jönsson, Kok, Schön and
+// Unger, "Real-time video based lighting using GPU raytracing" (2014), sections 4 to 7, as a pass
+// of the raster frame: per frame the environment's CDF tables (built on the CPU and uploaded, as
+// the paper does), then one compute pass over the G-buffer's receivers (shaders/gi/ibl/).
+#include "nestlight/gi/ibl/ibl_method.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "nestlight/frame/frame_graph.h"
+#include "nestlight/gi/ibl/environment_table.h"
+#include "nestlight/gi/ibl/triangle_bvh.h"
+#include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gl/program.h"
+#include "nestlight/gl/resources.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/json_field.h"
+
+namespace nestlight::gi {
+
+namespace {
+
+constexpr int kSmcMax = 32, kBisMax = 64;
+
+int estimatorCode(IblParameters::Estimator e) {
+  switch (e) {
+    case IblParameters::Estimator::Mis: return IBL_MIS;
+    case IblParameters::Estimator::Bis: return IBL_BIS;
+    case IblParameters::Estimator::Smc: return IBL_SMC;
+    case IblParameters::Estimator::Environment: return IBL_ENVIRONMENT;
+    case IblParameters::Estimator::Brdf: return IBL_BRDF;
+  }
+  return IBL_MIS;
+}
+
+class IblExtension : public RasterExtension {
+ public:
+  explicit IblExtension(const Scene& scene) : params_(iblParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
+
+  std::string name() const override { return "ibl"; }
+  std::vector<std::string> parameterKeys() const override { return iblParameterKeys(); }
+
+  std::vector<std::pair<std::string, std::string>> parameters() const override {
+    return {{"estimator", estimatorName(params_.estimator)},
+            {"brdf_samples", std::to_string(params_.brdfSamples)},
+            {"env_samples", std::to_string(params_.envSamples)},
+            {"bis_proposals", std::to_string(params_.bisProposals)},
+            {"bis_samples", std::to_string(params_.bisSamples)},
+            {"smc_particles", std::to_string(params_.smcParticles)},
+            {"smc_intermediate", std::to_string(params_.smcIntermediate)},
+            {"smc_local_probability", std::to_string(params_.smcLocalProbability)},
+            {"smc_local_degrees", std::to_string(params_.smcLocalDegrees)},
+            {"smc_reinit_ratio", std::to_string(params_.smcReinitRatio)},
+            {"visibility", params_.visibility ? "true" : "false"},
+            {"smc_statistics", params_.smcStatistics ? "true" : "false"}};
+  }
+
+  std::string setUp(RasterFrame& f) override {
+    const Scene& scene = f.scene();
+    // This pass owns the environment's light on every receiver, occluded: direct light must not
+    // add its unshadowed irradiance too.
+    f.setSkyOnDiffuseLobes(false);
+    std::vector<glm::vec3> corners;
+    const auto& meshes = f.meshes();
+    for (size_t i = 0; i < meshes.size() && i < scene.meshes.size(); ++i) {
+      const glm::mat4 localFromObject = scene.localFromObject(scene.meshes[i]);
+      for (uint32_t idx : meshes[i].indices)
+        corners.push_back(glm::vec3(localFromObject * glm::vec4(meshes[i].positions[idx], 1.0f)));
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    ibl::TriangleBvh bvh = ibl::buildTriangleBvh(corners);
+    bvhMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    bvhNodes_ = bvh.nodes.size();
+    bvhTriangles_ = bvh.triangles.size();
+    bvhDepth_ = bvh.depth;
+    NL_CHECK_MSG(bvh.nodes.size() * sizeof(ibl::BvhNode) <= gl::kMaxSsboRange &&
+                     bvh.triangles.size() * sizeof(ibl::BvhTriangle) <= gl::kMaxSsboRange,
+                 "ibl: the meshes' BVH exceeds one 128 MiB buffer range");
+    bvh_ = gl::Buffer(std::max<size_t>(bvh.nodes.size(), 1) * sizeof(ibl::BvhNode), bvh.nodes.empty() ? nullptr : bvh.nodes.data(), 0);
+    triangles_ = gl::Buffer(std::max<size_t>(bvh.triangles.size(), 1) * sizeof(ibl::BvhTriangle),
+                            bvh.triangles.empty() ? nullptr : bvh.triangles.data(), 0);
+    program_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/ibl/ibl_shade.comp"}},
+                                 {{"IBL_SMC_N", std::to_string(params_.smcParticles)}});
+    stats_ = gl::Buffer(IBL_STAT_COUNT * 4);
+    frame::FrameGraph& g = f.graph();
+    g.addTarget("radiance_ibl", {GL_RGBA32F});
+    g.addPass(
+        "ibl_shade", frame::Scope::Tile,
+        [](frame::PassBuilder& b) {
+          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"}) b.read(t);
+          b.write("radiance_ibl");
+        },
+        [this, &f](const frame::PassContext& ctx) { shade(f, ctx); });
+    return "radiance_ibl";
+  }
+
+  void beforeFrame(RasterFrame& f) override {
+    std::shared_ptr<const EnvironmentMap> current = f.environmentMap();
+    if (current != tableMap_) {
+      const ibl::EnvironmentTable t = ibl::buildEnvironmentTable(*current);
+      tableMs_ = t.buildSeconds * 1e3;
+      tableBuilds_++;
+      envTable_.reserve(t.data.size() * sizeof(float));
+      envTable_.upload(t.data.data(), t.data.size() * sizeof(float));
+      tableMap_ = current;
+    }
+    // SMC's previous target: the map the last frame lit with (this frame's on the first).
+    const std::shared_ptr<const EnvironmentMap> previous = lastMap_ ? lastMap_ : current;
+    if (params_.estimator == IblParameters::Estimator::Smc && previous != prevTextureMap_) {
+      uploadPrevious(*previous);
+      prevTextureMap_ = previous;
+    }
+    prevEnvScale_ = previous->scale();
+    lastMap_ = current;
+    std::array<uint32_t, IBL_STAT_COUNT> zeros{};
+    stats_.upload(zeros.data(), sizeof zeros);
+    hasPrevious_ = stateValid_;
+    frameClip_ = false;
+  }
+
+  void describe(const RasterFrame&, MethodFrame& mf) const override {
+    std::array<uint32_t, IBL_STAT_COUNT> s{};
+    glGetNamedBufferSubData(stats_.id(), 0, sizeof s, s.data());
+    mf.attributes["nestlight:ibl_estimator"] = estimatorName(params_.estimator);
+    mf.attributes["nestlight:ibl_receivers"] = std::to_string(s[IBL_STAT_RECEIVERS]);
+    mf.attributes["nestlight:ibl_rays"] = std::to_string(s[IBL_STAT_RAYS]);
+    mf.attributes["nestlight:ibl_table_ms"] = std::to_string(tableMs_);
+    mf.attributes["nestlight:ibl_table_builds"] = std::to_string(tableBuilds_);
+    mf.attributes["nestlight:ibl_bvh_triangles"] = std::to_string(bvhTriangles_);
+    mf.attributes["nestlight:ibl_bvh_nodes"] = std::to_string(bvhNodes_);
+    mf.attributes["nestlight:ibl_bvh_ms"] = std::to_string(bvhMs_);
+    mf.rays += s[IBL_STAT_RAYS];
+    char line[256];
+    std::snprintf(line, sizeof line, "; ibl %s: %u receivers, %u visibility rays; CDF tables %.2f ms",
+                  estimatorName(params_.estimator), s[IBL_STAT_RECEIVERS], s[IBL_STAT_RAYS], tableMs_);
+    mf.summary += line;
+    if (params_.estimator == IblParameters::Estimator::Smc) {
+      mf.attributes["nestlight:ibl_smc_reprojected"] = std::to_string(s[IBL_STAT_REPROJECTED]);
+      mf.attributes["nestlight:ibl_smc_reinit_jump"] = std::to_string(s[IBL_STAT_REINIT_JUMP]);
+      mf.attributes["nestlight:ibl_smc_reinit_new"] = std::to_string(s[IBL_STAT_REINIT_NEW]);
+      mf.attributes["nestlight:ibl_smc_resampled"] = std::to_string(s[IBL_STAT_RESAMPLED]);
+      mf.attributes["nestlight:ibl_smc_moves"] = std::to_string(s[IBL_STAT_MOVES]);
+      mf.attributes["nestlight:ibl_smc_accepted"] = std::to_string(s[IBL_STAT_ACCEPTED]);
+      std::snprintf(line, sizeof line,
+                    "; smc: %u carried, %u reinitialised on a jump, %u started afresh, %u resampled, %u of %u moves accepted",
+                    s[IBL_STAT_REPROJECTED], s[IBL_STAT_REINIT_JUMP], s[IBL_STAT_REINIT_NEW], s[IBL_STAT_RESAMPLED],
+                    s[IBL_STAT_ACCEPTED], s[IBL_STAT_MOVES]);
+      mf.summary += line;
+      if (params_.smcStatistics) {
+        // The carried normalising constants Z_t of the frame just rendered (afterFrame, before
+        // this, swapped it into stateIn_), over the pixels holding samples.
+        std::vector<uint32_t> words(stateIn_.bytes() / 4);
+        glGetNamedBufferSubData(stateIn_.id(), 0, GLsizeiptr(words.size() * 4), words.data());
+        const size_t stride = size_t(8 + 2 * params_.smcParticles);
+        const size_t rowWords = (size_t(stateW_) * stride + 63) / 64 * 64;
+        std::vector<float> z;
+        for (int y = 0; y < stateH_; ++y)
+          for (int x = 0; x < stateW_; ++x) {
+            const size_t base = size_t(y) * rowWords + size_t(x) * stride;
+            if (base + 5 < words.size() && words[base + 5] == 1u) z.push_back(std::bit_cast<float>(words[base + 3]));
+          }
+        double mean = 0;
+        for (float v : z) mean += v;
+        mean = z.empty() ? 0 : mean / double(z.size());
+        std::nth_element(z.begin(), z.begin() + std::ptrdiff_t(z.size() / 2), z.end());
+        mf.attributes["nestlight:ibl_smc_z_pixels"] = std::to_string(z.size());
+        mf.attributes["nestlight:ibl_smc_z_mean"] = std::to_string(mean);
+        mf.attributes["nestlight:ibl_smc_z_median"] = std::to_string(z.empty() ? 0.0f : z[z.size() / 2]);
+      }
+    }
+  }
+
+  bool afterFrame(double, bool) override {
+    if (params_.estimator == IblParameters::Estimator::Smc && frameClip_) {
+      std::swap(stateIn_, stateOut_);
+      stateValid_ = true;
+      prevClipFromWorld_ = clipFromWorld_;
+    }
+    return false;
+  }
+
+ private:
+  void uploadPrevious(const EnvironmentMap& map) {
+    const HdrImage& img = map.image();
+    const int w = std::max(img.width, 1), h = std::max(img.height, 1);
+    std::vector<float> rgba(size_t(w) * size_t(h) * 4, 0.0f);
+    for (size_t p = 0; p < img.pixels(); ++p)
+      for (int k = 0; k < 3; ++k) rgba[4 * p + k] = img.rgb[3 * p + k];
+    if (prevTexture_.width() != w || prevTexture_.height() != h) prevTexture_ = gl::Texture(GL_RGBA32F, w, h);
+    glTextureSubImage2D(prevTexture_.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
+  }
+
+  void shade(RasterFrame& f, const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    const bool smc = params_.estimator == IblParameters::Estimator::Smc;
+    f.bindSceneBuffers();
+    ctx.bindTexture("depth", 0);
+    ctx.bindTexture("base_colour", 1);
+    ctx.bindTexture("normal", 2);
+    ctx.bindTexture("material", 3);
+    ctx.bindTexture("radiance", 4);
+    glBindImageTexture(0, ctx.target("radiance_ibl").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    program_.use();
+    f.bindEnvironment(program_);
+    envTable_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_ENV);
+    bvh_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_BVH);
+    triangles_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_TRIANGLES);
+    stats_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATS);
+    const GLuint p = program_.id();
+    glUniform1i(program_.uniform("uEstimator"), estimatorCode(params_.estimator));
+    glUniform1i(program_.uniform("uBrdfSamples"), params_.brdfSamples);
+    glUniform1i(program_.uniform("uEnvSamples"), params_.envSamples);
+    glUniform1i(program_.uniform("uBisM"), params_.bisProposals);
+    glUniform1i(program_.uniform("uBisN"), params_.bisSamples);
+    glUniform1i(program_.uniform("uIntermediate"), params_.smcIntermediate);
+    glUniform1f(program_.uniform("uLocalProbability"), params_.smcLocalProbability);
+    glUniform1f(program_.uniform("uLocalCos"), std::cos(glm::radians(params_.smcLocalDegrees)));
+    glUniform1f(program_.uniform("uReinitRatio"), params_.smcReinitRatio);
+    glUniform1i(program_.uniform("uVisibility"), params_.visibility ? 1 : 0);
+    glUniform1ui(program_.uniform("uSeed"), seed_);
+    glUniform1i(program_.uniform("uBvhNodes"), int(bvhNodes_));
+    (void)p;
+    if (smc) {
+      // The full image's clip-from-world, for the next frame's reprojection.
+      clipFromWorld_ = glm::inverse(tile.clipFromFullClip) * ctx.uniforms().clipFromWorld;
+      frameClip_ = true;
+      bindState(tile);
+      glBindTextureUnit(6, prevTexture_.id());
+      glUniform1f(program_.uniform("uPrevEnvScale"), prevEnvScale_);
+      glUniformMatrix4fv(program_.uniform("uPrevClipFromWorld"), 1, GL_FALSE, &prevClipFromWorld_[0][0]);
+    } else {
+      // Bound all the same (the shader declares them).
+      if (stateIn_.bytes() == 0) stateIn_.reserve(16), stateOut_.reserve(16);
+      stateIn_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_IN);
+      stateOut_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_OUT);
+      glUniform1i(program_.uniform("uHasPrevious"), 0);
+    }
+    glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                    GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+  }
+
+  // The SMC state: a row of IBL_STATE_STRIDE words per pixel, padded to 256 bytes, two buffers
+  // (last frame's, read; this frame's, written). Images larger than one 128 MiB range bind the
+  // rows about the tile: a pixel whose reprojection lands outside them starts afresh.
+  void bindState(const frame::Tile& tile) {
+    const int W = tile.fullWidth, H = tile.fullHeight;
+    const size_t stride = size_t(8 + 2 * params_.smcParticles);
+    const size_t rowWords = (size_t(W) * stride + 63) / 64 * 64;
+    const size_t bytes = rowWords * 4 * size_t(H);
+    if (W != stateW_ || H != stateH_ || stateOut_.bytes() < bytes) {
+      stateIn_ = gl::Buffer(bytes);
+      stateOut_ = gl::Buffer(bytes);
+      stateW_ = W, stateH_ = H;
+      stateValid_ = hasPrevious_ = false;
+    }
+    const size_t rowBytes = rowWords * 4;
+    const int maxRows = int(std::max<size_t>(gl::kMaxSsboRange / rowBytes, 1));
+    int inFirst = 0, inRows = H, outFirst = 0, outRows = H;
+    if (H > maxRows) {
+      outFirst = std::clamp(tile.y0, 0, H - 1);
+      outRows = std::min(tile.height, H - outFirst);
+      const int margin = std::max((maxRows - outRows) / 2, 0);
+      inFirst = std::max(outFirst - margin, 0);
+      inRows = std::min(maxRows, H - inFirst);
+    }
+    stateIn_.bindRange(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_IN, size_t(inFirst) * rowBytes, size_t(inRows) * rowBytes);
+    stateOut_.bindRange(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_OUT, size_t(outFirst) * rowBytes,
+                        size_t(outRows) * rowBytes);
+    glUniform1i(program_.uniform("uHasPrevious"), hasPrevious_ ? 1 : 0);
+    glUniform1i(program_.uniform("uStateRowIn"), inFirst);
+    glUniform1i(program_.uniform("uStateRowsIn"), inRows);
+    glUniform1i(program_.uniform("uStateRowOut"), outFirst);
+    glUniform1i(program_.uniform("uStateRowsOut"), outRows);
+    glUniform1i(program_.uniform("uStateRowWords"), int(rowWords));
+  }
+
+  IblParameters params_;
+  uint32_t seed_ = 1;
+  gl::ShaderProgram program_;
+  gl::Buffer envTable_, bvh_, triangles_, stats_, stateIn_, stateOut_;
+  gl::Texture prevTexture_;
+  std::shared_ptr<const EnvironmentMap> tableMap_, lastMap_, prevTextureMap_;
+  float prevEnvScale_ = 1;
+  double tableMs_ = 0, bvhMs_ = 0;
+  uint64_t tableBuilds_ = 0, bvhNodes_ = 0, bvhTriangles_ = 0;
+  int bvhDepth_ = 0;
+  int stateW_ = 0, stateH_ = 0;
+  bool stateValid_ = false, hasPrevious_ = false, frameClip_ = false;
+  glm::mat4 clipFromWorld_{1.0f}, prevClipFromWorld_{1.0f};
+};
+
+}  // namespace
+
+const char* estimatorName(IblParameters::Estimator e) {
+  switch (e) {
+    case IblParameters::Estimator::Mis: return "mis";
+    case IblParameters::Estimator::Bis: return "bis";
+    case IblParameters::Estimator::Smc: return "smc";
+    case IblParameters::Estimator::Environment: return "env";
+    case IblParameters::Estimator::Brdf: return "brdf";
+  }
+  return "?";
+}
+
+const std::vector<std::string>& iblParameterKeys() {
+  static const std::vector<std::string> keys = {
+      "estimator",        "brdf_samples",          "env_samples",        "bis_proposals",
+      "bis_samples",      "smc_particles",         "smc_intermediate",   "smc_local_probability",
+      "smc_local_degrees", "smc_reinit_ratio",     "visibility",         "smc_statistics"};
+  return keys;
+}
+
+IblParameters iblParameters(const Scene& scene) {
+  IblParameters p;
+  if (scene.gi.parameters.is_null()) return p;
+  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+  if (f.has("estimator")) {
+    const std::string e = f.at("estimator").choice({"mis", "bis", "smc", "env", "brdf"});
+    p.estimator = e == "mis"   ? IblParameters::Estimator::Mis
+                  : e == "bis" ? IblParameters::Estimator::Bis
+                  : e == "smc" ? IblParameters::Estimator::Smc
+                  : e == "env" ? IblParameters::Estimator::Environment
+                               : IblParameters::Estimator::Brdf;
+  }
+  if (f.has("brdf_samples")) p.brdfSamples = int(f.at("brdf_samples").integer(0, 4096));
+  if (f.has("env_samples")) p.envSamples = int(f.at("env_samples").integer(0, 4096));
+  if (f.has("bis_proposals")) p.bisProposals = int(f.at("bis_proposals").integer(1, 65536));
+  if (f.has("bis_samples")) p.bisSamples = int(f.at("bis_samples").integer(1, kBisMax));
+  if (f.has("smc_particles")) p.smcParticles = int(f.at("smc_particles").integer(1, kSmcMax));
+  if (f.has("smc_intermediate")) p.smcIntermediate = int(f.at("smc_intermediate").integer(1, 16));
+  if (f.has("smc_local_probability")) p.smcLocalProbability = float(f.at("smc_local_probability").number(0, 1));
+  if (f.has("smc_local_degrees")) p.smcLocalDegrees = float(f.at("smc_local_degrees").number(0.01, 90));
+  if (f.has("smc_reinit_ratio")) p.smcReinitRatio = float(f.at("smc_reinit_ratio").number(1, 1e30));
+  if (f.has("visibility")) p.visibility = f.at("visibility").boolean();
+  if (f.has("smc_statistics")) p.smcStatistics = f.at("smc_statistics").boolean();
+  if (p.estimator == IblParameters::Estimator::Mis && p.brdfSamples + p.envSamples == 0)
+    f.at("brdf_samples").fail("MIS needs at least one sample: brdf_samples + env_samples > 0");
+  return p;
+}
+
+std::unique_ptr<Method> createIblMethod(const Scene& scene, const MethodContext& ctx) {
+  return createRasterMethod(scene, ctx, std::make_unique<IblExtension>(scene));
+}
+
+}  // namespace nestlight::gi

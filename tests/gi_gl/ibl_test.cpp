@@ -1,0 +1,263 @@
+// The `ibl` method (GL): every estimator unbiased in a furnace (exact) and under a single-texel
+// sun (closed form), shadows by visibility rays, and SMC's normalising constant tracking a
+// rotating map with the reinitialisation firing on a jump only.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include "nestlight/converters/test_scenes.h"
+#include "nestlight/gi/material.h"
+#include "nestlight/gi/method.h"
+#include "nestlight/gi/methods.h"
+#include "nestlight/gi/reference/path_tracer.h"
+#include "nestlight/gi/scene.h"
+#include "test_support.h"
+
+namespace nestlight::gi {
+namespace {
+
+using json = nlohmann::json;
+constexpr double kPiD = 3.14159265358979323846;
+
+// A 20 x 20 m floor (a flat box, top face at z = 0) seen from above, optionally a 2 x 2 m slab
+// 1 m above it, and the environment `environment`.
+Scene floorScene(const test::TempDir& t, const json& material, const json& environment, const json& parameters,
+                 int size = 32, bool occluder = false) {
+  writeBoxObj(t.path() / "box.obj");
+  json meshes = json::array({json{{"path", "box.obj"},
+                                  {"transform", {{"translate", {-10.0, -10.0, -0.1}}, {"scale", {20.0, 20.0, 0.1}}}},
+                                  {"material", "floor"}}});
+  if (occluder)
+    meshes.push_back(json{{"path", "box.obj"},
+                          {"transform", {{"translate", {-1.0, -1.0, 1.0}}, {"scale", {2.0, 2.0, 0.1}}}},
+                          {"material", "floor"}});
+  json j = {{"version", 1},
+            {"materials", {{"floor", material}}},
+            {"meshes", meshes},
+            {"environment", environment},
+            {"camera", {{"eye", {0.0, -0.001, 6.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 1.0, 0.0}}, {"fov", 60.0},
+                        {"width", size}, {"height", size}}},
+            {"gi", {{"method", "ibl"}, {"mode", "albedo"}, {"seed", 7}, {"parameters", parameters}}}};
+  std::ofstream(t.path() / "scene.json") << j.dump(2);
+  return loadScene(t.path() / "scene.json");
+}
+
+// Where the ray through pixel (x + 0.5, y + 0.5) meets the plane z = 0.
+bool floorPoint(const Scene& s, int x, int y, glm::vec3* p, float half = 9.5f) {
+  glm::vec3 o, d;
+  cameraRay(s.camera, s.origin, x + 0.5f, y + 0.5f, &o, &d);
+  if (!(d.z < 0)) return false;
+  *p = o + d * (-o.z / d.z);
+  return std::abs(p->x) < half && std::abs(p->y) < half;
+}
+
+struct Stats {
+  double mean = 0, sd = 0;
+  int n = 0;
+};
+
+// The floor pixels' ratio of rendered to expected radiance (red channel).
+template <typename Want>
+Stats ratioStats(const Scene& s, const MethodFrame& f, Want want) {
+  Stats st;
+  double sum = 0, sum2 = 0;
+  for (int y = 0; y < s.camera.height; ++y)
+    for (int x = 0; x < s.camera.width; ++x) {
+      glm::vec3 p;
+      if (!floorPoint(s, x, y, &p)) continue;
+      const double r = f.image.get(x, y).r / want(p);
+      sum += r, sum2 += r * r, st.n++;
+    }
+  st.mean = sum / st.n;
+  st.sd = std::sqrt(std::max(0.0, sum2 / st.n - st.mean * st.mean));
+  return st;
+}
+
+const char* kEstimators[] = {"mis", "bis", "smc", "env", "brdf"};
+
+json estimatorParameters(const std::string& e) {
+  return {{"estimator", e}, {"brdf_samples", 8}, {"env_samples", 8}, {"bis_proposals", 64}, {"bis_samples", 8},
+          {"smc_particles", 8}};
+}
+
+// The furnace: a constant sky L over a convex floor. Lambert: every pixel returns rho L exactly;
+// GGX: L times the material's directional albedo at the pixel's view (gi/core, by quadrature).
+// Unbiased means the mean over the floor's ~900 pixels lies within 4 standard errors of the
+// truth (the pixels are independent estimates), plus 0.2% for the float sums.
+TEST(Ibl, EveryEstimatorIsUnbiasedInAFurnace) {
+  for (bool glossy : {false, true}) {
+    Material m;
+    m.type = glossy ? MaterialType::GGX : MaterialType::Lambert;
+    m.baseColor = Rgb(glossy ? 0.9f : 0.5f);
+    m.roughness = 0.3f, m.metallic = 1;
+    std::vector<double> want;  // per pixel, filled by the first estimator's pass
+    for (const char* e : kEstimators) {
+      test::TempDir t;
+      const json material = glossy ? json{{"type", "ggx"}, {"base_color", 0.9}, {"roughness", 0.3}, {"metallic", 1.0}}
+                                   : json{{"type", "lambert"}, {"base_color", 0.5}};
+      Scene s = floorScene(t, material, {{"constant", 2.0}}, estimatorParameters(e));
+      const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+      const glm::vec3 eye = glm::vec3(s.camera.eye - s.origin);
+      size_t k = 0;
+      const bool fill = want.empty();
+      const Stats st = ratioStats(s, f, [&](const glm::vec3& p) {
+        if (fill) {
+          const glm::vec3 wo = glm::normalize(eye - p);  // the floor's frame is the world's (n = +z)
+          want.push_back(glossy ? 2.0 * double(directionalAlbedo(m, wo, 20000, 3).r) : 1.0);
+        }
+        return want.at(k++);
+      });
+      ASSERT_GT(st.n, 500) << e;
+      EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3)
+          << e << (glossy ? " ggx" : " lambert") << ": sd " << st.sd;
+    }
+  }
+}
+
+// A single-texel sun: a 16 x 8 map, black but for texel (5, 2) of radiance E. A Lambert floor
+// (rho) sees it whole above its horizon: L_o = rho / pi * E * integral over the texel of cos theta
+// = rho / pi * E * (2 pi / 16) * (cos^2 theta0 - cos^2 theta1) / 2 at every floor point.
+TEST(Ibl, EveryEstimatorIsUnbiasedUnderASingleTexelSun) {
+  test::TempDir t;
+  HdrImage img(16, 8);
+  const float E = 50.0f;
+  img.set(5, 2, Rgb(E));
+  writeExr(t.file("sun.exr"), img);
+  const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
+  const double want = 0.5 / kPiD * E * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
+  for (const char* e : kEstimators) {
+    json p = estimatorParameters(e);
+    if (std::string(e) == "bis" || std::string(e) == "smc") p["bis_proposals"] = 256;
+    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sun.exr"}}, p);
+    const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+    const Stats st = ratioStats(s, f, [&](const glm::vec3&) { return want; });
+    ASSERT_GT(st.n, 500) << e;
+    EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3) << e << ": sd " << st.sd;
+  }
+}
+
+// Visibility: a 2 x 2 m slab 1 m above the floor under a sun texel 45 to 67.5 degrees from the
+// zenith, azimuth 0 to 22.5 degrees (texel (0, 2) of a 16 x 8 map). Its rays from a floor point
+// reach the slab's height 0.92 to 2.41 m further in +x and 0 to 0.92 m in +y, so the floor at
+// x in [-1.85, -1.5], y in [-0.9, 0] (in the camera's view, beside the slab) is in full shadow,
+// while everything beyond x = 1.5 sees the whole texel: the closed form of the sun test.
+TEST(Ibl, TheMeshesShadowTheSky) {
+  test::TempDir t;
+  HdrImage img(16, 8);
+  const float E = 50.0f;
+  img.set(0, 2, Rgb(E));
+  writeExr(t.file("sun.exr"), img);
+  const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
+  const double lit = 0.5 / kPiD * E * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
+  for (bool visibility : {true, false}) {
+    json p = estimatorParameters("env");
+    p["visibility"] = visibility;
+    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sun.exr"}}, p, 64, true);
+    const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+    std::vector<double> shade, open;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        glm::vec3 q;
+        if (!floorPoint(s, x, y, &q)) continue;
+        const double r = f.image.get(x, y).r / lit;
+        if (q.x > -1.85f && q.x < -1.5f && q.y > -0.9f && q.y < 0.0f) shade.push_back(r);
+        if (q.x > 1.5f) open.push_back(r);
+      }
+    ASSERT_GT(shade.size(), 4u);
+    ASSERT_GT(open.size(), 200u);
+    // Environment sampling of a lone texel varies only with cos theta across it: the means lie
+    // within 4 standard errors of the closed form.
+    auto within = [](const std::vector<double>& v) {
+      double m = 0, m2 = 0;
+      for (double r : v) m += r, m2 += r * r;
+      m /= double(v.size());
+      const double sd = std::sqrt(std::max(0.0, m2 / double(v.size()) - m * m));
+      return std::abs(m - 1) <= 4 * sd / std::sqrt(double(v.size())) + 1e-3;
+    };
+    EXPECT_TRUE(within(open)) << visibility;
+    if (visibility) {
+      EXPECT_LT(*std::max_element(shade.begin(), shade.end()), 1e-6) << "the umbra";
+    } else {
+      EXPECT_TRUE(within(shade)) << "unshadowed";
+    }
+    EXPECT_EQ(f.attributes.at("nestlight:ibl_bvh_triangles"), "24");
+  }
+}
+
+// A sky of 0.2 with a soft sun: 50 exp(-a^2 / (2 sigma^2)) at angle a from its centre (50 degrees
+// from the zenith, sigma 5 degrees), on a 128 x 64 map turned one texel (2.8 degrees) about the
+// zenith per frame: a slowly changing probe, as the paper's video sequences are between frames.
+HdrImage rotatingSky(int frame, float sun) {
+  const int W = 128, H = 64;
+  const double sigma = 5 * kPiD / 180;
+  HdrImage img(W, H);
+  const double st = std::sin(50 * kPiD / 180), ct = std::cos(50 * kPiD / 180);
+  const double phi0 = 2 * kPiD * frame / W;
+  const glm::dvec3 c(st * std::cos(phi0), st * std::sin(phi0), ct);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const double th = kPiD * (y + 0.5) / H, ph = 2 * kPiD * (x + 0.5) / W;
+      const glm::dvec3 d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+      const double a = std::acos(std::clamp(glm::dot(c, d), -1.0, 1.0));
+      img.set(x, y, Rgb(float(0.2 + sun * std::exp(-a * a / (2 * sigma * sigma)))));
+    }
+  return img;
+}
+
+// Z = integral of L_Y rho_Y cos over the floor's hemisphere (the un-occluded target's mass, eq. 3),
+// the same at every floor point: texel by texel, each row's integral of cos over its band.
+double trueZ(const HdrImage& img, double rhoY) {
+  double z = 0;
+  for (int y = 0; y < img.height / 2; ++y) {
+    const double c0 = std::cos(kPiD * y / img.height), c1 = std::cos(kPiD * (y + 1) / img.height);
+    for (int x = 0; x < img.width; ++x)
+      z += double(luminance(img.get(x, y))) * (2 * kPiD / img.width) * (c0 * c0 - c1 * c1) / 2;
+  }
+  return z * rhoY;
+}
+
+// SMC over a video light probe: the first frame starts every pixel afresh by BIS; the carried
+// normalising constant Z_t (eq. 8) follows the true one while the sun turns, with no
+// reinitialisation; when the sun brightens 20-fold (a light switched on) Z_t / Z_t-1 jumps and the
+// pixels reinitialise.
+TEST(Ibl, SmcTracksTheNormalisingConstantAndReinitialisesOnAJump) {
+  test::TempDir t;
+  const int frames = 10;
+  for (int f = 0; f < frames; ++f)
+    writeExr(t.file("sky_" + std::to_string(f) + ".exr"), rotatingSky(f, f == frames - 1 ? 1000.0f : 50.0f));
+  json p = estimatorParameters("smc");
+  p["smc_statistics"] = true;
+  p["bis_proposals"] = 256;
+  Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"sequence", "sky_%d.exr"}, {"fps", 10}}, p, 24);
+  const std::vector<SceneCamera> cameras = sceneCameras(s);
+  ASSERT_EQ(cameras.size(), size_t(frames));
+  auto m = createMethod(s, {true, false});
+  for (int f = 0; f < frames; ++f) {
+    const MethodFrame r = m->render(cameras[size_t(f)]);
+    const double want = trueZ(rotatingSky(f, f == frames - 1 ? 1000.0f : 50.0f), 0.5 / kPiD);
+    const double zMean = std::stod(r.attributes.at("nestlight:ibl_smc_z_mean"));
+    const long receivers = std::stol(r.attributes.at("nestlight:ibl_receivers"));
+    const long jumps = std::stol(r.attributes.at("nestlight:ibl_smc_reinit_jump"));
+    const long fresh = std::stol(r.attributes.at("nestlight:ibl_smc_reinit_new"));
+    const long carried = std::stol(r.attributes.at("nestlight:ibl_smc_reprojected"));
+    std::printf("frame %d: Z mean %.4f, true %.4f (%.3f); %ld receivers, %ld carried, %ld jumps, %ld fresh\n", f, zMean,
+                want, zMean / want, receivers, carried, jumps, fresh);
+    ASSERT_GT(receivers, 300);
+    if (f == 0) {
+      EXPECT_EQ(fresh, receivers);
+    } else {
+      EXPECT_EQ(carried, receivers) << f;
+    }
+    if (f > 0 && f < frames - 1) EXPECT_EQ(jumps, 0) << "frame " << f << ": no jump while the sun turns";
+    if (f == frames - 1) EXPECT_GT(jumps, receivers * 9 / 10) << "the sun brightened 20-fold";
+    // Measured: within 1.5% over the 9 turning frames (N = 8, K = 3, M = 256). 5% allows the seed's
+    // luck; an SMC whose Z drifted (a reweighting or move that broke invariance) leaves it within
+    // a few frames. A hard-edged sun a texel per frame drifts much faster: docs/IBL.md.
+    EXPECT_NEAR(zMean / want, 1.0, 0.05) << "frame " << f;
+  }
+}
+
+}  // namespace
+}  // namespace nestlight::gi
