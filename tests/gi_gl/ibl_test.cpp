@@ -13,6 +13,7 @@
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
+#include "sphere_scan.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -183,6 +184,32 @@ TEST(Ibl, TheMeshesShadowTheSky) {
       EXPECT_TRUE(within(shade)) << "unshadowed";
     }
     EXPECT_EQ(f.attributes.at("nestlight:ibl_bvh_triangles"), "24");
+  }
+}
+
+// The scan occludes too: a box inside a closed sphere of 20,000 scan points under a sky of 1 sees
+// no sky through the points' discs (a pixel may catch a ray between two discs: 2% allowed), and
+// all of it (rho L) when visibility is off.
+TEST(Ibl, TheScanShadowsTheSky) {
+  test::TempDir t;
+  buildSphereScan(t, 20000, 1.0f, 128);
+  for (bool visibility : {true, false}) {
+    Scene s = boxInSphereScene(t, 0.5, "ibl", {{"estimator", "mis"}, {"brdf_samples", 8}, {"env_samples", 8},
+                                              {"visibility", visibility}});
+    SceneEnvironment e;
+    e.constant = Rgb(1.0f);
+    s.environment = e;
+    const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+    double sum = 0;
+    int n = 0;
+    for (int y = 8; y < 24; ++y)
+      for (int x = 8; x < 24; ++x) sum += f.image.get(x, y).r, n++;  // the box's face fills the middle
+    if (visibility) {
+      EXPECT_LT(sum / n, 0.02 * 0.5) << "light through a closed scan";
+      EXPECT_NE(f.attributes.at("nestlight:ibl_scan_hierarchy_nodes"), "0");
+    } else {
+      EXPECT_NEAR(sum / n, 0.5, 0.02) << "the unoccluded furnace";
+    }
   }
 }
 

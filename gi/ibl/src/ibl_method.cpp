@@ -16,6 +16,8 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/ibl/environment_table.h"
 #include "nestlight/gi/ibl/triangle_bvh.h"
+#include "nestlight/gi/pbgi/bsh_layer.h"
+#include "nestlight/gi/pbgi/cut_hierarchies.h"
 #include "nestlight/gi/raster/raster_frame.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
@@ -66,6 +68,11 @@ class IblExtension : public RasterExtension {
     // This pass owns the environment's light on every receiver, occluded: direct light must not
     // add its unshadowed irradiance too.
     f.setSkyOnDiffuseLobes(false);
+    // The scan occludes through the hierarchies pbgi gathers from: built per node on the loader
+    // threads, joined under a top tree when the cut changes.
+    layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {
+      return std::make_shared<pbgi::BshLayer>(meta, pbgi::BshOptions{}, std::move(colours));
+    });
     std::vector<glm::vec3> corners;
     const auto& meshes = f.meshes();
     for (size_t i = 0; i < meshes.size() && i < scene.meshes.size(); ++i) {
@@ -101,6 +108,10 @@ class IblExtension : public RasterExtension {
   }
 
   void beforeFrame(RasterFrame& f) override {
+    if (f.cutGeneration() != generation_) {
+      generation_ = f.cutGeneration();
+      hier_.assemble(f, layer_);
+    }
     std::shared_ptr<const EnvironmentMap> current = f.environmentMap();
     if (current != tableMap_) {
       const ibl::EnvironmentTable t = ibl::buildEnvironmentTable(*current);
@@ -135,6 +146,9 @@ class IblExtension : public RasterExtension {
     mf.attributes["nestlight:ibl_bvh_triangles"] = std::to_string(bvhTriangles_);
     mf.attributes["nestlight:ibl_bvh_nodes"] = std::to_string(bvhNodes_);
     mf.attributes["nestlight:ibl_bvh_ms"] = std::to_string(bvhMs_);
+    mf.attributes["nestlight:ibl_scan_hierarchy_nodes"] = std::to_string(hier_.nodeCount());
+    mf.attributes["nestlight:ibl_scan_cut_nodes"] = std::to_string(hier_.cutNodes());
+    mf.attributes["nestlight:ibl_scan_nodes_left_out"] = std::to_string(hier_.leftOut());
     mf.rays += s[IBL_STAT_RAYS];
     char line[256];
     std::snprintf(line, sizeof line, "; ibl %s: %u receivers, %u visibility rays; CDF tables %.2f ms",
@@ -225,6 +239,10 @@ class IblExtension : public RasterExtension {
     glUniform1i(program_.uniform("uVisibility"), params_.visibility ? 1 : 0);
     glUniform1ui(program_.uniform("uSeed"), seed_);
     glUniform1i(program_.uniform("uBvhNodes"), int(bvhNodes_));
+    glUniform1i(program_.uniform("uTopCount"), int(hier_.topCount()));
+    hier_.top().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP);
+    hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
+    hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
     (void)p;
     if (smc) {
       // The full image's clip-from-world, for the next frame's reprojection.
@@ -283,6 +301,9 @@ class IblExtension : public RasterExtension {
 
   IblParameters params_;
   uint32_t seed_ = 1;
+  size_t layer_ = 0;
+  uint64_t generation_ = ~0ull;
+  pbgi::CutHierarchies hier_;
   gl::ShaderProgram program_;
   gl::Buffer envTable_, bvh_, triangles_, stats_, stateIn_, stateOut_;
   gl::Texture prevTexture_;

@@ -14,6 +14,7 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/pbgi/bsh.h"
 #include "nestlight/gi/pbgi/bsh_layer.h"
+#include "nestlight/gi/pbgi/cut_hierarchies.h"
 #include "nestlight/gi/pbgi/mesh_trees.h"
 #include "nestlight/gi/pbgi/micro_buffer.h"
 #include "nestlight/gi/raster/raster_frame.h"
@@ -86,15 +87,12 @@ class PbgiExtension : public RasterExtension {
       return layer;
     });
     if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene, f.meshes());
-    std::vector<BshNode> meshNodes;
     for (const auto& t : meshTrees_) {
-      meshOffsets_.push_back(meshNodes.size());
-      meshNodes.insert(meshNodes.end(), t.nodes.begin(), t.nodes.end());
       meshLiftMax_ = std::max(meshLiftMax_, t.discRadius);
       if (t.material < meshLift_.size()) meshLift_[t.material] = std::max(meshLift_[t.material], t.discRadius);
       meshSurfels_ += t.surfels;
     }
-    if (!meshNodes.empty()) meshNodes_ = gl::Buffer(meshNodes.size() * sizeof(BshNode), meshNodes.data(), 0);
+    hier_.setMeshTrees(meshTrees_);
     // The gather reads lit copies of the hierarchies when anything needs lighting: every node in
     // the albedo mode, the meshes' surfels in both.
     lit_ = albedo_ || !meshTrees_.empty();
@@ -189,85 +187,14 @@ class PbgiExtension : public RasterExtension {
  private:
   // The cut's hierarchies into one buffer, their roots into the top tree.
   void rebuild(RasterFrame& f) {
-    const auto t0 = std::chrono::steady_clock::now();
     generation_ = f.cutGeneration();
-    const auto& cut = f.lightsCut();
-    std::vector<PbgiNode> table;
-    std::vector<BshNode> roots;
-    std::vector<size_t> included;
-    uint64_t total = 0;
-    leftOut_ = 0;
-    // Parents come before children in the cut: when the hierarchies outgrow one buffer range,
-    // the finest nodes are the ones left out (and counted).
-    for (size_t i = 0; i < cut.size(); ++i) {
-      const size_t bytes = f.layerBytes(cut[i], layer_);
-      const uint64_t count = bytes / sizeof(BshNode);
-      if (count == 0) continue;
-      if ((total + count) * sizeof(BshNode) > gl::kMaxSsboRange) {
-        leftOut_++;
-        continue;
-      }
-      PbgiNode e{};
-      e.origin = glm::vec4(cut[i].origin, cut[i].colourScale);
-      e.range = glm::uvec4(uint32_t(total), uint32_t(count), 0, std::bit_cast<uint32_t>(cut[i].spacing));
-      table.push_back(e);
-      included.push_back(i);
-      total += count;
-    }
-    cutNodes_ = cut.size();
-    scanTrees_ = table.size();
-    // The meshes' hierarchies after the cut's (range.z: material + 1, which marks them).
-    std::vector<size_t> meshIncluded;
-    for (size_t k = 0; k < meshTrees_.size(); ++k) {
-      const uint64_t count = meshTrees_[k].nodes.size();
-      if ((total + count) * sizeof(BshNode) > gl::kMaxSsboRange) {
-        leftOut_++;
-        continue;
-      }
-      PbgiNode e{};
-      e.origin = glm::vec4(meshTrees_[k].origin, 1.0f);
-      e.range = glm::uvec4(uint32_t(total), uint32_t(count), meshTrees_[k].material + 1,
-                           std::bit_cast<uint32_t>(meshTrees_[k].discRadius));
-      table.push_back(e);
-      meshIncluded.push_back(k);
-      total += count;
-    }
-    bshNodes_ = total;
-    nodes_.reserve(std::max<size_t>(total, 1) * sizeof(BshNode));
-    // The roots come back in one read (one read per node would stall the pipeline each time).
-    roots.resize(included.size());
-    rootsStaging_.reserve(std::max<size_t>(included.size(), 1) * sizeof(BshNode));
-    for (size_t k = 0; k < included.size(); ++k) {
-      const GLuint src = f.layerBuffer(cut[included[k]], layer_);
-      const size_t bytes = size_t(table[k].range.y) * sizeof(BshNode);
-      glCopyNamedBufferSubData(src, nodes_.id(), 0, GLintptr(size_t(table[k].range.x) * sizeof(BshNode)),
-                               GLsizeiptr(bytes));
-      glCopyNamedBufferSubData(src, rootsStaging_.id(), 0, GLintptr(k * sizeof(BshNode)), sizeof(BshNode));
-    }
-    if (!included.empty()) {
-      glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-      glGetNamedBufferSubData(rootsStaging_.id(), 0, GLsizeiptr(roots.size() * sizeof(BshNode)), roots.data());
-    }
-    for (size_t k = 0; k < included.size(); ++k) {
-      const CutNode& n = cut[included[k]];
-      roots[k].sphere = glm::vec4(glm::vec3(roots[k].sphere) + n.origin, roots[k].sphere.w);
-      roots[k].colour = glm::vec4(glm::vec3(roots[k].colour) * n.colourScale, roots[k].colour.w);
-    }
-    for (size_t j = 0; j < meshIncluded.size(); ++j) {
-      const pbgi::MeshTree& t = meshTrees_[meshIncluded[j]];
-      const PbgiNode& e = table[scanTrees_ + j];
-      glCopyNamedBufferSubData(meshNodes_.id(), nodes_.id(), GLintptr(meshOffsets_[meshIncluded[j]] * sizeof(BshNode)),
-                               GLintptr(size_t(e.range.x) * sizeof(BshNode)), GLsizeiptr(t.nodes.size() * sizeof(BshNode)));
-      BshNode root = t.nodes[0];
-      root.sphere = glm::vec4(glm::vec3(root.sphere) + t.origin, root.sphere.w);
-      roots.push_back(root);
-    }
-    const pbgi::Bsh topTree = pbgi::buildTopTree(roots);
-    topCount_ = topTree.nodes.size();
-    top_.reserve(std::max<size_t>(topCount_, 1) * sizeof(BshNode));
-    if (topCount_) top_.upload(topTree.nodes.data(), topCount_ * sizeof(BshNode));
-    table_.reserve(std::max<size_t>(table.size(), 1) * sizeof(PbgiNode));
-    if (!table.empty()) table_.upload(table.data(), table.size() * sizeof(PbgiNode));
+    hier_.assemble(f, layer_);
+    std::vector<PbgiNode> table = hier_.entries();
+    cutNodes_ = hier_.cutNodes();
+    leftOut_ = hier_.leftOut();
+    scanTrees_ = hier_.scanTrees();
+    bshNodes_ = hier_.nodeCount();
+    topCount_ = hier_.topCount();
     tableCount_ = table.size();
     maxRange_ = 0;
     treeSizes_.clear();
@@ -284,17 +211,16 @@ class PbgiExtension : public RasterExtension {
         for (auto& e : table) e.origin.w = 1.0f;
       tableLit_.reserve(std::max<size_t>(table.size(), 1) * sizeof(PbgiNode));
       if (!table.empty()) tableLit_.upload(table.data(), table.size() * sizeof(PbgiNode));
-      nodesLit_.reserve(nodes_.bytes());
-      topLit_.reserve(top_.bytes());
+      nodesLit_.reserve(hier_.nodes().bytes());
+      topLit_.reserve(hier_.top().bytes());
       // The radiance-cache mode lights only the meshes' surfels: the scan's nodes are copied once
       // per cut, not every frame.
       if (!albedo_ && bshNodes_ > 0)
-        glCopyNamedBufferSubData(nodes_.id(), nodesLit_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
+        glCopyNamedBufferSubData(hier_.nodes().id(), nodesLit_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
     }
-    meshRoots_.clear();
-    for (size_t j = 0; j < meshIncluded.size(); ++j) meshRoots_.push_back(roots[scanTrees_ + j]);
-    average_ = topCount_ ? scanAverage(topTree.nodes[0], meshRoots_) : glm::vec3(0);
-    topMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    meshRoots_.assign(hier_.roots().begin() + std::ptrdiff_t(scanTrees_), hier_.roots().end());
+    average_ = topCount_ ? scanAverage(hier_.topRoot(), meshRoots_) : glm::vec3(0);
+    topMs_ = hier_.milliseconds();
   }
 
   void addPasses(RasterFrame& f) {
@@ -336,11 +262,11 @@ class PbgiExtension : public RasterExtension {
     f.bindSceneBuffers();
     lightProgram_.use();
     f.bindEnvironment(lightProgram_);
-    table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+    hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
     glUniform1i(lightProgram_.uniform("uFirstTree"), int(firstLit));
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
     if (tableCount_ > firstLit && litRange > 0) {
-      nodes_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN);
+      hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN);
       nodesLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT);
       glDispatchCompute(GLuint((litRange + 63) / 64), GLuint(tableCount_ - firstLit), 1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
@@ -370,11 +296,11 @@ class PbgiExtension : public RasterExtension {
       glUniform1i(lightUpProgram_.uniform("uTopTree"), topTree ? 1 : 0);
       runUntilDone(trees, "a light sweep");
     };
-    table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+    hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
     if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, start);
     // The top tree's leaves take their nodes' lit roots, scaled as the gather scales them.
     tableLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
-    glCopyNamedBufferSubData(top_.id(), topLit_.id(), 0, 0, GLsizeiptr(topCount_ * sizeof(BshNode)));
+    glCopyNamedBufferSubData(hier_.top().id(), topLit_.id(), 0, 0, GLsizeiptr(topCount_ * sizeof(BshNode)));
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     sweep(true, topLit_, 1, {uint32_t(topCount_)});
     BshNode root;
@@ -417,8 +343,8 @@ class PbgiExtension : public RasterExtension {
     receivers_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS);
     selectProgram_.use();
     glUniform1ui(selectProgram_.uniform("uPoints"), GLuint(params_.bouncePoints));
-    table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
-    nodes_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
+    hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+    hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
     glDispatchCompute(GLuint((maxRange_ + 63) / 64), GLuint(tableCount_), 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     uint32_t count = 0;
@@ -438,8 +364,8 @@ class PbgiExtension : public RasterExtension {
       cursors_.reserve(tableCount_ * 4);
       cursors_.upload(zeroCursors.data(), zeroCursors.size() * 4);
       cursors_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS);
-      table_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
-      nodes_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN);
+      hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+      hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_IN);
       nodesDirect_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
       nodesLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIGHT_OUT);
       receivers_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS);
@@ -483,9 +409,9 @@ class PbgiExtension : public RasterExtension {
     glGetNamedBufferSubData(receivers_.id(), 0, 4, &count);
     receiverCount_ += count;
     // Albedo mode: the lit copies; one bounce asked (direct light only): nothing to gather.
-    const gl::Buffer& topIn = lit_ ? topLit_ : top_;
-    const gl::Buffer& nodesIn = lit_ ? nodesLit_ : nodes_;
-    const gl::Buffer& tableIn = lit_ ? tableLit_ : table_;
+    const gl::Buffer& topIn = lit_ ? topLit_ : hier_.top();
+    const gl::Buffer& nodesIn = lit_ ? nodesLit_ : hier_.nodes();
+    const gl::Buffer& tableIn = lit_ ? tableLit_ : hier_.table();
     if (albedo_ && bounces_ < 2) count = 0;
     bool lists = false;
     if (count > 0 && topCount_ > 0 && params_.variant != PbgiParameters::Variant::Classic) {
@@ -646,7 +572,8 @@ class PbgiExtension : public RasterExtension {
   size_t layer_ = 0;
   std::vector<std::shared_ptr<const pbgi::BshLayer>> layers_;  // one per scan, for their build totals
   gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
-  gl::Buffer micro_, top_, nodes_, table_, receivers_, state_, stack_, mb_, rootsStaging_;
+  gl::Buffer micro_, receivers_, state_, stack_, mb_;
+  pbgi::CutHierarchies hier_;
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
   gl::ShaderProgram lightProgram_, lightUpProgram_, selectProgram_, downProgram_;
   gl::Buffer nodesDirect_, gathered_;  // further bounces: the leaves' direct light, each node's gathered light
@@ -658,8 +585,6 @@ class PbgiExtension : public RasterExtension {
   bool albedo_ = false;
   bool lit_ = false;  // the gather reads lit copies (albedo mode, or meshes' surfels)
   std::vector<pbgi::MeshTree> meshTrees_;
-  std::vector<size_t> meshOffsets_;  // each one's first node in meshNodes_
-  gl::Buffer meshNodes_;
   uint64_t meshSurfels_ = 0;
   // Mesh receivers leave from this far above their surface, per material (pbgi_common.glsl).
   std::array<float, PBGI_LIFTS> meshLift_{};

@@ -71,7 +71,7 @@ vec3 toLocal(vec3 d) { return vec3(dot(d, S.F[0]), dot(d, S.F[1]), dot(d, S.F[2]
 float visible(vec3 d) {
   if (!uVisibility) return 1.0;
   rays++;
-  return meshesOcclude(S.x, d, 1e30) ? 0.0 : 1.0;
+  return meshesOcclude(S.x, d, 1e30) || scanOccludes(S.x, d, 1e30) ? 0.0 : 1.0;
 }
 vec3 bsdf(vec3 wiL) { return evalBsdf(S.mat, S.woL, wiL); }
 float envPrevLuminance(vec3 d) {

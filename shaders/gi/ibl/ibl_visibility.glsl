@@ -1,5 +1,6 @@
 // Visibility V(x, w) of the environment: rays against the inserted meshes' triangles through their
-// BVH (gi/ibl/triangle_bvh.h; gi::ibl::traceTriangleBvh is this traversal on the CPU).
+// BVH (gi/ibl/triangle_bvh.h; gi::ibl::traceTriangleBvh is this traversal on the CPU), and
+// against the scan's resident cut (below).
 layout(std430, binding = IBL_SSBO_BVH) readonly buffer IblBvh { IblBvhNode bvh[]; };
 layout(std430, binding = IBL_SSBO_TRIANGLES) readonly buffer IblTriangles { IblTriangle triangles[]; };
 uniform int uBvhNodes;  // 0: no meshes
@@ -48,6 +49,54 @@ bool meshesOcclude(vec3 o, vec3 d, float tMax) {
     if (top + 2 > IBL_BVH_STACK) return false;  // deeper than the builder makes (a CHECK on the CPU)
     stack[top++] = b;
     stack[top++] = a;
+  }
+  return false;
+}
+
+// And against the resident cut of the scan: its points as discs (the leaves of the per-node
+// bounding-sphere hierarchies of the pbgi method, gi/pbgi/cut_hierarchies.h, joined by their top
+// tree): spheres bound the rays' search, a leaf is a disc of its radius about its normal (a
+// pruned cluster: one disc as wide as the points it stands for; without a normal, a disc facing
+// the ray).
+#include "../pbgi/bsh_interface.glsl"
+#include "../pbgi/pbgi_nodes.glsl"
+#include "../../common/octahedral.glsl"
+uniform int uTopCount;  // 0: nothing resident
+
+bool scanOccludes(vec3 o, vec3 d, float tMax) {
+  if (uTopCount == 0) return false;
+  uvec2 stack[PBGI_STACK];
+  int top = 0;
+  stack[top++] = uvec2(0u, 0u);
+  while (top > 0) {
+    uvec2 e = stack[--top];
+    BshNode A = fetchNode(e);
+    vec3 oc = A.sphere.xyz - o;
+    float tc = dot(oc, d), r = A.sphere.w;
+    float dist2 = max(dot(oc, oc) - tc * tc, 0.0);
+    if (dist2 > r * r || tc + r <= 0.0 || tc - r >= tMax) continue;
+    if (A.links.x == BSH_LEAF) {
+      if (e.y == 0u) {  // a top-tree leaf: enter that node's own hierarchy
+        stack[top++] = uvec2(0u, A.links.y + 1u);
+        continue;
+      }
+      float disc = min(uintBitsToFloat(A.links.y), r);
+      if (A.links.w == 0u) {
+        if (dist2 <= disc * disc && tc > 0.0 && tc < tMax) return true;
+        continue;
+      }
+      vec3 n = decodeNormal(A.links.w);
+      float dn = dot(d, n);
+      if (abs(dn) < 1e-8) continue;
+      float t = dot(oc, n) / dn;
+      if (!(t > 0.0 && t < tMax)) continue;
+      vec3 p = o + t * d - A.sphere.xyz;
+      if (dot(p, p) <= disc * disc) return true;
+      continue;
+    }
+    if (top + 2 > PBGI_STACK) return false;  // deeper than two BSH_MAX_DEPTH hierarchies: cannot happen
+    stack[top++] = uvec2(A.links.y, e.y);
+    stack[top++] = uvec2(A.links.x, e.y);
   }
   return false;
 }
