@@ -44,6 +44,7 @@ void addCompare(CLI::App& app, int& exitCode);
 void addExpandHdr(CLI::App& app, int& exitCode);
 void addColourMatch(CLI::App& app, int& exitCode);
 void addBenchHdr(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
+void addBenchIbl(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 
 // "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
       "  nestlight render room/scene.json               path-traced reference of a scene, linear EXR\n"
       "  nestlight compare render.exr reference.exr     error metrics against a reference image\n"
       "  nestlight bench gi room/scene.json             speed against error of the GI methods\n"
+      "  nestlight bench ibl                            IBL estimators under video light probes\n"
       "  nestlight expand-hdr scan.octree --photo p.exr HDR colour layer from one HDR photograph\n",
       "nestlight"};
   app.require_subcommand(1);
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addExpandHdr(app, code);
   nestlight::cli::addColourMatch(app, code);
   nestlight::cli::addBenchHdr(app, code);
+  nestlight::cli::addBenchIbl(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

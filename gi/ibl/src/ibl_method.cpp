@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -95,6 +96,8 @@ class IblExtension : public RasterExtension {
     program_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/ibl/ibl_shade.comp"}},
                                  {{"IBL_SMC_N", std::to_string(params_.smcParticles)}});
     stats_ = gl::Buffer(IBL_STAT_COUNT * 4);
+    const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    llvmpipe_ = renderer && std::strstr(renderer, "llvmpipe");
     frame::FrameGraph& g = f.graph();
     g.addTarget("radiance_ibl", {GL_RGBA32F});
     g.addPass(
@@ -150,10 +153,15 @@ class IblExtension : public RasterExtension {
     mf.attributes["nestlight:ibl_scan_cut_nodes"] = std::to_string(hier_.cutNodes());
     mf.attributes["nestlight:ibl_scan_nodes_left_out"] = std::to_string(hier_.leftOut());
     mf.rays += s[IBL_STAT_RAYS];
+    mf.attributes["nestlight:ibl_loop_limit_pixels"] = std::to_string(s[IBL_STAT_LOOP_LIMIT]);
     char line[256];
     std::snprintf(line, sizeof line, "; ibl %s: %u receivers, %u visibility rays; CDF tables %.2f ms",
                   estimatorName(params_.estimator), s[IBL_STAT_RECEIVERS], s[IBL_STAT_RAYS], tableMs_);
     mf.summary += line;
+    if (s[IBL_STAT_LOOP_LIMIT] && llvmpipe_)
+      mf.summary += "; warning: " + std::to_string(s[IBL_STAT_LOOP_LIMIT]) +
+                    " pixels neared llvmpipe's 65,535 loop iterations per invocation (their estimates may be cut "
+                    "short): use fewer samples per pixel";
     if (params_.estimator == IblParameters::Estimator::Smc) {
       mf.attributes["nestlight:ibl_smc_reprojected"] = std::to_string(s[IBL_STAT_REPROJECTED]);
       mf.attributes["nestlight:ibl_smc_reinit_jump"] = std::to_string(s[IBL_STAT_REINIT_JUMP]);
@@ -313,7 +321,7 @@ class IblExtension : public RasterExtension {
   uint64_t tableBuilds_ = 0, bvhNodes_ = 0, bvhTriangles_ = 0;
   int bvhDepth_ = 0;
   int stateW_ = 0, stateH_ = 0;
-  bool stateValid_ = false, hasPrevious_ = false, frameClip_ = false;
+  bool stateValid_ = false, hasPrevious_ = false, frameClip_ = false, llvmpipe_ = false;
   glm::mat4 clipFromWorld_{1.0f}, prevClipFromWorld_{1.0f};
 };
 

@@ -35,7 +35,8 @@
 #define IBL_STAT_MOVES 5            // SMC: Metropolis-Hastings proposals
 #define IBL_STAT_ACCEPTED 6         // ... accepted
 #define IBL_STAT_REPROJECTED 7      // SMC: pixels that took their samples from the previous frame
-#define IBL_STAT_COUNT 8
+#define IBL_STAT_LOOP_LIMIT 8        // pixels whose loops neared llvmpipe's 65,535 iterations per invocation
+#define IBL_STAT_COUNT 9
 
 #define IBL_BVH_LEAF 0x80000000u    // IblBvhNode.lo.w bits of a leaf: first triangle | IBL_BVH_LEAF
 #define IBL_BVH_STACK 64

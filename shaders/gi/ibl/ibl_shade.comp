@@ -114,6 +114,7 @@ vec3 ratioContribution(vec3 d) {
 vec3 estimateMis(int nRho, int nL) {
   vec3 sum = vec3(0.0);
   for (int i = 0; i < nRho + nL; ++i) {
+    loopSteps += 20u;  // the loop and an environment sample's two binary searches
     vec3 d, wiL;
     if (i < nRho) {
       if (!sampleBsdf(S.mat, S.woL, rnd2(), rnd(), wiL)) continue;
@@ -140,6 +141,7 @@ float bisSample(int M, int N) {
   uint start = rngState;
   float total = 0.0;
   for (int j = 0; j < M; ++j) {
+    loopSteps += 2u;  // this pass and the next
     vec3 wiL;
     if (!sampleBsdf(S.mat, S.woL, rnd2(), rnd(), wiL)) continue;
     float q = pdfBsdf(S.mat, S.woL, wiL);
@@ -395,6 +397,7 @@ void main() {
     else L = estimateSmc(gpx, x);
   }
   atomicAdd(stats[IBL_STAT_RAYS], rays);
+  if (loopSteps > 60000u) atomicAdd(stats[IBL_STAT_LOOP_LIMIT], 1u);
   if (moves > 0u) {
     atomicAdd(stats[IBL_STAT_MOVES], moves);
     atomicAdd(stats[IBL_STAT_ACCEPTED], accepted);

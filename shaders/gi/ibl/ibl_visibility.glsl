@@ -4,6 +4,9 @@
 layout(std430, binding = IBL_SSBO_BVH) readonly buffer IblBvh { IblBvhNode bvh[]; };
 layout(std430, binding = IBL_SSBO_TRIANGLES) readonly buffer IblTriangles { IblTriangle triangles[]; };
 uniform int uBvhNodes;  // 0: no meshes
+// Loop iterations this invocation ran (llvmpipe stops every loop of an invocation after 65,535 in
+// all: the frame counts the pixels that came near).
+uint loopSteps = 0u;
 
 bool iblHitBox(IblBvhNode n, vec3 o, vec3 inv, float tMax) {
   vec3 t0 = (n.lo.xyz - o) * inv, t1 = (n.hi.xyz - o) * inv;
@@ -37,6 +40,7 @@ bool meshesOcclude(vec3 o, vec3 d, float tMax) {
   stack[top++] = 0u;
   while (top > 0) {
     IblBvhNode n = bvh[stack[--top]];
+    loopSteps++;
     if (!iblHitBox(n, o, inv, tMax)) continue;
     uint a = floatBitsToUint(n.lo.w), b = floatBitsToUint(n.hi.w);
     if ((a & IBL_BVH_LEAF) != 0u) {
@@ -70,6 +74,7 @@ bool scanOccludes(vec3 o, vec3 d, float tMax) {
   stack[top++] = uvec2(0u, 0u);
   while (top > 0) {
     uvec2 e = stack[--top];
+    loopSteps++;
     BshNode A = fetchNode(e);
     vec3 oc = A.sphere.xyz - o;
     float tc = dot(oc, d), r = A.sphere.w;

@@ -1,0 +1,345 @@
+// `nestlight bench ibl` (nestlight/gi/bench_ibl.h).
+#include "nestlight/gi/bench_ibl.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include "nestlight/converters/test_scenes.h"
+#include "nestlight/gi/hdr_image.h"
+#include "nestlight/gi/methods.h"
+#include "nestlight/gi/plot.h"
+#include "nestlight/gi/reference/path_tracer.h"
+#include "nestlight/gi/reference/reference_scene.h"
+#include "nestlight/gi/scene.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::gi {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+namespace {
+
+constexpr double kPiD = 3.14159265358979323846;
+
+// A UV sphere of radius 1 about the origin with vertex normals.
+void writeSphereObj(const fs::path& path, int rings = 32, int segments = 64) {
+  std::ofstream f(path);
+  for (int r = 0; r <= rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const double th = kPiD * r / rings, ph = 2 * kPiD * s / segments;
+      const double x = std::sin(th) * std::cos(ph), y = std::sin(th) * std::sin(ph), z = std::cos(th);
+      f << "v " << x << " " << y << " " << z << "\nvn " << x << " " << y << " " << z << "\n";
+    }
+  auto id = [&](int r, int s) { return r * segments + (s % segments) + 1; };
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const int a = id(r, s), b = id(r + 1, s), c = id(r + 1, s + 1), d = id(r, s + 1);
+      if (r > 0) f << "f " << a << "//" << a << " " << b << "//" << b << " " << d << "//" << d << "\n";
+      if (r < rings - 1) f << "f " << d << "//" << d << " " << b << "//" << b << " " << c << "//" << c << "\n";
+    }
+}
+
+// A sky (0.5 at the zenith to 0.1 at the horizon, 0.05 below) with a sun: a Gaussian of 3 degrees
+// peaking at 2,000 (90% of the light), 35 degrees above the horizon, moving 6 degrees in azimuth a
+// frame.
+HdrImage movingSunFrame(int frame) {
+  const int W = 256, H = 128;
+  HdrImage img(W, H);
+  const double sigma = 3 * kPiD / 180, el = 35 * kPiD / 180, az = (20 + 6.0 * frame) * kPiD / 180;
+  const glm::dvec3 sun(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      const double th = kPiD * (y + 0.5) / H, ph = 2 * kPiD * (x + 0.5) / W;
+      const glm::dvec3 d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+      const double a = std::acos(std::clamp(glm::dot(d, sun), -1.0, 1.0));
+      const double sky = d.z > 0 ? 0.1 + 0.4 * d.z : 0.05;
+      const double s = 2000 * std::exp(-a * a / (2 * sigma * sigma));
+      img.set(x, y, Rgb(float(sky * 0.8 + s), float(sky * 0.9 + s * 0.95), float(sky * 1.2 + s * 0.85)));
+    }
+  return img;
+}
+
+// `map` turned about the zenith by `columns` texels.
+HdrImage turned(const HdrImage& map, int columns) {
+  HdrImage out(map.width, map.height);
+  for (int y = 0; y < map.height; ++y)
+    for (int x = 0; x < map.width; ++x) out.set((x + columns) % map.width, y, map.get(x, y));
+  return out;
+}
+
+double medianOf(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Pixels whose centre ray and all 8 neighbours' meet the same surface (a mesh's material): the
+// shading error without the silhouettes, where a GL method's pixel-centre sample and the
+// reference's pixel average differ whatever the estimator.
+std::vector<uint8_t> interiorMask(const Scene& s, int W, int H) {
+  const auto rs = ReferenceScene::load(s);
+  SceneCamera cam = s.camera;
+  cam.width = W, cam.height = H;
+  std::vector<int> id(size_t(W) * H, -1);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      glm::vec3 o, d;
+      cameraRay(cam, s.origin, x + 0.5f, y + 0.5f, &o, &d);
+      SurfaceHit hit;
+      if (rs->intersect(o, d, 1e30f, &hit)) id[size_t(y) * W + x] = int(hit.material);
+    }
+  std::vector<uint8_t> mask(id.size(), 0);
+  for (int y = 1; y + 1 < H; ++y)
+    for (int x = 1; x + 1 < W; ++x) {
+      const int c = id[size_t(y) * W + x];
+      bool same = c >= 0;
+      for (int dy = -1; dy <= 1 && same; ++dy)
+        for (int dx = -1; dx <= 1 && same; ++dx) same = id[size_t(y + dy) * W + x + dx] == c;
+      mask[size_t(y) * W + x] = same;
+    }
+  return mask;
+}
+
+struct Sums {
+  double err2 = 0, ref2 = 0;
+};
+Sums maskedSums(const HdrImage& a, const HdrImage& r, const std::vector<uint8_t>& mask) {
+  Sums s;
+  for (size_t p = 0; p < mask.size(); ++p) {
+    if (!mask[p]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const double e = double(a.rgb[3 * p + k]) - r.rgb[3 * p + k];
+      if (std::isfinite(e)) s.err2 += e * e;
+      s.ref2 += double(r.rgb[3 * p + k]) * r.rgb[3 * p + k];
+    }
+  }
+  return s;
+}
+
+// Time at which the error curve (ms, error) in the order of the sample counts reaches `target`,
+// interpolated in log-log; extrapolated (and said so) beyond the largest count.
+json timeTo(const std::vector<std::pair<double, double>>& curve, double target) {
+  for (size_t i = 0; i < curve.size(); ++i) {
+    if (curve[i].second > target) continue;
+    if (i == 0) return {{"ms", curve[0].first}, {"how", "reached at the fewest samples"}};
+    const auto& a = curve[i - 1];
+    const auto& b = curve[i];
+    const double t = (std::log(target) - std::log(a.second)) / (std::log(b.second) - std::log(a.second));
+    return {{"ms", std::exp(std::log(a.first) + t * (std::log(b.first) - std::log(a.first)))}, {"how", "interpolated"}};
+  }
+  if (curve.size() >= 2 && curve.back().second < curve[curve.size() - 2].second) {
+    const auto& a = curve[curve.size() - 2];
+    const auto& b = curve.back();
+    const double t = (std::log(target) - std::log(a.second)) / (std::log(b.second) - std::log(a.second));
+    return {{"ms", std::exp(std::log(a.first) + t * (std::log(b.first) - std::log(a.first)))},
+            {"how", "extrapolated beyond the most samples"}};
+  }
+  return {{"ms", nullptr}, {"how", "not reached"}};
+}
+
+}  // namespace
+
+BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
+  auto say = [&](const char* fmt, auto... args) {
+    if (!log) return;
+    std::fprintf(log, fmt, args...);
+    std::fflush(log);
+  };
+  if (o.frames < 2) throw Error("--frames", "", "give at least 2 frames (flicker compares consecutive frames)");
+  const MethodInfo* ibl = findMethod("ibl");
+  NL_CHECK(ibl);
+  for (const auto& e : o.estimators)
+    if (e != "mis" && e != "bis" && e != "smc" && e != "env" && e != "brdf")
+      throw Error("--estimators", "", "unknown estimator '" + e + "' (mis, bis, smc, env, brdf)");
+  BenchIblReport report;
+  report.dir = o.out;
+  fs::create_directories(o.out);
+  json all = {{"device", o.device}, {"frames", o.frames}, {"size", o.size}, {"timing_size", o.timingSize},
+              {"reference_spp", o.referenceSpp}, {"roughness", o.roughness}, {"scenes", json::array()}};
+  std::ofstream csv(o.out / "bench_ibl.csv");
+  csv << "scene,estimator,samples,frame,ms,relative_l2,relative_variance,flicker\n";
+  for (const std::string& sceneName : o.scenes) {
+    const fs::path dir = o.out / sceneName;
+    fs::create_directories(dir);
+    // The probe sequence.
+    if (sceneName == "moving-sun") {
+      for (int f = 0; f < o.frames; ++f) {
+        char name[64];
+        std::snprintf(name, sizeof name, "probe_%04d.exr", f);
+        writeExr((dir / name).string(), movingSunFrame(f));
+      }
+    } else if (sceneName == "shared") {
+      const fs::path map = o.sharedData / "hdr" / "stage_env_latlong.exr";
+      if (!fs::exists(map)) {
+        say("bench ibl: %s not found: the shared scene is skipped\n", map.c_str());
+        continue;
+      }
+      const HdrImage base = readHdrImage(map.string());
+      for (int f = 0; f < o.frames; ++f) {
+        char name[64];
+        std::snprintf(name, sizeof name, "probe_%04d.exr", f);
+        writeExr((dir / name).string(), turned(base, int(std::lround(base.width * 4.0 * f / 360))));
+      }
+    } else {
+      throw Error("--scenes", "", "unknown scene '" + sceneName + "' (moving-sun, shared)");
+    }
+    writeSphereObj(dir / "sphere.obj");
+    writeBoxObj(dir / "box.obj");
+    const json sceneJson = {
+        {"version", 1},
+        {"materials",
+         {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}},
+          {"glossy", {{"type", "ggx"}, {"base_color", {0.95, 0.8, 0.5}}, {"roughness", o.roughness}, {"metallic", 1.0}}}}},
+        {"meshes", json::array({json{{"path", "box.obj"},
+                                     {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+                                     {"material", "floor"}},
+                                json{{"path", "sphere.obj"}, {"transform", {{"translate", {0.0, 0.0, 1.0}}}}, {"material", "glossy"}}})},
+        {"environment", {{"sequence", "probe_%04d.exr"}, {"fps", 1}}},
+        {"camera", {{"eye", {0.0, -4.2, 2.4}}, {"target", {0.0, 0.0, 0.8}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 42.0},
+                    {"width", o.size}, {"height", o.size}}},
+        {"gi", {{"method", "direct"}, {"mode", "radiance_cache"}, {"seed", 1}}}};
+    std::ofstream(dir / "scene.json") << sceneJson.dump(2);
+    Scene scene = loadScene(dir / "scene.json");
+    const std::vector<SceneCamera> cameras = sceneCameras(scene);
+    NL_CHECK(int(cameras.size()) == o.frames);
+    // Ground truth per frame: the reference's direct light, cached by size and samples.
+    std::vector<HdrImage> refs;
+    {
+      Scene rs = scene;
+      rs.gi.samplesPerPixel = o.referenceSpp;
+      rs.gi.targetRelativeError = 0;
+      std::unique_ptr<Method> ref;
+      double refSeconds = 0;
+      for (int f = 0; f < o.frames; ++f) {
+        char name[96];
+        std::snprintf(name, sizeof name, "reference_%d_%dspp_%04d.exr", o.size, o.referenceSpp, f);
+        const fs::path file = dir / name;
+        if (fs::exists(file)) {
+          refs.push_back(readHdrImage(file.string()));
+          continue;
+        }
+        if (!ref) ref = createMethod(rs, {true, false});
+        const MethodFrame r = ref->render(cameras[size_t(f)]);
+        refSeconds += r.seconds;
+        writeExr(file.string(), r.image, r.attributes);
+        refs.push_back(r.image);
+        say("bench ibl: %s reference frame %d: %d spp in %.1f s, estimated relative error %.4f\n", sceneName.c_str(), f,
+            r.samplesPerPixel, r.seconds, r.relativeError);
+      }
+    }
+    const std::vector<uint8_t> mask = interiorMask(scene, o.size, o.size);
+    json sceneOut = {{"scene", sceneName}, {"estimators", json::array()}};
+    std::vector<PlotSeries> speedSeries, frameSeries;
+    json envBaseline;
+    std::map<std::string, json> timeTos;
+    for (const std::string& est : o.estimators) {
+      std::vector<std::pair<double, double>> curve;  // (median ms, median relative L2) per sample count
+      PlotSeries speed{est, {}};
+      json estOut = {{"estimator", est}, {"levels", json::array()}};
+      for (int q : o.samples) {
+        Scene s = scene;
+        s.gi.method = "ibl";
+        s.gi.parameters = json{{"estimator", est}};
+        ibl->applyQuality(s.gi, q);
+        auto runSeed = [&](uint64_t seed, int W) {
+          Scene ss = s;
+          ss.gi.seed = seed;
+          ss.camera.width = ss.camera.height = W;
+          auto m = createMethod(ss, {true, false});
+          std::vector<MethodFrame> out;
+          for (int f = 0; f < (W == o.size ? o.frames : std::min(o.frames, o.timingFrames)); ++f) {
+            SceneCamera c = cameras[size_t(f)];
+            c.width = c.height = W;
+            out.push_back(m->render(c));
+          }
+          return out;
+        };
+        const std::vector<MethodFrame> a = runSeed(1, o.size);
+        std::vector<MethodFrame> b;
+        if (o.variance) b = runSeed(2, o.size);
+        std::vector<double> errs, vars, flick, ms;
+        for (int f = 0; f < o.frames; ++f) {
+          const Sums e = maskedSums(a[size_t(f)].image, refs[size_t(f)], mask);
+          const double rel = e.ref2 > 0 ? std::sqrt(e.err2 / e.ref2) : 0;
+          double var = 0;
+          if (o.variance) {
+            const Sums d = maskedSums(a[size_t(f)].image, b[size_t(f)].image, mask);
+            var = e.ref2 > 0 ? d.err2 / 2 / e.ref2 : 0;  // E (a - b)^2 = 2 var, relative to mean r^2
+          }
+          double fl = 0;
+          if (f > 0) {
+            HdrImage da = a[size_t(f)].image, db = a[size_t(f - 1)].image;
+            for (size_t i = 0; i < da.rgb.size(); ++i) da.rgb[i] -= refs[size_t(f)].rgb[i];
+            for (size_t i = 0; i < db.rgb.size(); ++i) db.rgb[i] -= refs[size_t(f - 1)].rgb[i];
+            const Sums d = maskedSums(da, db, mask);
+            fl = e.ref2 > 0 ? std::sqrt(d.err2 / e.ref2) : 0;
+            flick.push_back(fl);
+          }
+          errs.push_back(rel), vars.push_back(var), ms.push_back(a[size_t(f)].seconds * 1e3);
+          csv << sceneName << "," << est << "," << q << "," << f << "," << ms.back() << "," << rel << "," << var << ","
+              << (f > 0 ? std::to_string(fl) : "") << "\n";
+        }
+        double timingMs = 0;
+        if (o.timingSize > 0) {
+          std::vector<double> t;
+          for (const MethodFrame& fr : runSeed(1, o.timingSize)) t.push_back(fr.seconds * 1e3);
+          timingMs = medianOf(t);
+        }
+        const double medMs = medianOf(ms), medErr = medianOf(errs);
+        curve.push_back({medMs, medErr});
+        speed.points.push_back({medMs, medErr, std::to_string(q)});
+        if (q == o.samples[o.samples.size() / 2]) {
+          PlotSeries fs{est + " (" + std::to_string(q) + " spp)", {}};
+          for (int f = 0; f < o.frames; ++f) fs.points.push_back({double(f), errs[size_t(f)]});
+          frameSeries.push_back(fs);
+        }
+        say("bench ibl: %-10s %-4s %3d spp: %8.1f ms/frame at %d^2 (%8.1f ms at %d^2), relative L2 %.4f (median of %d "
+            "frames), relative variance %.2e, flicker %.4f\n",
+            sceneName.c_str(), est.c_str(), q, medMs, o.size, timingMs, o.timingSize, medErr, o.frames, medianOf(vars),
+            medianOf(flick));
+        estOut["levels"].push_back({{"samples", q},
+                                    {"median_ms", medMs},
+                                    {"timing_ms", timingMs},
+                                    {"median_relative_l2", medErr},
+                                    {"relative_l2_per_frame", errs},
+                                    {"relative_variance_per_frame", vars},
+                                    {"flicker_per_frame", flick},
+                                    {"median_flicker", medianOf(flick)},
+                                    {"ms_per_frame", ms},
+                                    {"attributes", a.back().attributes}});
+      }
+      estOut["time_to_5pct"] = timeTo(curve, 0.05);
+      estOut["time_to_2pct"] = timeTo(curve, 0.02);
+      timeTos[est] = estOut["time_to_5pct"];
+      speedSeries.push_back(speed);
+      sceneOut["estimators"].push_back(estOut);
+    }
+    // The best estimator's time to 5% against environment-map sampling alone.
+    if (timeTos.count("env") && timeTos["env"]["ms"].is_number()) {
+      std::string best;
+      double bestMs = INFINITY;
+      for (const auto& [e, t] : timeTos)
+        if (e != "env" && t["ms"].is_number() && t["ms"].get<double>() < bestMs) bestMs = t["ms"].get<double>(), best = e;
+      if (!best.empty()) {
+        const double speedup = timeTos["env"]["ms"].get<double>() / bestMs;
+        sceneOut["best_to_5pct"] = {{"estimator", best}, {"speedup_over_env", speedup}};
+        say("bench ibl: %s: %s reaches 5%% in %.1f ms, %.2fx faster than environment sampling alone\n", sceneName.c_str(),
+            best.c_str(), bestMs, speedup);
+      }
+    }
+    writeSvgPlot((o.out / (sceneName + "_speed.svg")).string(), "ibl on " + sceneName + ": time against error",
+                 "ms per frame (" + std::to_string(o.size) + "^2)", "relative L2 error (median over frames)", speedSeries,
+                 true, true);
+    writeSvgPlot((o.out / (sceneName + "_frames.svg")).string(), "ibl on " + sceneName + ": error per frame",
+                 "frame", "relative L2 error", frameSeries, false, true);
+    all["scenes"].push_back(sceneOut);
+  }
+  std::ofstream(o.out / "bench_ibl.json") << all.dump(2);
+  report.json = std::move(all);
+  return report;
+}
+
+}  // namespace nestlight::gi
