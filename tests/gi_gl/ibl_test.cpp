@@ -418,5 +418,32 @@ TEST(Ibl, ADamagedProbeFrameIsNamedOrThePreviousKept) {
   }
 }
 
+// `nestlight bench ibl` end to end at a toy size: a row per estimator, sample count and frame,
+// and the summary's times to 5% and 2%.
+TEST(Ibl, BenchIblWritesItsTablesAndPlots) {
+  test::TempDir t;
+  std::string out;
+  const int rc = test::runCli("bench ibl --scenes moving-sun --frames 2 --size 16 --timing-size 0 --samples 1,2 "
+                              "--reference-spp 4 --no-variance -o " + t.path().string(), &out);
+  ASSERT_EQ(rc, 0) << out;
+  std::ifstream csv(t.path() / "bench_ibl.csv");
+  std::string line;
+  int rows = -1;
+  while (std::getline(csv, line)) rows++;
+  EXPECT_EQ(rows, 4 * 2 * 2) << "estimators x sample counts x frames";
+  std::ifstream js(t.path() / "bench_ibl.json");
+  const json j = json::parse(js);
+  ASSERT_EQ(j.at("scenes").size(), 1u);
+  for (const auto& e : j.at("scenes")[0].at("estimators")) {
+    EXPECT_TRUE(e.contains("time_to_5pct")) << e.dump();
+    EXPECT_EQ(e.at("levels").size(), 2u);
+  }
+  EXPECT_TRUE(std::filesystem::exists(t.path() / "moving-sun_speed.svg"));
+  EXPECT_TRUE(std::filesystem::exists(t.path() / "moving-sun_frames.svg"));
+  const int bad = test::runCli("bench ibl --estimators mis,foo --frames 2 -o " + t.path().string(), &out);
+  EXPECT_NE(bad, 0);
+  EXPECT_NE(out.find("foo"), std::string::npos) << out;
+}
+
 }  // namespace
 }  // namespace nestlight::gi
