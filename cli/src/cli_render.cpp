@@ -147,6 +147,10 @@ void addRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--variant", *variant, "Scenes, method pbgi: its traversal, x (X-PBGI, default), mip (MIP-PBGI) or "
                                          "classic (gi.parameters.variant)")
       ->check(CLI::IsMember({"classic", "mip", "x"}))->group(group);
+  auto estimator = std::make_shared<std::string>();
+  cmd->add_option("--estimator", *estimator, "Scenes, method ibl: mis (default), bis, smc, or the baselines env "
+                                             "(environment sampling alone) and brdf (gi.parameters.estimator; docs/IBL.md)")
+      ->check(CLI::IsMember({"mis", "bis", "smc", "env", "brdf"}))->group(group);
   cmd->add_option("--spp", sc->spp, "Scenes: samples per pixel at most")->check(CLI::Range(1, 1 << 24))->group(group);
   cmd->add_option("--target-error", sc->targetError,
                   "Scenes: stop when the estimated relative error (two half-sample images) falls below")
@@ -169,6 +173,7 @@ void addRender(CLI::App& app, int& exitCode) {
       }
       if (!mode->empty()) sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
       if (!variant->empty()) sc->parameters["variant"] = *variant;
+      if (!estimator->empty()) sc->parameters["estimator"] = *estimator;
       sc->output = job->output;
       gi::renderSceneFile(*octree, *sc);
       exitCode = 0;

@@ -57,7 +57,7 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
   ASSERT_EQ(test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out), 0) << out;
   ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
-                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 --quality pbgi=8 --reference-error 0.05 "
+                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 --quality pbgi=8 --quality ibl=2 --reference-error 0.05 "
                              "--reference-spp 256 -o " +
                              dir.file("b"),
                          &out),
@@ -72,10 +72,14 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   // Every registered method: reference and direct at 1 and 4 spp, raster at 2 shadow-map sizes,
   // vpl at 16 VPLs as the scene sets it and in its 4 variants (1 to 3 bounces, exact visibility),
   // pbgi (X-PBGI) at 8 x 8 micro-buffers and in its 5 variants (classic, mip, no pruning,
-  // conservative, no meshes).
-  EXPECT_EQ(rows, 17);
+  // conservative, no meshes), ibl (MIS) at 2 samples per pixel and in its 4 variants (bis, smc,
+  // environment sampling, bsdf sampling).
+  EXPECT_EQ(rows, 22);
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 17u);
+  ASSERT_EQ(j["rows"].size(), 22u);
+  EXPECT_EQ(j["rows"][17]["method"], "ibl");
+  EXPECT_EQ(j["rows"][18]["variant"], "bis");
+  EXPECT_EQ(j["rows"][21]["variant"], "bsdf sampling");
   EXPECT_EQ(j["rows"][11]["method"], "pbgi");
   EXPECT_EQ(j["rows"][12]["variant"], "classic");
   EXPECT_EQ(j["rows"][15]["variant"], "conservative");

@@ -31,42 +31,57 @@ float smithVisibility(vec3 wo, vec3 wi, float a2) {
 }
 float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 
+// The material's parameters resolved into the terms the lobes use (material.cpp's resolve()):
+// shared by evaluation and sampling (brdf_sample.glsl).
+struct Lobes {
+  bool lambert, burley;
+  vec3 base, diffuseAlbedo, sheen, f0, f0Dielectric;
+  float roughness, alpha, a2, coat, coatA2, coatLogA2;
+};
+
+Lobes resolveLobes(MaterialParams m) {
+  Lobes l;
+  l.base = clamp(m.baseColor, 0.0, 1.0);
+  l.lambert = m.type == NL_MATERIAL_LAMBERT;
+  l.burley = m.type == NL_MATERIAL_PRINCIPLED;
+  float metallic = l.lambert ? 0.0 : clamp(m.metallic, 0.0, 1.0);
+  l.roughness = clamp(m.roughness, 0.0, 1.0);
+  l.alpha = max(1e-3, l.roughness * l.roughness), l.a2 = l.alpha * l.alpha;
+  l.diffuseAlbedo = (1.0 - metallic) * l.base;
+  l.f0Dielectric = vec3(0.04), l.sheen = vec3(0.0);
+  l.coat = 0.0, l.coatA2 = 0.0, l.coatLogA2 = 0.0;
+  if (l.burley) {
+    float lum = luminance(l.base);
+    vec3 tint = lum > 0.0 ? l.base / lum : vec3(1.0);
+    l.f0Dielectric = min(vec3(1.0), 0.08 * clamp(m.specular, 0.0, 1.0) * mix(vec3(1.0), tint, clamp(m.specularTint, 0.0, 1.0)));
+    l.sheen = (1.0 - metallic) * clamp(m.sheen, 0.0, 1.0) * mix(vec3(1.0), tint, clamp(m.sheenTint, 0.0, 1.0));
+    l.coat = 0.25 * clamp(m.clearcoat, 0.0, 1.0);
+    float coatAlpha = mix(0.1, 0.001, clamp(m.clearcoatGloss, 0.0, 1.0));
+    l.coatA2 = coatAlpha * coatAlpha;
+    l.coatLogA2 = log(l.coatA2);
+  }
+  l.f0 = mix(l.f0Dielectric, l.base, metallic);
+  return l;
+}
+
 vec3 evalBsdf(MaterialParams m, vec3 wo, vec3 wi) {
   if (!(wo.z > kMinCos) || !(wi.z > kMinCos)) return vec3(0.0);
-  vec3 base = clamp(m.baseColor, 0.0, 1.0);
-  if (m.type == NL_MATERIAL_LAMBERT) return base * kInvPi;
-  float metallic = clamp(m.metallic, 0.0, 1.0);
-  float roughness = clamp(m.roughness, 0.0, 1.0);
-  float alpha = max(1e-3, roughness * roughness), a2 = alpha * alpha;
-  vec3 diffuseAlbedo = (1.0 - metallic) * base;
-  vec3 f0Dielectric = vec3(0.04), sheen = vec3(0.0);
-  float coat = 0.0, coatA2 = 0.0, coatLogA2 = 0.0;
-  bool burley = m.type == NL_MATERIAL_PRINCIPLED;
-  if (burley) {
-    float lum = luminance(base);
-    vec3 tint = lum > 0.0 ? base / lum : vec3(1.0);
-    f0Dielectric = min(vec3(1.0), 0.08 * clamp(m.specular, 0.0, 1.0) * mix(vec3(1.0), tint, clamp(m.specularTint, 0.0, 1.0)));
-    sheen = (1.0 - metallic) * clamp(m.sheen, 0.0, 1.0) * mix(vec3(1.0), tint, clamp(m.sheenTint, 0.0, 1.0));
-    coat = 0.25 * clamp(m.clearcoat, 0.0, 1.0);
-    float coatAlpha = mix(0.1, 0.001, clamp(m.clearcoatGloss, 0.0, 1.0));
-    coatA2 = coatAlpha * coatAlpha;
-    coatLogA2 = log(coatA2);
-  }
-  vec3 f0 = mix(f0Dielectric, base, metallic);
+  Lobes l = resolveLobes(m);
+  if (l.lambert) return l.base * kInvPi;
   vec3 h = normalize(wo + wi);
   float cosD = clamp(dot(wi, h), 0.0, 1.0);
-  vec3 diffuse = diffuseAlbedo * kInvPi;
-  if (burley) {
-    float fd90 = 0.5 + 2.0 * roughness * cosD * cosD;
+  vec3 diffuse = l.diffuseAlbedo * kInvPi;
+  if (l.burley) {
+    float fd90 = 0.5 + 2.0 * l.roughness * cosD * cosD;
     float fo = 1.0 + (fd90 - 1.0) * pow5(1.0 - wo.z), fi = 1.0 + (fd90 - 1.0) * pow5(1.0 - wi.z);
-    diffuse = diffuse * (fo * fi) + sheen * pow5(1.0 - cosD);
+    diffuse = diffuse * (fo * fi) + l.sheen * pow5(1.0 - cosD);
   }
-  vec3 transmitted = (vec3(1.0) - schlick(f0Dielectric, wo.z)) * (vec3(1.0) - schlick(f0Dielectric, wi.z));
-  vec3 below = diffuse * transmitted + schlick(f0, cosD) * (ggxD(h, a2) * smithVisibility(wo, wi, a2));
-  if (coat > 0.0) {
-    float coatO = coat * schlick(0.04, wo.z), coatI = coat * schlick(0.04, wi.z);
+  vec3 transmitted = (vec3(1.0) - schlick(l.f0Dielectric, wo.z)) * (vec3(1.0) - schlick(l.f0Dielectric, wi.z));
+  vec3 below = diffuse * transmitted + schlick(l.f0, cosD) * (ggxD(h, l.a2) * smithVisibility(wo, wi, l.a2));
+  if (l.coat > 0.0) {
+    float coatO = l.coat * schlick(0.04, wo.z), coatI = l.coat * schlick(0.04, wi.z);
     return below * ((1.0 - coatO) * (1.0 - coatI)) +
-           vec3(coat * gtr1D(h, coatA2, coatLogA2) * schlick(0.04, cosD) * smithVisibility(wo, wi, 0.0625));
+           vec3(l.coat * gtr1D(h, l.coatA2, l.coatLogA2) * schlick(0.04, cosD) * smithVisibility(wo, wi, 0.0625));
   }
   return below;
 }

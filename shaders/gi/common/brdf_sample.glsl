@@ -8,41 +8,23 @@
 const float kMinLobeProbability = 0.05;
 
 struct LobeChoice {
-  float diffuse, specular, coat;
-  float alpha, alpha2, coatA2, coatLogA2;
+  float diffuse, specular, coat;  // each lobe's share of the samples
+  Lobes l;
 };
 
 // Each lobe's share of the samples, from wo alone (material.cpp's lobeProbabilities).
 LobeChoice lobeChoice(MaterialParams m, vec3 wo) {
   LobeChoice c;
+  c.l = resolveLobes(m);
   c.diffuse = 1.0, c.specular = 0.0, c.coat = 0.0;
-  c.alpha = 1.0, c.alpha2 = 1.0, c.coatA2 = 0.0, c.coatLogA2 = 0.0;
-  if (m.type == NL_MATERIAL_LAMBERT) return c;
-  vec3 base = clamp(m.baseColor, 0.0, 1.0);
-  float metallic = clamp(m.metallic, 0.0, 1.0);
-  float roughness = clamp(m.roughness, 0.0, 1.0);
-  c.alpha = max(1e-3, roughness * roughness), c.alpha2 = c.alpha * c.alpha;
-  vec3 diffuse = (1.0 - metallic) * base;
-  vec3 f0Dielectric = vec3(0.04), sheen = vec3(0.0);
-  float coat = 0.0;
-  if (m.type == NL_MATERIAL_PRINCIPLED) {
-    float lum = luminance(base);
-    vec3 tint = lum > 0.0 ? base / lum : vec3(1.0);
-    f0Dielectric = min(vec3(1.0), 0.08 * clamp(m.specular, 0.0, 1.0) * mix(vec3(1.0), tint, clamp(m.specularTint, 0.0, 1.0)));
-    sheen = (1.0 - metallic) * clamp(m.sheen, 0.0, 1.0) * mix(vec3(1.0), tint, clamp(m.sheenTint, 0.0, 1.0));
-    coat = 0.25 * clamp(m.clearcoat, 0.0, 1.0);
-    float coatAlpha = mix(0.1, 0.001, clamp(m.clearcoatGloss, 0.0, 1.0));
-    c.coatA2 = coatAlpha * coatAlpha;
-    c.coatLogA2 = log(c.coatA2);
-  }
-  vec3 f0 = mix(f0Dielectric, base, metallic);
-  float coatF = coat * schlick(0.04, wo.z);
-  vec3 below = (1.0 - coatF) * (vec3(1.0) - schlick(f0Dielectric, wo.z));
-  float wd = dot(below * (diffuse + 0.25 * sheen), vec3(1.0 / 3.0));
-  float ws = (1.0 - coatF) * dot(schlick(f0, wo.z), vec3(1.0 / 3.0));
+  if (c.l.lambert) return c;
+  float coatF = c.l.coat * schlick(0.04, wo.z);
+  vec3 below = (1.0 - coatF) * (vec3(1.0) - schlick(c.l.f0Dielectric, wo.z));
+  float wd = dot(below * (c.l.diffuseAlbedo + 0.25 * c.l.sheen), vec3(1.0 / 3.0));
+  float ws = (1.0 - coatF) * dot(schlick(c.l.f0, wo.z), vec3(1.0 / 3.0));
   float wc = coatF;
-  bool hasDiffuse = dot(diffuse + sheen, vec3(1.0)) > 0.0;
-  bool hasCoat = coat > 0.0;
+  bool hasDiffuse = dot(c.l.diffuseAlbedo + c.l.sheen, vec3(1.0)) > 0.0;
+  bool hasCoat = c.l.coat > 0.0;
   float total = wd + ws + wc;
   if (!(total > 0.0)) {
     wd = hasDiffuse ? 1.0 : 0.0;
@@ -66,8 +48,8 @@ float pdfBsdf(MaterialParams m, vec3 wo, vec3 wi) {
   if (m.type == NL_MATERIAL_LAMBERT) return wi.z * kInvPi;
   vec3 h = normalize(wo + wi);
   float cosD = clamp(dot(wi, h), 0.0, 1.0);
-  float pdf = c.diffuse * wi.z * kInvPi + c.specular * ggxD(h, c.alpha2) * smithG1OverCos(wo, c.alpha2) * 0.25;
-  if (c.coat > 0.0) pdf += c.coat * gtr1D(h, c.coatA2, c.coatLogA2) * h.z / (4.0 * max(cosD, 1e-9));
+  float pdf = c.diffuse * wi.z * kInvPi + c.specular * ggxD(h, c.l.a2) * smithG1OverCos(wo, c.l.a2) * 0.25;
+  if (c.coat > 0.0) pdf += c.coat * gtr1D(h, c.l.coatA2, c.l.coatLogA2) * h.z / (4.0 * max(cosD, 1e-9));
   return pdf;
 }
 
@@ -108,9 +90,9 @@ bool sampleBsdf(MaterialParams m, vec3 wo, vec2 u, float uLobe, out vec3 wi) {
   if (uLobe < c.diffuse) {
     wi = sampleCosineHemisphereGl(u);
   } else if (uLobe < c.diffuse + c.specular || c.coat == 0.0) {
-    wi = reflect(-wo, sampleGgxVisibleNormal(wo, c.alpha, u));
+    wi = reflect(-wo, sampleGgxVisibleNormal(wo, c.l.alpha, u));
   } else {
-    vec3 h = sampleGtr1(c.coatA2, u);
+    vec3 h = sampleGtr1(c.l.coatA2, u);
     if (!(dot(wo, h) > 0.0)) return false;
     wi = reflect(-wo, h);
   }
