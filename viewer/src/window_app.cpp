@@ -122,6 +122,7 @@ int runViewer(const ViewerOptions& opt) {
     std::string status;
     int frame = 0;
     auto last = std::chrono::steady_clock::now();
+    const auto opened = last;  // a scene's video light probe plays from here
     double lastX = 0, lastY = 0;
     glfwGetCursorPos(ctx.window(), &lastX, &lastY);
     std::vector<float> pointMillions{float(budgets.points) / 1e6f};
@@ -178,6 +179,7 @@ int runViewer(const ViewerOptions& opt) {
       gi::SceneCamera sceneCam;
       sceneCam.eye = cam.eye, sceneCam.target = cam.target, sceneCam.up = cam.up;
       sceneCam.fovYDegrees = cam.fovYDegrees, sceneCam.width = fbw, sceneCam.height = fbh;
+      sceneCam.time = std::chrono::duration<double>(now - opened).count();
       const streaming::FrameStats& st = streamer->update(cam.view(fbw, fbh));
       DrawTimings timings;
       if (showMethod) {
