@@ -53,8 +53,9 @@ const std::vector<MethodInfo>& registeredMethods() {
                   {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }},
                   {"no meshes", [](GiSettings& g) { g.parameters["meshes"] = false; }}}});
     // Samples per pixel: MIS and the baselines split them between the BSDF and the environment
-    // (the paper's half each), BIS resamples them from 20 times as many proposals (the paper's
-    // 400 for 20), SMC carries them (at most 32) with the paper's 3 intermediate distributions.
+    // (the paper's half each), BIS resamples them (at most 64) from 20 times as many proposals
+    // (the paper's 400 for 20), SMC carries them (at most 32) with the paper's 3 intermediate
+    // distributions.
     m.push_back({"ibl", "real-time image-based lighting from HDR environment maps and video light probes: MIS, BIS, SMC (GL)",
                  true, "samples per pixel", {2, 8, 32},
                  [](GiSettings& g, int q) {
@@ -62,7 +63,7 @@ const std::vector<MethodInfo>& registeredMethods() {
                    const std::string e = g.parameters.value("estimator", std::string("mis"));
                    if (e == "bis") {
                      g.parameters["bis_samples"] = std::min(q, 64);
-                     g.parameters["bis_proposals"] = 20 * std::min(q, 64);
+                     g.parameters["bis_proposals"] = 20 * q;
                    } else if (e == "smc") {
                      g.parameters["smc_particles"] = std::min(q, 32);
                    } else {
