@@ -61,7 +61,8 @@ class IblExtension : public RasterExtension {
             {"smc_local_degrees", std::to_string(params_.smcLocalDegrees)},
             {"smc_reinit_ratio", std::to_string(params_.smcReinitRatio)},
             {"visibility", params_.visibility ? "true" : "false"},
-            {"smc_statistics", params_.smcStatistics ? "true" : "false"}};
+            {"smc_statistics", params_.smcStatistics ? "true" : "false"},
+            {"smc_band_rows", std::to_string(params_.smcBandRows)}};
   }
 
   std::string setUp(RasterFrame& f) override {
@@ -234,7 +235,6 @@ class IblExtension : public RasterExtension {
     bvh_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_BVH);
     triangles_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_TRIANGLES);
     stats_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATS);
-    const GLuint p = program_.id();
     glUniform1i(program_.uniform("uEstimator"), estimatorCode(params_.estimator));
     glUniform1i(program_.uniform("uBrdfSamples"), params_.brdfSamples);
     glUniform1i(program_.uniform("uEnvSamples"), params_.envSamples);
@@ -251,60 +251,80 @@ class IblExtension : public RasterExtension {
     hier_.top().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP);
     hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
     hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
-    (void)p;
-    if (smc) {
-      // The full image's clip-from-world, for the next frame's reprojection.
-      clipFromWorld_ = glm::inverse(tile.clipFromFullClip) * ctx.uniforms().clipFromWorld;
-      frameClip_ = true;
-      bindState(tile);
-      glBindTextureUnit(6, prevTexture_.id());
-      glUniform1f(program_.uniform("uPrevEnvScale"), prevEnvScale_);
-      glUniformMatrix4fv(program_.uniform("uPrevClipFromWorld"), 1, GL_FALSE, &prevClipFromWorld_[0][0]);
-    } else {
+    const GLbitfield barriers = GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
+                                GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                                GL_FRAMEBUFFER_BARRIER_BIT;
+    if (!smc) {
       // Bound all the same (the shader declares them).
       if (stateIn_.bytes() == 0) stateIn_.reserve(16), stateOut_.reserve(16);
       stateIn_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_IN);
       stateOut_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_OUT);
       glUniform1i(program_.uniform("uHasPrevious"), 0);
+      glUniform1i(program_.uniform("uRowOffset"), 0);
+      glUniform1i(program_.uniform("uRows"), tile.height);
+      glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+      glMemoryBarrier(barriers);
+      return;
     }
-    glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
-                    GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
+    // The full image's clip-from-world, for the next frame's reprojection.
+    clipFromWorld_ = glm::inverse(tile.clipFromFullClip) * ctx.uniforms().clipFromWorld;
+    frameClip_ = true;
+    glBindTextureUnit(6, prevTexture_.id());
+    glUniform1f(program_.uniform("uPrevEnvScale"), prevEnvScale_);
+    glUniformMatrix4fv(program_.uniform("uPrevClipFromWorld"), 1, GL_FALSE, &prevClipFromWorld_[0][0]);
+    glUniform1i(program_.uniform("uHasPrevious"), hasPrevious_ ? 1 : 0);
+    const int bandRows = allocateState(tile.fullWidth, tile.fullHeight);
+    for (int r0 = 0; r0 < tile.height; r0 += bandRows) {
+      const int rows = std::min(bandRows, tile.height - r0);
+      bindBand(tile.y0 + r0, rows);
+      glUniform1i(program_.uniform("uRowOffset"), r0);
+      glUniform1i(program_.uniform("uRows"), rows);
+      glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((rows + 7) / 8), 1);
+    }
+    glMemoryBarrier(barriers);
   }
 
   // The SMC state: a row of IBL_STATE_STRIDE words per pixel, padded to 256 bytes, two buffers
-  // (last frame's, read; this frame's, written). Images larger than one 128 MiB range bind the
-  // rows about the tile: a pixel whose reprojection lands outside them starts afresh.
-  void bindState(const frame::Tile& tile) {
-    const int W = tile.fullWidth, H = tile.fullHeight;
+  // (last frame's, read; this frame's, written). When the image's rows exceed one 128 MiB range
+  // (1920 x 1080 at 8 samples does), the frame is shaded in bands of rows: each band writes its
+  // own rows and reads the previous state of the rows about it (a pixel whose reprojection lands
+  // further away starts afresh). Returns the band height.
+  int allocateState(int W, int H) {
     const size_t stride = size_t(8 + 2 * params_.smcParticles);
-    const size_t rowWords = (size_t(W) * stride + 63) / 64 * 64;
-    const size_t bytes = rowWords * 4 * size_t(H);
+    rowWords_ = (size_t(W) * stride + 63) / 64 * 64;
+    const size_t bytes = rowWords_ * 4 * size_t(H);
     if (W != stateW_ || H != stateH_ || stateOut_.bytes() < bytes) {
       stateIn_ = gl::Buffer(bytes);
       stateOut_ = gl::Buffer(bytes);
       stateW_ = W, stateH_ = H;
       stateValid_ = hasPrevious_ = false;
+      glUniform1i(program_.uniform("uHasPrevious"), 0);
     }
-    const size_t rowBytes = rowWords * 4;
-    const int maxRows = int(std::max<size_t>(gl::kMaxSsboRange / rowBytes, 1));
+    maxRows_ = int(std::max<size_t>(gl::kMaxSsboRange / (rowWords_ * 4), 2));
+    if (params_.smcBandRows > 0) maxRows_ = std::min(maxRows_, 2 * params_.smcBandRows);
+    glUniform1i(program_.uniform("uStateRowWords"), int(rowWords_));
+    return H <= maxRows_ ? std::max(H, 1) : std::max(maxRows_ / 2, 1);
+  }
+
+  // Binds the state for image rows [first, first + rows) (GL rows, bottom up).
+  void bindBand(int first, int rows) {
+    const int H = stateH_;
+    const size_t rowBytes = rowWords_ * 4;
     int inFirst = 0, inRows = H, outFirst = 0, outRows = H;
-    if (H > maxRows) {
-      outFirst = std::clamp(tile.y0, 0, H - 1);
-      outRows = std::min(tile.height, H - outFirst);
-      const int margin = std::max((maxRows - outRows) / 2, 0);
+    if (H > maxRows_) {
+      outFirst = std::clamp(first, 0, H - 1);
+      outRows = std::clamp(first + rows, outFirst + 1, H) - outFirst;
+      const int margin = std::max((maxRows_ - outRows) / 2, 0);
       inFirst = std::max(outFirst - margin, 0);
-      inRows = std::min(maxRows, H - inFirst);
+      inRows = std::min(maxRows_, H - inFirst);
     }
     stateIn_.bindRange(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_IN, size_t(inFirst) * rowBytes, size_t(inRows) * rowBytes);
     stateOut_.bindRange(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_OUT, size_t(outFirst) * rowBytes,
                         size_t(outRows) * rowBytes);
-    glUniform1i(program_.uniform("uHasPrevious"), hasPrevious_ ? 1 : 0);
     glUniform1i(program_.uniform("uStateRowIn"), inFirst);
     glUniform1i(program_.uniform("uStateRowsIn"), inRows);
     glUniform1i(program_.uniform("uStateRowOut"), outFirst);
     glUniform1i(program_.uniform("uStateRowsOut"), outRows);
-    glUniform1i(program_.uniform("uStateRowWords"), int(rowWords));
   }
 
   IblParameters params_;
@@ -320,7 +340,8 @@ class IblExtension : public RasterExtension {
   double tableMs_ = 0, bvhMs_ = 0;
   uint64_t tableBuilds_ = 0, bvhNodes_ = 0, bvhTriangles_ = 0;
   int bvhDepth_ = 0;
-  int stateW_ = 0, stateH_ = 0;
+  int stateW_ = 0, stateH_ = 0, maxRows_ = 1;
+  size_t rowWords_ = 0;
   bool stateValid_ = false, hasPrevious_ = false, frameClip_ = false, llvmpipe_ = false;
   glm::mat4 clipFromWorld_{1.0f}, prevClipFromWorld_{1.0f};
 };
@@ -342,7 +363,8 @@ const std::vector<std::string>& iblParameterKeys() {
   static const std::vector<std::string> keys = {
       "estimator",        "brdf_samples",          "env_samples",        "bis_proposals",
       "bis_samples",      "smc_particles",         "smc_intermediate",   "smc_local_probability",
-      "smc_local_degrees", "smc_reinit_ratio",     "visibility",         "smc_statistics"};
+      "smc_local_degrees", "smc_reinit_ratio",     "visibility",         "smc_statistics",
+      "smc_band_rows"};
   return keys;
 }
 
@@ -369,8 +391,13 @@ IblParameters iblParameters(const Scene& scene) {
   if (f.has("smc_reinit_ratio")) p.smcReinitRatio = float(f.at("smc_reinit_ratio").number(1, 1e30));
   if (f.has("visibility")) p.visibility = f.at("visibility").boolean();
   if (f.has("smc_statistics")) p.smcStatistics = f.at("smc_statistics").boolean();
+  if (f.has("smc_band_rows")) p.smcBandRows = int(f.at("smc_band_rows").integer(0, 1 << 16));
   if (p.estimator == IblParameters::Estimator::Mis && p.brdfSamples + p.envSamples == 0)
-    f.at("brdf_samples").fail("MIS needs at least one sample: brdf_samples + env_samples > 0");
+    f.fail("MIS needs at least one sample: brdf_samples + env_samples > 0");
+  if (p.estimator == IblParameters::Estimator::Environment && p.envSamples == 0)
+    f.fail("estimator \"env\" samples the environment alone: env_samples must be positive");
+  if (p.estimator == IblParameters::Estimator::Brdf && p.brdfSamples == 0)
+    f.fail("estimator \"brdf\" samples the BSDF alone: brdf_samples must be positive");
   return p;
 }
 

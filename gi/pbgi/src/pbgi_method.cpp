@@ -187,6 +187,7 @@ class PbgiExtension : public RasterExtension {
  private:
   // The cut's hierarchies into one buffer, their roots into the top tree.
   void rebuild(RasterFrame& f) {
+    const auto t0 = std::chrono::steady_clock::now();
     generation_ = f.cutGeneration();
     hier_.assemble(f, layer_);
     std::vector<PbgiNode> table = hier_.entries();
@@ -220,7 +221,7 @@ class PbgiExtension : public RasterExtension {
     }
     meshRoots_.assign(hier_.roots().begin() + std::ptrdiff_t(scanTrees_), hier_.roots().end());
     average_ = topCount_ ? scanAverage(hier_.topRoot(), meshRoots_) : glm::vec3(0);
-    topMs_ = hier_.milliseconds();
+    topMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
 
   void addPasses(RasterFrame& f) {

@@ -233,7 +233,7 @@ ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& 
           const uint64_t pixel = uint64_t(y) * W + x;
           Rng rng(mix64(mix64(opt.seed * 0x9E3779B97F4A7C15ULL + pixel) ^ (uint64_t(pass) * 0xD1B54A32D192ED03ULL)),
                   mix64(pixel));
-          glm::vec2 j = rng.uniform2();
+          const glm::vec2 j = opt.pixelCentres ? glm::vec2(0.5f) : rng.uniform2();
           glm::vec3 ro, rd;
           cameraRay(camera, scene.origin(), x + j.x, y + j.y, &ro, &rd);
           Rgb c = traceRadiance(scene, ro, rd, rng, opt, &localRays);

@@ -42,10 +42,11 @@ uniform bool uHasPrevious;              // SMC: the state buffer holds the previ
 uniform mat4 uPrevClipFromWorld;
 uniform float uPrevEnvScale;
 uniform int uStateRowWords;
+uniform int uRowOffset, uRows;  // the tile rows this dispatch shades (SMC: a band whose state fits the bound ranges)
 uniform int uStateRowIn, uStateRowsIn;    // SMC: the image rows the bound state ranges hold (read...
 uniform int uStateRowOut, uStateRowsOut;  // ...and written), each uStateRowWords words
 
-// PCG (O'Neill 2014) hashes a seed; xorshift-multiply steps it.
+// PCG's output permutation (O'Neill 2014) hashes a seed and steps the stream.
 uint rngState;
 uint pcgHash(uint v) {
   uint s = v * 747796405u + 2891336453u;
@@ -252,7 +253,7 @@ void resample() {
     run += W[i];
     while (k < IBL_SMC_N && (float(k) + u0) / float(IBL_SMC_N) < run) dirs[k++] = copy[i];
   }
-  for (; k < IBL_SMC_N; ++k) dirs[k] = copy[IBL_SMC_N - 1];
+  for (; k < IBL_SMC_N; ++k) dirs[k] = dirs[max(k - 1, 0)];  // rounding at the very end: the last pick again
   for (int i = 0; i < IBL_SMC_N; ++i) W[i] = 1.0 / float(IBL_SMC_N);
 }
 
@@ -356,8 +357,8 @@ vec3 estimateSmc(ivec2 gpx, vec3 x) {
 }
 
 void main() {
-  ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-  if (px.x >= int(frame.tile.z) || px.y >= int(frame.tile.w)) return;
+  ivec2 px = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, uRowOffset);
+  if (px.x >= int(frame.tile.z) || px.y >= min(int(frame.tile.w), uRowOffset + uRows)) return;
   ivec2 gpx = px + ivec2(frame.tile.xy);
   vec4 direct = texelFetch(uDirect, px, 0);
   float depth = texelFetch(uDepth, px, 0).r;

@@ -17,8 +17,8 @@
 namespace nestlight::gi {
 
 struct IblParameters {
-  // mis | bis | smc, and the benchmark's baselines: environment-map sampling alone ("env") and
-  // BSDF sampling alone ("brdf"), each with brdf_samples + env_samples samples.
+  // mis | bis | smc, and the benchmark's baselines: environment-map sampling alone ("env", with
+  // env_samples samples) and BSDF sampling alone ("brdf", with brdf_samples).
   enum class Estimator { Mis, Bis, Smc, Environment, Brdf } estimator = Estimator::Mis;
   int brdfSamples = 15;      // MIS: N_rho (the paper's Fig. 3: 15 and 15)
   int envSamples = 15;       // MIS: N_L
@@ -33,6 +33,9 @@ struct IblParameters {
   // SMC: read the per-pixel normalising constants back after each frame and report their mean
   // and median (attributes nestlight:ibl_smc_z_*; tests and the benchmark's Z tracking).
   bool smcStatistics = false;
+  // SMC: image rows shaded per dispatch (0: as many as the state's 128 MiB buffer ranges allow);
+  // a band reads the previous frame's state of the rows about it. For tests of the banding.
+  int smcBandRows = 0;
 };
 
 // From scene.gi.parameters; throws nestlight::Error naming scene.gi.parameters.<key>.

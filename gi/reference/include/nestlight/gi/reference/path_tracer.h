@@ -28,6 +28,10 @@ struct ReferenceOptions {
   double timeLimitSeconds = 0;     // 0: off
   uint64_t seed = 1;
   int minSamplesPerPixel = 4;      // before the error estimate is trusted
+  // Camera rays through pixel centres only (no anti-aliasing): the ground truth of a method that
+  // shades pixel centres (the GL methods), so that an error measures shading, not the spread of
+  // radiance across a pixel (a sharp highlight's pixel mean differs from its centre's value).
+  bool pixelCentres = false;
 };
 
 struct ReferenceProgress {
