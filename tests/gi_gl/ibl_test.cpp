@@ -139,6 +139,32 @@ TEST(Ibl, EveryEstimatorIsUnbiasedUnderASingleTexelSun) {
   }
 }
 
+// Sample counts beyond one dispatch's share (64 samples, 4,096 BIS proposals a pixel, kept below
+// llvmpipe's loop limit) run as several passes whose sum is the same estimator: still unbiased
+// under the sun texel, with the noise of all the samples (about sqrt(320 / 16) = 4.5 times less
+// than 16 samples'), and no pixel near the loop limit.
+TEST(Ibl, ManySamplesRunAsPasses) {
+  test::TempDir t;
+  HdrImage img(16, 8);
+  const float E = 50.0f;
+  img.set(5, 2, Rgb(E));
+  writeExr(t.file("sun.exr"), img);
+  const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
+  const double want = 0.5 / kPiD * E * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
+  double sd16 = 0;
+  for (const json& p : {json{{"estimator", "mis"}, {"brdf_samples", 8}, {"env_samples", 8}},
+                        json{{"estimator", "mis"}, {"brdf_samples", 160}, {"env_samples", 160}},
+                        json{{"estimator", "bis"}, {"bis_proposals", 8192}, {"bis_samples", 16}}}) {
+    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sun.exr"}}, p, 24);
+    const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+    const Stats st = ratioStats(s, f, [&](const glm::vec3&) { return want; });
+    EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3) << p.dump() << ": sd " << st.sd;
+    EXPECT_EQ(f.attributes.at("nestlight:ibl_loop_limit_pixels"), "0") << p.dump();
+    if (p.at("estimator") == "mis" && p.at("brdf_samples") == 8) sd16 = st.sd;
+    if (p.at("estimator") == "mis" && p.at("brdf_samples") == 160) EXPECT_LT(st.sd, sd16 / 3) << "the passes' samples all count";
+  }
+}
+
 // Visibility: a 2 x 2 m slab 1 m above the floor under a sun texel 45 to 67.5 degrees from the
 // zenith, azimuth 0 to 22.5 degrees (texel (0, 2) of a 16 x 8 map). Its rays from a floor point
 // reach the slab's height 0.92 to 2.41 m further in +x and 0 to 0.92 m in +y, so the floor at

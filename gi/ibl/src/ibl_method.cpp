@@ -254,6 +254,8 @@ class IblExtension : public RasterExtension {
     const GLbitfield barriers = GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
                                 GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
                                 GL_FRAMEBUFFER_BARRIER_BIT;
+    glUniform1i(program_.uniform("uPass"), 0);
+    glUniform1i(program_.uniform("uPasses"), 1);
     if (!smc) {
       // Bound all the same (the shader declares them).
       if (stateIn_.bytes() == 0) stateIn_.reserve(16), stateOut_.reserve(16);
@@ -262,8 +264,13 @@ class IblExtension : public RasterExtension {
       glUniform1i(program_.uniform("uHasPrevious"), 0);
       glUniform1i(program_.uniform("uRowOffset"), 0);
       glUniform1i(program_.uniform("uRows"), tile.height);
-      glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
-      glMemoryBarrier(barriers);
+      const int passes = passCount();
+      glUniform1i(program_.uniform("uPasses"), passes);
+      for (int pass = 0; pass < passes; ++pass) {
+        glUniform1i(program_.uniform("uPass"), pass);
+        glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+        glMemoryBarrier(barriers);
+      }
       return;
     }
     // The full image's clip-from-world, for the next frame's reprojection.
@@ -282,6 +289,23 @@ class IblExtension : public RasterExtension {
       glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((rows + 7) / 8), 1);
     }
     glMemoryBarrier(barriers);
+  }
+
+  // Dispatches per tile: every pass shades at most IBL_PASS_SAMPLES samples (MIS, baselines) or
+  // IBL_PASS_PROPOSALS proposals (BIS) a pixel.
+  int passCount() const {
+    auto ceilDiv = [](int a, int b) { return (a + b - 1) / b; };
+    switch (params_.estimator) {
+      case IblParameters::Estimator::Mis:
+        return std::max(1, ceilDiv(params_.brdfSamples + params_.envSamples, IBL_PASS_SAMPLES));
+      case IblParameters::Estimator::Environment: return std::max(1, ceilDiv(params_.envSamples, IBL_PASS_SAMPLES));
+      case IblParameters::Estimator::Brdf: return std::max(1, ceilDiv(params_.brdfSamples, IBL_PASS_SAMPLES));
+      case IblParameters::Estimator::Bis:
+        // Each pass resamples at least one of the N.
+        return std::clamp(ceilDiv(params_.bisProposals, IBL_PASS_PROPOSALS), 1, params_.bisSamples);
+      case IblParameters::Estimator::Smc: return 1;
+    }
+    return 1;
   }
 
   // The SMC state: a row of IBL_STATE_STRIDE words per pixel, padded to 256 bytes, two buffers

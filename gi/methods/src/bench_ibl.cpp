@@ -162,7 +162,7 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
               {"time_to_error_at", o.timingSize > 0 ? o.timingSize : o.size},
               {"reference_spp", o.referenceSpp}, {"roughness", o.roughness}, {"scenes", json::array()}};
   std::ofstream csv(o.out / "bench_ibl.csv");
-  csv << "scene,estimator,samples,frame,ms,relative_l2,relative_variance,flicker\n";
+  csv << "scene,estimator,samples,frame,ms,relative_l2,relative_l2_net,relative_variance,flicker\n";
   for (const std::string& sceneName : o.scenes) {
     const fs::path dir = o.out / sceneName;
     fs::create_directories(dir);
@@ -218,8 +218,12 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
     std::snprintf(stamp, sizeof stamp, "%016zx", std::hash<std::string>{}(stampText));
     const std::vector<SceneCamera> cameras = sceneCameras(scene);
     NL_CHECK(int(cameras.size()) == o.frames);
-    // Ground truth per frame: the reference's direct light, cached by size and samples.
+    const std::vector<uint8_t> mask = interiorMask(scene, o.size, o.size);
+    // Ground truth per frame: the reference's direct light, as two halves of the samples with
+    // different seeds, whose mean is the reference and whose difference measures its own noise
+    // (the errors below are reported with it and with it taken out). Cached by a stamp.
     std::vector<HdrImage> refs;
+    std::vector<double> refNoise2;  // per frame: the reference's relative squared error
     {
       // The reference's first bounce (direct light), its camera rays through pixel centres as the
       // GL methods shade them, lit by each frame's probe as the method is (EnvironmentSource).
@@ -231,30 +235,45 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
       ro.targetRelativeError = 0;
       ro.pixelCentres = true;
       for (int f = 0; f < o.frames; ++f) {
-        char name[96];
-        std::snprintf(name, sizeof name, "reference_%s_%dspp_%04d.exr", stamp, o.referenceSpp, f);
-        const fs::path file = dir / name;
-        if (fs::exists(file)) {
-          refs.push_back(readHdrImage(file.string()));
-          continue;
+        HdrImage half[2];
+        for (int k = 0; k < 2; ++k) {
+          char name[128];
+          std::snprintf(name, sizeof name, "reference_%s_%dspp_%04d_%c.exr", stamp, o.referenceSpp, f, "ab"[k]);
+          const fs::path file = dir / name;
+          if (fs::exists(file)) {
+            half[k] = readHdrImage(file.string());
+            continue;
+          }
+          if (!rs) {
+            rs = ReferenceScene::load(scene);
+            probe = std::make_unique<EnvironmentSource>(scene.environment);
+          }
+          rs->setEnvironment(probe->at(cameras[size_t(f)].time));
+          ro.seed = 2 * uint64_t(f) + uint64_t(k) + 1;
+          ro.maxSamplesPerPixel = std::max(o.referenceSpp / 2, 1);
+          const ReferenceResult r =
+              renderReference(*rs, cameras[size_t(f)], ro, [](const ReferenceProgress&) { return true; });
+          writeExr(file.string(), r.image,
+                   {{"nestlight:method", "direct"}, {"nestlight:samples", std::to_string(r.samplesPerPixel)},
+                    {"nestlight:pixel_centres", "1"}});
+          half[k] = r.image;
+          say("bench ibl: %s reference frame %d (%c): %d spp in %.1f s\n", sceneName.c_str(), f, "ab"[k],
+              r.samplesPerPixel, r.seconds);
         }
-        if (!rs) {
-          rs = ReferenceScene::load(scene);
-          probe = std::make_unique<EnvironmentSource>(scene.environment);
-        }
-        rs->setEnvironment(probe->at(cameras[size_t(f)].time));
-        ro.seed = uint64_t(f) + 1;
-        const ReferenceResult r = renderReference(*rs, cameras[size_t(f)], ro, [](const ReferenceProgress&) { return true; });
-        writeExr(file.string(), r.image,
-                 {{"nestlight:method", "direct"}, {"nestlight:samples", std::to_string(r.samplesPerPixel)},
-                  {"nestlight:pixel_centres", "1"}, {"nestlight:relative_error_estimate", std::to_string(r.relativeError)}});
-        refs.push_back(r.image);
-        say("bench ibl: %s reference frame %d: %d spp in %.1f s, estimated relative error %.4f\n", sceneName.c_str(), f,
-            r.samplesPerPixel, r.seconds, r.relativeError);
+        HdrImage mean = half[0];
+        for (size_t i = 0; i < mean.rgb.size(); ++i) mean.rgb[i] = 0.5f * (half[0].rgb[i] + half[1].rgb[i]);
+        // The mean of two halves: its variance is a quarter of E (a - b)^2.
+        const Sums d = maskedSums(half[0], half[1], mask);
+        const Sums m = maskedSums(mean, mean, mask);
+        refNoise2.push_back(m.ref2 > 0 ? d.err2 / 4 / m.ref2 : 0);
+        refs.push_back(std::move(mean));
       }
+      say("bench ibl: %s reference: %d spp, its own relative error %.4f (median over frames)\n", sceneName.c_str(),
+          o.referenceSpp, std::sqrt(medianOf(refNoise2)));
     }
-    const std::vector<uint8_t> mask = interiorMask(scene, o.size, o.size);
-    json sceneOut = {{"scene", sceneName}, {"estimators", json::array()}};
+    std::vector<double> refNoise;
+    for (double v : refNoise2) refNoise.push_back(std::sqrt(v));
+    json sceneOut = {{"scene", sceneName}, {"reference_relative_error_per_frame", refNoise}, {"estimators", json::array()}};
     std::vector<PlotSeries> speedSeries, frameSeries;
     json envBaseline;
     std::map<std::string, json> timeTos;
@@ -283,10 +302,12 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
         const std::vector<MethodFrame> a = runSeed(1, o.size);
         std::vector<MethodFrame> b;
         if (o.variance) b = runSeed(2, o.size);
-        std::vector<double> errs, vars, flick, ms;
+        std::vector<double> errs, errsNet, vars, flick, ms;
         for (int f = 0; f < o.frames; ++f) {
           const Sums e = maskedSums(a[size_t(f)].image, refs[size_t(f)], mask);
           const double rel = e.ref2 > 0 ? std::sqrt(e.err2 / e.ref2) : 0;
+          // The reference's own noise adds to the measured error (independent): taken out.
+          errsNet.push_back(std::sqrt(std::max(0.0, rel * rel - refNoise2[size_t(f)])));
           double var = 0;
           if (o.variance) {
             const Sums d = maskedSums(a[size_t(f)].image, b[size_t(f)].image, mask);
@@ -302,7 +323,7 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
             flick.push_back(fl);
           }
           errs.push_back(rel), vars.push_back(var), ms.push_back(a[size_t(f)].seconds * 1e3);
-          csv << sceneName << "," << est << "," << q << "," << f << "," << ms.back() << "," << rel << "," << var << ","
+          csv << sceneName << "," << est << "," << q << "," << f << "," << ms.back() << "," << rel << "," << errsNet.back() << "," << var << ","
               << (f > 0 ? std::to_string(fl) : "") << "\n";
         }
         double timingMs = 0;
@@ -311,25 +332,27 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
           for (const MethodFrame& fr : runSeed(1, o.timingSize)) t.push_back(fr.seconds * 1e3);
           timingMs = medianOf(t);
         }
-        const double medMs = medianOf(ms), medErr = medianOf(errs);
+        const double medMs = medianOf(ms), medErr = medianOf(errsNet);
         // Equal time at the timing size where it was measured: per-pixel relative error hardly
         // depends on the image's size at a given sample count, frame time does (fixed costs).
         curve.push_back({o.timingSize > 0 ? timingMs : medMs, medErr});
         speed.points.push_back({curve.back().first, medErr, std::to_string(q)});
         if (q == o.samples[o.samples.size() / 2]) {
           PlotSeries fs{est + " (" + std::to_string(q) + " spp)", {}};
-          for (int f = 0; f < o.frames; ++f) fs.points.push_back({double(f), errs[size_t(f)]});
+          for (int f = 0; f < o.frames; ++f) fs.points.push_back({double(f), errsNet[size_t(f)]});
           frameSeries.push_back(fs);
         }
-        say("bench ibl: %-10s %-4s %3d spp: %8.1f ms/frame at %d^2 (%8.1f ms at %d^2), relative L2 %.4f (median of %d "
-            "frames), relative variance %.2e, flicker %.4f\n",
-            sceneName.c_str(), est.c_str(), q, medMs, o.size, timingMs, o.timingSize, medErr, o.frames, medianOf(vars),
-            medianOf(flick));
+        say("bench ibl: %-10s %-4s %3d spp: %8.1f ms/frame at %d^2 (%8.1f ms at %d^2), relative L2 %.4f (%.4f without "
+            "the reference's noise; median of %d frames), relative variance %.2e, flicker %.4f\n",
+            sceneName.c_str(), est.c_str(), q, medMs, o.size, timingMs, o.timingSize, medianOf(errs), medErr, o.frames,
+            medianOf(vars), medianOf(flick));
         estOut["levels"].push_back({{"samples", q},
                                     {"median_ms", medMs},
                                     {"timing_ms", timingMs},
-                                    {"median_relative_l2", medErr},
+                                    {"median_relative_l2", medianOf(errs)},
+                                    {"median_relative_l2_net", medErr},
                                     {"relative_l2_per_frame", errs},
+                                    {"relative_l2_net_per_frame", errsNet},
                                     {"relative_variance_per_frame", vars},
                                     {"flicker_per_frame", flick},
                                     {"median_flicker", medianOf(flick)},
@@ -357,10 +380,10 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
     }
     const int timeSize = o.timingSize > 0 ? o.timingSize : o.size;
     writeSvgPlot((o.out / (sceneName + "_speed.svg")).string(), "ibl on " + sceneName + ": time against error",
-                 "ms per frame (" + std::to_string(timeSize) + "^2)", "relative L2 error (median over frames)",
+                 "ms per frame (" + std::to_string(timeSize) + "^2)", "relative L2 error (median over frames, net)",
                  speedSeries, true, true);
     writeSvgPlot((o.out / (sceneName + "_frames.svg")).string(), "ibl on " + sceneName + ": error per frame",
-                 "frame", "relative L2 error", frameSeries, false, true);
+                 "frame", "relative L2 error (the reference's noise taken out)", frameSeries, false, true);
     all["scenes"].push_back(sceneOut);
   }
   std::ofstream(o.out / "bench_ibl.json") << all.dump(2);

@@ -24,7 +24,7 @@ layout(binding = 2) uniform sampler2D uNormal;
 layout(binding = 3) uniform usampler2D uMaterial;
 layout(binding = 4) uniform sampler2D uDirect;
 layout(binding = 6) uniform sampler2D uEnvironmentPrev;  // SMC: the previous frame's map
-layout(rgba32f, binding = 0) uniform writeonly image2D uOut;
+layout(rgba32f, binding = 0) uniform image2D uOut;
 layout(std430, binding = IBL_SSBO_STATS) buffer IblStats { uint stats[]; };
 layout(std430, binding = IBL_SSBO_STATE_IN) readonly buffer StateIn { uint stateIn[]; };
 layout(std430, binding = IBL_SSBO_STATE_OUT) writeonly buffer StateOut { uint stateOut[]; };
@@ -42,7 +42,11 @@ uniform bool uHasPrevious;              // SMC: the state buffer holds the previ
 uniform mat4 uPrevClipFromWorld;
 uniform float uPrevEnvScale;
 uniform int uStateRowWords;
-uniform int uRowOffset, uRows;  // the tile rows this dispatch shades (SMC: a band whose state fits the bound ranges)
+uniform int uRowOffset, uRows;
+// Passes: a pixel's samples are split over uPasses dispatches (at most IBL_PASS_SAMPLES BSDF and
+// environment samples, or IBL_PASS_PROPOSALS BIS proposals, each), so that no invocation nears
+// llvmpipe's 65,535 loop iterations; pass 0 writes direct light plus its share, the others add.
+uniform int uPass, uPasses;  // the tile rows this dispatch shades (SMC: a band whose state fits the bound ranges)
 uniform int uStateRowIn, uStateRowsIn;    // SMC: the image rows the bound state ranges hold (read...
 uniform int uStateRowOut, uStateRowsOut;  // ...and written), each uStateRowWords words
 
@@ -111,8 +115,14 @@ vec3 ratioContribution(vec3 d) {
   return L * f * (visible(d) / y);
 }
 
+// This pass's share of n samples split over uPasses.
+int passShare(int n) { return n / uPasses + (uPass < n % uPasses ? 1 : 0); }
+
 // ---- MIS (eq. 2, the balance heuristic over N_rho BSDF and N_L environment samples) ----
-vec3 estimateMis(int nRho, int nL) {
+// This pass's share of the samples, weighted with the totals' balance heuristic: the passes' sum
+// is the estimator over all N_rho + N_L samples.
+vec3 estimateMis(int totalRho, int totalL) {
+  int nRho = passShare(totalRho), nL = passShare(totalL);
   vec3 sum = vec3(0.0);
   for (int i = 0; i < nRho + nL; ++i) {
     loopSteps += 20u;  // the loop and an environment sample's two binary searches
@@ -127,7 +137,7 @@ vec3 estimateMis(int nRho, int nL) {
     }
     vec3 Lf = environment(d) * bsdf(wiL) * wiL.z;
     if (!(dot(Lf, vec3(1.0)) > 0.0)) continue;
-    float denom = float(nRho) * pdfBsdf(S.mat, S.woL, wiL) + float(nL) * envPdf(d);
+    float denom = float(totalRho) * pdfBsdf(S.mat, S.woL, wiL) + float(totalL) * envPdf(d);
     if (!(denom > 0.0)) continue;
     sum += Lf * (visible(d) / denom);
   }
@@ -170,8 +180,11 @@ float bisSample(int M, int N) {
   return total / float(M);
 }
 
-vec3 estimateBis(int M, int N) {
-  float Z = bisSample(M, N);
+// Each pass an independent BIS estimate from its share of the proposals and samples; their mean
+// over the passes.
+vec3 estimateBis(int totalM, int totalN) {
+  int M = max(passShare(totalM), 1), N = max(passShare(totalN), 1);
+  float Z = bisSample(M, N) / float(uPasses);
   if (!(Z > 0.0)) return vec3(0.0);
   vec3 sum = vec3(0.0);
   for (int i = 0; i < N; ++i) sum += ratioContribution(bisPicks[i]);
@@ -365,15 +378,16 @@ void main() {
   uvec4 m = texelFetch(uMaterial, px, 0);
   bool receiver = depth < 1.0 && (frame.counts.y == 1 || gbufferSource(m) != NL_SOURCE_SCAN);
   if (!receiver) {
-    imageStore(uOut, px, direct);
+    if (uPass == 0) imageStore(uOut, px, direct);
     if (uEstimator == IBL_SMC) {
       S.n = vec3(0.0, 0.0, 1.0);
       smcStore(gpx, vec3(0.0), 0.0, false);
     }
     return;
   }
-  atomicAdd(stats[IBL_STAT_RECEIVERS], 1u);
-  rngState = pcgHash(uint(gpx.x) * 9781u + uint(gpx.y) * 6271u + pcgHash(uSeed + uint(frame.counts.z) * 26699u));
+  if (uPass == 0) atomicAdd(stats[IBL_STAT_RECEIVERS], 1u);
+  rngState = pcgHash(uint(gpx.x) * 9781u + uint(gpx.y) * 6271u +
+                     pcgHash(uSeed + uint(frame.counts.z) * 26699u + uint(uPass) * 7919u));
   vec2 ndc = ((vec2(px) + 0.5) / frame.tile.zw) * 2.0 - 1.0;
   vec4 wp = frame.worldFromClip * vec4(ndc, depth * 2.0 - 1.0, 1.0);
   vec3 x = wp.xyz / wp.w;
@@ -404,5 +418,6 @@ void main() {
     atomicAdd(stats[IBL_STAT_ACCEPTED], accepted);
   }
   if (any(isnan(L)) || any(isinf(L))) L = vec3(0.0);
-  imageStore(uOut, px, vec4(direct.rgb + L, direct.a));
+  vec4 before = uPass == 0 ? direct : imageLoad(uOut, px);
+  imageStore(uOut, px, vec4(before.rgb + L, direct.a));
 }
