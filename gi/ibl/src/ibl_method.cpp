@@ -60,6 +60,7 @@ class IblExtension : public RasterExtension {
             {"smc_local_probability", std::to_string(params_.smcLocalProbability)},
             {"smc_local_degrees", std::to_string(params_.smcLocalDegrees)},
             {"smc_reinit_ratio", std::to_string(params_.smcReinitRatio)},
+            {"smc_reinit_on_drop", params_.smcReinitOnDrop ? "true" : "false"},
             {"visibility", params_.visibility ? "true" : "false"},
             {"smc_statistics", params_.smcStatistics ? "true" : "false"},
             {"smc_band_rows", std::to_string(params_.smcBandRows)}};
@@ -244,6 +245,7 @@ class IblExtension : public RasterExtension {
     glUniform1f(program_.uniform("uLocalProbability"), params_.smcLocalProbability);
     glUniform1f(program_.uniform("uLocalCos"), std::cos(glm::radians(params_.smcLocalDegrees)));
     glUniform1f(program_.uniform("uReinitRatio"), params_.smcReinitRatio);
+    glUniform1i(program_.uniform("uReinitOnDrop"), params_.smcReinitOnDrop ? 1 : 0);
     glUniform1i(program_.uniform("uVisibility"), params_.visibility ? 1 : 0);
     glUniform1ui(program_.uniform("uSeed"), seed_);
     glUniform1i(program_.uniform("uBvhNodes"), int(bvhNodes_));
@@ -388,7 +390,7 @@ const std::vector<std::string>& iblParameterKeys() {
       "estimator",        "brdf_samples",          "env_samples",        "bis_proposals",
       "bis_samples",      "smc_particles",         "smc_intermediate",   "smc_local_probability",
       "smc_local_degrees", "smc_reinit_ratio",     "visibility",         "smc_statistics",
-      "smc_band_rows"};
+      "smc_band_rows",    "smc_reinit_on_drop"};
   return keys;
 }
 
@@ -415,6 +417,7 @@ IblParameters iblParameters(const Scene& scene) {
   if (f.has("smc_reinit_ratio")) p.smcReinitRatio = float(f.at("smc_reinit_ratio").number(1, 1e30));
   if (f.has("visibility")) p.visibility = f.at("visibility").boolean();
   if (f.has("smc_statistics")) p.smcStatistics = f.at("smc_statistics").boolean();
+  if (f.has("smc_reinit_on_drop")) p.smcReinitOnDrop = f.at("smc_reinit_on_drop").boolean();
   if (f.has("smc_band_rows")) p.smcBandRows = int(f.at("smc_band_rows").integer(0, 1 << 16));
   if (p.estimator == IblParameters::Estimator::Mis && p.brdfSamples + p.envSamples == 0)
     f.fail("MIS needs at least one sample: brdf_samples + env_samples > 0");

@@ -173,8 +173,8 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
         std::snprintf(name, sizeof name, "probe_%04d.exr", f);
         writeExr((dir / name).string(), movingSunFrame(f));
       }
-    } else if (sceneName == "shared") {
-      const fs::path map = o.sharedData / "hdr" / "stage_env_latlong.exr";
+    } else if (sceneName == "shared" || sceneName == "outdoor") {
+      const fs::path map = o.sharedData / "hdr" / (sceneName == "shared" ? "stage_env_latlong.exr" : "royal_esplanade_1k.hdr");
       if (!fs::exists(map)) {
         say("bench ibl: %s not found: the shared scene is skipped\n", map.c_str());
         continue;
@@ -186,7 +186,7 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
         writeExr((dir / name).string(), turned(base, int(std::lround(base.width * 4.0 * f / 360))));
       }
     } else {
-      throw Error("--scenes", "", "unknown scene '" + sceneName + "' (moving-sun, shared)");
+      throw Error("--scenes", "", "unknown scene '" + sceneName + "' (moving-sun, shared, outdoor)");
     }
     writeSphereObj(dir / "sphere.obj");
     writeBoxObj(dir / "box.obj");

@@ -35,7 +35,8 @@ uniform int uBisM, uBisN;               // BIS: proposals M, resampled N
 uniform int uIntermediate;              // SMC: intermediate distributions per frame
 uniform float uLocalProbability;        // SMC: nu, the share of local Metropolis-Hastings moves
 uniform float uLocalCos;                // SMC: cos of a local move's largest angle
-uniform float uReinitRatio;             // SMC: reinitialise when Z_t / Z_t-1 exceeds it
+uniform float uReinitRatio;             // SMC: reinitialise when Z_t / Z_t-1 exceeds it...
+uniform bool uReinitOnDrop;             // ...or (when set) falls below its inverse
 uniform bool uVisibility;
 uniform uint uSeed;
 uniform bool uHasPrevious;              // SMC: the state buffer holds the previous frame's samples
@@ -352,8 +353,9 @@ vec3 estimateSmc(ivec2 gpx, vec3 x) {
       mhMove(b1);
     }
     // The paper's reinitialisation: Z_t / Z_t-1 jumped (a light switched on), or the samples
-    // lost all weight (the light they sat on went out).
-    if (!(Z > 0.0) || isinf(Z) || Z > uReinitRatio * Zprev) {
+    // lost all weight (the light they sat on went out); with uReinitOnDrop also a fall by the
+    // same ratio (the light moved off the samples faster than the moves could follow).
+    if (!(Z > 0.0) || isinf(Z) || Z > uReinitRatio * Zprev || (uReinitOnDrop && Z * uReinitRatio < Zprev)) {
       atomicAdd(stats[IBL_STAT_REINIT_JUMP], 1u);
       carried = false;
     }

@@ -20,8 +20,9 @@ namespace nestlight::gi {
 
 struct BenchIblOptions {
   std::filesystem::path out = "bench-ibl";
-  // "moving-sun" (generated) and "shared" (../shared/data/hdr/stage_env_latlong.exr turned 4
-  // degrees a frame; skipped with a message without the shared data).
+  // "moving-sun" (generated), "shared" (../shared/data/hdr/stage_env_latlong.exr, a film stage's
+  // small bright lamps) and "outdoor" (royal_esplanade_1k.hdr, a sunny square), each turned 4
+  // degrees a frame; a shared map's scene is skipped with a message without the shared data.
   std::vector<std::string> scenes = {"moving-sun", "shared"};
   std::vector<std::string> estimators = {"mis", "bis", "smc", "env"};
   std::vector<int> samples = {4, 16, 64};  // the ibl method's quality levels (samples per pixel)

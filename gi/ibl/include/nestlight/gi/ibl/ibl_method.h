@@ -28,7 +28,8 @@ struct IblParameters {
   int smcIntermediate = 3;   // SMC: intermediate distributions per frame (the paper: 3)
   float smcLocalProbability = 0.5f;  // SMC: nu, the share of local Metropolis-Hastings moves
   float smcLocalDegrees = 3;         // SMC: a local move's largest angle ("a few degrees")
-  float smcReinitRatio = 4;          // SMC: reinitialise where Z_t / Z_t-1 exceeds this
+  float smcReinitRatio = 4;          // SMC: reinitialise where Z_t / Z_t-1 exceeds this...
+  bool smcReinitOnDrop = false;      // ...or falls below its inverse (docs/IBL.md)
   bool visibility = true;    // trace V(w) against the meshes (false: unshadowed)
   // SMC: read the per-pixel normalising constants back after each frame and report their mean
   // and median (attributes nestlight:ibl_smc_z_*; tests and the benchmark's Z tracking).
