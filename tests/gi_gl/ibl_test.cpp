@@ -13,6 +13,7 @@
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
+#include "floor_scene.h"
 #include "sphere_scan.h"
 #include "test_support.h"
 
@@ -22,36 +23,19 @@ namespace {
 using json = nlohmann::json;
 constexpr double kPiD = 3.14159265358979323846;
 
-// A 20 x 20 m floor (a flat box, top face at z = 0) seen from above, optionally a 2 x 2 m slab
-// 1 m above it, and the environment `environment`.
+// The floor (floor_scene.h), optionally a 2 x 2 m slab 1 m above it, and the environment.
 Scene floorScene(const test::TempDir& t, const json& material, const json& environment, const json& parameters,
                  int size = 32, bool occluder = false) {
-  writeBoxObj(t.path() / "box.obj");
-  json meshes = json::array({json{{"path", "box.obj"},
-                                  {"transform", {{"translate", {-10.0, -10.0, -0.1}}, {"scale", {20.0, 20.0, 0.1}}}},
-                                  {"material", "floor"}}});
+  json j = floorSceneJson(t, size);
   if (occluder)
-    meshes.push_back(json{{"path", "box.obj"},
-                          {"transform", {{"translate", {-1.0, -1.0, 1.0}}, {"scale", {2.0, 2.0, 0.1}}}},
-                          {"material", "floor"}});
-  json j = {{"version", 1},
-            {"materials", {{"floor", material}}},
-            {"meshes", meshes},
-            {"environment", environment},
-            {"camera", {{"eye", {0.0, -0.001, 6.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 1.0, 0.0}}, {"fov", 60.0},
-                        {"width", size}, {"height", size}}},
-            {"gi", {{"method", "ibl"}, {"mode", "albedo"}, {"seed", 7}, {"parameters", parameters}}}};
+    j["meshes"].push_back(json{{"path", "box.obj"},
+                               {"transform", {{"translate", {-1.0, -1.0, 1.0}}, {"scale", {2.0, 2.0, 0.1}}}},
+                               {"material", "floor"}});
+  j["materials"] = {{"floor", material}};
+  j["environment"] = environment;
+  j["gi"] = {{"method", "ibl"}, {"mode", "albedo"}, {"seed", 7}, {"parameters", parameters}};
   std::ofstream(t.path() / "scene.json") << j.dump(2);
   return loadScene(t.path() / "scene.json");
-}
-
-// Where the ray through pixel (x + 0.5, y + 0.5) meets the plane z = 0.
-bool floorPoint(const Scene& s, int x, int y, glm::vec3* p, float half = 9.5f) {
-  glm::vec3 o, d;
-  cameraRay(s.camera, s.origin, x + 0.5f, y + 0.5f, &o, &d);
-  if (!(d.z < 0)) return false;
-  *p = o + d * (-o.z / d.z);
-  return std::abs(p->x) < half && std::abs(p->y) < half;
 }
 
 struct Stats {
@@ -117,17 +101,28 @@ TEST(Ibl, EveryEstimatorIsUnbiasedInAFurnace) {
   }
 }
 
-// A single-texel sun: a 16 x 8 map, black but for texel (5, 2) of radiance E. A Lambert floor
-// (rho) sees it whole above its horizon: L_o = rho / pi * E * integral over the texel of cos theta
-// = rho / pi * E * (2 pi / 16) * (cos^2 theta0 - cos^2 theta1) / 2 at every floor point.
+// A single-texel sun: a 16 x 8 map of radiance `sky`, but for texel (column, 2) of radiance E. A
+// Lambert floor (rho 0.5) sees the texel whole above its horizon: L_o = rho / pi * E * integral
+// over the texel of cos theta = rho / pi * E * (2 pi / 16) * (cos^2 theta0 - cos^2 theta1) / 2 at
+// every floor point, plus rho times the sky (a uniform hemisphere).
+struct SunTexel {
+  HdrImage map{16, 8};
+  double radiance = 0;  // what the floor returns
+  SunTexel(float E, int column = 5, float sky = 0) {
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 16; ++x) map.set(x, y, Rgb(sky));
+    map.set(column, 2, Rgb(E));
+    const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
+    radiance = 0.5 / kPiD * (E - sky) * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2 +
+               0.5 * sky;
+  }
+};
+
 TEST(Ibl, EveryEstimatorIsUnbiasedUnderASingleTexelSun) {
   test::TempDir t;
-  HdrImage img(16, 8);
-  const float E = 50.0f;
-  img.set(5, 2, Rgb(E));
-  writeExr(t.file("sun.exr"), img);
-  const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
-  const double want = 0.5 / kPiD * E * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
+  const SunTexel sun(50.0f);
+  writeExr(t.file("sun.exr"), sun.map);
+  const double want = sun.radiance;
   for (const char* e : kEstimators) {
     json p = estimatorParameters(e);
     if (std::string(e) == "bis" || std::string(e) == "smc") p["bis_proposals"] = 256;
@@ -145,12 +140,9 @@ TEST(Ibl, EveryEstimatorIsUnbiasedUnderASingleTexelSun) {
 // than 16 samples'), and no pixel near the loop limit.
 TEST(Ibl, ManySamplesRunAsPasses) {
   test::TempDir t;
-  HdrImage img(16, 8);
-  const float E = 50.0f;
-  img.set(5, 2, Rgb(E));
-  writeExr(t.file("sun.exr"), img);
-  const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
-  const double want = 0.5 / kPiD * E * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
+  const SunTexel sun(50.0f);
+  writeExr(t.file("sun.exr"), sun.map);
+  const double want = sun.radiance;
   double sd16 = 0;
   for (const json& p : {json{{"estimator", "mis"}, {"brdf_samples", 8}, {"env_samples", 8}},
                         json{{"estimator", "mis"}, {"brdf_samples", 160}, {"env_samples", 160}},
@@ -161,7 +153,9 @@ TEST(Ibl, ManySamplesRunAsPasses) {
     EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3) << p.dump() << ": sd " << st.sd;
     EXPECT_EQ(f.attributes.at("nestlight:ibl_loop_limit_pixels"), "0") << p.dump();
     if (p.at("estimator") == "mis" && p.at("brdf_samples") == 8) sd16 = st.sd;
-    if (p.at("estimator") == "mis" && p.at("brdf_samples") == 160) EXPECT_LT(st.sd, sd16 / 3) << "the passes' samples all count";
+    if (p.at("estimator") == "mis" && p.at("brdf_samples") == 160) {
+      EXPECT_LT(st.sd, sd16 / 3) << "the passes' samples all count";
+    }
   }
 }
 
@@ -172,12 +166,9 @@ TEST(Ibl, ManySamplesRunAsPasses) {
 // while everything beyond x = 1.5 sees the whole texel: the closed form of the sun test.
 TEST(Ibl, TheMeshesShadowTheSky) {
   test::TempDir t;
-  HdrImage img(16, 8);
-  const float E = 50.0f;
-  img.set(0, 2, Rgb(E));
-  writeExr(t.file("sun.exr"), img);
-  const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
-  const double lit = 0.5 / kPiD * E * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
+  const SunTexel sun(50.0f, 0);
+  writeExr(t.file("sun.exr"), sun.map);
+  const double lit = sun.radiance;
   for (bool visibility : {true, false}) {
     json p = estimatorParameters("env");
     p["visibility"] = visibility;
@@ -303,8 +294,12 @@ TEST(Ibl, SmcTracksTheNormalisingConstantAndReinitialisesOnAJump) {
     } else {
       EXPECT_EQ(carried, receivers) << f;
     }
-    if (f > 0 && f < frames - 1) EXPECT_EQ(jumps, 0) << "frame " << f << ": no jump while the sun turns";
-    if (f == frames - 1) EXPECT_GT(jumps, receivers * 9 / 10) << "the sun brightened 20-fold";
+    if (f > 0 && f < frames - 1) {
+      EXPECT_EQ(jumps, 0) << "frame " << f << ": no jump while the sun turns";
+    }
+    if (f == frames - 1) {
+      EXPECT_GT(jumps, receivers * 9 / 10) << "the sun brightened 20-fold";
+    }
     // Measured: within 1.5% over the 9 turning frames (N = 8, K = 3, M = 256). 5% allows the seed's
     // luck; an SMC whose Z drifted (a reweighting or move that broke invariance) leaves it within
     // a few frames. A hard-edged sun a texel per frame drifts much faster: docs/IBL.md.
@@ -356,7 +351,9 @@ TEST(Ibl, SmcInBandsOfRowsEqualsOneBand) {
     for (int f = 0; f < 3; ++f) {
       const MethodFrame r = m->render(s.camera);
       images[banded].push_back(r.image.rgb);
-      if (f > 0) EXPECT_EQ(r.attributes.at("nestlight:ibl_smc_reprojected"), r.attributes.at("nestlight:ibl_receivers"));
+      if (f > 0) {
+        EXPECT_EQ(r.attributes.at("nestlight:ibl_smc_reprojected"), r.attributes.at("nestlight:ibl_receivers"));
+      }
     }
   }
   for (int f = 0; f < 3; ++f) EXPECT_TRUE(images[0][size_t(f)] == images[1][size_t(f)]) << "frame " << f;
@@ -366,18 +363,11 @@ TEST(Ibl, SmcInBandsOfRowsEqualsOneBand) {
 // all-black frame between bright ones lights nothing (no NaN), and SMC starts afresh after it.
 TEST(Ibl, ASunOf1e5AndABlackFrame) {
   test::TempDir t;
-  HdrImage img(16, 8);
-  for (int y = 0; y < 8; ++y)
-    for (int x = 0; x < 16; ++x) img.set(x, y, Rgb(1e-3f));
-  const float E = 1e5f;
-  img.set(5, 2, Rgb(E));
-  writeExr(t.file("sun_0.exr"), img);
+  const SunTexel sun(1e5f, 5, 1e-3f);
+  writeExr(t.file("sun_0.exr"), sun.map);
   writeExr(t.file("sun_1.exr"), HdrImage(16, 8));  // black
-  writeExr(t.file("sun_2.exr"), img);
-  const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
-  // The sun texel (closed form) plus the dim sky over the floor's hemisphere (rho L).
-  const double want = 0.5 / kPiD * (E - 1e-3) * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2 +
-                      0.5 * 1e-3;
+  writeExr(t.file("sun_2.exr"), sun.map);
+  const double want = sun.radiance;
   for (const char* e : kEstimators) {
     json p = estimatorParameters(e);
     p["bis_proposals"] = 256;
@@ -395,9 +385,10 @@ TEST(Ibl, ASunOf1e5AndABlackFrame) {
         continue;
       }
       EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3) << e << " frame " << f << ": sd " << st.sd;
-      if (std::string(e) == "smc" && f == 2)
+      if (std::string(e) == "smc" && f == 2) {
         EXPECT_EQ(r.attributes.at("nestlight:ibl_smc_reinit_new"), r.attributes.at("nestlight:ibl_receivers"))
             << "after a black frame no pixel holds samples: all start afresh";
+      }
     }
   }
 }

@@ -18,6 +18,7 @@
 #include "nestlight/gi/srgb.h"
 #include "nestlight/gi/tone_map.h"
 #include "nestlight/octree/error.h"
+#include "floor_scene.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -25,34 +26,19 @@ namespace {
 
 using json = nlohmann::json;
 
-// A 20 x 20 m Lambert floor (a flat box, top face at z = 0) seen from above, and `lights`.
+// A Lambert floor of albedo 0.5 (floor_scene.h) under `lights`, optionally a 1 x 1 m occluder 1 m
+// above it.
 Scene floorScene(const test::TempDir& t, const json& lights, int size = 64, bool occluder = false) {
-  writeBoxObj(t.path() / "box.obj");
-  json meshes = json::array({json{{"path", "box.obj"},
-                                  {"transform", {{"translate", {-10.0, -10.0, -0.1}}, {"scale", {20.0, 20.0, 0.1}}}},
-                                  {"material", "floor"}}});
+  json j = floorSceneJson(t, size);
   if (occluder)
-    meshes.push_back(json{{"path", "box.obj"},
-                          {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-                          {"material", "floor"}});
-  json j = {{"version", 1},
-            {"materials", {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}}},
-            {"meshes", meshes},
-            {"lights", lights},
-            {"camera", {{"eye", {0.0, -0.001, 6.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 1.0, 0.0}}, {"fov", 60.0},
-                        {"width", size}, {"height", size}}},
-            {"gi", {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 1024}}}}}};
+    j["meshes"].push_back(json{{"path", "box.obj"},
+                               {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+                               {"material", "floor"}});
+  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
+  j["lights"] = lights;
+  j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 1024}}}};
   std::ofstream(t.path() / "scene.json") << j.dump(2);
   return loadScene(t.path() / "scene.json");
-}
-
-// Where the ray through pixel (x + 0.5, y + 0.5) meets the plane z = 0 (the reference's camera).
-bool floorPoint(const Scene& s, int x, int y, glm::vec3* p) {
-  glm::vec3 o, d;
-  cameraRay(s.camera, s.origin, x + 0.5f, y + 0.5f, &o, &d);
-  if (!(d.z < 0)) return false;
-  *p = o + d * (-o.z / d.z);
-  return std::abs(p->x) < 9.5f && std::abs(p->y) < 9.5f;
 }
 
 MethodFrame renderRaster(const Scene& s) {

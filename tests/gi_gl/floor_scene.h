@@ -1,0 +1,39 @@
+// The scene most GL method tests light: a 20 x 20 m floor (a flat box whose top face is z = 0)
+// seen straight down from 6 m, in a square image; and where a pixel's ray meets that floor.
+#pragma once
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "nestlight/converters/test_scenes.h"
+#include "nestlight/gi/reference/path_tracer.h"
+#include "nestlight/gi/scene.h"
+#include "test_support.h"
+
+namespace nestlight::gi {
+
+// The floor (material "floor") and the camera; tests add materials, more meshes, lights,
+// the environment and gi.
+inline nlohmann::json floorSceneJson(const test::TempDir& t, int size) {
+  writeBoxObj(t.path() / "box.obj");
+  using json = nlohmann::json;
+  return {{"version", 1},
+          {"meshes", json::array({json{{"path", "box.obj"},
+                                       {"transform", {{"translate", {-10.0, -10.0, -0.1}}, {"scale", {20.0, 20.0, 0.1}}}},
+                                       {"material", "floor"}}})},
+          {"camera", {{"eye", {0.0, -0.001, 6.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 1.0, 0.0}}, {"fov", 60.0},
+                      {"width", size}, {"height", size}}}};
+}
+
+// Where the ray through pixel (x + 0.5, y + 0.5) meets the plane z = 0 (the reference's camera),
+// when that is on the floor within `half` of its centre.
+inline bool floorPoint(const Scene& s, int x, int y, glm::vec3* p, float half = 9.5f) {
+  glm::vec3 o, d;
+  cameraRay(s.camera, s.origin, x + 0.5f, y + 0.5f, &o, &d);
+  if (!(d.z < 0)) return false;
+  *p = o + d * (-o.z / d.z);
+  return std::abs(p->x) < half && std::abs(p->y) < half;
+}
+
+}  // namespace nestlight::gi
