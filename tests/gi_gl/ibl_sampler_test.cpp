@@ -34,9 +34,7 @@ class SamplerHarness {
     gl::Buffer table(t.data.size() * 4, t.data.data(), 0);
     table.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_ENV);
     const HdrImage& img = map.image();
-    std::vector<float> rgba(img.pixels() * 4, 1.0f);
-    for (size_t p = 0; p < img.pixels(); ++p)
-      for (int k = 0; k < 3; ++k) rgba[4 * p + k] = img.rgb[3 * p + k];
+    const std::vector<float> rgba = img.rgba();
     gl::Texture tex(GL_RGBA32F, img.width, img.height);
     glTextureSubImage2D(tex.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT, rgba.data());
     glBindTextureUnit(5, tex.id());

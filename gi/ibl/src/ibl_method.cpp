@@ -213,9 +213,8 @@ class IblExtension : public RasterExtension {
   void uploadPrevious(const EnvironmentMap& map) {
     const HdrImage& img = map.image();
     const int w = std::max(img.width, 1), h = std::max(img.height, 1);
-    std::vector<float> rgba(size_t(w) * size_t(h) * 4, 0.0f);
-    for (size_t p = 0; p < img.pixels(); ++p)
-      for (int k = 0; k < 3; ++k) rgba[4 * p + k] = img.rgb[3 * p + k];
+    std::vector<float> rgba = img.rgba();
+    rgba.resize(size_t(w) * size_t(h) * 4, 0.0f);  // no environment: one black texel
     if (prevTexture_.width() != w || prevTexture_.height() != h) prevTexture_ = gl::Texture(GL_RGBA32F, w, h);
     glTextureSubImage2D(prevTexture_.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
   }
@@ -229,7 +228,7 @@ class IblExtension : public RasterExtension {
     ctx.bindTexture("normal", 2);
     ctx.bindTexture("material", 3);
     ctx.bindTexture("radiance", 4);
-    glBindImageTexture(0, ctx.target("radiance_ibl").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(0, ctx.target("radiance_ibl").id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     program_.use();
     f.bindEnvironment(program_);
     envTable_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_ENV);

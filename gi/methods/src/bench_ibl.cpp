@@ -80,8 +80,7 @@ double medianOf(std::vector<double> v) {
 // Pixels whose centre ray and all 8 neighbours' meet the same surface (a mesh's material): the
 // shading error without the silhouettes, where a GL method's pixel-centre sample and the
 // reference's pixel average differ whatever the estimator.
-std::vector<uint8_t> interiorMask(const Scene& s, int W, int H) {
-  const auto rs = ReferenceScene::load(s);
+std::vector<uint8_t> interiorMask(const Scene& s, const ReferenceScene& rs, int W, int H) {
   SceneCamera cam = s.camera;
   cam.width = W, cam.height = H;
   std::vector<int> id(size_t(W) * H, -1);
@@ -90,7 +89,7 @@ std::vector<uint8_t> interiorMask(const Scene& s, int W, int H) {
       glm::vec3 o, d;
       cameraRay(cam, s.origin, x + 0.5f, y + 0.5f, &o, &d);
       SurfaceHit hit;
-      if (rs->intersect(o, d, 1e30f, &hit)) id[size_t(y) * W + x] = int(hit.material);
+      if (rs.intersect(o, d, 1e30f, &hit)) id[size_t(y) * W + x] = int(hit.material);
     }
   std::vector<uint8_t> mask(id.size(), 0);
   for (int y = 1; y + 1 < H; ++y)
@@ -218,7 +217,9 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
     std::snprintf(stamp, sizeof stamp, "%016zx", std::hash<std::string>{}(stampText));
     const std::vector<SceneCamera> cameras = sceneCameras(scene);
     NL_CHECK(int(cameras.size()) == o.frames);
-    const std::vector<uint8_t> mask = interiorMask(scene, o.size, o.size);
+    // The scene as the reference traces it: the mask's rays, and the references not yet cached.
+    const std::unique_ptr<ReferenceScene> rs = ReferenceScene::load(scene);
+    const std::vector<uint8_t> mask = interiorMask(scene, *rs, o.size, o.size);
     // Ground truth per frame: the reference's direct light, as two halves of the samples with
     // different seeds, whose mean is the reference and whose difference measures its own noise
     // (the errors below are reported with it and with it taken out). Cached by a stamp.
@@ -227,7 +228,6 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
     {
       // The reference's first bounce (direct light), its camera rays through pixel centres as the
       // GL methods shade them, lit by each frame's probe as the method is (EnvironmentSource).
-      std::unique_ptr<ReferenceScene> rs;
       std::unique_ptr<EnvironmentSource> probe;
       ReferenceOptions ro = referenceOptionsFrom(scene.gi);
       ro.maxBounces = 1;
@@ -244,10 +244,7 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
             half[k] = readHdrImage(file.string());
             continue;
           }
-          if (!rs) {
-            rs = ReferenceScene::load(scene);
-            probe = std::make_unique<EnvironmentSource>(scene.environment);
-          }
+          if (!probe) probe = std::make_unique<EnvironmentSource>(scene.environment);
           rs->setEnvironment(probe->at(cameras[size_t(f)].time));
           ro.seed = 2 * uint64_t(f) + uint64_t(k) + 1;
           ro.maxSamplesPerPixel = std::max(o.referenceSpp / 2, 1);

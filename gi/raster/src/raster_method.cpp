@@ -547,9 +547,7 @@ class RasterMethod : public Method, public RasterFrame {
     envScale_ = env.scale();
     sh_ = irradianceSh(env);
     const HdrImage& img = env.image();
-    std::vector<float> rgba(img.pixels() * 4, 1.0f);
-    for (size_t p = 0; p < img.pixels(); ++p)
-      for (int k = 0; k < 3; ++k) rgba[4 * p + k] = img.rgb[3 * p + k];
+    const std::vector<float> rgba = img.rgba();
     // Mip levels for lookups averaged over a solid angle (environment.glsl's environmentOver: a
     // GI method's micro-buffer m-pixel, which point samples would alias on a small bright sun).
     int levels = 1;

@@ -29,6 +29,13 @@ struct HdrImage {
     float* p = &rgb[3 * (size_t(y) * width + x)];
     p[0] = c.r, p[1] = c.g, p[2] = c.b;
   }
+  // The pixels as RGBA (alpha 1), the layout GL uploads take.
+  std::vector<float> rgba() const {
+    std::vector<float> out(pixels() * 4, 1.0f);
+    for (size_t p = 0; p < pixels(); ++p)
+      for (int k = 0; k < 3; ++k) out[4 * p + k] = rgb[3 * p + k];
+    return out;
+  }
 };
 
 // Header attributes stored beside the pixels (e.g. "nestlight:samples" = "4096").
