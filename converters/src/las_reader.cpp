@@ -1,4 +1,5 @@
-// LAS reader: LAS 1.0-1.4, uncompressed, point data record formats 0-10.
+// LAS reader: LAS 1.0-1.4, point data record formats 0-10, uncompressed or LASzip-compressed
+// (LAZ, COPC: the chunks are decoded by laz_points.cpp into the same records).
 //
 // Follows the ASPRS LAS Specification 1.4 - R15 (ASPRS, July 2019): the public header block
 // (section 2.4, table 3), variable and extended variable length records (2.5, 2.7), point data
@@ -11,12 +12,16 @@
 // offsets and lengths are compared without multiplying so that they cannot overflow.
 #include <algorithm>
 #include <charconv>
+#include <functional>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <string>
 
+#include <tbb/task_arena.h>
+
 #include "las_format.h"
+#include "laz_points.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
 
@@ -117,10 +122,16 @@ class LasReader final : public PointReader {
   std::vector<std::string> warnings() const override { return warnings_; }
   uint64_t bytesTotal() const override { return src_->size(); }
   uint64_t bytesConsumed() const override {
+    if (laz_) {
+      const auto& chunks = laz_->chunks();
+      return nextChunk_ >= chunks.size() ? src_->size() : chunks[nextChunk_].offset;
+    }
     return next_ >= count_ ? src_->size() : pointStart_ + next_ * recordLength_;
   }
+  uint64_t pointsUnreadable() const override { return laz_ ? laz_->unreadable() : 0; }
 
   bool read(PointBatch& batch, size_t maxPoints) override {
+    if (laz_) return readLaz(batch, maxPoints, 1) != 0;
     batch.clear();
     if (next_ >= count_ || maxPoints == 0) return false;
     const size_t n = static_cast<size_t>(std::min<uint64_t>(maxPoints, count_ - next_));
@@ -137,6 +148,11 @@ class LasReader final : public PointReader {
 
   // Fixed-size records: skipping is free, so the counting pass decodes one record in `step`.
   size_t readSampled(PointBatch& batch, size_t maxPoints, size_t step) override {
+    if (laz_) {
+      // Compressed points cannot be skipped one by one, but whole chunks can.
+      if (step <= 1 || !laz_->hasChunkTable() || laz_->chunks().size() < 2 * step) step = 1;
+      return readLaz(batch, maxPoints, step);
+    }
     batch.clear();
     if (step <= 1) return read(batch, maxPoints) ? 1 : 0;
     if (next_ >= count_ || maxPoints == 0) return false;
@@ -153,9 +169,33 @@ class LasReader final : public PointReader {
     return step;
   }
 
+  // Every point record as the uncompressed file stores it, in file order, in batches.
+  void forEachRecords(const std::function<void(const uint8_t*, size_t)>& sink) {
+    rewind();
+    if (!laz_) {
+      const size_t batch = std::max<size_t>((16u << 20) / recordLength_, 1);
+      for (uint64_t i = 0; i < count_; i += batch) {
+        const size_t n = static_cast<size_t>(std::min<uint64_t>(batch, count_ - i));
+        sink(src_->data() + pointStart_ + i * recordLength_, n);
+      }
+      return;
+    }
+    PointBatch unused;
+    while (readLaz(unused, SIZE_MAX, 1, false)) {
+      sink(cache_.data(), cacheCount_);
+      cacheAt_ = cacheCount_;
+    }
+  }
+  size_t recordLength() const { return recordLength_; }
+
   void rewind() override {
     next_ = 0;
     src_->releaseBefore(0);
+    if (laz_) {
+      laz_->rewind();
+      nextChunk_ = 0;
+      cacheAt_ = cacheCount_ = 0;
+    }
   }
 
  private:
@@ -170,6 +210,8 @@ class LasReader final : public PointReader {
   void handleRecord(const std::string& user, uint16_t id, const uint8_t* data, uint64_t length,
                     uint64_t at, bool extended);
   void buildLayout();
+  void setupLaz(uint64_t declared, uint64_t dataEnd);
+  size_t readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool decodeFields = true);
 
   std::shared_ptr<ByteSource> src_;
   ReadOptions options_;
@@ -185,6 +227,13 @@ class LasReader final : public PointReader {
   Vec3d scale_, offset_;
 
   nlohmann::json geotiff_;
+  const uint8_t* laszipVlr_ = nullptr;
+  uint64_t laszipVlrLength_ = 0, laszipVlrAt_ = 0;
+  bool compressed_ = false;
+  std::unique_ptr<laz::LazPoints> laz_;
+  std::vector<uint8_t> cache_;  // decoded LAZ records not yet returned
+  size_t cacheAt_ = 0, cacheCount_ = 0, cacheWeight_ = 1;
+  size_t nextChunk_ = 0;        // first LAZ chunk not decoded yet
   const uint8_t* extraBytesVlr_ = nullptr;
   uint64_t extraBytesVlrLength_ = 0;
   uint64_t extraBytesVlrAt_ = 0;
@@ -231,12 +280,9 @@ void LasReader::parse() {
   const uint32_t legacyCount = load<uint32_t>(d + 107);
 
   // LASzip marks compressed files by setting bit 7 (and bit 6 in some versions) of the format.
-  if (formatByte & 0xC0)
-    fail(104, "LAZ is not supported yet: the point data is compressed (point format byte " +
-                  std::to_string(formatByte) +
-                  "); decompress it first, e.g. with 'laszip -i in.laz -o out.las' or 'pdal "
-                  "translate in.laz out.las'");
-  pointFormat_ = formatByte;
+  compressed_ = (formatByte & 0xC0) != 0;
+  pointFormat_ = formatByte & 0x3F;
+  if (compressed_) header_.format = "laz";
   if (pointFormat_ > las::kMaxPointFormat)
     fail(104, "unknown point data record format " + std::to_string(pointFormat_) +
                   " (LAS 1.4 defines 0-10)");
@@ -336,6 +382,9 @@ void LasReader::parse() {
       waveformStart < dataEnd)
     dataEnd = waveformStart;
 
+  if (compressed_) {
+    setupLaz(declared, dataEnd);
+  } else {
   const uint64_t complete = (dataEnd - pointStart_) / recordLength_;
   if (declared > complete) {
     const uint64_t at = pointStart_ + complete * recordLength_;
@@ -360,6 +409,7 @@ void LasReader::parse() {
                 " more records: does the header claim fewer points than the file holds?";
       warn(what);
     }
+  }
   }
 
   buildLayout();
@@ -443,6 +493,14 @@ void LasReader::handleRecord(const std::string& user, uint16_t id, const uint8_t
       // GeoAsciiParams are '|'-separated strings; keep them verbatim (NULs end the last one).
       geotiff_["ascii"] = fixedString(data, static_cast<size_t>(length), true);
     }
+  } else if (user == laz::kLaszipUserId && id == laz::kLaszipRecordId && !extended) {
+    if (laszipVlr_) {
+      warn(Error::atByte(at) + ": a second LASzip record is ignored");
+      return;
+    }
+    laszipVlr_ = data;
+    laszipVlrLength_ = length;
+    laszipVlrAt_ = at;
   } else if (user == "LASF_Spec" && id == las::kRecordExtraBytes) {
     if (extended || extraBytesVlr_) {
       warn(Error::atByte(at) + ": a second Extra Bytes record is ignored");
@@ -527,10 +585,94 @@ void LasReader::buildLayout() {
   if (las::hasRgb(pointFormat_)) header_.rgbBits = 16;
 }
 
+void LasReader::setupLaz(uint64_t declared, uint64_t dataEnd) {
+  if (!laszipVlr_)
+    fail(104, "the point format byte (" + std::to_string(pointFormat_ | 0x80) +
+                  ") says the points are LASzip-compressed, but there is no LASzip record "
+                  "(VLR \"laszip encoded\" 22204)");
+  laz::LaszipInfo info;
+  const std::string bad = laz::parseLaszipVlr(laszipVlr_, static_cast<size_t>(laszipVlrLength_),
+                                             pointFormat_, recordLength_, info);
+  if (!bad.empty()) fail(laszipVlrAt_ + las::kVlrHeaderSize, bad);
+  laz_ = std::make_unique<laz::LazPoints>(src_, info, pointStart_, dataEnd, declared,
+                                          options_.lenient, [this](std::string w) { warn(std::move(w)); });
+  count_ = laz_->points();
+
+  nlohmann::json items = nlohmann::json::array();
+  for (const laz::Item& it : info.items)
+    items.push_back(laz::itemName(it.type) + " v" + std::to_string(it.version) + " (" +
+                    std::to_string(it.size) + " bytes)");
+  static const char* kCompressors[] = {"none", "pointwise", "pointwise chunked", "layered chunked"};
+  header_.details["laszip"] = {
+      {"version", std::to_string(info.versionMajor) + "." + std::to_string(info.versionMinor) + "." +
+                      std::to_string(info.versionRevision)},
+      {"compressor", kCompressors[static_cast<int>(info.compressor)]},
+      {"items", std::move(items)},
+      {"chunk_size", info.chunkSize == laz::kVariableChunkSize ? nlohmann::json("variable")
+                                                               : nlohmann::json(info.chunkSize)},
+      {"chunks", laz_->chunks().size()},
+      {"chunk_table", laz_->hasChunkTable()}};
+}
+
+// LAZ: chunks are decoded in groups, in parallel, into cache_; batches are cut from it. With
+// `step` > 1 (planning passes) only every step-th chunk is decoded, standing for `step` chunks.
+size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool decodeFields) {
+  batch.clear();
+  if (maxPoints == 0) return 0;
+  while (cacheAt_ >= cacheCount_) {
+    const auto& chunks = laz_->chunks();
+    if (nextChunk_ >= chunks.size()) return 0;
+    // Enough chunks to keep every core busy, within 64 MiB of records.
+    const uint64_t threads = static_cast<uint64_t>(tbb::this_task_arena::max_concurrency());
+    const uint64_t cap = std::max<uint64_t>((64u << 20) / recordLength_, 1);
+    const uint64_t target =
+        std::max<uint64_t>(decodeFields ? maxPoints : 0,
+                           std::min<uint64_t>(cap, 4 * threads * chunks[nextChunk_].points));
+    std::vector<size_t> which;
+    uint64_t points = 0;
+    size_t c = nextChunk_;
+    if (!laz_->hasChunkTable()) {
+      which.push_back(c++);
+    } else {
+      while (c < chunks.size() && (which.empty() || points + chunks[c].points <= target)) {
+        which.push_back(c);
+        points += chunks[c].points;
+        c += step;
+      }
+    }
+    nextChunk_ = std::min(c, chunks.size());
+    cacheCount_ = static_cast<size_t>(laz_->decode(which, cache_));
+    cacheAt_ = 0;
+    cacheWeight_ = step;
+    src_->releaseBefore(nextChunk_ < laz_->chunks().size() ? laz_->chunks()[nextChunk_].offset
+                                                          : src_->size());
+  }
+  if (!decodeFields) return cacheWeight_;
+  const size_t n = std::min(maxPoints, cacheCount_ - cacheAt_);
+  const size_t stride = header_.layout.stride();
+  batch.xyz.resize(3 * n);
+  batch.attrs.resize(n * stride);
+  kDecoders[pointFormat_](cache_.data() + cacheAt_ * recordLength_, n, recordLength_, scale_,
+                          offset_, batch.xyz.data(), batch.attrs.data(), stride, extraBytes_);
+  cacheAt_ += n;
+  next_ += n;
+  return cacheWeight_;
+}
+
 }  // namespace
 
 std::unique_ptr<PointReader> openLas(std::shared_ptr<ByteSource> src, const ReadOptions& options) {
   return std::make_unique<LasReader>(std::move(src), options);
+}
+
+size_t readLasRecords(std::shared_ptr<ByteSource> src, const ReadOptions& options,
+                      const std::function<void(const uint8_t*, size_t, size_t)>& sink,
+                      SourceHeader* header, std::vector<std::string>* warnings) {
+  LasReader r(std::move(src), options);
+  r.forEachRecords([&](const uint8_t* p, size_t n) { sink(p, n, r.recordLength()); });
+  if (header) *header = r.header();
+  if (warnings) *warnings = r.warnings();
+  return r.recordLength();
 }
 
 }  // namespace nestlight

@@ -18,18 +18,15 @@ std::string lowerExtension(const std::string& path) {
 
 std::unique_ptr<PointReader> openReader(const std::string& path, const ReadOptions& options) {
   const std::string ext = lowerExtension(path);
-  if (ext == ".laz")
-    throw Error(path, "",
-                "LAZ (compressed LAS) is not supported yet; decompress it first, e.g. with "
-                "'laszip -i in.laz -o out.las' or 'pdal translate in.laz out.las'");
-  if (ext == ".las") return openLas(mapFile(path), options);
+  // LAZ and COPC are LAS files whose point records are compressed; the LAS reader decodes them.
+  if (ext == ".las" || ext == ".laz") return openLas(mapFile(path), options);
   if (ext == ".ply") return openPly(mapFile(path), options);
   if (ext == ".pcd") return openPcd(path, options);
   if (ext == ".xyz" || ext == ".pts" || ext == ".txt" || ext == ".csv")
     return openXyz(mapFile(path), options);
   throw Error(path, "",
               "unknown point cloud format '" + ext +
-                  "'; supported: .las .ply .pcd .xyz .pts .txt .csv");
+                  "'; supported: .las .laz .ply .pcd .xyz .pts .txt .csv");
 }
 
 std::unique_ptr<PointWriter> createWriter(const std::string& path, const SourceHeader& header) {

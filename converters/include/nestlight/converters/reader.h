@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -22,7 +23,7 @@ namespace nestlight {
 
 struct SourceHeader {
   std::string path;
-  std::string format;  // "las", "ply", "pcd", "xyz"
+  std::string format;  // "las", "laz", "ply", "pcd", "xyz"
   std::optional<uint64_t> declaredPoints;  // what the header claims, if it claims anything
   std::optional<Box3d> declaredBounds;     // LAS header bounds
   std::optional<Vec3d> scale;              // the source's quantisation (LAS)
@@ -70,18 +71,27 @@ class PointReader {
   virtual void rewind() = 0;
   // Header/data disagreements tolerated in lenient mode, and other notes for the metadata.
   virtual std::vector<std::string> warnings() const { return {}; }
+  // Points the source declares but could not decode, counted by the builder as rejected: the
+  // damaged chunks of a compressed file read with ReadOptions::lenient, since the last rewind().
+  virtual uint64_t pointsUnreadable() const { return 0; }
   // Progress, in bytes of the input.
   virtual uint64_t bytesConsumed() const = 0;
   virtual uint64_t bytesTotal() const = 0;
 };
 
-// Chooses the reader from the extension (.las .ply .pcd .xyz .pts .txt .csv); .laz is an error
-// saying that LAZ is not supported yet.
+// Chooses the reader from the extension (.las .laz .ply .pcd .xyz .pts .txt .csv); LAZ and COPC
+// files go through the LAS reader, which decodes their compressed chunks.
 std::unique_ptr<PointReader> openReader(const std::string& path, const ReadOptions& options = {});
 
 std::unique_ptr<PointReader> openLas(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
 std::unique_ptr<PointReader> openPly(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
 std::unique_ptr<PointReader> openXyz(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
+// LAS or LAZ: calls `sink(records, n, recordLength)` with every point record exactly as the uncompressed file
+// stores it (LAZ chunks decoded on all cores), in file order. Returns the record length. For
+// byte-for-byte tests and decode benchmarks.
+size_t readLasRecords(std::shared_ptr<ByteSource> src, const ReadOptions& options,
+                      const std::function<void(const uint8_t*, size_t, size_t)>& sink,
+                      SourceHeader* header = nullptr, std::vector<std::string>* warnings = nullptr);
 // PCD goes through PCL, which reads from a path.
 std::unique_ptr<PointReader> openPcd(const std::string& path, const ReadOptions& o = {});
 

@@ -1,0 +1,351 @@
+// The adaptive arithmetic decoder of LASzip, safe on untrusted input. Private to converters/src.
+//
+// LASzip (Isenburg, "LASzip: lossless compression of LiDAR data", Photogrammetric Engineering &
+// Remote Sensing 79(2), 2013; the LAZ format as specified by the LASzip reference implementation
+// 2.x-3.x) entropy-codes every field with an adaptive range coder after Amir Said ("Introduction
+// to Arithmetic Coding - Theory and Practice", HP Labs HPL-2004-76, 2004): 32-bit interval,
+// byte-wise renormalisation, symbol models whose cumulative counts are rebuilt periodically (with
+// a lookup table that narrows the bisection for models of more than 16 symbols), and binary
+// models with a scaled probability of 0. A decoder must reproduce the encoder's model updates bit
+// for bit, so the constants and update rules below are the format, not tuning.
+//
+// Written here because Debian packages neither LASzip nor LAZperf. Differences from the reference
+// decoder, none of which changes the decoded values of a valid stream:
+// - reading past the end of the stream yields zero bytes and is counted (overrun()), so that the
+//   caller can report a truncated or damaged chunk instead of reading foreign memory;
+// - the table lookup is clamped, because a damaged stream can leave value >= length, where the
+//   reference decoder would index past its table;
+// - all interval arithmetic is unsigned (wrapping), so a damaged stream cannot cause undefined
+//   behaviour; models keep their invariants (every count >= 1), so length never reaches zero and
+//   renormalisation always terminates.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace nestlight::laz {
+
+inline constexpr uint32_t kMinLength = 0x01000000u;  // renormalise below 2^24
+inline constexpr uint32_t kMaxLength = 0xFFFFFFFFu;
+inline constexpr uint32_t kBitLengthShift = 13;  // binary models: probabilities in 1/2^13
+inline constexpr uint32_t kBitMaxCount = 1u << kBitLengthShift;
+inline constexpr uint32_t kSymbolLengthShift = 15;  // symbol models: distribution in 1/2^15
+inline constexpr uint32_t kSymbolMaxCount = 1u << kSymbolLengthShift;
+inline constexpr uint32_t kMaxSymbols = 1u << 11;
+
+// Binary adaptive model.
+struct BitModel {
+  uint32_t bit0Count = 1, bitCount = 2;
+  uint32_t bit0Prob = 1u << (kBitLengthShift - 1);
+  uint32_t updateCycle = 4, bitsUntilUpdate = 4;
+
+  void reset() { *this = BitModel(); }
+  void update() {
+    if ((bitCount += updateCycle) > kBitMaxCount) {
+      bitCount = (bitCount + 1) >> 1;
+      bit0Count = (bit0Count + 1) >> 1;
+      if (bit0Count == bitCount) ++bitCount;
+    }
+    const uint32_t scale = 0x80000000u / bitCount;
+    bit0Prob = (bit0Count * scale) >> (31 - kBitLengthShift);
+    updateCycle = (5 * updateCycle) >> 2;
+    if (updateCycle > 64) updateCycle = 64;
+    bitsUntilUpdate = updateCycle;
+  }
+};
+
+// Adaptive model of `symbols` symbols (2 to 2048).
+class SymbolModel {
+ public:
+  explicit SymbolModel(uint32_t symbols) : symbols_(symbols), last_(symbols - 1) {
+    if (symbols > 16) {
+      uint32_t bits = 3;
+      while (symbols > (1u << (bits + 2))) ++bits;
+      tableSize_ = 1u << bits;
+      tableShift_ = kSymbolLengthShift - bits;
+    }
+    storage_.resize(2 * size_t(symbols) + (tableSize_ ? tableSize_ + 2 : 0));
+    reset();
+  }
+  SymbolModel(const SymbolModel&) = delete;
+  SymbolModel& operator=(const SymbolModel&) = delete;
+  SymbolModel(SymbolModel&&) = default;
+  SymbolModel& operator=(SymbolModel&&) = default;
+
+  void reset() {
+    uint32_t* count = counts();
+    for (uint32_t k = 0; k < symbols_; ++k) count[k] = 1;
+    totalCount_ = 0;
+    updateCycle_ = symbols_;
+    update();
+    symbolsUntilUpdate_ = updateCycle_ = (symbols_ + 6) >> 1;
+  }
+
+  uint32_t symbols() const { return symbols_; }
+
+ private:
+  friend class ArithmeticDecoder;
+  uint32_t* distribution() { return storage_.data(); }
+  uint32_t* counts() { return storage_.data() + symbols_; }
+  uint32_t* table() { return storage_.data() + 2 * size_t(symbols_); }
+
+  void update() {
+    uint32_t* count = counts();
+    uint32_t* dist = distribution();
+    if ((totalCount_ += updateCycle_) > kSymbolMaxCount) {
+      totalCount_ = 0;
+      for (uint32_t n = 0; n < symbols_; ++n) totalCount_ += (count[n] = (count[n] + 1) >> 1);
+    }
+    const uint32_t scale = 0x80000000u / totalCount_;
+    uint32_t sum = 0;
+    if (tableSize_ == 0) {
+      for (uint32_t k = 0; k < symbols_; ++k) {
+        dist[k] = (scale * sum) >> (31 - kSymbolLengthShift);
+        sum += count[k];
+      }
+    } else {
+      uint32_t* tab = table();
+      uint32_t s = 0;
+      for (uint32_t k = 0; k < symbols_; ++k) {
+        dist[k] = (scale * sum) >> (31 - kSymbolLengthShift);
+        sum += count[k];
+        const uint32_t w = dist[k] >> tableShift_;
+        while (s < w) tab[++s] = k - 1;
+      }
+      tab[0] = 0;
+      while (s <= tableSize_) tab[++s] = symbols_ - 1;
+    }
+    updateCycle_ = (5 * updateCycle_) >> 2;
+    const uint32_t maxCycle = (symbols_ + 6) << 3;
+    if (updateCycle_ > maxCycle) updateCycle_ = maxCycle;
+    symbolsUntilUpdate_ = updateCycle_;
+  }
+
+  uint32_t symbols_, last_;
+  uint32_t tableSize_ = 0, tableShift_ = 0;
+  uint32_t totalCount_ = 0, updateCycle_ = 0, symbolsUntilUpdate_ = 0;
+  std::vector<uint32_t> storage_;  // distribution, counts, decoder table
+};
+
+class ArithmeticDecoder {
+ public:
+  // Starts decoding the bytes [begin, end): reads the first four bytes of the code value.
+  void init(const uint8_t* begin, const uint8_t* end) {
+    begin_ = p_ = begin;
+    end_ = end;
+    overrun_ = 0;
+    length_ = kMaxLength;
+    value_ = uint32_t(byte()) << 24;
+    value_ |= uint32_t(byte()) << 16;
+    value_ |= uint32_t(byte()) << 8;
+    value_ |= uint32_t(byte());
+  }
+
+  // Bytes asked for beyond the end of the stream (read as zero). A valid stream never needs
+  // them: the encoder pads its last bytes so that the decoder stays inside.
+  size_t overrun() const { return overrun_; }
+  // Bytes consumed so far (streams without a chunk table continue where the decoder stopped).
+  size_t consumed() const { return size_t(p_ - begin_); }
+
+  uint32_t decodeBit(BitModel& m) {
+    const uint32_t x = m.bit0Prob * (length_ >> kBitLengthShift);
+    uint32_t sym;
+    if (value_ < x) {
+      sym = 0;
+      length_ = x;
+      ++m.bit0Count;
+    } else {
+      sym = 1;
+      value_ -= x;
+      length_ -= x;
+    }
+    if (length_ < kMinLength) renormalise();
+    if (--m.bitsUntilUpdate == 0) m.update();
+    return sym;
+  }
+
+  uint32_t decodeSymbol(SymbolModel& m) {
+    uint32_t n, sym, x, y = length_;
+    const uint32_t* dist = m.distribution();
+    if (m.tableSize_) {
+      length_ >>= kSymbolLengthShift;
+      const uint32_t dv = value_ / length_;
+      uint32_t t = dv >> m.tableShift_;
+      if (t > m.tableSize_) t = m.tableSize_;  // only a damaged stream gets here
+      const uint32_t* tab = m.table();
+      sym = tab[t];
+      n = tab[t + 1] + 1;
+      while (n > sym + 1) {
+        const uint32_t k = (sym + n) >> 1;
+        if (dist[k] > dv)
+          n = k;
+        else
+          sym = k;
+      }
+      x = dist[sym] * length_;
+      if (sym != m.last_) y = dist[sym + 1] * length_;
+    } else {
+      x = sym = 0;
+      length_ >>= kSymbolLengthShift;
+      n = m.symbols_;
+      uint32_t k = n >> 1;
+      do {
+        const uint32_t z = length_ * dist[k];
+        if (z > value_) {
+          n = k;
+          y = z;
+        } else {
+          sym = k;
+          x = z;
+        }
+      } while ((k = (sym + n) >> 1) != sym);
+    }
+    value_ -= x;
+    length_ = y - x;
+    if (length_ < kMinLength) renormalise();
+    ++m.counts()[sym];
+    if (--m.symbolsUntilUpdate_ == 0) m.update();
+    return sym;
+  }
+
+  uint32_t readBit() {
+    const uint32_t sym = value_ / (length_ >>= 1);
+    value_ -= length_ * sym;
+    if (length_ < kMinLength) renormalise();
+    return sym;
+  }
+
+  // 1 to 32 raw bits (more than 19 are read as 16 low bits and the rest).
+  uint32_t readBits(uint32_t bits) {
+    if (bits > 19) {
+      const uint32_t low = readShort();
+      const uint32_t high = readBits(bits - 16);
+      return (high << 16) | low;
+    }
+    const uint32_t sym = value_ / (length_ >>= bits);
+    value_ -= length_ * sym;
+    if (length_ < kMinLength) renormalise();
+    return sym;
+  }
+
+  uint8_t readByte() { return static_cast<uint8_t>(readBits(8)); }
+  uint16_t readShort() {
+    const uint32_t sym = value_ / (length_ >>= 16);
+    value_ -= length_ * sym;
+    if (length_ < kMinLength) renormalise();
+    return static_cast<uint16_t>(sym);
+  }
+  uint32_t readInt() {
+    const uint32_t low = readShort();
+    const uint32_t high = readShort();
+    return (high << 16) | low;
+  }
+  uint64_t readInt64() {
+    const uint64_t low = readInt();
+    const uint64_t high = readInt();
+    return (high << 32) | low;
+  }
+
+ private:
+  uint8_t byte() {
+    if (p_ < end_) return *p_++;
+    ++overrun_;
+    return 0;
+  }
+  void renormalise() {
+    do value_ = (value_ << 8) | byte();
+    while ((length_ <<= 8) < kMinLength);
+  }
+
+  const uint8_t* begin_ = nullptr;
+  const uint8_t* p_ = nullptr;
+  const uint8_t* end_ = nullptr;
+  size_t overrun_ = 0;
+  uint32_t value_ = 0, length_ = kMaxLength;
+};
+
+// Corrector coding of integer differences (LASzip's IntegerCompressor, decoding side): a
+// difference to a prediction is coded as the number k of its significant bits (one symbol model
+// per context) and then its position inside [-(2^k - 1), -(2^(k-1))] u [2^(k-1) + 1, 2^k], with
+// one model per k (low bits beyond `bitsHigh` raw).
+class IntegerDecoder {
+ public:
+  explicit IntegerDecoder(uint32_t bits = 16, uint32_t contexts = 1, uint32_t bitsHigh = 8,
+                          uint32_t range = 0)
+      : bitsHigh_(bitsHigh) {
+    if (range) {
+      corrBits_ = 0;
+      corrRange_ = range;
+      while (range) {
+        range >>= 1;
+        ++corrBits_;
+      }
+      if (corrRange_ == (1u << (corrBits_ - 1))) --corrBits_;
+      corrMin_ = -static_cast<int32_t>(corrRange_ / 2);
+    } else if (bits && bits < 32) {
+      corrBits_ = bits;
+      corrRange_ = 1u << bits;
+      corrMin_ = -static_cast<int32_t>(corrRange_ / 2);
+    } else {
+      corrBits_ = 32;
+      corrRange_ = 0;
+      corrMin_ = INT32_MIN;
+    }
+    bits_.reserve(contexts);
+    for (uint32_t i = 0; i < contexts; ++i) bits_.emplace_back(corrBits_ + 1);
+    corrector_.reserve(corrBits_ + 1);
+    corrector_.emplace_back(2);  // placeholder for k = 0, which uses corrector0_
+    for (uint32_t i = 1; i <= corrBits_; ++i) corrector_.emplace_back(1u << std::min(i, bitsHigh_));
+  }
+
+  void reset() {
+    for (auto& m : bits_) m.reset();
+    corrector0_.reset();
+    for (size_t i = 1; i < corrector_.size(); ++i) corrector_[i].reset();
+  }
+
+  // The prediction plus the decoded corrector, wrapped into the corrector range.
+  int32_t decompress(ArithmeticDecoder& dec, int32_t pred, uint32_t context = 0) {
+    uint32_t real = static_cast<uint32_t>(pred) + static_cast<uint32_t>(readCorrector(dec, context));
+    if (corrRange_) {
+      if (static_cast<int32_t>(real) < 0)
+        real += corrRange_;
+      else if (real >= corrRange_)
+        real -= corrRange_;
+    }
+    return static_cast<int32_t>(real);
+  }
+
+  // The number of significant bits of the last corrector (later fields choose contexts by it).
+  uint32_t k() const { return k_; }
+  uint32_t contexts() const { return static_cast<uint32_t>(bits_.size()); }
+
+ private:
+  int32_t readCorrector(ArithmeticDecoder& dec, uint32_t context) {
+    k_ = dec.decodeSymbol(bits_[context]);
+    if (k_ == 0) return static_cast<int32_t>(dec.decodeBit(corrector0_));
+    if (k_ >= 32) return corrMin_;  // the encoder never emits this; keep it defined
+    uint32_t c;
+    if (k_ <= bitsHigh_) {
+      c = dec.decodeSymbol(corrector_[k_]);
+    } else {
+      const uint32_t k1 = k_ - bitsHigh_;
+      c = dec.decodeSymbol(corrector_[k_]);
+      c = (c << k1) | dec.readBits(k1);
+    }
+    if (c >= (1u << (k_ - 1))) return static_cast<int32_t>(c + 1);
+    return static_cast<int32_t>(c - ((1u << k_) - 1));
+  }
+
+  uint32_t bitsHigh_;
+  uint32_t corrBits_ = 0, corrRange_ = 0;
+  int32_t corrMin_ = 0;
+  uint32_t k_ = 0;
+  std::vector<SymbolModel> bits_;
+  BitModel corrector0_;
+  std::vector<SymbolModel> corrector_;
+};
+
+}  // namespace nestlight::laz

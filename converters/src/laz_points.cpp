@@ -1,0 +1,290 @@
+// The chunk table of LAZ files and parallel chunk decoding.
+//
+// Chunked LAZ (LASzip reference implementation, lasreadpoint.cpp; Isenburg, "LASzip: lossless
+// compression of LiDAR data", PE&RS 79(2), 2013): the point data starts with the 64-bit offset of
+// the chunk table (-1: it is in the last 8 bytes of the file; the offset of the point data itself:
+// the compressor was interrupted and wrote none). The table is a version (0), a chunk count and
+// an arithmetic-coded list of each chunk's point count (variable-size chunks only) and byte size,
+// each predicted from the previous chunk's. Chunks are independent, so they decode in parallel.
+//
+// Every number in the table is a claim: chunks must lie inside the point data, their counts must
+// add up to the header's, and a chunk may not ask for more memory than a bounded batch.
+#include "laz_points.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cstring>
+#include <optional>
+
+#include "laz_arithmetic.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::laz {
+
+namespace {
+template <typename T>
+T get(const uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// A chunk is decoded whole, so its claimed point count decides an allocation: refuse claims no
+// writer makes (LASzip's default is 50,000 points; COPC writers stay far below this).
+constexpr uint32_t kMaxChunkPoints = 1u << 26;
+}  // namespace
+
+struct LazPoints::Decoders : tbb::enumerable_thread_specific<std::unique_ptr<ChunkDecoder>> {
+  using tbb::enumerable_thread_specific<std::unique_ptr<ChunkDecoder>>::enumerable_thread_specific;
+};
+
+LazPoints::~LazPoints() = default;
+
+// TEMPORARY until laz_layered.cpp lands.
+__attribute__((weak)) std::unique_ptr<ChunkDecoder> makeLayeredDecoder(const LaszipInfo&) {
+  throw DecodeError(0, "the layered LASzip compressor is not supported yet");
+}
+
+LazPoints::LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t pointStart,
+                     uint64_t dataEnd, uint64_t declaredPoints, bool lenient,
+                     std::function<void(std::string)> warn)
+    : src_(std::move(src)),
+      info_(std::move(info)),
+      recordSize_(info_.recordSize()),
+      pointStart_(pointStart),
+      dataEnd_(dataEnd),
+      lenient_(lenient),
+      warn_(std::move(warn)) {
+  if (info_.compressor == Compressor::Pointwise) {
+    // LASzip 1.0: one stream for every point, no chunk table.
+    if (declaredPoints > kMaxChunkPoints)
+      fail(pointStart_, "the unchunked LAZ stream (LASzip compressor 1) holds " +
+                            std::to_string(declaredPoints) + " points; this reader decodes at most " +
+                            std::to_string(kMaxChunkPoints) +
+                            " without chunks: recompress with a chunked LASzip");
+    tabled_ = true;
+    if (declaredPoints)
+      chunks_.push_back({pointStart_, dataEnd_ - pointStart_, 0, uint32_t(declaredPoints)});
+    points_ = declaredPoints;
+    return;
+  }
+  readChunkTable(declaredPoints);
+}
+
+std::string LazPoints::chunkName(size_t i) const {
+  const Chunk& c = chunks_[i];
+  std::string s = "chunk " + std::to_string(i + 1);
+  if (tabled_) s += " of " + std::to_string(chunks_.size());
+  if (c.points)
+    s += " (points " + std::to_string(c.firstPoint + 1) + "-" +
+         std::to_string(c.firstPoint + c.points) + ")";
+  return s;
+}
+
+void LazPoints::fail(uint64_t at, const std::string& reason) const {
+  throw Error(src_->name(), Error::atByte(at), reason);
+}
+
+void LazPoints::readChunkTable(uint64_t declared) {
+  const uint8_t* d = src_->data();
+  const uint64_t size = src_->size();
+  const uint64_t chunksStart = pointStart_ + 8;
+  if (dataEnd_ < chunksStart)
+    fail(pointStart_, "the point data ends before the 8-byte offset of the LAZ chunk table");
+  int64_t table = get<int64_t>(d + pointStart_);
+  uint64_t tableAt = pointStart_;  // where the offset was read, for messages
+  if (table == -1 && size >= 8) {
+    tableAt = size - 8;
+    table = get<int64_t>(d + tableAt);
+  }
+  const bool fixed = info_.chunkSize != kVariableChunkSize;
+
+  // Without a table, chunks of a fixed size can still be found one after the other, each
+  // starting where the previous one's stream ended; variable-size ones cannot.
+  auto sequential = [&](const std::string& why) {
+    if (!fixed) fail(tableAt, why + "; a file with variable-size chunks cannot be read without it");
+    if (!lenient_ && uint64_t(table) != pointStart_)
+      fail(tableAt, why + " (--lenient reads the chunks one after the other without it)");
+    warn_(src_->name() + ": " + Error::atByte(tableAt) + ": " + why +
+          "; chunks are found one after the other (no parallel decoding)");
+    tabled_ = false;
+    points_ = declared;
+    if (declared)
+      chunks_.push_back(
+          {chunksStart, 0, 0, uint32_t(std::min<uint64_t>(declared, info_.chunkSize))});
+  };
+
+  if (uint64_t(table) == pointStart_) return sequential("the LAZ file has no chunk table (the compressor was interrupted)");
+  if (table < int64_t(chunksStart) || uint64_t(table) > size || size - uint64_t(table) < 8)
+    return sequential("the LAZ chunk table offset " + std::to_string(table) +
+                      (table < 0 || uint64_t(table) < chunksStart
+                           ? " lies before the point data"
+                           : " points past the end of the file (" + std::to_string(size) + " bytes)"));
+  tableStart_ = uint64_t(table);
+  const uint32_t version = get<uint32_t>(d + tableStart_);
+  if (version != 0)
+    fail(tableStart_, "unknown LAZ chunk table version " + std::to_string(version) + " (expected 0)");
+  const uint32_t n = get<uint32_t>(d + tableStart_ + 4);
+  const uint64_t dataBytes = tableStart_ - chunksStart;
+  // Every chunk stores its first point raw, so the table cannot list more chunks than fit.
+  if (n > dataBytes / std::max<size_t>(recordSize_, 1))
+    fail(tableStart_ + 4, "the LAZ chunk table lists " + std::to_string(n) + " chunks, but the " +
+                              std::to_string(dataBytes) + " bytes of point data hold at most " +
+                              std::to_string(dataBytes / std::max<size_t>(recordSize_, 1)));
+  std::vector<uint32_t> counts(n), bytes(n);
+  if (n) {
+    ArithmeticDecoder dec;
+    dec.init(d + tableStart_ + 8, d + size);
+    IntegerDecoder ic(32, 2);
+    for (uint32_t i = 0; i < n; ++i) {
+      if (!fixed)
+        counts[i] = static_cast<uint32_t>(ic.decompress(dec, i ? int32_t(counts[i - 1]) : 0, 0));
+      bytes[i] = static_cast<uint32_t>(ic.decompress(dec, i ? int32_t(bytes[i - 1]) : 0, 1));
+      if (dec.overrun())
+        fail(size, "the LAZ chunk table (from byte " + std::to_string(tableStart_) +
+                       ") ends inside the entry of chunk " + std::to_string(i + 1) + " of " +
+                       std::to_string(n));
+    }
+  }
+  tabled_ = true;
+
+  uint64_t at = chunksStart, first = 0;
+  chunks_.reserve(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    Chunk c;
+    c.offset = at;
+    c.bytes = bytes[i];
+    c.firstPoint = first;
+    c.points = fixed ? uint32_t(std::min<uint64_t>(info_.chunkSize, declared > first ? declared - first : 0))
+                     : counts[i];
+    if (c.points > kMaxChunkPoints)
+      fail(c.offset, "chunk " + std::to_string(i + 1) + " of " + std::to_string(n) + " claims " +
+                         std::to_string(c.points) + " points, more than this reader decodes at once (" +
+                         std::to_string(kMaxChunkPoints) + ")");
+    if (c.bytes > tableStart_ - at) {
+      const std::string what = "chunk " + std::to_string(i + 1) + " of " + std::to_string(n) +
+                                " (" + std::to_string(c.bytes) + " bytes at byte " +
+                                std::to_string(at) + ") runs past the start of the chunk table at byte " +
+                                std::to_string(tableStart_);
+      if (!lenient_) fail(at, what);
+      uint64_t lost = 0;
+      for (uint32_t j = i; j < n; ++j) lost += fixed ? 0 : counts[j];
+      if (fixed) lost = declared > first ? declared - first : 0;
+      warn_(src_->name() + ": " + Error::atByte(at) + ": " + what + "; the " + std::to_string(lost) +
+            " points of it and the following chunks are counted as unreadable");
+      unreadableAtOpen_ = lost;
+      break;
+    }
+    chunks_.push_back(c);
+    at += c.bytes;
+    first += c.points;
+  }
+  points_ = first;
+  const uint64_t listed = points_ + unreadableAtOpen_;
+  if (listed < declared) {
+    const std::string what = "the header declares " + std::to_string(declared) +
+                             " points but the LAZ chunks hold " + std::to_string(listed);
+    if (!lenient_) fail(tableStart_, what + "; the file is truncated or its header is wrong");
+    warn_(src_->name() + ": " + what + "; read the " + std::to_string(points_) + " they hold");
+  } else if (listed > declared) {
+    // Trust the header for how many points there are, as LASzip does.
+    warn_(src_->name() + ": the LAZ chunks hold " + std::to_string(listed) +
+          " points, more than the " + std::to_string(declared) + " the header declares; read " +
+          std::to_string(declared));
+    uint64_t keep = declared;
+    size_t k = 0;
+    for (; k < chunks_.size() && keep; ++k) {
+      chunks_[k].points = uint32_t(std::min<uint64_t>(chunks_[k].points, keep));
+      keep -= chunks_[k].points;
+    }
+    chunks_.resize(k);
+    points_ = std::min(points_, declared);
+    unreadableAtOpen_ = 0;
+  }
+  if (dataEnd_ < tableStart_)
+    fail(tableStart_, "the LAZ chunk table at byte " + std::to_string(tableStart_) +
+                          " lies after the end of the point data (byte " + std::to_string(dataEnd_) +
+                          ")");
+  unreadable_ = unreadableAtOpen_;
+}
+
+uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t>& out) {
+  const uint8_t* d = src_->data();
+  if (!decoders_)
+    decoders_ = std::make_unique<Decoders>([this] {
+      return info_.compressor == Compressor::LayeredChunked ? makeLayeredDecoder(info_)
+                                                            : makePointwiseDecoder(info_);
+    });
+  auto& pool = *decoders_;
+  out.clear();
+  if (which.empty()) return 0;
+
+  if (!tabled_) {
+    // Files without a table: one chunk at a time, each found where the previous one ended.
+    NL_CHECK(which.size() == 1 && which[0] + 1 == chunks_.size());
+    const size_t i = which[0];
+    out.resize(size_t(chunks_[i].points) * recordSize_);
+    size_t used = 0;
+    try {
+      if (chunks_[i].offset >= dataEnd_) throw DecodeError(0, "starts past the end of the point data");
+      used = pool.local()->decode(d + chunks_[i].offset, dataEnd_ - chunks_[i].offset,
+                                  chunks_[i].points, out.data());
+    } catch (const DecodeError& e) {
+      // Without a table nothing after a damaged chunk can be found.
+      const std::string what = chunkName(i) + ": " + e.what();
+      if (!lenient_) fail(chunks_[i].offset + e.offset, what);
+      const uint64_t lost = points_ - chunks_[i].firstPoint;
+      warn_(src_->name() + ": " + Error::atByte(chunks_[i].offset + e.offset) + ": " + what +
+            "; the " + std::to_string(lost) + " points from here on are counted as unreadable");
+      unreadable_ += lost;
+      out.clear();
+      return 0;
+    }
+    chunks_[i].bytes = used;
+    const uint64_t next = chunks_[i].firstPoint + chunks_[i].points;
+    if (next < points_)
+      chunks_.push_back({chunks_[i].offset + used, 0, next,
+                         uint32_t(std::min<uint64_t>(points_ - next, info_.chunkSize))});
+    return chunks_[i].points;
+  }
+
+  const size_t n = which.size();
+  std::vector<uint64_t> at(n + 1, 0);
+  for (size_t k = 0; k < n; ++k) at[k + 1] = at[k] + chunks_[which[k]].points;
+  out.resize(size_t(at.back()) * recordSize_);
+  std::vector<std::optional<DecodeError>> failed(n);
+  tbb::parallel_for(size_t(0), n, size_t(1), [&](size_t k) {
+    const Chunk& c = chunks_[which[k]];
+    try {
+      pool.local()->decode(d + c.offset, c.bytes, c.points,
+                           out.data() + size_t(at[k]) * recordSize_);
+    } catch (const DecodeError& e) {
+      failed[k] = e;
+    }
+  });
+  // Damaged chunks: an error, or (lenient) their points leave the batch and are counted.
+  uint64_t kept = at.back();
+  size_t write = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const Chunk& c = chunks_[which[k]];
+    const size_t bytes = size_t(c.points) * recordSize_;
+    if (failed[k]) {
+      const DecodeError& e = *failed[k];
+      const std::string what = chunkName(which[k]) + ": " + e.what();
+      if (!lenient_) fail(c.offset + e.offset, what);
+      warn_(src_->name() + ": " + Error::atByte(c.offset + e.offset) + ": " + what + "; its " +
+            std::to_string(c.points) + " points are counted as unreadable");
+      unreadable_ += c.points;
+      kept -= c.points;
+      continue;
+    }
+    const size_t from = size_t(at[k]) * recordSize_;
+    if (write != from) std::memmove(out.data() + write, out.data() + from, bytes);
+    write += bytes;
+  }
+  out.resize(write);
+  return kept;
+}
+
+}  // namespace nestlight::laz
