@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/converters/progress.h"
+
 namespace nestlight::viewer {
 struct RenderJob;
 }
@@ -58,5 +60,7 @@ double median(std::vector<double> v);
 std::vector<double> parseNumberList(const std::string& text, const std::string& option);
 std::string cpuName();  // /proc/cpuinfo's model name
 std::string humanCount(double n);
+// --progress: "terminal", "json", "quiet" (or "none"); anything else is Auto.
+ProgressMode parseProgress(const std::string& s);
 
 }  // namespace nestlight::cli

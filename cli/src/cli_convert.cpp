@@ -91,14 +91,12 @@ std::string humanCount(double n) {
   return buf;
 }
 
-namespace {
 ProgressMode parseProgress(const std::string& s) {
   if (s == "terminal") return ProgressMode::Terminal;
   if (s == "json") return ProgressMode::Json;
   if (s == "quiet" || s == "none") return ProgressMode::Quiet;
   return ProgressMode::Auto;
 }
-}  // namespace
 
 void printBuildSummary(const BuildReport& r, const fs::path& out) {
   const Metadata& m = r.metadata;

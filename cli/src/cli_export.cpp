@@ -1,20 +1,108 @@
 // `nestlight export`.
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 
 #include "cli.h"
 #include "nestlight/converters/export.h"
+#include "nestlight/converters/potree_export.h"
+#include "nestlight/octree/error.h"
 
 namespace nestlight::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The format -o implies: its extension, or potree for a directory or a name without extension.
+std::string formatOf(const std::string& out) {
+  const fs::path p(out);
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".las") return "las";
+  if (ext == ".ply") return "ply";
+  std::error_code ec;
+  if (ext.empty() || fs::is_directory(p, ec)) return "potree";
+  throw Error(out, "",
+              "cannot tell the output format from the extension '" + ext +
+                  "': name a .las or .ply file, or a directory, or pass --format las|ply|potree");
+}
+
+}  // namespace
 
 void addExport(CLI::App& app, int& exitCode) {
-  auto* cmd = app.add_subcommand("export", "Write an octree's points (all, or one level) to LAS or PLY");
+  auto* cmd = app.add_subcommand(
+      "export",
+      "Write an octree's points to LAS or PLY (all, or one level), or as a Potree 2.0 dataset");
+  cmd->footer(
+      "Formats: las and ply write one file of points (all nodes, or --level N); potree writes a\n"
+      "directory that the Potree web viewer (1.8 and later) opens: metadata.json, hierarchy.bin "
+      "and\n"
+      "octree.bin, with the octree's own nodes and sampling (no reconversion) and positions exact "
+      "in\n"
+      "its integer grid. Without --format the format follows -o: .las, .ply, else (a directory or "
+      "a\n"
+      "name without extension) potree. An existing non-empty directory is refused unless --force.\n"
+      "Attribute mapping and limits: docs/POTREE_EXPORT.md.");
   auto dir = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   auto level = std::make_shared<int>(-1);
+  auto format = std::make_shared<std::string>();
+  auto force = std::make_shared<bool>(false);
+  auto progress = std::make_shared<std::string>("auto");
+  auto potree = std::make_shared<PotreeExportOptions>();
   cmd->add_option("octree", *dir, "Octree folder")->required();
-  cmd->add_option("-o,--output", *out, "Output file (.las or .ply)")->required();
-  cmd->add_option("--level", *level, "Only the nodes of this level (0 = root)");
+  cmd->add_option("-o,--output", *out, "Output file (.las, .ply) or directory (potree)")
+      ->required();
+  cmd->add_option("--format", *format, "las, ply or potree (default: from -o)")
+      ->check(CLI::IsMember({"las", "ply", "potree"}));
+  cmd->add_option("--level", *level, "las/ply: only the nodes of this level (0 = root)");
+  cmd->add_flag("--force", *force,
+                "potree: write into a non-empty directory (replaces its Potree files)");
+  cmd->add_option("--hierarchy-step", potree->stepSize, "potree: levels per hierarchy chunk")
+      ->check(CLI::Range(1u, 16u))
+      ->capture_default_str();
+  cmd->add_option("--name", potree->name,
+                  "potree: dataset name (default: the octree folder's name)");
+  cmd->add_option("--threads", potree->threads, "potree: nodes decoded in parallel (0: all cores)")
+      ->capture_default_str();
+  cmd->add_option("--progress", *progress, "potree: auto, terminal, json or quiet")
+      ->check(CLI::IsMember({"auto", "terminal", "json", "quiet"}))
+      ->capture_default_str();
   cmd->callback([=, &exitCode]() {
+    const std::string f = format->empty() ? formatOf(*out) : *format;
+    if (f == "potree") {
+      if (*level >= 0)
+        throw Error(
+            "--level does not apply to --format potree: a Potree dataset holds every level");
+      PotreeExportOptions o = *potree;
+      o.overwrite = *force;
+      o.progress = parseProgress(*progress);
+      PotreeExportReport r = exportPotree(*dir, *out, o);
+      std::printf("wrote %llu points in %llu nodes to %s (Potree 2.0: %llu hierarchy chunks, %s)\n",
+                  (unsigned long long)r.points, (unsigned long long)r.nodes, out->c_str(),
+                  (unsigned long long)r.chunks,
+                  humanBytes(double(r.octreeBytes + r.hierarchyBytes)).c_str());
+      for (const auto& a : r.attributes) {
+        std::string names;
+        for (const auto& n : a.potree) names += (names.empty() ? "" : ", ") + n;
+        std::printf("  %-20s -> %s (%s)%s%s\n", a.source.c_str(), names.c_str(), a.type.c_str(),
+                    a.note.empty() ? "" : ": ", a.note.c_str());
+      }
+      if (r.rgbLifted)
+        std::printf("  %llu dark 16-bit colour components (1..255) written as 256\n",
+                    (unsigned long long)r.rgbLifted);
+      exitCode = 0;
+      return;
+    }
+    // las, ply: the writer follows the extension, which must agree with --format.
+    const std::string ext = fs::path(*out).extension().string();
+    std::string lower = ext;
+    std::transform(lower.begin(), lower.end(), lower.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    if (lower != "." + f)
+      throw Error(*out, "", "--format " + f + " needs an output file ending in ." + f);
     std::optional<uint32_t> l;
     if (*level >= 0) l = static_cast<uint32_t>(*level);
     uint64_t n = exportOctree(*dir, *out, l);
