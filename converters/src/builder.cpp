@@ -618,6 +618,13 @@ class Builder {
     }
     stopWriter();
     if (writeError) std::rethrow_exception(writeError);
+    // Points a source declares but could not decode (damaged LAZ chunks read leniently) are
+    // input that was rejected, so that the accounting still covers every declared point.
+    for (auto& src : sources_)
+      if (const uint64_t lost = src.reader->pointsUnreadable()) {
+        accounting_.input += lost;
+        accounting_.rejected[reject::kUnreadable] += lost;
+      }
     std::vector<int32_t>().swap(cellChunk_);
   }
 

@@ -87,6 +87,7 @@ class SymbolModel {
 
  private:
   friend class ArithmeticDecoder;
+  friend class ArithmeticEncoder;
   uint32_t* distribution() { return storage_.data(); }
   uint32_t* counts() { return storage_.data() + symbols_; }
   uint32_t* table() { return storage_.data() + 2 * size_t(symbols_); }
@@ -266,6 +267,102 @@ class ArithmeticDecoder {
   uint32_t value_ = 0, length_ = kMaxLength;
 };
 
+// The matching encoder (LASzip's ArithmeticEncoder): writes chunk tables and lets tests craft
+// streams and check that decoding inverts encoding for every model path.
+class ArithmeticEncoder {
+ public:
+  explicit ArithmeticEncoder(std::vector<uint8_t>& out) : out_(out), start_(out.size()) {}
+
+  void encodeBit(BitModel& m, uint32_t bit) {
+    const uint32_t x = m.bit0Prob * (length_ >> kBitLengthShift);
+    if (bit == 0) {
+      length_ = x;
+      ++m.bit0Count;
+    } else {
+      add(x);
+      length_ -= x;
+    }
+    if (length_ < kMinLength) renormalise();
+    if (--m.bitsUntilUpdate == 0) m.update();
+  }
+
+  void encodeSymbol(SymbolModel& m, uint32_t sym) {
+    const uint32_t* dist = m.distribution();
+    if (sym == m.last_) {
+      const uint32_t x = dist[sym] * (length_ >> kSymbolLengthShift);
+      add(x);
+      length_ -= x;
+    } else {
+      length_ >>= kSymbolLengthShift;
+      const uint32_t x = dist[sym] * length_;
+      add(x);
+      length_ = dist[sym + 1] * length_ - x;
+    }
+    if (length_ < kMinLength) renormalise();
+    ++m.counts()[sym];
+    if (--m.symbolsUntilUpdate_ == 0) m.update();
+  }
+
+  void writeBits(uint32_t bits, uint32_t value) {
+    if (bits > 19) {
+      writeShort(static_cast<uint16_t>(value));
+      value >>= 16;
+      bits -= 16;
+    }
+    add(value * (length_ >>= bits));
+    if (length_ < kMinLength) renormalise();
+  }
+  void writeShort(uint16_t v) {
+    add(uint32_t(v) * (length_ >>= 16));
+    if (length_ < kMinLength) renormalise();
+  }
+  void writeInt(uint32_t v) {
+    writeShort(static_cast<uint16_t>(v));
+    writeShort(static_cast<uint16_t>(v >> 16));
+  }
+
+  // Flushes the interval and pads so that the decoder never reads past the stream.
+  void done() {
+    const uint32_t before = base_;
+    bool anotherByte = true;
+    if (length_ > 2 * kMinLength) {
+      base_ += kMinLength;
+      length_ = kMinLength >> 1;
+    } else {
+      base_ += kMinLength >> 1;
+      length_ = kMinLength >> 9;
+      anotherByte = false;
+    }
+    if (before > base_) carry();
+    renormalise();
+    out_.push_back(0);
+    out_.push_back(0);
+    if (anotherByte) out_.push_back(0);
+  }
+
+ private:
+  void add(uint32_t x) {
+    const uint32_t before = base_;
+    base_ += x;
+    if (before > base_) carry();
+  }
+  void carry() {
+    size_t i = out_.size();
+    while (i > start_ && out_[i - 1] == 0xFF) out_[--i] = 0;
+    if (i > start_) ++out_[i - 1];
+  }
+  void renormalise() {
+    do {
+      out_.push_back(static_cast<uint8_t>(base_ >> 24));
+      base_ <<= 8;
+    } while ((length_ <<= 8) < kMinLength);
+  }
+
+  std::vector<uint8_t>& out_;
+  size_t start_;
+  uint32_t base_ = 0, length_ = kMaxLength;
+};
+
 // Corrector coding of integer differences (LASzip's IntegerCompressor, decoding side): a
 // difference to a prediction is coded as the number k of its significant bits (one symbol model
 // per context) and then its position inside [-(2^k - 1), -(2^(k-1))] u [2^(k-1) + 1, 2^k], with
@@ -318,6 +415,19 @@ class IntegerDecoder {
     return static_cast<int32_t>(real);
   }
 
+  // The encoding side (the reference's compress): codes real - pred, folded into the range.
+  void compress(ArithmeticEncoder& enc, int32_t pred, int32_t real, uint32_t context = 0) {
+    uint32_t corr = static_cast<uint32_t>(real) - static_cast<uint32_t>(pred);
+    if (corrRange_) {
+      const int32_t corrMax = corrMin_ + static_cast<int32_t>(corrRange_ - 1);
+      if (static_cast<int32_t>(corr) < corrMin_)
+        corr += corrRange_;
+      else if (static_cast<int32_t>(corr) > corrMax)
+        corr -= corrRange_;
+    }
+    writeCorrector(enc, static_cast<int32_t>(corr), context);
+  }
+
   // The number of significant bits of the last corrector (later fields choose contexts by it).
   uint32_t k() const { return k_; }
   uint32_t contexts() const { return static_cast<uint32_t>(bits_.size()); }
@@ -337,6 +447,30 @@ class IntegerDecoder {
     }
     if (c >= (1u << (k_ - 1))) return static_cast<int32_t>(c + 1);
     return static_cast<int32_t>(c - ((1u << k_) - 1));
+  }
+
+  void writeCorrector(ArithmeticEncoder& enc, int32_t c, uint32_t context) {
+    // k: the smallest with c in [-(2^k - 1), 2^k]
+    uint32_t c1 = c <= 0 ? 0u - static_cast<uint32_t>(c) : static_cast<uint32_t>(c) - 1;
+    k_ = 0;
+    while (c1) {
+      c1 >>= 1;
+      ++k_;
+    }
+    enc.encodeSymbol(bits_[context], k_);
+    if (k_ == 0) {
+      enc.encodeBit(corrector0_, static_cast<uint32_t>(c));
+      return;
+    }
+    if (k_ >= 32) return;  // INT32_MIN (see readCorrector)
+    uint32_t v = c < 0 ? static_cast<uint32_t>(c) + ((1u << k_) - 1) : static_cast<uint32_t>(c) - 1;
+    if (k_ <= bitsHigh_) {
+      enc.encodeSymbol(corrector_[k_], v);
+    } else {
+      const uint32_t k1 = k_ - bitsHigh_;
+      enc.encodeSymbol(corrector_[k_], v >> k1);
+      enc.writeBits(k1, v & ((1u << k1) - 1));
+    }
   }
 
   uint32_t bitsHigh_;

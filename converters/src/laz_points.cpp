@@ -104,8 +104,7 @@ void LazPoints::readChunkTable(uint64_t declared) {
   // starting where the previous one's stream ended; variable-size ones cannot.
   auto sequential = [&](const std::string& why) {
     if (!fixed) fail(tableAt, why + "; a file with variable-size chunks cannot be read without it");
-    if (!lenient_ && uint64_t(table) != pointStart_)
-      fail(tableAt, why + " (--lenient reads the chunks one after the other without it)");
+    // Not an error by itself (LASzip reads such files too): a damaged chunk on the way is.
     warn_(src_->name() + ": " + Error::atByte(tableAt) + ": " + why +
           "; chunks are found one after the other (no parallel decoding)");
     tabled_ = false;
@@ -184,7 +183,8 @@ void LazPoints::readChunkTable(uint64_t declared) {
   const uint64_t listed = points_ + unreadableAtOpen_;
   if (listed < declared) {
     const std::string what = "the header declares " + std::to_string(declared) +
-                             " points but the LAZ chunks hold " + std::to_string(listed);
+                             " points but the " + std::to_string(n) + " LAZ chunks hold " +
+                             (fixed ? "at most " : "") + std::to_string(listed);
     if (!lenient_) fail(tableStart_, what + "; the file is truncated or its header is wrong");
     warn_(src_->name() + ": " + what + "; read the " + std::to_string(points_) + " they hold");
   } else if (listed > declared) {

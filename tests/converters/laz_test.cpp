@@ -110,3 +110,283 @@ TEST(Laz, StreamingEqualsBulkAndSerialEqualsParallel) {
 }
 
 }  // namespace
+
+// ---- the coder --------------------------------------------------------------------------------
+
+#include "laz_arithmetic.h"
+
+namespace {
+
+// Decoding inverts encoding on every path of the models: bits, symbols of small and table-driven
+// models across many updates, raw bits of every width, and integers of every magnitude through
+// the corrector models (including k above bitsHigh, where low bits go raw).
+TEST(LazCoder, DecodingInvertsEncodingOnEveryModelPath) {
+  std::vector<uint8_t> stream;
+  uint64_t state = 12345;
+  auto next = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<uint32_t>(state >> 33);
+  };
+  struct Op {
+    int kind;
+    uint32_t a, b;
+  };
+  std::vector<Op> ops;
+  for (int i = 0; i < 20000; ++i) {
+    const int kind = int(next() % 5);
+    uint32_t a = next(), b = 0;
+    switch (kind) {
+      case 0: a &= 1; break;                                          // bit, skewed below
+      case 1: a = (next() & 7) ? a % 3 : a % 2048; break;             // symbol of 2048
+      case 2: b = 1 + next() % 32; a = b == 32 ? a : a & ((1u << b) - 1); break;  // raw bits
+      case 3: a = uint32_t(int32_t(a) >> (next() % 31)); b = next() % 4; break;   // integer
+      case 4: a %= 256; break;                                        // symbol of 256
+    }
+    if (kind == 0 && (next() % 10)) a = 0;
+    ops.push_back({kind, a, b});
+  }
+  {
+    laz::ArithmeticEncoder enc(stream);
+    laz::BitModel bit;
+    laz::SymbolModel big(2048), small(256);
+    laz::IntegerDecoder ic(32, 4);
+    int32_t pred = 0;
+    for (const Op& op : ops) {
+      switch (op.kind) {
+        case 0: enc.encodeBit(bit, op.a); break;
+        case 1: enc.encodeSymbol(big, op.a); break;
+        case 2: enc.writeBits(op.b, op.a); break;
+        case 3: ic.compress(enc, pred, int32_t(op.a), op.b); pred = int32_t(op.a) / 2; break;
+        case 4: enc.encodeSymbol(small, op.a); break;
+      }
+    }
+    enc.done();
+  }
+  laz::ArithmeticDecoder dec;
+  dec.init(stream.data(), stream.data() + stream.size());
+  laz::BitModel bit;
+  laz::SymbolModel big(2048), small(256);
+  laz::IntegerDecoder ic(32, 4);
+  int32_t pred = 0;
+  size_t wrong = 0;
+  for (const Op& op : ops) {
+    uint32_t got = 0;
+    switch (op.kind) {
+      case 0: got = dec.decodeBit(bit); break;
+      case 1: got = dec.decodeSymbol(big); break;
+      case 2: got = dec.readBits(op.b); break;
+      case 3: got = uint32_t(ic.decompress(dec, pred, op.b)); pred = int32_t(got) / 2; break;
+      case 4: got = dec.decodeSymbol(small); break;
+    }
+    wrong += got != op.a;
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_EQ(dec.overrun(), 0u) << "the encoder's padding keeps the decoder inside the stream";
+  EXPECT_LE(stream.size() - dec.consumed(), 4u);
+}
+
+// Garbage decodes to garbage, in bounds and in finite time, and running dry is reported.
+TEST(LazCoder, GarbageStaysInBoundsAndRunningDryIsCounted) {
+  std::vector<uint8_t> junk(64);
+  for (size_t i = 0; i < junk.size(); ++i) junk[i] = uint8_t(i * 131 + 7);
+  laz::ArithmeticDecoder dec;
+  dec.init(junk.data(), junk.data() + junk.size());
+  laz::SymbolModel m(300);
+  laz::IntegerDecoder ic(32, 2);
+  for (int i = 0; i < 2000; ++i) {
+    EXPECT_LT(dec.decodeSymbol(m), 300u);
+    (void)ic.decompress(dec, i, i & 1);
+  }
+  EXPECT_GT(dec.overrun(), 0u);
+  EXPECT_EQ(dec.consumed(), junk.size());
+}
+
+// ---- damaged files ------------------------------------------------------------------------------
+
+template <typename T>
+T load(const std::string& s, size_t at) {
+  T v;
+  std::memcpy(&v, s.data() + at, sizeof v);
+  return v;
+}
+template <typename T>
+void store(std::string& s, size_t at, T v) {
+  std::memcpy(s.data() + at, &v, sizeof v);
+}
+
+// A LASzip 2 file (fixed chunk size) and its chunk table, decoded here from the format's rules.
+struct LazLayout {
+  uint64_t pointStart = 0, table = 0;
+  std::vector<uint32_t> bytes;  // per chunk
+  uint64_t chunkStart(size_t i) const {
+    uint64_t at = pointStart + 8;
+    for (size_t k = 0; k < i; ++k) at += bytes[k];
+    return at;
+  }
+};
+
+LazLayout layoutOf(const std::string& f) {
+  LazLayout l;
+  l.pointStart = load<uint32_t>(f, 96);
+  l.table = uint64_t(load<int64_t>(f, l.pointStart));
+  const uint32_t n = load<uint32_t>(f, l.table + 4);
+  laz::ArithmeticDecoder dec;
+  const auto* d = reinterpret_cast<const uint8_t*>(f.data());
+  dec.init(d + l.table + 8, d + f.size());
+  laz::IntegerDecoder ic(32, 2);
+  for (uint32_t i = 0; i < n; ++i)
+    l.bytes.push_back(uint32_t(ic.decompress(dec, i ? int32_t(l.bytes.back()) : 0, 1)));
+  return l;
+}
+
+// The file with its chunk table replaced by one that lists `bytes`.
+std::string withTable(std::string f, const LazLayout& l, const std::vector<uint32_t>& bytes) {
+  f.resize(l.table);
+  std::vector<uint8_t> t(8);
+  store<uint32_t>(f, 0, load<uint32_t>(f, 0));  // no-op: keeps the helpers symmetric
+  const uint32_t n = uint32_t(bytes.size());
+  std::memcpy(t.data() + 4, &n, 4);
+  {
+    laz::ArithmeticEncoder enc(t);
+    laz::IntegerDecoder ic(32, 2);
+    for (uint32_t i = 0; i < n; ++i) ic.compress(enc, i ? int32_t(bytes[i - 1]) : 0, int32_t(bytes[i]), 1);
+    enc.done();
+  }
+  f.append(reinterpret_cast<const char*>(t.data()), t.size());
+  return f;
+}
+
+std::string autzenLaz() { return test::readFile(laz("autzen_trim.laz")); }
+
+Error errorReading(const std::string& bytes, bool lenient = false) {
+  return test::errorOf([&] {
+    ReadOptions o;
+    o.lenient = lenient;
+    auto r = openLas(memorySource("damaged.laz", std::vector<uint8_t>(bytes.begin(), bytes.end())), o);
+    test::readAll(*r, 100000);
+  });
+}
+
+struct LenientRead {
+  uint64_t points = 0, unreadable = 0;
+  std::vector<std::string> warnings;
+};
+LenientRead readLeniently(const std::string& bytes) {
+  ReadOptions o;
+  o.lenient = true;
+  auto r = openLas(memorySource("damaged.laz", std::vector<uint8_t>(bytes.begin(), bytes.end())), o);
+  LenientRead out;
+  out.points = test::readAll(*r, 100000).size();
+  out.unreadable = r->pointsUnreadable();
+  out.warnings = r->warnings();
+  return out;
+}
+
+TEST(LazDamage, TheTestFileHasThreeChunksAndReencodingItsTableChangesNothing) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  const std::string f = autzenLaz();
+  const LazLayout l = layoutOf(f);
+  ASSERT_EQ(l.bytes.size(), 3u);
+  EXPECT_EQ(l.chunkStart(3), l.table);
+  // Our encoder writes the table the reference wrote, bit for bit.
+  EXPECT_EQ(withTable(f, l, l.bytes), f);
+}
+
+TEST(LazDamage, TruncatedFileNamesTheChunkAndOffset) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  const std::string f = autzenLaz();
+  const LazLayout l = layoutOf(f);
+  const uint64_t cut = l.chunkStart(1) + 1000;
+  const std::string t = f.substr(0, cut);
+  const Error e = errorReading(t);
+  EXPECT_EQ(e.file(), "damaged.laz");
+  EXPECT_NE(e.reason().find("chunk 2 (points 50001-100000)"), std::string::npos) << e.what();
+  EXPECT_NE(e.reason().find("truncated"), std::string::npos) << e.what();
+  EXPECT_EQ(e.position(), Error::atByte(cut)) << e.what();
+  // Lenient: the intact first chunk is kept, the rest counted, nothing twice.
+  const LenientRead r = readLeniently(t);
+  EXPECT_EQ(r.points, 50000u);
+  EXPECT_EQ(r.unreadable, 60000u);
+  EXPECT_TRUE(test::anyContains(r.warnings, "chunk 2")) << r.warnings.size();
+}
+
+TEST(LazDamage, ChunkTablePointingPastTheEndIsAnError) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  const std::string f = autzenLaz();
+  const LazLayout l = layoutOf(f);
+  std::vector<uint32_t> b = l.bytes;
+  b[1] += 1u << 20;  // chunk 2 claims a megabyte more than the file holds
+  const std::string bad = withTable(f, l, b);
+  const Error e = errorReading(bad);
+  EXPECT_NE(e.reason().find("chunk 2 of 3"), std::string::npos) << e.what();
+  EXPECT_NE(e.reason().find("runs past the start of the chunk table"), std::string::npos) << e.what();
+  EXPECT_EQ(e.position(), Error::atByte(l.chunkStart(1)));
+  const LenientRead r = readLeniently(bad);
+  EXPECT_EQ(r.points, 50000u);
+  EXPECT_EQ(r.unreadable, 60000u);
+  // And the offset of the table itself pointing past the end: chunks are found one by one.
+  std::string far = f;
+  store<int64_t>(far, l.pointStart, int64_t(f.size() + 100));
+  const LenientRead g = readLeniently(far);
+  EXPECT_EQ(g.points, 110000u);
+  EXPECT_TRUE(test::anyContains(g.warnings, "points past the end of the file"));
+}
+
+TEST(LazDamage, ZeroLengthChunkNamesTheChunk) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  const std::string f = autzenLaz();
+  const LazLayout l = layoutOf(f);
+  const std::string bad = withTable(f, l, {l.bytes[0], 0, l.bytes[1] + l.bytes[2]});
+  const Error e = errorReading(bad);
+  EXPECT_NE(e.reason().find("chunk 2 of 3 (points 50001-100000)"), std::string::npos) << e.what();
+  EXPECT_NE(e.reason().find("0 bytes"), std::string::npos) << e.what();
+  EXPECT_EQ(e.position(), Error::atByte(l.chunkStart(1)));
+  // Lenient keeps chunk 1; chunk 3 now starts at chunk 2's data and holds 10,000 points of it,
+  // which decode (to chunk 2's first points): the table is the authority on where chunks are.
+  const LenientRead r = readLeniently(bad);
+  EXPECT_EQ(r.unreadable, 50000u);
+  EXPECT_EQ(r.points, 60000u);
+}
+
+TEST(LazDamage, PointCountLargerThanTheDataIsAnError) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  std::string f = autzenLaz();
+  store<uint32_t>(f, 107, 110000 + 50001);  // one more chunk's worth than the table lists
+  const Error e = errorReading(f);
+  EXPECT_NE(e.reason().find("header declares 160001 points but the 3 LAZ chunks hold at most 150000"),
+            std::string::npos) << e.what();
+  // One point more than the last chunk holds: that chunk's stream runs dry.
+  std::string g = autzenLaz();
+  store<uint32_t>(g, 107, 110001);
+  const Error e2 = errorReading(g);
+  EXPECT_NE(e2.reason().find("chunk 3 of 3 (points 100001-110001)"), std::string::npos) << e2.what();
+}
+
+TEST(LazDamage, UnknownCompressorOrItemNamesTheRecord) {
+  NL_REQUIRE_SHARED("laz/point10.las.laz");
+  const std::string f = test::readFile(laz("point10.las.laz"));
+  // Find the LASzip VLR.
+  const uint16_t headerSize = load<uint16_t>(f, 94);
+  size_t p = headerSize, vlr = 0;
+  for (uint32_t i = 0; i < load<uint32_t>(f, 100); ++i) {
+    if (load<uint16_t>(f, p + 18) == 22204) vlr = p;
+    p += 54 + load<uint16_t>(f, p + 20);
+  }
+  ASSERT_NE(vlr, 0u);
+  std::string c = f;
+  store<uint16_t>(c, vlr + 54, 9);
+  const Error e = errorReading(c);
+  EXPECT_NE(e.reason().find("unknown compressor 9"), std::string::npos) << e.what();
+  EXPECT_EQ(e.position(), Error::atByte(vlr + 54));
+  std::string it = f;
+  store<uint16_t>(it, vlr + 54 + 34, 99);
+  EXPECT_NE(errorReading(it).reason().find("item 1 has the unknown type 99"), std::string::npos);
+  std::string v = f;
+  store<uint16_t>(v, vlr + 54 + 34 + 4, 7);
+  EXPECT_NE(errorReading(v).reason().find("version 7 is not supported"), std::string::npos);
+  std::string none = f;
+  std::memcpy(none.data() + vlr + 2, "not laszip", 11);
+  EXPECT_NE(errorReading(none).reason().find("there is no LASzip record"), std::string::npos);
+}
+
+}  // namespace

@@ -27,5 +27,18 @@ case "$name" in
   fuzz_scene)
     printf '{"version": 1, "octrees": ["a.octree", {"path": "b", "max_level": 3, "memory_budget": "1GiB"}],\n "materials": {"m": {"type": "principled", "base_color": [1, 0.5, 0.2], "clearcoat": 1}},\n "meshes": [{"path": "x.obj", "material": "m", "transform": {"translate": [1, 2, 3], "rotate": [0, 0, 90], "scale": [1, 2, 3]}, "surfels": {"method": "poisson", "count": 10}}],\n "lights": [{"type": "spot", "position": [0, 0, 1], "direction": [0, 0, -1], "intensity": 2, "inner_angle": 5, "outer_angle": 9}],\n "environment": {"constant": [1, 1, 1]}, "camera": {"eye": [0, -1, 0], "target": [0, 0, 0]},\n "camera_path": {"fps": 2, "keyframes": [{"time": 0, "eye": [0, 1, 0], "target": [0, 0, 0]}]},\n "gi": {"mode": "albedo", "max_bounces": 2}, "output": {"exr": "o.exr"}}\n' > "$dir/a.json"
     printf '{"meshes": [{"path": "m.ply", "transform": {"matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}}]}' > "$dir/b.json" ;;
+  fuzz_laz)
+    # Whole files (a leading even byte): the small LAZ files of ../shared/data when present
+    # (copied at run time, never committed), else a generated LAS file, which exercises the
+    # header paths; and bare chunks (a leading odd byte): the chunk bytes of those files.
+    shared=../shared/data/laz
+    n=0
+    for f in "$shared"/point10.las.laz "$shared"/point-color-time.las.laz "$shared"/extrabytes.laz "$shared"/1_4_w_evlr.laz "$shared"/simple.copc.laz; do
+      [ -f "$f" ] || continue
+      n=$((n + 1)); { printf '\x00'; cat "$f"; } > "$dir/file$n"
+    done
+    if [ "$n" = 0 ]; then "$bin" generate -n 50 -o "$dir/a.las" >/dev/null; { printf '\x00'; cat "$dir/a.las"; } > "$dir/file0"; rm "$dir/a.las"; fi
+    # pf 3 with a bare chunk of 5 points: the first record raw, then arbitrary stream bytes.
+    head -c 200 /dev/urandom > "$dir/rnd"; { printf '\x01\x06\x04'; cat "$dir/rnd"; } > "$dir/chunk3"; rm "$dir/rnd" ;;
   *) : ;;
 esac

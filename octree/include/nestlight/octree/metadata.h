@@ -44,6 +44,7 @@ struct Accounting {
 namespace reject {
 inline constexpr const char* kNonFinite = "non_finite_coordinate";
 inline constexpr const char* kOutsideBounds = "outside_declared_bounds";
+inline constexpr const char* kUnreadable = "unreadable_source_data";  // damaged compressed chunks
 }  // namespace reject
 
 struct SourceRecord {

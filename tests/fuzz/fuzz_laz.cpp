@@ -1,0 +1,88 @@
+// libFuzzer target for the LAZ decoder, two ways in:
+// - a whole file (first byte even): the LAS reader on LASzip-compressed data, strict and lenient,
+//   streamed and sampled, then the raw records, so that the VLR, the chunk table and every chunk
+//   decoder see damaged input;
+// - a bare chunk (first byte odd): the next byte picks a point format and item versions, the rest
+//   is one chunk handed straight to the chunk decoder, which reaches the item decoders' states
+//   faster than mutations through a file can.
+// Either reads, or throws nestlight::Error / laz::DecodeError; it never reads out of bounds,
+// hangs, aborts or leaks.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "fuzz_common.h"
+#include "laz_format.h"
+#include "nestlight/converters/reader.h"
+#include "nestlight/octree/error.h"
+
+namespace {
+
+void wholeFile(const uint8_t* data, size_t size) {
+  for (bool lenient : {false, true}) {
+    try {
+      nestlight::ReadOptions options;
+      options.lenient = lenient;
+      auto reader = nestlight::openLas(nestlight::borrowedSource("fuzz.laz", data, size), options);
+      (void)reader->header().details.dump();
+      nestlight::fuzz::readEverything(*reader);
+      nestlight::PointBatch batch;
+      reader->rewind();
+      while (reader->readSampled(batch, 1000, 8)) {
+      }
+      size_t records = 0;
+      nestlight::readLasRecords(nestlight::borrowedSource("fuzz.laz", data, size), options,
+                                [&](const uint8_t*, size_t n, size_t) { records += n; });
+    } catch (const nestlight::Error&) {
+    }
+  }
+}
+
+void bareChunk(const uint8_t* data, size_t size) {
+  using namespace nestlight::laz;
+  if (size < 2) return;
+  const uint8_t pick = data[0];
+  LaszipInfo info;
+  const int pf = (pick >> 1) % 11;
+  const uint16_t extra = (pick >> 5) & 3;  // 0-3 extra bytes
+  const bool layered = pf >= 6;
+  info.compressor = layered ? Compressor::LayeredChunked : Compressor::PointwiseChunked;
+  info.chunkSize = 50000;
+  static const std::vector<ItemType> kItems[11] = {
+      {ItemType::Point10},
+      {ItemType::Point10, ItemType::GpsTime11},
+      {ItemType::Point10, ItemType::Rgb12},
+      {ItemType::Point10, ItemType::GpsTime11, ItemType::Rgb12},
+      {ItemType::Point10, ItemType::GpsTime11},
+      {ItemType::Point10, ItemType::GpsTime11, ItemType::Rgb12},
+      {ItemType::Point14},
+      {ItemType::Point14, ItemType::Rgb14},
+      {ItemType::Point14, ItemType::RgbNir14},
+      {ItemType::Point14},
+      {ItemType::Point14, ItemType::RgbNir14}};
+  static const uint16_t kSizes[15] = {0, 0, 0, 0, 0, 0, 20, 8, 6, 29, 30, 6, 8, 29, 0};
+  for (ItemType t : kItems[pf])
+    info.items.push_back({t, kSizes[static_cast<int>(t)], uint16_t(layered ? 3 : 2)});
+  if (extra) info.items.push_back({layered ? ItemType::Byte14 : ItemType::Byte, extra, uint16_t(layered ? 3 : 2)});
+  const uint32_t count = 1 + data[1] % 64;
+  std::vector<uint8_t> out(size_t(count) * info.recordSize());
+  try {
+    auto dec = layered ? makeLayeredDecoder(info) : makePointwiseDecoder(info);
+    // Twice: a decoder object is reused for many chunks and must reset all its state.
+    dec->decode(data + 2, size - 2, count, out.data());
+    dec->decode(data + 2, size - 2, count, out.data());
+  } catch (const DecodeError& e) {
+    if (e.offset > size) __builtin_trap();  // offsets lie inside the chunk or at its end
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  if (size == 0) return 0;
+  if (data[0] & 1)
+    bareChunk(data + 1, size - 1);
+  else
+    wholeFile(data + 1, size - 1);
+  return 0;
+}
