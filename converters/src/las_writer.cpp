@@ -17,6 +17,7 @@
 #include <string>
 
 #include "las_format.h"
+#include "laz_writer.h"
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/octree/error.h"
 
@@ -238,8 +239,8 @@ void putString(uint8_t* dst, size_t n, const std::string& s) {
 
 class LasWriter final : public PointWriter {
  public:
-  LasWriter(std::string path, const SourceHeader& header)
-      : path_(std::move(path)), tmp_(path_ + ".tmp"), layout_(header.layout) {
+  LasWriter(std::string path, const SourceHeader& header, bool compress)
+      : path_(std::move(path)), tmp_(path_ + ".tmp"), layout_(header.layout), compress_(compress) {
     for (int a = 0; a < 3; ++a) {
       scale_[a] = header.scale ? (*header.scale)[a] : 0.001;
       if (!(std::isfinite(scale_[a]) && scale_[a] > 0))
@@ -254,7 +255,7 @@ class LasWriter final : public PointWriter {
       const auto& d = header.details;
       if (d.contains("global_encoding") && d["global_encoding"].is_number_unsigned())
         gpsStandard_ = (d["global_encoding"].get<uint64_t>() & las::kEncodingGpsStandard) != 0;
-      if (header.format == "las" && d.contains("file_source_id") &&
+      if ((header.format == "las" || header.format == "laz") && d.contains("file_source_id") &&
           d["file_source_id"].is_number_unsigned())
         fileSourceId_ = static_cast<uint16_t>(d["file_source_id"].get<uint64_t>());
     }
@@ -265,6 +266,10 @@ class LasWriter final : public PointWriter {
     }
 
     const bool needs14 = hasKnown(kFScannerChannel) || hasKnown(kFScanAngle) || hasKnown(kFNir);
+    if (compress_ && needs14)
+      throw Error(path_, "",
+                  "LAZ output covers LAS point formats 0-3 (LASzip 2); these points carry fields "
+                  "only formats 6-8 hold (scanner channel, 16-bit scan angle or NIR): write .las");
     plan_ = makePlan(layout_, needs14 ? modernFormat() : legacyFormat(), needs14 ? 4 : 2);
 
     file_ = std::fopen(tmp_.c_str(), "w+b");
@@ -335,6 +340,21 @@ class LasWriter final : public PointWriter {
       file_ = nullptr;
       if (std::fclose(f) != 0) ioError(tmp_, "close");
       std::error_code ec;
+      if (compress_) {
+        // The records are final only now (a late value may have changed the point format), so
+        // LAZ is compressed from the finished LAS file.
+        const std::string z = path_ + ".laztmp";
+        try {
+          laz::compressLas(tmp_, z, path_);
+        } catch (...) {
+          std::filesystem::remove(z, ec);
+          throw;
+        }
+        std::filesystem::remove(tmp_, ec);
+        std::filesystem::rename(z, path_, ec);
+        if (ec) throw Error(path_, "", "cannot rename " + z + ": " + ec.message());
+        return;
+      }
       std::filesystem::rename(tmp_, path_, ec);
       if (ec) throw Error(path_, "", "cannot rename " + tmp_ + ": " + ec.message());
     } catch (...) {
@@ -557,6 +577,7 @@ class LasWriter final : public PointWriter {
 
   std::string path_, tmp_;
   PointLayout layout_;
+  bool compress_ = false;
   Plan plan_;
   std::FILE* file_ = nullptr;
   Vec3d scale_, offset_;
@@ -575,7 +596,11 @@ class LasWriter final : public PointWriter {
 }  // namespace
 
 std::unique_ptr<PointWriter> createLasWriter(const std::string& path, const SourceHeader& header) {
-  return std::make_unique<LasWriter>(path, header);
+  return std::make_unique<LasWriter>(path, header, false);
+}
+
+std::unique_ptr<PointWriter> createLazWriter(const std::string& path, const SourceHeader& header) {
+  return std::make_unique<LasWriter>(path, header, true);
 }
 
 }  // namespace nestlight

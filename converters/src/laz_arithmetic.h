@@ -392,15 +392,25 @@ class IntegerDecoder {
     }
     bits_.reserve(contexts);
     for (uint32_t i = 0; i < contexts; ++i) bits_.emplace_back(corrBits_ + 1);
+    bitsStamp_.assign(contexts, 0);
+    correctorStamp_.assign(corrBits_ + 1, 0);
     corrector_.reserve(corrBits_ + 1);
     corrector_.emplace_back(2);  // placeholder for k = 0, which uses corrector0_
     for (uint32_t i = 1; i <= corrBits_; ++i) corrector_.emplace_back(1u << std::min(i, bitsHigh_));
   }
 
+  // Resets every model. Lazily: a model is reset when first used after this, which decodes the
+  // same and saves most of the per-chunk cost for small chunks (COPC nodes), whose points touch
+  // few of the 33 corrector models.
   void reset() {
-    for (auto& m : bits_) m.reset();
+    if (++generation_ == 0) {  // wrapped after 2^32 resets: reset for real, stamp everything
+      for (auto& m : bits_) m.reset();
+      for (size_t i = 1; i < corrector_.size(); ++i) corrector_[i].reset();
+      generation_ = 1;
+      std::fill(bitsStamp_.begin(), bitsStamp_.end(), generation_);
+      std::fill(correctorStamp_.begin(), correctorStamp_.end(), generation_);
+    }
     corrector0_.reset();
-    for (size_t i = 1; i < corrector_.size(); ++i) corrector_[i].reset();
   }
 
   // The prediction plus the decoded corrector, wrapped into the corrector range.
@@ -433,16 +443,31 @@ class IntegerDecoder {
   uint32_t contexts() const { return static_cast<uint32_t>(bits_.size()); }
 
  private:
+  SymbolModel& bitsModel(uint32_t context) {
+    if (bitsStamp_[context] != generation_) {
+      bits_[context].reset();
+      bitsStamp_[context] = generation_;
+    }
+    return bits_[context];
+  }
+  SymbolModel& correctorModel(uint32_t k) {
+    if (correctorStamp_[k] != generation_) {
+      corrector_[k].reset();
+      correctorStamp_[k] = generation_;
+    }
+    return corrector_[k];
+  }
+
   int32_t readCorrector(ArithmeticDecoder& dec, uint32_t context) {
-    k_ = dec.decodeSymbol(bits_[context]);
+    k_ = dec.decodeSymbol(bitsModel(context));
     if (k_ == 0) return static_cast<int32_t>(dec.decodeBit(corrector0_));
     if (k_ >= 32) return corrMin_;  // the encoder never emits this; keep it defined
     uint32_t c;
     if (k_ <= bitsHigh_) {
-      c = dec.decodeSymbol(corrector_[k_]);
+      c = dec.decodeSymbol(correctorModel(k_));
     } else {
       const uint32_t k1 = k_ - bitsHigh_;
-      c = dec.decodeSymbol(corrector_[k_]);
+      c = dec.decodeSymbol(correctorModel(k_));
       c = (c << k1) | dec.readBits(k1);
     }
     if (c >= (1u << (k_ - 1))) return static_cast<int32_t>(c + 1);
@@ -457,7 +482,7 @@ class IntegerDecoder {
       c1 >>= 1;
       ++k_;
     }
-    enc.encodeSymbol(bits_[context], k_);
+    enc.encodeSymbol(bitsModel(context), k_);
     if (k_ == 0) {
       enc.encodeBit(corrector0_, static_cast<uint32_t>(c));
       return;
@@ -465,10 +490,10 @@ class IntegerDecoder {
     if (k_ >= 32) return;  // INT32_MIN (see readCorrector)
     uint32_t v = c < 0 ? static_cast<uint32_t>(c) + ((1u << k_) - 1) : static_cast<uint32_t>(c) - 1;
     if (k_ <= bitsHigh_) {
-      enc.encodeSymbol(corrector_[k_], v);
+      enc.encodeSymbol(correctorModel(k_), v);
     } else {
       const uint32_t k1 = k_ - bitsHigh_;
-      enc.encodeSymbol(corrector_[k_], v >> k1);
+      enc.encodeSymbol(correctorModel(k_), v >> k1);
       enc.writeBits(k1, v & ((1u << k1) - 1));
     }
   }
@@ -477,6 +502,8 @@ class IntegerDecoder {
   uint32_t corrBits_ = 0, corrRange_ = 0;
   int32_t corrMin_ = 0;
   uint32_t k_ = 0;
+  uint32_t generation_ = 1;  // models whose stamp differs are reset before use
+  std::vector<uint32_t> bitsStamp_, correctorStamp_;
   std::vector<SymbolModel> bits_;
   BitModel corrector0_;
   std::vector<SymbolModel> corrector_;

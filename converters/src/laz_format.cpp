@@ -138,10 +138,16 @@ std::string parseLaszipVlr(const uint8_t* d, size_t length, int pf, size_t recor
     if (fixed ? it.size != fixed : it.size == 0)
       return which + " has size " + std::to_string(it.size) +
              (fixed ? ", not " + std::to_string(fixed) : "");
-    const bool versionOk = layered ? it.version == 3 : (it.version == 1 || it.version == 2);
+    // Layered items: LASzip reads version 2 (written by a prototype) as 3; version 4 differs from
+    // 3 only in how a scanner-channel switch selects contexts; WAVEPACKET14 exists as 3 only.
+    const bool versionOk =
+        layered ? (it.type == ItemType::WavePacket14 ? it.version == 3
+                                                     : it.version >= 2 && it.version <= 4)
+                : (it.version == 1 || it.version == 2);
     if (!versionOk)
       return which + ": version " + std::to_string(it.version) + " is not supported (" +
-             (layered ? "formats 6-10 need version 3" : "formats 0-5 need version 1 or 2") + ")";
+             (layered ? "formats 6-10 need version 2, 3 or 4" : "formats 0-5 need version 1 or 2") +
+             ")";
   }
   if (out.items.size() < expected.size())
     return "LASzip record lists " + std::to_string(out.items.size()) + " items; point format " +

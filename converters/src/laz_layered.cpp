@@ -28,9 +28,12 @@
 //     from the last values of the context it leaves (and stores the result there).
 //
 // Differences from the reference decoder, none of which changes the decoded values of a valid
-// chunk: every size is checked against the chunk before use; GPS time's sequence switch loops
-// with a bound instead of recursing; arithmetic that overflows in the reference wraps unsigned
-// here; models are allocated once per decoder and reset per chunk.
+// chunk: every size is checked against the chunk before use, and a chunk whose point count
+// disagrees with the chunk table is an error; GPS time's sequence switch loops with a bound
+// instead of recursing; arithmetic that overflows in the reference wraps unsigned here; models
+// are allocated once per decoder and reset when a context first uses them after its
+// initialisation (what the reference resets at the initialisation); a chunk of one point is
+// its raw record whatever its layers hold (the reference would still start the first stream).
 #include <array>
 #include <cstring>
 #include <memory>
@@ -56,21 +59,32 @@ void put(uint8_t* p, T v) {
 
 // Byte arithmetic of the colour and extra-byte predictors: sums wrap modulo 256 (values stay in
 // 0..510, so the reference's fold is the low byte), predictions clamp to 0..255.
-inline uint32_t low8(uint32_t v) { return v & 0xFFu; }
-inline int32_t clamp8(int32_t v) { return v <= 0 ? 0 : (v >= 255 ? 255 : v); }
+inline uint32_t low8(uint32_t v) {
+  return v & 0xFFu;
+}
+inline int32_t clamp8(int32_t v) {
+  return v <= 0 ? 0 : (v >= 255 ? 255 : v);
+}
 
 // Context of the x/y models by (number of returns n, return number r): the valid combinations
 // (1 <= r <= n) fall into six classes, and the table also maps files that number from 0 or swap
 // the fields to distinct contexts.
-constexpr uint8_t kReturnMap6[16][16] = {
-    {0, 1, 2, 3, 4, 5, 3, 4, 4, 5, 5, 5, 5, 5, 5, 5}, {1, 0, 1, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3},
-    {2, 1, 2, 4, 4, 4, 4, 4, 4, 4, 4, 3, 3, 3, 3, 3}, {3, 3, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
-    {4, 3, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4}, {5, 3, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
-    {3, 3, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4}, {4, 3, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4},
-    {4, 3, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4}, {5, 3, 4, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4},
-    {5, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4}, {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 4, 4, 4},
-    {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 4, 4}, {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 4},
-    {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5}, {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5}};
+constexpr uint8_t kReturnMap6[16][16] = {{0, 1, 2, 3, 4, 5, 3, 4, 4, 5, 5, 5, 5, 5, 5, 5},
+                                         {1, 0, 1, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3, 3},
+                                         {2, 1, 2, 4, 4, 4, 4, 4, 4, 4, 4, 3, 3, 3, 3, 3},
+                                         {3, 3, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+                                         {4, 3, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+                                         {5, 3, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+                                         {3, 3, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4, 4},
+                                         {4, 3, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4, 4},
+                                         {4, 3, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4, 4},
+                                         {5, 3, 4, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4, 4},
+                                         {5, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 4, 4, 4, 4, 4},
+                                         {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 4, 4, 4},
+                                         {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 4, 4},
+                                         {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5, 4},
+                                         {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5},
+                                         {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5}};
 // Context of the height predictor: how deep the return is (|n - r|), capped at 7.
 inline uint32_t returnLevel(uint32_t n, uint32_t r) {
   const uint32_t d = n > r ? n - r : r - n;
@@ -148,6 +162,18 @@ inline SymbolModel& lazyModel(std::unique_ptr<SymbolModel>& slot, uint64_t& fres
   return *slot;
 }
 
+// A model or integer decoder of a context, reset when the context first uses it after its
+// (re)initialisation: equivalent to resetting it at the initialisation, but a chunk of a few
+// points (COPC) does not pay for resetting the many models it never touches.
+template <typename M>
+inline M& fresh(M& m, uint32_t& pending, uint32_t bit) {
+  if (pending & (1u << bit)) {
+    m.reset();
+    pending &= ~(1u << bit);
+  }
+  return m;
+}
+
 std::vector<SymbolModel> models(size_t n, uint32_t symbols) {
   std::vector<SymbolModel> v;
   v.reserve(n);
@@ -160,9 +186,9 @@ std::vector<SymbolModel> models(size_t n, uint32_t symbols) {
 struct Layer {
   std::string name;  // for errors: "POINT14 layer 'Z'"
   ArithmeticDecoder dec;
-  size_t sizeField = 0;       // offset of its u32 size in the chunk
+  size_t sizeField = 0;         // offset of its u32 size in the chunk
   size_t offset = 0, size = 0;  // its bytes in the chunk
-  bool active = false;        // has bytes in this chunk (else its field keeps its last value)
+  bool active = false;          // has bytes in this chunk (else its field keeps its last value)
 };
 
 // ---- POINT14 ---------------------------------------------------------------------------------
@@ -175,8 +201,8 @@ struct Point14 {
   uint8_t classFlags = 0, channel = 0, scanDirection = 0, edge = 0;
   uint8_t classification = 0, userData = 0;
   uint16_t scanAngle = 0, pointSource = 0;  // scan angle: the i16's bits
-  uint64_t gpsTime = 0;                       // the f64's bits
-  bool gpsTimeChanged = false;                // of this point (a context of the next one)
+  uint64_t gpsTime = 0;                     // the f64's bits
+  bool gpsTimeChanged = false;              // of this point (a context of the next one)
 
   void unpack(const uint8_t* r) {
     x = get<uint32_t>(r);
@@ -219,7 +245,23 @@ constexpr uint32_t kGpsCodeFull = kGpsMulti - kGpsMultiMinus + 1;    // 511
 constexpr uint32_t kGpsMultiTotal = kGpsMulti - kGpsMultiMinus + 5;  // 515 symbols
 
 struct Point14Context {
-  bool used = false;  // initialised in this chunk
+  bool used = false;     // initialised in this chunk
+  uint32_t pending = 0;  // models still to reset (bits below), see fresh()
+  enum : uint32_t {
+    kChanged = 0,  // 8 bits: changed[0..7]
+    kScannerChannel = 8,
+    kReturnNumberGpsSame,
+    kDx,
+    kDy,
+    kZ,
+    kIntensity,
+    kScanAngle,
+    kPointSource,
+    kGpsMulti,
+    kGps0Diff,
+    kGps,
+    kAll = (1u << 19) - 1
+  };
   Point14 last;
   // channel/returns/XY layer
   std::vector<SymbolModel> changed = models(8, 128);  // which fields change, by last return
@@ -249,24 +291,13 @@ struct Point14Context {
   // point `from` (the chunk's first point, or the last point of the context being left).
   void init(const Point14& from) {
     used = true;
-    for (auto& m : changed) m.reset();
-    scannerChannel.reset();
+    pending = kAll;
     freshNumberOfReturns = freshReturnNumber = 0;
-    returnNumberGpsSame.reset();
-    dx.reset();
-    dy.reset();
     medianX.fill(Median5());
     medianY.fill(Median5());
-    z.reset();
     lastZ.fill(from.z);
     freshClassification = freshFlags = freshUserData = 0;
-    intensity.reset();
     lastIntensity.fill(from.intensity);
-    scanAngle.reset();
-    pointSource.reset();
-    gpsMulti.reset();
-    gps0Diff.reset();
-    gps.reset();
     gpsLast = gpsNext = 0;
     gpsTime = {from.gpsTime, 0, 0, 0};
     gpsDiff.fill(0);
@@ -280,6 +311,7 @@ struct Point14Context {
 
 struct RgbContext {
   bool used = false;
+  uint32_t pending = 0;            // bits: 0 rgbUsed, 1-6 rgbDiff, 7 nirUsed, 8-9 nirDiff
   std::array<uint16_t, 4> last{};  // r, g, b, nir
   SymbolModel rgbUsed{128};        // which of the six colour bytes change
   std::vector<SymbolModel> rgbDiff = models(6, 256);
@@ -288,10 +320,7 @@ struct RgbContext {
 
   void init(const std::array<uint16_t, 4>& from) {
     used = true;
-    rgbUsed.reset();
-    for (auto& m : rgbDiff) m.reset();
-    nirUsed.reset();
-    for (auto& m : nirDiff) m.reset();
+    pending = (1u << 10) - 1;
     last = from;
   }
 };
@@ -300,6 +329,8 @@ struct RgbContext {
 
 struct WaveContext {
   bool used = false;
+  uint32_t pending = 0;  // bits: 0 packetIndex, 1-4 offsetSym, 5 offsetDiff, 6 packetSize,
+                         // 7 returnPoint, 8 xyz
   std::array<uint8_t, 29> last{};
   int32_t lastOffsetDiff = 0;
   uint32_t lastOffsetSym = 0;
@@ -309,12 +340,7 @@ struct WaveContext {
 
   void init(const uint8_t* from) {
     used = true;
-    packetIndex.reset();
-    for (auto& m : offsetSym) m.reset();
-    offsetDiff.reset();
-    packetSize.reset();
-    returnPoint.reset();
-    xyz.reset();
+    pending = (1u << 9) - 1;
     lastOffsetDiff = 0;
     lastOffsetSym = 0;
     std::memcpy(last.data(), from, last.size());
@@ -357,10 +383,10 @@ struct ByteContext {
 // An item after POINT14, and how it follows POINT14's scanner channel.
 struct Secondary {
   ItemType type;
-  size_t offset;       // in the record
-  size_t size;         // bytes
-  size_t firstLayer;   // index into the decoder's layers
-  bool switchFixed;    // version 4: a switch to a used context predicts from that context
+  size_t offset;      // in the record
+  size_t size;        // bytes
+  size_t firstLayer;  // index into the decoder's layers
+  bool switchFixed;   // version 4: a switch to a used context predicts from that context
   uint32_t current = 0;
   std::array<std::unique_ptr<RgbContext>, 4> rgb;
   std::array<std::unique_ptr<WaveContext>, 4> wave;
@@ -373,9 +399,9 @@ class LayeredDecoder final : public ChunkDecoder {
     if (info.items.empty() || info.items[0].type != ItemType::Point14 || info.items[0].size != 30)
       throw DecodeError(0, "the layered LASzip compressor needs POINT14 (30 bytes) as first item");
     point14V4_ = checkVersion(info.items[0]);
-    static const char* const kPointLayers[9] = {"channel/returns/XY", "Z", "classification",
-                                                "flags", "intensity", "scan angle",
-                                                "user data", "point source", "GPS time"};
+    static const char* const kPointLayers[9] = {
+        "channel/returns/XY", "Z",         "classification", "flags",   "intensity",
+        "scan angle",         "user data", "point source",   "GPS time"};
     for (const char* n : kPointLayers) addLayer(std::string("POINT14 layer '") + n + "'");
     size_t offset = 30;
     for (size_t i = 1; i < info.items.size(); ++i) {
@@ -417,13 +443,13 @@ class LayeredDecoder final : public ChunkDecoder {
     const size_t rs = recordSize_;
     if (size < rs)
       throw DecodeError(0, "chunk of " + std::to_string(size) +
-                               " bytes is too short for its first point (" +
-                               std::to_string(rs) + " bytes raw)");
+                               " bytes is too short for its first point (" + std::to_string(rs) +
+                               " bytes raw)");
     std::memcpy(out, data, rs);
     size_t at = rs;
     if (size - at < 4)
-      throw DecodeError(at, "chunk ends before its point count (" + std::to_string(size) +
-                                " bytes)");
+      throw DecodeError(at,
+                        "chunk ends before its point count (" + std::to_string(size) + " bytes)");
     const uint32_t inner = get<uint32_t>(data + at);
     if (inner != count)
       throw DecodeError(at, "chunk says it holds " + std::to_string(inner) +
@@ -433,10 +459,10 @@ class LayeredDecoder final : public ChunkDecoder {
     // Layer sizes, then the layers back to back; each must lie inside the chunk.
     const size_t fields = layers_.size();
     if ((size - at) / 4 < fields)
-      throw DecodeError(at + (size - at) / 4 * 4,
-                        "chunk ends inside its table of layer sizes (" + std::to_string(fields) +
-                            " sizes from byte " + std::to_string(at) + ", chunk of " +
-                            std::to_string(size) + " bytes)");
+      throw DecodeError(at + (size - at) / 4 * 4, "chunk ends inside its table of layer sizes (" +
+                                                      std::to_string(fields) + " sizes from byte " +
+                                                      std::to_string(at) + ", chunk of " +
+                                                      std::to_string(size) + " bytes)");
     size_t pos = at + 4 * fields;
     for (size_t i = 0; i < fields; ++i) {
       Layer& l = layers_[i];
@@ -467,9 +493,15 @@ class LayeredDecoder final : public ChunkDecoder {
     for (Secondary& s : secondary_) {
       switch (s.type) {
         case ItemType::Rgb14:
-        case ItemType::RgbNir14: decodeRgb(s, out, count); break;
-        case ItemType::WavePacket14: decodeWave(s, out, count); break;
-        default: decodeBytes(s, out, count); break;
+        case ItemType::RgbNir14:
+          decodeRgb(s, out, count);
+          break;
+        case ItemType::WavePacket14:
+          decodeWave(s, out, count);
+          break;
+        default:
+          decodeBytes(s, out, count);
+          break;
       }
     }
 
@@ -478,8 +510,8 @@ class LayeredDecoder final : public ChunkDecoder {
         throw DecodeError(l.offset + l.size,
                           l.name + " (" + std::to_string(l.size) + " bytes from byte " +
                               std::to_string(l.offset) + ") ends before the chunk's " +
-                              std::to_string(count) + " points are decoded: " +
-                              std::to_string(l.dec.overrun()) +
+                              std::to_string(count) +
+                              " points are decoded: " + std::to_string(l.dec.overrun()) +
                               " bytes missing (truncated or damaged compressed data)");
     return used;
   }
@@ -505,10 +537,10 @@ class LayeredDecoder final : public ChunkDecoder {
   // instead of decoding the rest of a large chunk from zeros.
   void checkDry(const Layer& l, uint32_t p, uint32_t count) const {
     if (l.dec.overrun() > 64)
-      throw DecodeError(l.offset + l.size,
-                        l.name + " (" + std::to_string(l.size) + " bytes) ends at point " +
-                            std::to_string(p + 1) + " of " + std::to_string(count) +
-                            " (truncated or damaged compressed data)");
+      throw DecodeError(l.offset + l.size, l.name + " (" + std::to_string(l.size) +
+                                               " bytes) ends at point " + std::to_string(p + 1) +
+                                               " of " + std::to_string(count) +
+                                               " (truncated or damaged compressed data)");
   }
 
   Point14Context& pointContext(uint32_t c) {
@@ -526,10 +558,10 @@ class LayeredDecoder final : public ChunkDecoder {
     ArithmeticDecoder& angleDec = layers_[5].dec;
     ArithmeticDecoder& userDec = layers_[6].dec;
     ArithmeticDecoder& sourceDec = layers_[7].dec;
-    const bool hasZ = layers_[1].active, hasClass = layers_[2].active,
-               hasFlags = layers_[3].active, hasIntensity = layers_[4].active,
-               hasAngle = layers_[5].active, hasUser = layers_[6].active,
-               hasSource = layers_[7].active, hasGps = layers_[8].active;
+    const bool hasZ = layers_[1].active, hasClass = layers_[2].active, hasFlags = layers_[3].active,
+               hasIntensity = layers_[4].active, hasAngle = layers_[5].active,
+               hasUser = layers_[6].active, hasSource = layers_[7].active,
+               hasGps = layers_[8].active;
 
     for (auto& c : pctx_)
       if (c) c->used = false;
@@ -545,9 +577,14 @@ class LayeredDecoder final : public ChunkDecoder {
       const uint32_t lpr = (c->last.returnNumber == 1 ? 1u : 0u) |
                            (c->last.returnNumber >= c->last.numberOfReturns ? 2u : 0u) |
                            (c->last.gpsTimeChanged ? 4u : 0u);
-      const uint32_t changed = xy.decodeSymbol(c->changed[lpr]);
+      const uint32_t changed =
+          xy.decodeSymbol(fresh(c->changed[lpr], c->pending, Point14Context::kChanged + lpr));
       if (changed & 64) {  // the scanner channel switched: code 0-2 means +1..+3
-        const uint32_t next = (cur + xy.decodeSymbol(c->scannerChannel) + 1) & 3;
+        const uint32_t next = (cur +
+                               xy.decodeSymbol(fresh(c->scannerChannel, c->pending,
+                                                     Point14Context::kScannerChannel)) +
+                               1) &
+                              3;
         Point14Context& nc = pointContext(next);
         if (!nc.used) nc.init(c->last);  // a new channel starts from the point before
         cur = next;
@@ -559,20 +596,28 @@ class LayeredDecoder final : public ChunkDecoder {
 
       uint32_t n = last.numberOfReturns;
       if (changed & 4) {
-        n = xy.decodeSymbol(
-            lazyModel(c->numberOfReturns[n], c->freshNumberOfReturns, n, 16));
+        n = xy.decodeSymbol(lazyModel(c->numberOfReturns[n], c->freshNumberOfReturns, n, 16));
         last.numberOfReturns = uint8_t(n);
       }
       uint32_t r = last.returnNumber;
       switch (changed & 3) {
-        case 0: break;
-        case 1: r = (r + 1) & 15; break;
-        case 2: r = (r + 15) & 15; break;
+        case 0:
+          break;
+        case 1:
+          r = (r + 1) & 15;
+          break;
+        case 2:
+          r = (r + 15) & 15;
+          break;
         default:
           if (gpsChange)  // a new pulse: the return number itself
             r = xy.decodeSymbol(lazyModel(c->returnNumber[r], c->freshReturnNumber, r, 16));
           else  // same pulse: a step of 2 to 14
-            r = (r + xy.decodeSymbol(c->returnNumberGpsSame) + 2) & 15;
+            r = (r +
+                 xy.decodeSymbol(fresh(c->returnNumberGpsSame, c->pending,
+                                       Point14Context::kReturnNumberGpsSame)) +
+                 2) &
+                15;
           break;
       }
       last.returnNumber = uint8_t(r);
@@ -585,18 +630,21 @@ class LayeredDecoder final : public ChunkDecoder {
 
       // x and y: differences to the last point, predicted by the median of recent ones; y's
       // model is chosen by how large x's correction was.
-      int32_t diff = c->dx.decompress(xy, c->medianX[mctx].get(), single);
+      int32_t diff = fresh(c->dx, c->pending, Point14Context::kDx)
+                         .decompress(xy, c->medianX[mctx].get(), single);
       last.x += uint32_t(diff);
       c->medianX[mctx].add(diff);
       uint32_t k = c->dx.k();
-      diff = c->dy.decompress(xy, c->medianY[mctx].get(), single + (k < 20 ? (k & ~1u) : 20));
+      diff = fresh(c->dy, c->pending, Point14Context::kDy)
+                 .decompress(xy, c->medianY[mctx].get(), single + (k < 20 ? (k & ~1u) : 20));
       last.y += uint32_t(diff);
       c->medianY[mctx].add(diff);
 
       if (hasZ) {  // z: the last z of the same return depth, model by x's and y's corrections
         k = (c->dx.k() + c->dy.k()) / 2;
-        last.z = uint32_t(c->z.decompress(zDec, int32_t(c->lastZ[level]),
-                                          single + (k < 18 ? (k & ~1u) : 18)));
+        last.z = uint32_t(
+            fresh(c->z, c->pending, Point14Context::kZ)
+                .decompress(zDec, int32_t(c->lastZ[level]), single + (k < 18 ? (k & ~1u) : 18)));
         c->lastZ[level] = last.z;
       }
       if (hasClass) {
@@ -605,8 +653,8 @@ class LayeredDecoder final : public ChunkDecoder {
             lazyModel(c->classification[ctx], c->freshClassification, ctx, 256)));
       }
       if (hasFlags) {
-        const uint32_t ctx = (uint32_t(last.edge) << 5) | (uint32_t(last.scanDirection) << 4) |
-                             last.classFlags;
+        const uint32_t ctx =
+            (uint32_t(last.edge) << 5) | (uint32_t(last.scanDirection) << 4) | last.classFlags;
         const uint32_t f = flagsDec.decodeSymbol(lazyModel(c->flags[ctx], c->freshFlags, ctx, 64));
         last.edge = (f >> 5) & 1;
         last.scanDirection = (f >> 4) & 1;
@@ -614,20 +662,23 @@ class LayeredDecoder final : public ChunkDecoder {
       }
       if (hasIntensity) {  // the last intensity of the same return kind and GPS change
         const uint32_t ctx = (cpr << 1) | (gpsChange ? 1u : 0u);
-        const auto v = uint16_t(c->intensity.decompress(intensityDec, c->lastIntensity[ctx], cpr));
+        const auto v = uint16_t(fresh(c->intensity, c->pending, Point14Context::kIntensity)
+                                    .decompress(intensityDec, c->lastIntensity[ctx], cpr));
         c->lastIntensity[ctx] = v;
         last.intensity = v;
       }
       if (hasAngle && angleChange)
-        last.scanAngle = uint16_t(c->scanAngle.decompress(
-            angleDec, int16_t(last.scanAngle), gpsChange ? 1u : 0u));
+        last.scanAngle =
+            uint16_t(fresh(c->scanAngle, c->pending, Point14Context::kScanAngle)
+                         .decompress(angleDec, int16_t(last.scanAngle), gpsChange ? 1u : 0u));
       if (hasUser) {
         const uint32_t ctx = last.userData / 4u;
-        last.userData = uint8_t(
-            userDec.decodeSymbol(lazyModel(c->userData[ctx], c->freshUserData, ctx, 256)));
+        last.userData =
+            uint8_t(userDec.decodeSymbol(lazyModel(c->userData[ctx], c->freshUserData, ctx, 256)));
       }
       if (hasSource && sourceChange)
-        last.pointSource = uint16_t(c->pointSource.decompress(sourceDec, last.pointSource));
+        last.pointSource = uint16_t(fresh(c->pointSource, c->pending, Point14Context::kPointSource)
+                                        .decompress(sourceDec, last.pointSource));
       if (hasGps && gpsChange) {
         decodeGpsTime(*c);
         last.gpsTime = c->gpsTime[c->gpsLast];
@@ -644,6 +695,9 @@ class LayeredDecoder final : public ChunkDecoder {
   // encoder only emits once per point (so two rounds suffice; more means a damaged stream).
   void decodeGpsTime(Point14Context& c) {
     ArithmeticDecoder& dec = layers_[8].dec;
+    fresh(c.gpsMulti, c.pending, Point14Context::kGpsMulti);
+    fresh(c.gps0Diff, c.pending, Point14Context::kGps0Diff);
+    fresh(c.gps, c.pending, Point14Context::kGps);
     for (int round = 0; round < 4; ++round) {
       const uint32_t s = c.gpsLast;
       if (c.gpsDiff[s] == 0) {
@@ -709,8 +763,8 @@ class LayeredDecoder final : public ChunkDecoder {
   }
   static void fullGpsTime(Point14Context& c, ArithmeticDecoder& dec) {
     c.gpsNext = (c.gpsNext + 1) & 3;
-    const auto high = uint32_t(
-        c.gps.decompress(dec, int32_t(uint32_t(c.gpsTime[c.gpsLast] >> 32)), 8));
+    const auto high =
+        uint32_t(c.gps.decompress(dec, int32_t(uint32_t(c.gpsTime[c.gpsLast] >> 32)), 8));
     c.gpsTime[c.gpsNext] = (uint64_t(high) << 32) | dec.readInt();
     c.gpsLast = c.gpsNext;
     c.gpsDiff[c.gpsLast] = 0;
@@ -775,26 +829,29 @@ class LayeredDecoder final : public ChunkDecoder {
       if (hasRgb) {
         // Which bytes change (bit 6: the colour is not grey); red's low and high bytes are
         // differences, green and blue are predicted from red's change, clamped to a byte.
-        const uint32_t sym = rgbDec.decodeSymbol(c.rgbUsed);
+        const uint32_t sym = rgbDec.decodeSymbol(fresh(c.rgbUsed, c.pending, 0));
+        auto corr = [&](uint32_t i) {
+          return rgbDec.decodeSymbol(fresh(c.rgbDiff[i], c.pending, 1 + i));
+        };
         const uint32_t lo0 = last[0] & 255u, hi0 = last[0] >> 8;
         const uint32_t lo1 = last[1] & 255u, hi1 = last[1] >> 8;
         const uint32_t lo2 = last[2] & 255u, hi2 = last[2] >> 8;
-        const uint32_t rl = sym & 1 ? low8(rgbDec.decodeSymbol(c.rgbDiff[0]) + lo0) : lo0;
-        const uint32_t rh = sym & 2 ? low8(rgbDec.decodeSymbol(c.rgbDiff[1]) + hi0) : hi0;
+        const uint32_t rl = sym & 1 ? low8(corr(0) + lo0) : lo0;
+        const uint32_t rh = sym & 2 ? low8(corr(1) + hi0) : hi0;
         v[0] = uint16_t(rl | (rh << 8));
         if (sym & 64) {
           int32_t d = int32_t(rl) - int32_t(lo0);
           uint32_t gl = lo1, bl = lo2, gh = hi1, bh = hi2;
-          if (sym & 4) gl = low8(rgbDec.decodeSymbol(c.rgbDiff[2]) + clamp8(d + int32_t(lo1)));
+          if (sym & 4) gl = low8(corr(2) + clamp8(d + int32_t(lo1)));
           if (sym & 16) {
             d = (d + (int32_t(gl) - int32_t(lo1))) / 2;  // C division: truncates toward 0
-            bl = low8(rgbDec.decodeSymbol(c.rgbDiff[4]) + clamp8(d + int32_t(lo2)));
+            bl = low8(corr(4) + clamp8(d + int32_t(lo2)));
           }
           d = int32_t(rh) - int32_t(hi0);
-          if (sym & 8) gh = low8(rgbDec.decodeSymbol(c.rgbDiff[3]) + clamp8(d + int32_t(hi1)));
+          if (sym & 8) gh = low8(corr(3) + clamp8(d + int32_t(hi1)));
           if (sym & 32) {
             d = (d + (int32_t(gh) - int32_t(hi1))) / 2;
-            bh = low8(rgbDec.decodeSymbol(c.rgbDiff[5]) + clamp8(d + int32_t(hi2)));
+            bh = low8(corr(5) + clamp8(d + int32_t(hi2)));
           }
           v[1] = uint16_t(gl | (gh << 8));
           v[2] = uint16_t(bl | (bh << 8));
@@ -814,10 +871,13 @@ class LayeredDecoder final : public ChunkDecoder {
       put(item + 4, v[2]);
       if (nir) {
         if (hasNir) {
-          const uint32_t sym = nirDec->decodeSymbol(c.nirUsed);
+          const uint32_t sym = nirDec->decodeSymbol(fresh(c.nirUsed, c.pending, 7));
           const uint32_t lo = last[3] & 255u, hi = last[3] >> 8;
-          const uint32_t nl = sym & 1 ? low8(nirDec->decodeSymbol(c.nirDiff[0]) + lo) : lo;
-          const uint32_t nh = sym & 2 ? low8(nirDec->decodeSymbol(c.nirDiff[1]) + hi) : hi;
+          auto corr = [&](uint32_t i) {
+            return nirDec->decodeSymbol(fresh(c.nirDiff[i], c.pending, 8 + i));
+          };
+          const uint32_t nl = sym & 1 ? low8(corr(0) + lo) : lo;
+          const uint32_t nh = sym & 2 ? low8(corr(1) + hi) : hi;
           last[3] = uint16_t(nl | (nh << 8));
         }
         put(item + 6, last[3]);
@@ -855,25 +915,33 @@ class LayeredDecoder final : public ChunkDecoder {
         continue;
       }
       // Descriptor index u8, then offset u64, packet size u32, return point and x/y/z f32.
-      item[0] = uint8_t(dec.decodeSymbol(c.packetIndex));
+      item[0] = uint8_t(dec.decodeSymbol(fresh(c.packetIndex, c.pending, 0)));
       const uint64_t lastOffset = get<uint64_t>(last + 1);
       const uint32_t lastSize = get<uint32_t>(last + 9);
-      c.lastOffsetSym = dec.decodeSymbol(c.offsetSym[c.lastOffsetSym]);
+      c.lastOffsetSym =
+          dec.decodeSymbol(fresh(c.offsetSym[c.lastOffsetSym], c.pending, 1 + c.lastOffsetSym));
       uint64_t offset;
       switch (c.lastOffsetSym) {
-        case 0: offset = lastOffset; break;                 // same packet
-        case 1: offset = lastOffset + lastSize; break;      // the next packet
-        case 2:                                             // a coded difference
-          c.lastOffsetDiff = c.offsetDiff.decompress(dec, c.lastOffsetDiff);
+        case 0:
+          offset = lastOffset;
+          break;  // same packet
+        case 1:
+          offset = lastOffset + lastSize;
+          break;  // the next packet
+        case 2:   // a coded difference
+          c.lastOffsetDiff = fresh(c.offsetDiff, c.pending, 5).decompress(dec, c.lastOffsetDiff);
           offset = lastOffset + uint64_t(int64_t(c.lastOffsetDiff));
           break;
-        default: offset = dec.readInt64(); break;  // raw
+        default:
+          offset = dec.readInt64();
+          break;  // raw
       }
       put(item + 1, offset);
-      put(item + 9, uint32_t(c.packetSize.decompress(dec, int32_t(lastSize))));
-      put(item + 13, c.returnPoint.decompress(dec, get<int32_t>(last + 13)));
+      put(item + 9, uint32_t(fresh(c.packetSize, c.pending, 6).decompress(dec, int32_t(lastSize))));
+      put(item + 13, fresh(c.returnPoint, c.pending, 7).decompress(dec, get<int32_t>(last + 13)));
+      IntegerDecoder& xyz = fresh(c.xyz, c.pending, 8);
       for (uint32_t a = 0; a < 3; ++a)
-        put(item + 17 + 4 * a, c.xyz.decompress(dec, get<int32_t>(last + 17 + 4 * a), a));
+        put(item + 17 + 4 * a, xyz.decompress(dec, get<int32_t>(last + 17 + 4 * a), a));
       std::memcpy(last, item, 29);
       if ((p & 1023) == 0) checkDry(layer, p, count);
     }
@@ -897,9 +965,8 @@ class LayeredDecoder final : public ChunkDecoder {
     init(s.current, first_);
 
     for (uint32_t p = 1; p < count; ++p) {
-      uint8_t* last = follow<ByteContext, std::vector<uint8_t>>(s.bytes, s.current,
-                                                                itemContext(out, p),
-                                                                s.switchFixed, init)
+      uint8_t* last = follow<ByteContext, std::vector<uint8_t>>(
+                          s.bytes, s.current, itemContext(out, p), s.switchFixed, init)
                           ->data();
       ByteContext& c = *s.bytes[s.current];
       uint8_t* item = out + size_t(p) * rs + s.offset;

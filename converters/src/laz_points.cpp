@@ -41,11 +41,6 @@ struct LazPoints::Decoders : tbb::enumerable_thread_specific<std::unique_ptr<Chu
 
 LazPoints::~LazPoints() = default;
 
-// TEMPORARY until laz_layered.cpp lands.
-__attribute__((weak)) std::unique_ptr<ChunkDecoder> makeLayeredDecoder(const LaszipInfo&) {
-  throw DecodeError(0, "the layered LASzip compressor is not supported yet");
-}
-
 LazPoints::LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t pointStart,
                      uint64_t dataEnd, uint64_t declaredPoints, bool lenient,
                      std::function<void(std::string)> warn)

@@ -32,8 +32,9 @@ std::unique_ptr<PointReader> openReader(const std::string& path, const ReadOptio
 std::unique_ptr<PointWriter> createWriter(const std::string& path, const SourceHeader& header) {
   const std::string ext = lowerExtension(path);
   if (ext == ".las") return createLasWriter(path, header);
+  if (ext == ".laz") return createLazWriter(path, header);
   if (ext == ".ply") return createPlyWriter(path, header);
-  throw Error(path, "", "cannot write '" + ext + "'; supported: .las .ply");
+  throw Error(path, "", "cannot write '" + ext + "'; supported: .las .laz .ply");
 }
 
 }  // namespace nestlight
