@@ -486,3 +486,53 @@ TEST(LazWriter, ManyChunksRoundTripThroughTheConverterPath) {
 }
 
 }  // namespace
+
+// ---- converting ---------------------------------------------------------------------------------
+
+#include "nestlight/octree/octree_reader.h"
+
+namespace {
+
+// The converter's output is a function of the points: LAZ and LAS of the same scan give the same
+// octree, payload and hierarchy files byte for byte.
+TEST(LazConvert, LazAndLasOfAutzenConvertToIdenticalOctrees) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  NL_REQUIRE_SHARED("scans/autzen_trim.las");
+  test::TempDir t;
+  test::buildOctreeFrom(laz("autzen_trim.laz"), t.path() / "z", 5000);
+  test::buildOctreeFrom(sharedData() / "scans/autzen_trim.las", t.path() / "l", 5000);
+  for (const char* f : {"octree.bin", "hierarchy.bin"})
+    EXPECT_TRUE(test::readFile((t.path() / "z" / f).string()) == test::readFile((t.path() / "l" / f).string()))
+        << f;
+  OctreeReader z(t.path() / "z"), l(t.path() / "l");
+  EXPECT_EQ(z.metadata().points, 110000u);
+  EXPECT_EQ(z.metadata().accounting.input, l.metadata().accounting.input);
+  EXPECT_EQ(z.metadata().accounting.duplicatesMerged, l.metadata().accounting.duplicatesMerged);
+  EXPECT_GT(z.allNodes().size(), 10u);
+  EXPECT_EQ(z.metadata().sources.at(0).format, "laz");
+}
+
+// A damaged LAZ read leniently: the accounting covers every declared point, the damaged chunk's
+// as rejected, nothing counted twice.
+TEST(LazConvert, LenientConversionCountsTheDamagedChunkAsRejected) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  std::string f = test::readFile(laz("autzen_trim.laz"));
+  const LazLayout l = layoutOf(f);
+  f[l.chunkStart(1) + 500] ^= 0x5A;  // damage chunk 2's stream
+  f[l.chunkStart(1) + 501] ^= 0xA5;
+  test::TempDir t;
+  test::writeFile(t.file("d.laz"), f);
+  std::string out;
+  EXPECT_NE(test::runCli("convert " + t.file("d.laz") + " -o " + t.file("o") + " --progress quiet", &out), 0);
+  EXPECT_NE(out.find("chunk 2 of 3"), std::string::npos) << out;
+  ASSERT_EQ(test::runCli("convert " + t.file("d.laz") + " -o " + t.file("o") + " --lenient --progress quiet", &out), 0)
+      << out;
+  OctreeReader r(t.path() / "o");
+  const Accounting& a = r.metadata().accounting;
+  EXPECT_EQ(a.input, 110000u);
+  EXPECT_EQ(a.rejected.at(reject::kUnreadable), 50000u);
+  EXPECT_TRUE(a.balanced());
+  EXPECT_EQ(r.metadata().points + a.duplicatesMerged, 60000u);
+}
+
+}  // namespace
