@@ -47,6 +47,7 @@ void addExpandHdr(CLI::App& app, int& exitCode);
 void addColourMatch(CLI::App& app, int& exitCode);
 void addBenchHdr(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 void addBenchIbl(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
+void addBenchLaz(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 
 // "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");
@@ -60,6 +61,16 @@ double median(std::vector<double> v);
 std::vector<double> parseNumberList(const std::string& text, const std::string& option);
 std::string cpuName();  // /proc/cpuinfo's model name
 std::string humanCount(double n);
+// Runs this program with `args` in a child process (stdout discarded): wall time, the child's own
+// peak RSS, and the peak size of the converter's temporary folder under `watch` (an octree
+// folder being built; empty: not measured).
+struct ChildRun {
+  double seconds = 0;
+  uint64_t peakRss = 0;
+  uint64_t peakTempBytes = 0;
+  int status = 0;
+};
+ChildRun runChild(const std::vector<std::string>& args, const std::string& watch = "");
 // --progress: "terminal", "json", "quiet" (or "none"); anything else is Auto.
 ProgressMode parseProgress(const std::string& s);
 

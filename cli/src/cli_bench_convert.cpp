@@ -15,6 +15,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <atomic>
 #include <thread>
 
 #include "cli.h"
@@ -42,15 +43,16 @@ std::string cpuName() {
 
 uint64_t writeSynthetic(const SyntheticSpec& spec, const std::string& path);
 
-namespace {
+// Bytes of the files under `dir` (missing: 0).
+static uint64_t folderBytes(const fs::path& dir) {
+  uint64_t total = 0;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+    if (it->is_regular_file(ec)) total += it->file_size(ec);
+  return total;
+}
 
-struct ChildRun {
-  double seconds = 0;
-  uint64_t peakRss = 0;
-  int status = 0;
-};
-
-ChildRun runChild(const std::vector<std::string>& args) {
+ChildRun runChild(const std::vector<std::string>& args, const std::string& watch) {
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
@@ -63,16 +65,26 @@ ChildRun runChild(const std::vector<std::string>& args) {
   }
   int status = 0;
   struct rusage ru {};
-  ::wait4(pid, &status, 0, &ru);
   ChildRun r;
+  // The converter's temporary files live in WATCH/.build-PID: sample their size while it runs.
+  std::atomic<bool> done{false};
+  std::thread watcher;
+  if (!watch.empty())
+    watcher = std::thread([&] {
+      const fs::path tmp = fs::path(watch) / (".build-" + std::to_string(pid));
+      while (!done.load()) {
+        r.peakTempBytes = std::max(r.peakTempBytes, folderBytes(tmp));
+        std::this_thread::sleep_for(std::chrono::milliseconds(250));
+      }
+    });
+  ::wait4(pid, &status, 0, &ru);
+  done = true;
+  if (watcher.joinable()) watcher.join();
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   r.peakRss = static_cast<uint64_t>(ru.ru_maxrss) * 1024;
   r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
   return r;
 }
-
-
-}  // namespace
 
 void addBench(CLI::App& app, int& exitCode) {
   auto* bench = app.add_subcommand("bench", "Benchmarks: speed against size (and, later, error)");
@@ -96,8 +108,8 @@ void addBench(CLI::App& app, int& exitCode) {
     fs::create_directories(*dir);
     nlohmann::json results = {{"device", cpuName()}, {"cores", std::thread::hardware_concurrency()},
                               {"memory", *memory}, {"sampling", *sampling}, {"sizes", nlohmann::json::array()}};
-    std::printf("%-8s %-6s %10s %12s %10s %10s %12s\n", "points", "codec", "seconds", "points/s", "peak RSS",
-                "bytes/pt", "open root");
+    std::printf("%-8s %-6s %10s %12s %10s %10s %12s %10s\n", "points", "codec", "seconds", "points/s",
+                "peak RSS", "bytes/pt", "open root", "temp disk");
     bool first = true;
     for (const auto& sz : *sizes) {
       const uint64_t n = parseCount(sz, "--sizes");
@@ -115,13 +127,15 @@ void addBench(CLI::App& app, int& exitCode) {
       for (const auto& codec : codecList) {
         const std::string octree = (fs::path(*dir) / ("synthetic_" + sz + "_" + codec + ".octree")).string();
         const int nruns = codec == "zstd" ? *runs : 1;
-        std::vector<double> secs, rss;
+        std::vector<double> secs, rss, temp;
         for (int r = 0; r < nruns; ++r) {
           ChildRun c = runChild({"nestlight", "convert", las, "-o", octree, "--overwrite", "--progress", "quiet",
-                                 "--codec", codec, "--memory", *memory, "--sampling", *sampling});
+                                 "--codec", codec, "--memory", *memory, "--sampling", *sampling},
+                                octree);
           if (c.status != 0) throw Error(las, "", "conversion failed in the benchmark (exit " + std::to_string(c.status) + ")");
           secs.push_back(c.seconds);
           rss.push_back(double(c.peakRss));
+          temp.push_back(double(c.peakTempBytes));
         }
         // Time to open: metadata, root hierarchy chunk and root payload, warm cache, median of 9.
         std::vector<double> open;
@@ -136,12 +150,15 @@ void addBench(CLI::App& app, int& exitCode) {
         OctreeReader reader(octree);
         const Metadata& m = reader.metadata();
         const double s = median(secs), bpp = m.points ? double(m.payloadBytes) / m.points : 0;
-        std::printf("%-8s %-6s %10.2f %12s %10s %10.2f %9.2f ms\n", sz.c_str(), codec.c_str(), s,
-                    humanCount(n / s).c_str(), humanBytes(median(rss)).c_str(), bpp, median(open));
+        std::printf("%-8s %-6s %10.2f %12s %10s %10.2f %9.2f ms %10s\n", sz.c_str(), codec.c_str(), s,
+                    humanCount(n / s).c_str(), humanBytes(median(rss)).c_str(), bpp, median(open),
+                    humanBytes(median(temp)).c_str());
         std::fflush(stdout);
         results["sizes"].push_back({{"points", n}, {"codec", codec}, {"runs", nruns}, {"seconds_median", s},
                                     {"seconds", secs}, {"points_per_second", n / s},
                                     {"peak_rss_bytes_median", median(rss)}, {"payload_bytes", m.payloadBytes},
+                                    {"peak_temp_bytes_median", median(temp)},
+                                    {"input_bytes", fs::file_size(las)},
                                     {"bytes_per_point", bpp}, {"nodes", m.nodes},
                                     {"open_root_ms_median", median(open)}, {"hierarchy_bytes_read_on_open", hierarchyRead}});
       }

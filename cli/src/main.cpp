@@ -48,6 +48,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addColourMatch(app, code);
   nestlight::cli::addBenchHdr(app, code);
   nestlight::cli::addBenchIbl(app, code);
+  nestlight::cli::addBenchLaz(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -356,14 +356,16 @@ class Builder {
                                         while (current < sources_.size()) {
                                           auto item = std::make_unique<Item>();
                                           auto& r = *sources_[current].reader;
-                                          const size_t weight =
-                                              sampleStep > 1
-                                                  ? r.readSampled(item->batch, kBatchPoints, sampleStep)
-                                                  : (r.read(item->batch, kBatchPoints) ? 1 : 0);
+                                          // Compressed sources leave decoding to the
+                                          // parallel stage (batch.finish()).
+                                          const size_t weight = r.readDeferred(
+                                              item->batch, kBatchPoints, sampleStep);
                                           if (weight) {
                                             item->source = current;
                                             item->weight = weight;
-                                            item->points = item->batch.size() * weight;
+                                            item->points = (item->batch.pending ? item->batch.pendingPoints
+                                                                                : item->batch.size()) *
+                                                           weight;
                                             progress_.advance(r.bytesConsumed() - consumedBefore,
                                                               item->points);
                                             consumedBefore = r.bytesConsumed();
@@ -377,6 +379,15 @@ class Builder {
                                       }) &
             tbb::make_filter<Item*, Item*>(tbb::filter_mode::parallel,
                                            [&](Item* it) {
+                                             try {
+                                               if (it->batch.pending) {
+                                                 it->batch.finish();  // may throw on damage
+                                                 it->points = it->batch.size() * it->weight;
+                                               }
+                                             } catch (...) {
+                                               delete it;
+                                               throw;
+                                             }
                                              work(*it);
                                              return it;
                                            }) &

@@ -12,6 +12,7 @@
 // offsets and lengths are compared without multiplying so that they cannot overflow.
 #include <algorithm>
 #include <charconv>
+#include <set>
 #include <functional>
 #include <cmath>
 #include <cstring>
@@ -188,6 +189,40 @@ class LasReader final : public PointReader {
   }
   size_t recordLength() const { return recordLength_; }
 
+  // LAZ with a chunk table: whole chunks, decoded by batch.finish() on the caller's workers.
+  size_t readDeferred(PointBatch& batch, size_t maxPoints, size_t step) override {
+    if (!laz_ || !laz_->hasChunkTable() || cacheAt_ < cacheCount_)
+      return PointReader::readDeferred(batch, maxPoints, step);
+    batch.clear();
+    const auto& chunks = laz_->chunks();
+    if (nextChunk_ >= chunks.size() || maxPoints == 0) return 0;
+    // Planning passes sample whole chunks; a coarser step than for LAS keeps their decoding cost
+    // small, as long as enough chunks remain to stand for the rest.
+    size_t chunkStep = 1;
+    if (step > 1) chunkStep = chunks.size() >= 8 * step ? 4 * step : chunks.size() >= 2 * step ? step : 1;
+    std::vector<size_t> which;
+    uint64_t points = 0;
+    size_t c = nextChunk_;
+    while (c < chunks.size() && (which.empty() || points + chunks[c].points <= maxPoints)) {
+      which.push_back(c);
+      points += chunks[c].points;
+      c += chunkStep;
+    }
+    src_->releaseBefore(chunks[nextChunk_].offset);
+    nextChunk_ = std::min(c, chunks.size());
+    batch.pendingPoints = static_cast<size_t>(points);
+    batch.pending = [this, which = std::move(which)](PointBatch& b) {
+      thread_local std::vector<uint8_t> records;
+      const size_t n = static_cast<size_t>(laz_->decode(which, records, false));
+      const size_t stride = header_.layout.stride();
+      b.xyz.resize(3 * n);
+      b.attrs.resize(n * stride);
+      kDecoders[pointFormat_](records.data(), n, recordLength_, scale_, offset_, b.xyz.data(),
+                              b.attrs.data(), stride, extraBytes_);
+    };
+    return chunkStep;
+  }
+
   void rewind() override {
     next_ = 0;
     src_->releaseBefore(0);
@@ -211,6 +246,7 @@ class LasReader final : public PointReader {
                     uint64_t at, bool extended);
   void buildLayout();
   void setupLaz(uint64_t declared, uint64_t dataEnd);
+  std::vector<laz::Chunk> copcChunks();
   size_t readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool decodeFields = true);
 
   std::shared_ptr<ByteSource> src_;
@@ -227,6 +263,7 @@ class LasReader final : public PointReader {
   Vec3d scale_, offset_;
 
   nlohmann::json geotiff_;
+  const uint8_t* copcInfo_ = nullptr;
   const uint8_t* laszipVlr_ = nullptr;
   uint64_t laszipVlrLength_ = 0, laszipVlrAt_ = 0;
   bool compressed_ = false;
@@ -493,6 +530,8 @@ void LasReader::handleRecord(const std::string& user, uint16_t id, const uint8_t
       // GeoAsciiParams are '|'-separated strings; keep them verbatim (NULs end the last one).
       geotiff_["ascii"] = fixedString(data, static_cast<size_t>(length), true);
     }
+  } else if (user == "copc" && id == 1 && !extended && length >= 160) {
+    copcInfo_ = data;  // COPC 1.0: must be the first VLR; where it is does not matter here
   } else if (user == laz::kLaszipUserId && id == laz::kLaszipRecordId && !extended) {
     if (laszipVlr_) {
       warn(Error::atByte(at) + ": a second LASzip record is ignored");
@@ -595,7 +634,8 @@ void LasReader::setupLaz(uint64_t declared, uint64_t dataEnd) {
                                              pointFormat_, recordLength_, info);
   if (!bad.empty()) fail(laszipVlrAt_ + las::kVlrHeaderSize, bad);
   laz_ = std::make_unique<laz::LazPoints>(src_, info, pointStart_, dataEnd, declared,
-                                          options_.lenient, [this](std::string w) { warn(std::move(w)); });
+                                          options_.lenient, [this](std::string w) { warn(std::move(w)); },
+                                          copcChunks());
   count_ = laz_->points();
 
   nlohmann::json items = nlohmann::json::array();
@@ -611,7 +651,57 @@ void LasReader::setupLaz(uint64_t declared, uint64_t dataEnd) {
       {"chunk_size", info.chunkSize == laz::kVariableChunkSize ? nlohmann::json("variable")
                                                                : nlohmann::json(info.chunkSize)},
       {"chunks", laz_->chunks().size()},
-      {"chunk_table", laz_->hasChunkTable()}};
+      {"chunks_from", laz_->chunkSource()}};
+}
+
+// COPC (Cloud Optimized Point Cloud 1.0): the info VLR and the hierarchy pages it points to,
+// whose entries name every chunk (offset, bytes, points) of the octree it stores. Returns those
+// chunks, or none (with a warning) when the hierarchy is damaged: the chunk table still serves.
+std::vector<laz::Chunk> LasReader::copcChunks() {
+  if (!copcInfo_) return {};
+  const uint8_t* d = src_->data();
+  const uint64_t size = src_->size();
+  const uint8_t* info = copcInfo_;
+  nlohmann::json copc = {{"center", {load<double>(info), load<double>(info + 8), load<double>(info + 16)}},
+                         {"halfsize", load<double>(info + 24)},
+                         {"spacing", load<double>(info + 32)},
+                         {"gps_time", {load<double>(info + 56), load<double>(info + 64)}}};
+  std::vector<laz::Chunk> chunks;
+  std::vector<std::pair<uint64_t, uint64_t>> pages = {{load<uint64_t>(info + 40), load<uint64_t>(info + 48)}};
+  std::set<uint64_t> seen;
+  uint64_t entries = 0;
+  int maxLevel = 0;
+  while (!pages.empty()) {
+    const auto [at, bytes] = pages.back();
+    pages.pop_back();
+    if (at > size || bytes > size - at || bytes % 32 != 0 || !seen.insert(at).second) {
+      warn(Error::atByte(at) + ": COPC hierarchy page of " + std::to_string(bytes) +
+           " bytes is damaged (outside the file, not whole entries, or listed twice); the "
+           "hierarchy is ignored");
+      return {};
+    }
+    for (uint64_t e = at; e < at + bytes; e += 32) {
+      const int32_t level = load<int32_t>(d + e);
+      const uint64_t offset = load<uint64_t>(d + e + 16);
+      const int32_t byteSize = load<int32_t>(d + e + 24), count = load<int32_t>(d + e + 28);
+      ++entries;
+      maxLevel = std::max(maxLevel, level);
+      if (count == -1) {
+        pages.push_back({offset, uint64_t(uint32_t(byteSize))});
+      } else if (count < -1 || byteSize < 0) {
+        warn(Error::atByte(e) + ": COPC hierarchy entry with " + std::to_string(count) +
+             " points and " + std::to_string(byteSize) + " bytes; the hierarchy is ignored");
+        return {};
+      } else if (count > 0) {
+        chunks.push_back({offset, uint64_t(byteSize), 0, uint32_t(count)});
+      }
+    }
+  }
+  copc["hierarchy_entries"] = entries;
+  copc["chunks"] = chunks.size();
+  copc["max_level"] = maxLevel;
+  header_.details["copc"] = std::move(copc);
+  return chunks;
 }
 
 // LAZ: chunks are decoded in groups, in parallel, into cache_; batches are cut from it. With

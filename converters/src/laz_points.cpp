@@ -43,14 +43,15 @@ LazPoints::~LazPoints() = default;
 
 LazPoints::LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t pointStart,
                      uint64_t dataEnd, uint64_t declaredPoints, bool lenient,
-                     std::function<void(std::string)> warn)
+                     std::function<void(std::string)> warn, std::vector<Chunk> hierarchyChunks)
     : src_(std::move(src)),
       info_(std::move(info)),
       recordSize_(info_.recordSize()),
       pointStart_(pointStart),
       dataEnd_(dataEnd),
       lenient_(lenient),
-      warn_(std::move(warn)) {
+      warn_(std::move(warn)),
+      hierarchy_(std::move(hierarchyChunks)) {
   if (info_.compressor == Compressor::Pointwise) {
     // LASzip 1.0: one stream for every point, no chunk table.
     if (declaredPoints > kMaxChunkPoints)
@@ -95,14 +96,22 @@ void LazPoints::readChunkTable(uint64_t declared) {
   }
   const bool fixed = info_.chunkSize != kVariableChunkSize;
 
-  // Without a table, chunks of a fixed size can still be found one after the other, each
-  // starting where the previous one's stream ended; variable-size ones cannot.
+  // Without a table, a COPC hierarchy still says where every chunk is; chunks of a fixed size
+  // can be found one after the other, each starting where the previous one's stream ended;
+  // other variable-size ones cannot be found.
   auto sequential = [&](const std::string& why) {
+    if (!hierarchy_.empty()) {
+      warn_(src_->name() + ": " + Error::atByte(tableAt) + ": " + why +
+            "; the chunks are read from the COPC hierarchy instead");
+      useHierarchy(declared);
+      return;
+    }
     if (!fixed) fail(tableAt, why + "; a file with variable-size chunks cannot be read without it");
     // Not an error by itself (LASzip reads such files too): a damaged chunk on the way is.
     warn_(src_->name() + ": " + Error::atByte(tableAt) + ": " + why +
           "; chunks are found one after the other (no parallel decoding)");
     tabled_ = false;
+    source_ = "sequential";
     points_ = declared;
     if (declared)
       chunks_.push_back(
@@ -202,9 +211,57 @@ void LazPoints::readChunkTable(uint64_t declared) {
                           " lies after the end of the point data (byte " + std::to_string(dataEnd_) +
                           ")");
   unreadable_ = unreadableAtOpen_;
+  if (!hierarchy_.empty()) checkHierarchy();
 }
 
-uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t>& out) {
+// COPC lists every chunk in its hierarchy (offset, bytes, points): the same facts as the table.
+void LazPoints::checkHierarchy() {
+  std::vector<Chunk> h = hierarchy_;
+  std::sort(h.begin(), h.end(), [](const Chunk& a, const Chunk& b) { return a.offset < b.offset; });
+  size_t matched = 0;
+  for (const Chunk& e : h) {
+    auto it = std::lower_bound(chunks_.begin(), chunks_.end(), e.offset,
+                               [](const Chunk& c, uint64_t o) { return c.offset < o; });
+    if (it != chunks_.end() && it->offset == e.offset && it->bytes == e.bytes && it->points == e.points)
+      ++matched;
+  }
+  if (matched != h.size() || h.size() != chunks_.size())
+    warn_(src_->name() + ": the COPC hierarchy lists " + std::to_string(h.size()) +
+          " chunks, of which " + std::to_string(matched) + " match the " +
+          std::to_string(chunks_.size()) + " of the LAZ chunk table; the chunk table is used");
+}
+
+void LazPoints::useHierarchy(uint64_t declared) {
+  std::vector<Chunk> h = hierarchy_;
+  std::sort(h.begin(), h.end(), [](const Chunk& a, const Chunk& b) { return a.offset < b.offset; });
+  uint64_t first = 0, end = pointStart_ + 8;
+  for (Chunk c : h) {
+    if (c.points == 0) continue;
+    if (c.offset < end || c.bytes > dataEnd_ || c.offset > dataEnd_ - c.bytes)
+      fail(c.offset, "the COPC hierarchy lists a chunk of " + std::to_string(c.bytes) +
+                         " bytes at byte " + std::to_string(c.offset) +
+                         " that overlaps another or lies outside the point data");
+    if (c.points > kMaxChunkPoints)
+      fail(c.offset, "a COPC chunk claims " + std::to_string(c.points) + " points");
+    c.firstPoint = first;
+    first += c.points;
+    end = c.offset + c.bytes;
+    chunks_.push_back(c);
+  }
+  tabled_ = true;
+  source_ = "COPC hierarchy";
+  points_ = first;
+  if (first != declared) {
+    const std::string what = "the header declares " + std::to_string(declared) +
+                             " points but the COPC hierarchy lists " + std::to_string(first);
+    if (!lenient_ && first < declared) fail(pointStart_, what);
+    warn_(src_->name() + ": " + what);
+  }
+  hierarchy_.clear();  // nothing left to cross-check
+}
+
+uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t>& out,
+                           bool parallel) {
   const uint8_t* d = src_->data();
   if (!decoders_)
     decoders_ = std::make_unique<Decoders>([this] {
@@ -249,7 +306,7 @@ uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t
   for (size_t k = 0; k < n; ++k) at[k + 1] = at[k] + chunks_[which[k]].points;
   out.resize(size_t(at.back()) * recordSize_);
   std::vector<std::optional<DecodeError>> failed(n);
-  tbb::parallel_for(size_t(0), n, size_t(1), [&](size_t k) {
+  auto one = [&](size_t k) {
     const Chunk& c = chunks_[which[k]];
     try {
       pool.local()->decode(d + c.offset, c.bytes, c.points,
@@ -257,7 +314,11 @@ uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t
     } catch (const DecodeError& e) {
       failed[k] = e;
     }
-  });
+  };
+  if (parallel && n > 1)
+    tbb::parallel_for(size_t(0), n, size_t(1), one);
+  else
+    for (size_t k = 0; k < n; ++k) one(k);
   // Damaged chunks: an error, or (lenient) their points leave the batch and are counted.
   uint64_t kept = at.back();
   size_t write = 0;
@@ -268,8 +329,11 @@ uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t
       const DecodeError& e = *failed[k];
       const std::string what = chunkName(which[k]) + ": " + e.what();
       if (!lenient_) fail(c.offset + e.offset, what);
-      warn_(src_->name() + ": " + Error::atByte(c.offset + e.offset) + ": " + what + "; its " +
-            std::to_string(c.points) + " points are counted as unreadable");
+      {
+        std::lock_guard<std::mutex> lock(warnMutex_);
+        warn_(src_->name() + ": " + Error::atByte(c.offset + e.offset) + ": " + what + "; its " +
+              std::to_string(c.points) + " points are counted as unreadable");
+      }
       unreadable_ += c.points;
       kept -= c.points;
       continue;

@@ -3,8 +3,10 @@
 // point format byte says the points are compressed.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <memory>
 #include <string>
 #include <vector>
@@ -26,9 +28,11 @@ class LazPoints {
   // `pointStart` is the header's offset to point data, `dataEnd` where the point data must end
   // (the first EVLR, else the end of the file). Throws nestlight::Error naming the file, the
   // chunk and the byte offset; with `lenient`, damage that leaves intact chunks becomes warnings.
+  // `hierarchyChunks`: the chunks a COPC hierarchy lists (empty otherwise), cross-checked with
+  // the chunk table and used in its place when the table is missing or damaged.
   LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t pointStart,
             uint64_t dataEnd, uint64_t declaredPoints, bool lenient,
-            std::function<void(std::string)> warn);
+            std::function<void(std::string)> warn, std::vector<Chunk> hierarchyChunks = {});
   ~LazPoints();
 
   const LaszipInfo& info() const { return info_; }
@@ -37,19 +41,24 @@ class LazPoints {
   uint64_t points() const { return points_; }
   const std::vector<Chunk>& chunks() const { return chunks_; }
   bool hasChunkTable() const { return tabled_; }
+  // "chunk table", "COPC hierarchy" or "sequential" (no table: found while decoding).
+  const char* chunkSource() const { return source_; }
 
   // Decodes the chunks `which` (ascending) into `out` (their points' records back to back, in
-  // order) on all cores. Returns the number of points written; a damaged chunk throws, or with
-  // `lenient` is skipped, warned about and its points added to unreadable(). Without a chunk
-  // table, chunks are found as they are decoded: `which` must be the last one known.
-  uint64_t decode(const std::vector<size_t>& which, std::vector<uint8_t>& out);
+  // order), on all cores when `parallel`. Returns the number of points written; a damaged chunk
+  // throws, or with `lenient` is skipped, warned about and its points added to unreadable().
+  // Without a chunk table, chunks are found as they are decoded: `which` must be the last one
+  // known, and calls must not overlap. With a table, calls may run concurrently.
+  uint64_t decode(const std::vector<size_t>& which, std::vector<uint8_t>& out, bool parallel = true);
   // Points the file declares that could not be decoded: chunks lost at open (lenient) and
   // damaged chunks met since the last rewind().
-  uint64_t unreadable() const { return unreadable_; }
+  uint64_t unreadable() const { return unreadable_.load(); }
   void rewind() { unreadable_ = unreadableAtOpen_; }
 
  private:
   void readChunkTable(uint64_t declaredPoints);
+  void checkHierarchy();
+  void useHierarchy(uint64_t declaredPoints);
   [[noreturn]] void fail(uint64_t at, const std::string& reason) const;
   std::string chunkName(size_t i) const;
 
@@ -60,9 +69,13 @@ class LazPoints {
   bool lenient_;
   std::function<void(std::string)> warn_;
   bool tabled_ = false;
+  const char* source_ = "chunk table";
+  std::vector<Chunk> hierarchy_;
   std::vector<Chunk> chunks_;
   uint64_t points_ = 0;
-  uint64_t unreadable_ = 0, unreadableAtOpen_ = 0;
+  std::atomic<uint64_t> unreadable_{0};
+  uint64_t unreadableAtOpen_ = 0;
+  std::mutex warnMutex_;  // warn_ from concurrent decodes
   uint64_t tableStart_ = 0;
   struct Decoders;  // one ChunkDecoder per thread
   std::unique_ptr<Decoders> decoders_;

@@ -363,9 +363,6 @@ class PointwiseDecoder final : public ChunkDecoder {
 
 }  // namespace
 
-// TEMPORARY until laz_pointwise_v1.cpp lands.
-__attribute__((weak)) std::unique_ptr<ItemDecoder> makeItemV1(const Item&) { return nullptr; }
-
 std::unique_ptr<ChunkDecoder> makePointwiseDecoder(const LaszipInfo& info) {
   return std::make_unique<PointwiseDecoder>(info);
 }

@@ -147,6 +147,36 @@ TEST(Laz, CopcHoldsThePointsOfItsLasTwin) {
   EXPECT_EQ(c->header().details["laszip"]["chunk_size"], "variable");
 }
 
+// COPC lists its chunks in its hierarchy as well: they agree with the chunk table, and when the
+// table is lost the hierarchy finds every chunk (variable-size chunks cannot be found otherwise).
+TEST(Laz, CopcHierarchyAgreesWithTheTableAndStandsInForIt) {
+  NL_REQUIRE_SHARED("laz/simple.copc.laz");
+  std::string f = test::readFile(laz("simple.copc.laz"));
+  {
+    auto r = openLas(memorySource("a.copc.laz", std::vector<uint8_t>(f.begin(), f.end())));
+    EXPECT_EQ(r->header().details["copc"]["chunks"], 65);
+    EXPECT_EQ(r->header().details["laszip"]["chunks_from"], "chunk table");
+    EXPECT_TRUE(r->warnings().empty());
+  }
+  uint32_t pointStart;
+  std::memcpy(&pointStart, f.data() + 96, 4);
+  const int64_t past = int64_t(f.size()) + 1000;
+  std::memcpy(f.data() + pointStart, &past, 8);  // the chunk table offset now points nowhere
+  auto r = openLas(memorySource("b.copc.laz", std::vector<uint8_t>(f.begin(), f.end())));
+  EXPECT_EQ(r->header().details["laszip"]["chunks_from"], "COPC hierarchy");
+  EXPECT_TRUE(test::anyContains(r->warnings(), "read from the COPC hierarchy"));
+  const Records rec = records(laz("simple.copc.laz"));
+  const test::Points p = test::readAll(*r, 100);
+  EXPECT_EQ(p.size(), 1065u);
+  // Without hierarchy and table, a variable-size chunked file cannot be read: a clear error.
+  std::string g = f;
+  const size_t copc = g.find("copc");
+  ASSERT_NE(copc, std::string::npos);
+  g[copc] = 'x';  // no longer a COPC info VLR
+  const Error e = test::errorOf([&] { openLas(memorySource("c.laz", std::vector<uint8_t>(g.begin(), g.end()))); });
+  EXPECT_NE(e.reason().find("variable-size chunks cannot be read without it"), std::string::npos) << e.what();
+}
+
 // ---- the coder --------------------------------------------------------------------------------
 
 #include "laz_arithmetic.h"

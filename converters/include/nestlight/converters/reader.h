@@ -37,10 +37,23 @@ struct SourceHeader {
 struct PointBatch {
   std::vector<double> xyz;     // 3 per point, in the source's world coordinates
   std::vector<uint8_t> attrs;  // header().layout.stride() bytes per point
+  // Set by PointReader::readDeferred when the batch is still to be decoded: calling it fills xyz
+  // and attrs (on any thread, concurrently with other batches and reads; it may throw Error).
+  std::function<void(PointBatch&)> pending;
+  size_t pendingPoints = 0;  // how many points it claims to hold (for progress)
   size_t size() const { return xyz.size() / 3; }
   void clear() {
     xyz.clear();
     attrs.clear();
+    pending = nullptr;
+    pendingPoints = 0;
+  }
+  // Decodes a deferred batch; nothing when it is decoded already.
+  void finish() {
+    if (!pending) return;
+    auto f = std::move(pending);
+    pending = nullptr;
+    f(*this);
   }
 };
 
@@ -66,6 +79,12 @@ class PointReader {
   // cheaply and returns every point), or 0 at the end of the input.
   virtual size_t readSampled(PointBatch& batch, size_t maxPoints, size_t /*step*/) {
     return read(batch, maxPoints) ? 1 : 0;
+  }
+  // read() (step 1) or readSampled() that may leave the decoding to batch.finish(), so that a
+  // caller with parallel workers decodes batches there (compressed sources) instead of on the
+  // reading thread. The reader must outlive the batch's finish().
+  virtual size_t readDeferred(PointBatch& batch, size_t maxPoints, size_t step) {
+    return step > 1 ? readSampled(batch, maxPoints, step) : (read(batch, maxPoints) ? 1 : 0);
   }
   // Starts again from the first point.
   virtual void rewind() = 0;

@@ -1,0 +1,145 @@
+// `nestlight bench laz`: LAZ decoding speed on one core and on all cores (points/s and MB/s of
+// compressed input), for given LAZ files and a generated one, and conversion speed from LAZ
+// against the same points from LAS (each conversion in a child process, median of runs).
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "cli.h"
+#include "nestlight/converters/reader.h"
+#include "nestlight/converters/synthetic.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::cli {
+
+namespace fs = std::filesystem;
+uint64_t writeSynthetic(const SyntheticSpec& spec, const std::string& path);
+
+namespace {
+
+struct Decode {
+  double pointsPerSecond = 0, bytesPerSecond = 0;
+  uint64_t points = 0;
+};
+
+// Decodes the whole file again and again for at least `minSeconds`, `runs` times; the median
+// run's rate. The file is mapped once (warm page cache): this measures decoding, not the disk.
+Decode decodeRate(const std::string& path, unsigned threads, int runs, double minSeconds) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  auto src = mapFile(path);
+  std::vector<double> rates;
+  uint64_t points = 0;
+  for (int r = 0; r < runs; ++r) {
+    const auto t = std::chrono::steady_clock::now();
+    uint64_t n = 0;
+    double s = 0;
+    do {
+      readLasRecords(src, {}, [&](const uint8_t*, size_t k, size_t) { n += k; });
+      s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    } while (s < minSeconds);
+    rates.push_back(double(n) / s);
+    points = n;
+  }
+  Decode d;
+  d.pointsPerSecond = median(rates);
+  uint64_t perPass = 0;
+  readLasRecords(src, {}, [&](const uint8_t*, size_t k, size_t) { perPass += k; });
+  d.points = perPass;
+  d.bytesPerSecond = perPass ? d.pointsPerSecond * double(src->size()) / double(perPass) : 0;
+  (void)points;
+  return d;
+}
+
+}  // namespace
+
+void addBenchLaz(CLI::App& app, int& exitCode) {
+  CLI::App* bench = app.get_subcommand("bench");
+  auto* cmd = bench->add_subcommand(
+      "laz", "LAZ decoding speed (one core, all cores) and conversion from LAZ against LAS");
+  auto files = std::make_shared<std::vector<std::string>>();
+  auto points = std::make_shared<std::string>("20M");
+  auto runs = std::make_shared<int>(3);
+  auto dir = std::make_shared<std::string>("bench-data");
+  auto out = std::make_shared<std::string>("bench-laz.json");
+  auto memory = std::make_shared<std::string>("1G");
+  cmd->add_option("files", *files, "LAZ files whose decoding is measured as well (e.g. real scans)");
+  cmd->add_option("--points", *points, "Points of the generated scan, written as LAS and as LAZ")
+      ->capture_default_str();
+  cmd->add_option("--runs", *runs, "Runs of each measurement (the median is reported)")->capture_default_str();
+  cmd->add_option("--dir", *dir, "Folder for the generated scans and octrees (reused)")->capture_default_str();
+  cmd->add_option("--memory", *memory, "--memory passed to convert")->capture_default_str();
+  cmd->add_option("--json", *out, "Where to write the results")->capture_default_str();
+  cmd->callback([=, &exitCode]() {
+    const uint64_t n = parseCount(*points, "--points");
+    fs::create_directories(*dir);
+    const std::string stem = (fs::path(*dir) / ("synthetic_" + *points)).string();
+    const std::string las = stem + ".las", laz = stem + ".laz";
+    SyntheticSpec spec;
+    spec.points = n;
+    spec.seed = 42;
+    for (const std::string& f : {las, laz})
+      if (!fs::exists(f)) {
+        std::fprintf(stderr, "bench: generating %s\n", f.c_str());
+        writeSynthetic(spec, f);
+      }
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    nlohmann::json results = {{"device", cpuName()}, {"cores", cores}, {"decode", nlohmann::json::array()}};
+
+    std::printf("%-40s %10s %10s %14s %14s %12s\n", "LAZ file", "points", "bytes/pt", "1 core pts/s",
+                std::to_string(cores).append(" cores pts/s").c_str(), "MB/s (all)");
+    std::vector<std::string> decodeFiles = *files;
+    decodeFiles.push_back(laz);
+    for (const std::string& f : decodeFiles) {
+      const Decode one = decodeRate(f, 1, *runs, 1.0);
+      const Decode all = decodeRate(f, cores, *runs, 1.0);
+      const double bpp = one.points ? double(fs::file_size(f)) / double(one.points) : 0;
+      std::printf("%-40s %10s %10.2f %14s %14s %12.1f\n", fs::path(f).filename().c_str(),
+                  humanCount(double(one.points)).c_str(), bpp, humanCount(one.pointsPerSecond).c_str(),
+                  humanCount(all.pointsPerSecond).c_str(), all.bytesPerSecond / 1e6);
+      std::fflush(stdout);
+      results["decode"].push_back({{"file", f}, {"points", one.points}, {"bytes_per_point", bpp},
+                                   {"points_per_second_1_core", one.pointsPerSecond},
+                                   {"points_per_second_all_cores", all.pointsPerSecond},
+                                   {"bytes_per_second_all_cores", all.bytesPerSecond}});
+    }
+
+    // Conversion of the same points from LAS and from LAZ.
+    std::printf("\n%-6s %10s %12s %10s %10s\n", "input", "seconds", "points/s", "peak RSS", "input");
+    double rate[2] = {0, 0};
+    const std::string inputs[2] = {las, laz};
+    for (int k = 0; k < 2; ++k) {
+      const std::string octree = stem + (k ? "_from_laz" : "_from_las") + ".octree";
+      std::vector<double> secs, rss;
+      for (int r = 0; r < *runs; ++r) {
+        ChildRun c = runChild({"nestlight", "convert", inputs[k], "-o", octree, "--overwrite", "--progress",
+                               "quiet", "--memory", *memory});
+        if (c.status != 0)
+          throw Error(inputs[k], "", "conversion failed in the benchmark (exit " + std::to_string(c.status) + ")");
+        secs.push_back(c.seconds);
+        rss.push_back(double(c.peakRss));
+      }
+      const double s = median(secs);
+      rate[k] = double(n) / s;
+      std::printf("%-6s %10.2f %12s %10s %10s\n", k ? "LAZ" : "LAS", s, humanCount(rate[k]).c_str(),
+                  humanBytes(median(rss)).c_str(), humanBytes(double(fs::file_size(inputs[k]))).c_str());
+      std::fflush(stdout);
+      results[k ? "convert_laz" : "convert_las"] = {{"points", n}, {"runs", *runs}, {"seconds", secs},
+                                                    {"seconds_median", s}, {"points_per_second", rate[k]},
+                                                    {"peak_rss_bytes_median", median(rss)},
+                                                    {"input_bytes", fs::file_size(inputs[k])}};
+    }
+    results["laz_over_las"] = rate[0] > 0 ? rate[1] / rate[0] : 0;
+    std::printf("LAZ path at %.2fx the LAS path's points/s (target: at least 0.7x)\n",
+                rate[0] > 0 ? rate[1] / rate[0] : 0);
+    std::ofstream(*out) << results.dump(2) << "\n";
+    std::printf("results written to %s\n", out->c_str());
+    exitCode = 0;
+  });
+}
+
+}  // namespace nestlight::cli
