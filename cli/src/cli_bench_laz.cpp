@@ -67,11 +67,14 @@ void addBenchLaz(CLI::App& app, int& exitCode) {
   auto dir = std::make_shared<std::string>("bench-data");
   auto out = std::make_shared<std::string>("bench-laz.json");
   auto memory = std::make_shared<std::string>("1G");
-  cmd->add_option("files", *files, "LAZ files whose decoding is measured as well (e.g. real scans)");
+  cmd->add_option("files", *files,
+                  "LAZ files whose decoding is measured as well (e.g. real scans)");
   cmd->add_option("--points", *points, "Points of the generated scan, written as LAS and as LAZ")
       ->capture_default_str();
-  cmd->add_option("--runs", *runs, "Runs of each measurement (the median is reported)")->capture_default_str();
-  cmd->add_option("--dir", *dir, "Folder for the generated scans and octrees (reused)")->capture_default_str();
+  cmd->add_option("--runs", *runs, "Runs of each measurement (the median is reported)")
+      ->capture_default_str();
+  cmd->add_option("--dir", *dir, "Folder for the generated scans and octrees (reused)")
+      ->capture_default_str();
   cmd->add_option("--memory", *memory, "--memory passed to convert")->capture_default_str();
   cmd->add_option("--json", *out, "Where to write the results")->capture_default_str();
   cmd->callback([=, &exitCode]() {
@@ -88,10 +91,11 @@ void addBenchLaz(CLI::App& app, int& exitCode) {
         writeSynthetic(spec, f);
       }
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-    nlohmann::json results = {{"device", cpuName()}, {"cores", cores}, {"decode", nlohmann::json::array()}};
+    nlohmann::json results = {
+        {"device", cpuName()}, {"cores", cores}, {"decode", nlohmann::json::array()}};
 
-    std::printf("%-40s %10s %10s %14s %14s %12s\n", "LAZ file", "points", "bytes/pt", "1 core pts/s",
-                std::to_string(cores).append(" cores pts/s").c_str(), "MB/s (all)");
+    std::printf("%-40s %10s %10s %14s %14s %12s\n", "LAZ file", "points", "bytes/pt",
+                "1 core pts/s", std::to_string(cores).append(" cores pts/s").c_str(), "MB/s (all)");
     std::vector<std::string> decodeFiles = *files;
     decodeFiles.push_back(laz);
     for (const std::string& f : decodeFiles) {
@@ -99,37 +103,46 @@ void addBenchLaz(CLI::App& app, int& exitCode) {
       const Decode all = decodeRate(f, cores, *runs, 1.0);
       const double bpp = one.points ? double(fs::file_size(f)) / double(one.points) : 0;
       std::printf("%-40s %10s %10.2f %14s %14s %12.1f\n", fs::path(f).filename().c_str(),
-                  humanCount(double(one.points)).c_str(), bpp, humanCount(one.pointsPerSecond).c_str(),
-                  humanCount(all.pointsPerSecond).c_str(), all.bytesPerSecond / 1e6);
+                  humanCount(double(one.points)).c_str(), bpp,
+                  humanCount(one.pointsPerSecond).c_str(), humanCount(all.pointsPerSecond).c_str(),
+                  all.bytesPerSecond / 1e6);
       std::fflush(stdout);
-      results["decode"].push_back({{"file", f}, {"points", one.points}, {"bytes_per_point", bpp},
+      results["decode"].push_back({{"file", f},
+                                   {"points", one.points},
+                                   {"bytes_per_point", bpp},
                                    {"points_per_second_1_core", one.pointsPerSecond},
                                    {"points_per_second_all_cores", all.pointsPerSecond},
                                    {"bytes_per_second_all_cores", all.bytesPerSecond}});
     }
 
     // Conversion of the same points from LAS and from LAZ.
-    std::printf("\n%-6s %10s %12s %10s %10s\n", "input", "seconds", "points/s", "peak RSS", "input");
+    std::printf("\n%-6s %10s %12s %10s %10s\n", "input", "seconds", "points/s", "peak RSS",
+                "input");
     double rate[2] = {0, 0};
     const std::string inputs[2] = {las, laz};
     for (int k = 0; k < 2; ++k) {
       const std::string octree = stem + (k ? "_from_laz" : "_from_las") + ".octree";
       std::vector<double> secs, rss;
       for (int r = 0; r < *runs; ++r) {
-        ChildRun c = runChild({"nestlight", "convert", inputs[k], "-o", octree, "--overwrite", "--progress",
-                               "quiet", "--memory", *memory});
+        ChildRun c = runChild({"nestlight", "convert", inputs[k], "-o", octree, "--overwrite",
+                               "--progress", "quiet", "--memory", *memory});
         if (c.status != 0)
-          throw Error(inputs[k], "", "conversion failed in the benchmark (exit " + std::to_string(c.status) + ")");
+          throw Error(inputs[k], "",
+                      "conversion failed in the benchmark (exit " + std::to_string(c.status) + ")");
         secs.push_back(c.seconds);
         rss.push_back(double(c.peakRss));
       }
       const double s = median(secs);
       rate[k] = double(n) / s;
       std::printf("%-6s %10.2f %12s %10s %10s\n", k ? "LAZ" : "LAS", s, humanCount(rate[k]).c_str(),
-                  humanBytes(median(rss)).c_str(), humanBytes(double(fs::file_size(inputs[k]))).c_str());
+                  humanBytes(median(rss)).c_str(),
+                  humanBytes(double(fs::file_size(inputs[k]))).c_str());
       std::fflush(stdout);
-      results[k ? "convert_laz" : "convert_las"] = {{"points", n}, {"runs", *runs}, {"seconds", secs},
-                                                    {"seconds_median", s}, {"points_per_second", rate[k]},
+      results[k ? "convert_laz" : "convert_las"] = {{"points", n},
+                                                    {"runs", *runs},
+                                                    {"seconds", secs},
+                                                    {"seconds_median", s},
+                                                    {"points_per_second", rate[k]},
                                                     {"peak_rss_bytes_median", median(rss)},
                                                     {"input_bytes", fs::file_size(inputs[k])}};
     }

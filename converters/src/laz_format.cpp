@@ -1,9 +1,9 @@
 // The LASzip VLR (LASzip reference implementation, laszip.cpp: the "laszip encoded" record
 // 22204): compressor u16, coder u16, version u8 u8 u16, options u32, chunk size u32, number and
 // offset of special EVLRs i64 i64, item count u16, then per item type u16, size u16, version u16.
-#include <cstring>
-
 #include "laz_format.h"
+
+#include <cstring>
 
 namespace nestlight::laz {
 
@@ -18,55 +18,100 @@ T get(const uint8_t* p) {
 // The items LASzip writes for each point format, before any extra bytes (Byte / Byte14).
 bool expectedItems(int pf, std::vector<ItemType>& out) {
   switch (pf) {
-    case 0: out = {ItemType::Point10}; return true;
-    case 1: out = {ItemType::Point10, ItemType::GpsTime11}; return true;
-    case 2: out = {ItemType::Point10, ItemType::Rgb12}; return true;
-    case 3: out = {ItemType::Point10, ItemType::GpsTime11, ItemType::Rgb12}; return true;
-    case 4: out = {ItemType::Point10, ItemType::GpsTime11, ItemType::WavePacket13}; return true;
+    case 0:
+      out = {ItemType::Point10};
+      return true;
+    case 1:
+      out = {ItemType::Point10, ItemType::GpsTime11};
+      return true;
+    case 2:
+      out = {ItemType::Point10, ItemType::Rgb12};
+      return true;
+    case 3:
+      out = {ItemType::Point10, ItemType::GpsTime11, ItemType::Rgb12};
+      return true;
+    case 4:
+      out = {ItemType::Point10, ItemType::GpsTime11, ItemType::WavePacket13};
+      return true;
     case 5:
       out = {ItemType::Point10, ItemType::GpsTime11, ItemType::Rgb12, ItemType::WavePacket13};
       return true;
-    case 6: out = {ItemType::Point14}; return true;
-    case 7: out = {ItemType::Point14, ItemType::Rgb14}; return true;
-    case 8: out = {ItemType::Point14, ItemType::RgbNir14}; return true;
-    case 9: out = {ItemType::Point14, ItemType::WavePacket14}; return true;
-    case 10: out = {ItemType::Point14, ItemType::RgbNir14, ItemType::WavePacket14}; return true;
-    default: return false;
+    case 6:
+      out = {ItemType::Point14};
+      return true;
+    case 7:
+      out = {ItemType::Point14, ItemType::Rgb14};
+      return true;
+    case 8:
+      out = {ItemType::Point14, ItemType::RgbNir14};
+      return true;
+    case 9:
+      out = {ItemType::Point14, ItemType::WavePacket14};
+      return true;
+    case 10:
+      out = {ItemType::Point14, ItemType::RgbNir14, ItemType::WavePacket14};
+      return true;
+    default:
+      return false;
   }
 }
 
 size_t fixedSize(ItemType t) {
   switch (t) {
-    case ItemType::Point10: return 20;
-    case ItemType::GpsTime11: return 8;
-    case ItemType::Rgb12: return 6;
-    case ItemType::WavePacket13: return 29;
-    case ItemType::Point14: return 30;
-    case ItemType::Rgb14: return 6;
-    case ItemType::RgbNir14: return 8;
-    case ItemType::WavePacket14: return 29;
-    default: return 0;  // Byte, Byte14: any size
+    case ItemType::Point10:
+      return 20;
+    case ItemType::GpsTime11:
+      return 8;
+    case ItemType::Rgb12:
+      return 6;
+    case ItemType::WavePacket13:
+      return 29;
+    case ItemType::Point14:
+      return 30;
+    case ItemType::Rgb14:
+      return 6;
+    case ItemType::RgbNir14:
+      return 8;
+    case ItemType::WavePacket14:
+      return 29;
+    default:
+      return 0;  // Byte, Byte14: any size
   }
 }
 }  // namespace
 
 std::string itemName(ItemType t) {
   switch (t) {
-    case ItemType::Byte: return "BYTE";
-    case ItemType::Short: return "SHORT";
-    case ItemType::Int: return "INT";
-    case ItemType::Long: return "LONG";
-    case ItemType::Float: return "FLOAT";
-    case ItemType::Double: return "DOUBLE";
-    case ItemType::Point10: return "POINT10";
-    case ItemType::GpsTime11: return "GPSTIME11";
-    case ItemType::Rgb12: return "RGB12";
-    case ItemType::WavePacket13: return "WAVEPACKET13";
-    case ItemType::Point14: return "POINT14";
-    case ItemType::Rgb14: return "RGB14";
-    case ItemType::RgbNir14: return "RGBNIR14";
-    case ItemType::WavePacket14: return "WAVEPACKET14";
-    case ItemType::Byte14: return "BYTE14";
+    case ItemType::Byte:
+      return "BYTE";
+    case ItemType::Short:
+      return "SHORT";
+    case ItemType::Int:
+      return "INT";
+    case ItemType::Long:
+      return "LONG";
+    case ItemType::Float:
+      return "FLOAT";
+    case ItemType::Double:
+      return "DOUBLE";
+    case ItemType::Point10:
+      return "POINT10";
+    case ItemType::GpsTime11:
+      return "GPSTIME11";
+    case ItemType::Rgb12:
+      return "RGB12";
+    case ItemType::WavePacket13:
+      return "WAVEPACKET13";
+    case ItemType::Point14:
+      return "POINT14";
+    case ItemType::Rgb14:
+      return "RGB14";
+    case ItemType::RgbNir14:
+      return "RGBNIR14";
+    case ItemType::WavePacket14:
+      return "WAVEPACKET14";
+    case ItemType::Byte14:
+      return "BYTE14";
   }
   return "item type " + std::to_string(static_cast<unsigned>(t));
 }

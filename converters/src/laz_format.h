@@ -36,11 +36,11 @@ enum class ItemType : uint16_t {
   Long = 3,
   Float = 4,
   Double = 5,
-  Point10 = 6,      // the 20 bytes every format 0-5 record starts with
-  GpsTime11 = 7,    // 8 bytes
-  Rgb12 = 8,        // 6 bytes
-  WavePacket13 = 9, // 29 bytes
-  Point14 = 10,     // the 30 bytes every format 6-10 record starts with
+  Point10 = 6,       // the 20 bytes every format 0-5 record starts with
+  GpsTime11 = 7,     // 8 bytes
+  Rgb12 = 8,         // 6 bytes
+  WavePacket13 = 9,  // 29 bytes
+  Point14 = 10,      // the 30 bytes every format 6-10 record starts with
   Rgb14 = 11,
   RgbNir14 = 12,
   WavePacket14 = 13,
@@ -73,13 +73,14 @@ struct LaszipInfo {
 
 // Parses and checks the VLR payload against the point format and record length of the header.
 // Returns an empty string on success, else what is wrong (the caller names file and offset).
-std::string parseLaszipVlr(const uint8_t* data, size_t length, int pointFormat,
-                           size_t recordLength, LaszipInfo& out);
+std::string parseLaszipVlr(const uint8_t* data, size_t length, int pointFormat, size_t recordLength,
+                           LaszipInfo& out);
 
 // A damaged chunk: `offset` is relative to the chunk's first byte.
 class DecodeError : public std::runtime_error {
  public:
-  DecodeError(uint64_t offset, const std::string& what) : std::runtime_error(what), offset(offset) {}
+  DecodeError(uint64_t offset, const std::string& what)
+      : std::runtime_error(what), offset(offset) {}
   uint64_t offset;
 };
 

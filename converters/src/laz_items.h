@@ -24,17 +24,24 @@ void put(uint8_t* p, T v) {
   std::memcpy(p, &v, sizeof v);
 }
 
-inline uint8_t fold8(int32_t v) { return static_cast<uint8_t>(v); }  // wraps like U8_FOLD
-inline int32_t clamp8(int32_t v) { return v <= 0 ? 0 : (v >= 255 ? 255 : v); }
+inline uint8_t fold8(int32_t v) {
+  return static_cast<uint8_t>(v);
+}  // wraps like U8_FOLD
+inline int32_t clamp8(int32_t v) {
+  return v <= 0 ? 0 : (v >= 255 ? 255 : v);
+}
 
 // Context of the x/y/intensity models by (number of returns, return number): 0-14 for the
 // valid combinations, the rest for files that number returns from 0 or swap the two fields.
 constexpr uint8_t kReturnMap[8][8] = {
-    {15, 14, 13, 12, 11, 10, 9, 8}, {14, 0, 1, 3, 6, 10, 10, 9},   {13, 1, 2, 4, 7, 11, 11, 10},
-    {12, 3, 4, 5, 8, 12, 12, 11},   {11, 6, 7, 8, 9, 13, 13, 12},  {10, 10, 11, 12, 13, 14, 14, 13},
+    {15, 14, 13, 12, 11, 10, 9, 8},  {14, 0, 1, 3, 6, 10, 10, 9},
+    {13, 1, 2, 4, 7, 11, 11, 10},    {12, 3, 4, 5, 8, 12, 12, 11},
+    {11, 6, 7, 8, 9, 13, 13, 12},    {10, 10, 11, 12, 13, 14, 14, 13},
     {9, 10, 11, 12, 13, 14, 15, 14}, {8, 9, 10, 11, 12, 13, 14, 15}};
 // Context of the height model: the distance between return number and number of returns.
-constexpr uint8_t returnLevel(uint32_t n, uint32_t r) { return static_cast<uint8_t>(n > r ? n - r : r - n); }
+constexpr uint8_t returnLevel(uint32_t n, uint32_t r) {
+  return static_cast<uint8_t>(n > r ? n - r : r - n);
+}
 
 // Median of the last five values, updated in O(1) (LASzip's "streaming median").
 struct Median5 {

@@ -56,7 +56,8 @@ LazPoints::LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t 
     // LASzip 1.0: one stream for every point, no chunk table.
     if (declaredPoints > kMaxChunkPoints)
       fail(pointStart_, "the unchunked LAZ stream (LASzip compressor 1) holds " +
-                            std::to_string(declaredPoints) + " points; this reader decodes at most " +
+                            std::to_string(declaredPoints) +
+                            " points; this reader decodes at most " +
                             std::to_string(kMaxChunkPoints) +
                             " without chunks: recompress with a chunked LASzip");
     tabled_ = true;
@@ -118,16 +119,19 @@ void LazPoints::readChunkTable(uint64_t declared) {
           {chunksStart, 0, 0, uint32_t(std::min<uint64_t>(declared, info_.chunkSize))});
   };
 
-  if (uint64_t(table) == pointStart_) return sequential("the LAZ file has no chunk table (the compressor was interrupted)");
+  if (uint64_t(table) == pointStart_)
+    return sequential("the LAZ file has no chunk table (the compressor was interrupted)");
   if (table < int64_t(chunksStart) || uint64_t(table) > size || size - uint64_t(table) < 8)
-    return sequential("the LAZ chunk table offset " + std::to_string(table) +
-                      (table < 0 || uint64_t(table) < chunksStart
-                           ? " lies before the point data"
-                           : " points past the end of the file (" + std::to_string(size) + " bytes)"));
+    return sequential(
+        "the LAZ chunk table offset " + std::to_string(table) +
+        (table < 0 || uint64_t(table) < chunksStart
+             ? " lies before the point data"
+             : " points past the end of the file (" + std::to_string(size) + " bytes)"));
   tableStart_ = uint64_t(table);
   const uint32_t version = get<uint32_t>(d + tableStart_);
   if (version != 0)
-    fail(tableStart_, "unknown LAZ chunk table version " + std::to_string(version) + " (expected 0)");
+    fail(tableStart_,
+         "unknown LAZ chunk table version " + std::to_string(version) + " (expected 0)");
   const uint32_t n = get<uint32_t>(d + tableStart_ + 4);
   const uint64_t dataBytes = tableStart_ - chunksStart;
   // Every chunk stores its first point raw, so the table cannot list more chunks than fit.
@@ -159,22 +163,26 @@ void LazPoints::readChunkTable(uint64_t declared) {
     c.offset = at;
     c.bytes = bytes[i];
     c.firstPoint = first;
-    c.points = fixed ? uint32_t(std::min<uint64_t>(info_.chunkSize, declared > first ? declared - first : 0))
-                     : counts[i];
+    c.points =
+        fixed
+            ? uint32_t(std::min<uint64_t>(info_.chunkSize, declared > first ? declared - first : 0))
+            : counts[i];
     if (c.points > kMaxChunkPoints)
       fail(c.offset, "chunk " + std::to_string(i + 1) + " of " + std::to_string(n) + " claims " +
-                         std::to_string(c.points) + " points, more than this reader decodes at once (" +
+                         std::to_string(c.points) +
+                         " points, more than this reader decodes at once (" +
                          std::to_string(kMaxChunkPoints) + ")");
     if (c.bytes > tableStart_ - at) {
-      const std::string what = "chunk " + std::to_string(i + 1) + " of " + std::to_string(n) +
-                                " (" + std::to_string(c.bytes) + " bytes at byte " +
-                                std::to_string(at) + ") runs past the start of the chunk table at byte " +
-                                std::to_string(tableStart_);
+      const std::string what =
+          "chunk " + std::to_string(i + 1) + " of " + std::to_string(n) + " (" +
+          std::to_string(c.bytes) + " bytes at byte " + std::to_string(at) +
+          ") runs past the start of the chunk table at byte " + std::to_string(tableStart_);
       if (!lenient_) fail(at, what);
       uint64_t lost = 0;
       for (uint32_t j = i; j < n; ++j) lost += fixed ? 0 : counts[j];
       if (fixed) lost = declared > first ? declared - first : 0;
-      warn_(src_->name() + ": " + Error::atByte(at) + ": " + what + "; the " + std::to_string(lost) +
+      warn_(src_->name() + ": " + Error::atByte(at) + ": " + what + "; the " +
+            std::to_string(lost) +
             " points of it and the following chunks are counted as unreadable");
       unreadableAtOpen_ = lost;
       break;
@@ -208,8 +216,8 @@ void LazPoints::readChunkTable(uint64_t declared) {
   }
   if (dataEnd_ < tableStart_)
     fail(tableStart_, "the LAZ chunk table at byte " + std::to_string(tableStart_) +
-                          " lies after the end of the point data (byte " + std::to_string(dataEnd_) +
-                          ")");
+                          " lies after the end of the point data (byte " +
+                          std::to_string(dataEnd_) + ")");
   unreadable_ = unreadableAtOpen_;
   if (!hierarchy_.empty()) checkHierarchy();
 }
@@ -222,7 +230,8 @@ void LazPoints::checkHierarchy() {
   for (const Chunk& e : h) {
     auto it = std::lower_bound(chunks_.begin(), chunks_.end(), e.offset,
                                [](const Chunk& c, uint64_t o) { return c.offset < o; });
-    if (it != chunks_.end() && it->offset == e.offset && it->bytes == e.bytes && it->points == e.points)
+    if (it != chunks_.end() && it->offset == e.offset && it->bytes == e.bytes &&
+        it->points == e.points)
       ++matched;
   }
   if (matched != h.size() || h.size() != chunks_.size())
@@ -279,7 +288,8 @@ uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t
     out.resize(size_t(chunks_[i].points) * recordSize_);
     size_t used = 0;
     try {
-      if (chunks_[i].offset >= dataEnd_) throw DecodeError(0, "starts past the end of the point data");
+      if (chunks_[i].offset >= dataEnd_)
+        throw DecodeError(0, "starts past the end of the point data");
       used = pool.local()->decode(d + chunks_[i].offset, dataEnd_ - chunks_[i].offset,
                                   chunks_[i].points, out.data());
     } catch (const DecodeError& e) {

@@ -6,8 +6,8 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
-#include <mutex>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -30,9 +30,9 @@ class LazPoints {
   // chunk and the byte offset; with `lenient`, damage that leaves intact chunks becomes warnings.
   // `hierarchyChunks`: the chunks a COPC hierarchy lists (empty otherwise), cross-checked with
   // the chunk table and used in its place when the table is missing or damaged.
-  LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t pointStart,
-            uint64_t dataEnd, uint64_t declaredPoints, bool lenient,
-            std::function<void(std::string)> warn, std::vector<Chunk> hierarchyChunks = {});
+  LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t pointStart, uint64_t dataEnd,
+            uint64_t declaredPoints, bool lenient, std::function<void(std::string)> warn,
+            std::vector<Chunk> hierarchyChunks = {});
   ~LazPoints();
 
   const LaszipInfo& info() const { return info_; }
@@ -49,7 +49,8 @@ class LazPoints {
   // throws, or with `lenient` is skipped, warned about and its points added to unreadable().
   // Without a chunk table, chunks are found as they are decoded: `which` must be the last one
   // known, and calls must not overlap. With a table, calls may run concurrently.
-  uint64_t decode(const std::vector<size_t>& which, std::vector<uint8_t>& out, bool parallel = true);
+  uint64_t decode(const std::vector<size_t>& which, std::vector<uint8_t>& out,
+                  bool parallel = true);
   // Points the file declares that could not be decoded: chunks lost at open (lenient) and
   // damaged chunks met since the last rewind().
   uint64_t unreadable() const { return unreadable_.load(); }

@@ -59,22 +59,23 @@ class Point10V2 final : public ItemDecoder {
       l = returnLevel(n, r);
       uint16_t intensity;
       if (changed & 16) {
-        intensity = static_cast<uint16_t>(
-            intensity_.decompress(dec, lastIntensity_[m], m < 3 ? m : 3));
+        intensity =
+            static_cast<uint16_t>(intensity_.decompress(dec, lastIntensity_[m], m < 3 ? m : 3));
         lastIntensity_[m] = intensity;
       } else {
         intensity = lastIntensity_[m];
       }
       put<uint16_t>(last_ + 12, intensity);
-      if (changed & 8) last_[15] = static_cast<uint8_t>(dec.decodeSymbol(classification_[last_[15]]));
+      if (changed & 8)
+        last_[15] = static_cast<uint8_t>(dec.decodeSymbol(classification_[last_[15]]));
       if (changed & 4) {
         const uint32_t v = dec.decodeSymbol(scanAngle_[(last_[14] >> 6) & 1]);
         last_[16] = fold8(static_cast<int32_t>(v + last_[16]));
       }
       if (changed & 2) last_[17] = static_cast<uint8_t>(dec.decodeSymbol(userData_[last_[17]]));
       if (changed & 1)
-        put<uint16_t>(last_ + 18,
-                      static_cast<uint16_t>(pointSource_.decompress(dec, get<uint16_t>(last_ + 18))));
+        put<uint16_t>(last_ + 18, static_cast<uint16_t>(
+                                      pointSource_.decompress(dec, get<uint16_t>(last_ + 18))));
     } else {
       r = last_[14] & 7;
       n = (last_[14] >> 3) & 7;
@@ -149,8 +150,8 @@ class GpsTime11V2 final : public ItemDecoder {
       } else {
         int32_t multi = static_cast<int32_t>(dec.decodeSymbol(multi_));
         if (multi == 1) {
-          time_[last_] += static_cast<uint64_t>(
-              static_cast<int64_t>(ic_.decompress(dec, lastDiff_[last_], 1)));
+          time_[last_] +=
+              static_cast<uint64_t>(static_cast<int64_t>(ic_.decompress(dec, lastDiff_[last_], 1)));
           extreme_[last_] = 0;
         } else if (multi < kMultiUnchanged) {
           int32_t diff;
@@ -159,15 +160,17 @@ class GpsTime11V2 final : public ItemDecoder {
             diff = ic_.decompress(dec, 0, 7);
             countExtreme(diff);
           } else if (multi < kMulti) {
-            diff = ic_.decompress(dec, static_cast<int32_t>(static_cast<uint32_t>(multi) * lastDiff),
-                                  multi < 10 ? 2 : 3);
+            diff =
+                ic_.decompress(dec, static_cast<int32_t>(static_cast<uint32_t>(multi) * lastDiff),
+                               multi < 10 ? 2 : 3);
           } else if (multi == kMulti) {
             diff = ic_.decompress(dec, static_cast<int32_t>(uint32_t(kMulti) * lastDiff), 4);
             countExtreme(diff);
           } else {
             multi = kMulti - multi;
             if (multi > kMultiMinus) {
-              diff = ic_.decompress(dec, static_cast<int32_t>(static_cast<uint32_t>(multi) * lastDiff), 5);
+              diff = ic_.decompress(
+                  dec, static_cast<int32_t>(static_cast<uint32_t>(multi) * lastDiff), 5);
             } else {
               diff = ic_.decompress(
                   dec, static_cast<int32_t>(static_cast<uint32_t>(kMultiMinus) * lastDiff), 6);
@@ -232,13 +235,15 @@ class Rgb12V2 final : public ItemDecoder {
     else
       rgb[0] = last_[0] & 0xFF;
     if (sym & 2)
-      rgb[0] |= uint16_t(fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[1])) + high(last_[0])) << 8);
+      rgb[0] |=
+          uint16_t(fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[1])) + high(last_[0])) << 8);
     else
       rgb[0] |= last_[0] & 0xFF00;
     if (sym & 64) {
       int32_t diff = low(rgb[0]) - low(last_[0]);
       if (sym & 4)
-        rgb[1] = fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[2])) + clamp8(diff + low(last_[1])));
+        rgb[1] =
+            fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[2])) + clamp8(diff + low(last_[1])));
       else
         rgb[1] = last_[1] & 0xFF;
       if (sym & 16) {
@@ -342,11 +347,16 @@ class PointwiseDecoder final : public ChunkDecoder {
   static std::unique_ptr<ItemDecoder> makeItem(const Item& it) {
     if (it.version == 2) {
       switch (it.type) {
-        case ItemType::Point10: return std::make_unique<Point10V2>();
-        case ItemType::GpsTime11: return std::make_unique<GpsTime11V2>();
-        case ItemType::Rgb12: return std::make_unique<Rgb12V2>();
-        case ItemType::Byte: return std::make_unique<ByteV2>(it.size);
-        default: break;
+        case ItemType::Point10:
+          return std::make_unique<Point10V2>();
+        case ItemType::GpsTime11:
+          return std::make_unique<GpsTime11V2>();
+        case ItemType::Rgb12:
+          return std::make_unique<Rgb12V2>();
+        case ItemType::Byte:
+          return std::make_unique<ByteV2>(it.size);
+        default:
+          break;
       }
     }
     if (it.version == 1)

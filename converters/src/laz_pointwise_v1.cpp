@@ -79,7 +79,8 @@ class Point10V1 final : public ItemDecoder {
     // coded from its own previous value only, so updating last_ in place is safe.
     const uint32_t changed = dec.decodeSymbol(changed_);
     if (changed & 32)
-      put<uint16_t>(last_ + 12, static_cast<uint16_t>(intensity_.decompress(dec, get<uint16_t>(last_ + 12))));
+      put<uint16_t>(last_ + 12,
+                    static_cast<uint16_t>(intensity_.decompress(dec, get<uint16_t>(last_ + 12))));
     if (changed & 16) last_[14] = static_cast<uint8_t>(dec.decodeSymbol(bitByte_[last_[14]]));
     if (changed & 8) last_[15] = static_cast<uint8_t>(dec.decodeSymbol(classification_[last_[15]]));
     // The scan angle is predicted from its previous byte read unsigned (0-255); the 8-bit
@@ -87,7 +88,8 @@ class Point10V1 final : public ItemDecoder {
     if (changed & 4) last_[16] = static_cast<uint8_t>(scanAngle_.decompress(dec, last_[16], k < 3));
     if (changed & 2) last_[17] = static_cast<uint8_t>(dec.decodeSymbol(userData_[last_[17]]));
     if (changed & 1)
-      put<uint16_t>(last_ + 18, static_cast<uint16_t>(pointSource_.decompress(dec, get<uint16_t>(last_ + 18))));
+      put<uint16_t>(last_ + 18,
+                    static_cast<uint16_t>(pointSource_.decompress(dec, get<uint16_t>(last_ + 18))));
 
     // The differences are remembered as decoded (the wrapped coordinate difference).
     lastDx_[slot_] = dx;
@@ -155,8 +157,7 @@ class GpsTime11V1 final : public ItemDecoder {
         } else {
           // multi times the last difference (32-bit product, wrapping like the reference's),
           // with a context per magnitude band.
-          const int32_t pred =
-              static_cast<int32_t>(multi * static_cast<uint32_t>(lastDiff_));
+          const int32_t pred = static_cast<int32_t>(multi * static_cast<uint32_t>(lastDiff_));
           diff = ic_.decompress(dec, pred, multi < 10 ? 3 : (multi < 50 ? 4 : 5));
           if (multi == kMultiExtreme) countExtreme(diff);
         }
@@ -249,7 +250,8 @@ std::unique_ptr<ItemDecoder> makeItemV1(const Item& item) {
     case ItemType::Byte:
       if (item.size > 0) return std::make_unique<ByteV1>(item.size);
       break;
-    default: break;  // WAVEPACKET13 and the rest: not handled (the caller reports it)
+    default:
+      break;  // WAVEPACKET13 and the rest: not handled (the caller reports it)
   }
   return nullptr;
 }

@@ -7,6 +7,8 @@
 // (laswriteitemcompressed_v2), so that the files it writes decode with any LASzip reader. Written
 // by hand because Debian packages neither LASzip nor LAZperf. The layered compressor of formats
 // 6-10 is not written (LAS 1.4 exports that need those formats stay .las).
+#include "laz_writer.h"
+
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -21,7 +23,6 @@
 #include "laz_arithmetic.h"
 #include "laz_format.h"
 #include "laz_items.h"
-#include "laz_writer.h"
 #include "nestlight/converters/byte_source.h"
 #include "nestlight/octree/error.h"
 
@@ -64,12 +65,11 @@ class Point10Encoder final : public ItemEncoder {
     const uint32_t r = item[14] & 7, n = (item[14] >> 3) & 7;
     const uint32_t m = kReturnMap[n][r], l = returnLevel(n, r);
     const uint16_t intensity = get<uint16_t>(item + 12);
-    const uint32_t changed = (uint32_t(last_[14] != item[14]) << 5) |
-                             (uint32_t(lastIntensity_[m] != intensity) << 4) |
-                             (uint32_t(last_[15] != item[15]) << 3) |
-                             (uint32_t(last_[16] != item[16]) << 2) |
-                             (uint32_t(last_[17] != item[17]) << 1) |
-                             uint32_t(get<uint16_t>(last_ + 18) != get<uint16_t>(item + 18));
+    const uint32_t changed =
+        (uint32_t(last_[14] != item[14]) << 5) | (uint32_t(lastIntensity_[m] != intensity) << 4) |
+        (uint32_t(last_[15] != item[15]) << 3) | (uint32_t(last_[16] != item[16]) << 2) |
+        (uint32_t(last_[17] != item[17]) << 1) |
+        uint32_t(get<uint16_t>(last_ + 18) != get<uint16_t>(item + 18));
     enc.encodeSymbol(changed_, changed);
     if (changed & 32) enc.encodeSymbol(bitByte_[last_[14]], item[14]);
     if (changed & 16) {
@@ -78,9 +78,11 @@ class Point10Encoder final : public ItemEncoder {
     }
     if (changed & 8) enc.encodeSymbol(classification_[last_[15]], item[15]);
     if (changed & 4)
-      enc.encodeSymbol(scanAngle_[(item[14] >> 6) & 1], fold8(int32_t(item[16]) - int32_t(last_[16])));
+      enc.encodeSymbol(scanAngle_[(item[14] >> 6) & 1],
+                       fold8(int32_t(item[16]) - int32_t(last_[16])));
     if (changed & 2) enc.encodeSymbol(userData_[last_[17]], item[17]);
-    if (changed & 1) pointSource_.compress(enc, get<uint16_t>(last_ + 18), get<uint16_t>(item + 18));
+    if (changed & 1)
+      pointSource_.compress(enc, get<uint16_t>(last_ + 18), get<uint16_t>(item + 18));
 
     int32_t diff = static_cast<int32_t>(get<uint32_t>(item) - get<uint32_t>(last_));
     dx_.compress(enc, xMedian_[m].get(), diff, n == 1);
@@ -322,11 +324,20 @@ class ChunkEncoder {
     size_t at = 0;
     for (const Item& it : info.items) {
       switch (it.type) {
-        case ItemType::Point10: items_.push_back(std::make_unique<Point10Encoder>()); break;
-        case ItemType::GpsTime11: items_.push_back(std::make_unique<GpsTimeEncoder>()); break;
-        case ItemType::Rgb12: items_.push_back(std::make_unique<RgbEncoder>()); break;
-        case ItemType::Byte: items_.push_back(std::make_unique<ByteEncoder>(it.size)); break;
-        default: NL_CHECK_MSG(false, "no encoder for " + itemName(it.type));
+        case ItemType::Point10:
+          items_.push_back(std::make_unique<Point10Encoder>());
+          break;
+        case ItemType::GpsTime11:
+          items_.push_back(std::make_unique<GpsTimeEncoder>());
+          break;
+        case ItemType::Rgb12:
+          items_.push_back(std::make_unique<RgbEncoder>());
+          break;
+        case ItemType::Byte:
+          items_.push_back(std::make_unique<ByteEncoder>(it.size));
+          break;
+        default:
+          NL_CHECK_MSG(false, "no encoder for " + itemName(it.type));
       }
       offsets_.push_back(at);
       at += it.size;
@@ -371,9 +382,10 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
       throw Error(nameForErrors, "", "LAZ output of files with EVLRs is not supported");
   }
   if (pf > 3)
-    throw Error(nameForErrors, "",
-                "LAZ output covers point formats 0-3 (LASzip 2); these points need LAS point format " +
-                    std::to_string(pf) + ": write .las instead");
+    throw Error(
+        nameForErrors, "",
+        "LAZ output covers point formats 0-3 (LASzip 2); these points need LAS point format " +
+            std::to_string(pf) + ": write .las instead");
   NL_CHECK(uint64_t(pointStart) + count * recordLength <= size);
 
   LaszipInfo info;
@@ -470,7 +482,8 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
     throw Error(lazPath, "", "cannot seek");
   }
   put(&tableAt, 8);
-  if (std::fclose(f) != 0) throw Error(lazPath, "", std::string("cannot close: ") + std::strerror(errno));
+  if (std::fclose(f) != 0)
+    throw Error(lazPath, "", std::string("cannot close: ") + std::strerror(errno));
 }
 
 }  // namespace nestlight::laz

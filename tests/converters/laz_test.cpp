@@ -29,12 +29,16 @@ Records records(const std::string& path, const ReadOptions& o = {}) {
   Records r;
   r.recordLength = readLasRecords(
       mapFile(path), o,
-      [&](const uint8_t* p, size_t n, size_t length) { r.bytes.insert(r.bytes.end(), p, p + n * length); },
+      [&](const uint8_t* p, size_t n, size_t length) {
+        r.bytes.insert(r.bytes.end(), p, p + n * length);
+      },
       &r.header, &r.warnings);
   return r;
 }
 
-std::string laz(const std::string& name) { return (sharedData() / "laz" / name).string(); }
+std::string laz(const std::string& name) {
+  return (sharedData() / "laz" / name).string();
+}
 
 // The first differing record, for a readable failure.
 std::string firstDifference(const Records& a, const Records& b) {
@@ -129,14 +133,14 @@ TEST(Laz, CopcHoldsThePointsOfItsLasTwin) {
     std::vector<Row> out;
     for (size_t i = 0; i < p.size(); ++i) {
       auto q = [&](int a) { return int64_t(std::llround(p.xyz[3 * i + a] / sc[a])); };
-      out.emplace_back(q(0), q(1), q(2), test::attrAt<uint16_t>(p, r, i, "intensity"),
-                       test::attrAt<uint8_t>(p, r, i, "return_number"),
-                       test::attrAt<uint8_t>(p, r, i, "number_of_returns"),
-                       test::attrAt<uint8_t>(p, r, i, "classification"),
-                       test::attrAt<double>(p, r, i, "gps_time"),
-                       test::attrAt<uint16_t>(p, r, i, "rgb", 0), test::attrAt<uint16_t>(p, r, i, "rgb", 1),
-                       test::attrAt<uint16_t>(p, r, i, "rgb", 2),
-                       test::attrAt<uint16_t>(p, r, i, "point_source_id"));
+      out.emplace_back(
+          q(0), q(1), q(2), test::attrAt<uint16_t>(p, r, i, "intensity"),
+          test::attrAt<uint8_t>(p, r, i, "return_number"),
+          test::attrAt<uint8_t>(p, r, i, "number_of_returns"),
+          test::attrAt<uint8_t>(p, r, i, "classification"),
+          test::attrAt<double>(p, r, i, "gps_time"), test::attrAt<uint16_t>(p, r, i, "rgb", 0),
+          test::attrAt<uint16_t>(p, r, i, "rgb", 1), test::attrAt<uint16_t>(p, r, i, "rgb", 2),
+          test::attrAt<uint16_t>(p, r, i, "point_source_id"));
     }
     std::sort(out.begin(), out.end());
     return out;
@@ -173,8 +177,10 @@ TEST(Laz, CopcHierarchyAgreesWithTheTableAndStandsInForIt) {
   const size_t copc = g.find("copc");
   ASSERT_NE(copc, std::string::npos);
   g[copc] = 'x';  // no longer a COPC info VLR
-  const Error e = test::errorOf([&] { openLas(memorySource("c.laz", std::vector<uint8_t>(g.begin(), g.end()))); });
-  EXPECT_NE(e.reason().find("variable-size chunks cannot be read without it"), std::string::npos) << e.what();
+  const Error e = test::errorOf(
+      [&] { openLas(memorySource("c.laz", std::vector<uint8_t>(g.begin(), g.end()))); });
+  EXPECT_NE(e.reason().find("variable-size chunks cannot be read without it"), std::string::npos)
+      << e.what();
 }
 
 // ---- the coder --------------------------------------------------------------------------------
@@ -202,11 +208,23 @@ TEST(LazCoder, DecodingInvertsEncodingOnEveryModelPath) {
     const int kind = int(next() % 5);
     uint32_t a = next(), b = 0;
     switch (kind) {
-      case 0: a &= 1; break;                                          // bit, skewed below
-      case 1: a = (next() & 7) ? a % 3 : a % 2048; break;             // symbol of 2048
-      case 2: b = 1 + next() % 32; a = b == 32 ? a : a & ((1u << b) - 1); break;  // raw bits
-      case 3: a = uint32_t(int32_t(a) >> (next() % 31)); b = next() % 4; break;   // integer
-      case 4: a %= 256; break;                                        // symbol of 256
+      case 0:
+        a &= 1;
+        break;  // bit, skewed below
+      case 1:
+        a = (next() & 7) ? a % 3 : a % 2048;
+        break;  // symbol of 2048
+      case 2:
+        b = 1 + next() % 32;
+        a = b == 32 ? a : a & ((1u << b) - 1);
+        break;  // raw bits
+      case 3:
+        a = uint32_t(int32_t(a) >> (next() % 31));
+        b = next() % 4;
+        break;  // integer
+      case 4:
+        a %= 256;
+        break;  // symbol of 256
     }
     if (kind == 0 && (next() % 10)) a = 0;
     ops.push_back({kind, a, b});
@@ -219,11 +237,22 @@ TEST(LazCoder, DecodingInvertsEncodingOnEveryModelPath) {
     int32_t pred = 0;
     for (const Op& op : ops) {
       switch (op.kind) {
-        case 0: enc.encodeBit(bit, op.a); break;
-        case 1: enc.encodeSymbol(big, op.a); break;
-        case 2: enc.writeBits(op.b, op.a); break;
-        case 3: ic.compress(enc, pred, int32_t(op.a), op.b); pred = int32_t(op.a) / 2; break;
-        case 4: enc.encodeSymbol(small, op.a); break;
+        case 0:
+          enc.encodeBit(bit, op.a);
+          break;
+        case 1:
+          enc.encodeSymbol(big, op.a);
+          break;
+        case 2:
+          enc.writeBits(op.b, op.a);
+          break;
+        case 3:
+          ic.compress(enc, pred, int32_t(op.a), op.b);
+          pred = int32_t(op.a) / 2;
+          break;
+        case 4:
+          enc.encodeSymbol(small, op.a);
+          break;
       }
     }
     enc.done();
@@ -238,11 +267,22 @@ TEST(LazCoder, DecodingInvertsEncodingOnEveryModelPath) {
   for (const Op& op : ops) {
     uint32_t got = 0;
     switch (op.kind) {
-      case 0: got = dec.decodeBit(bit); break;
-      case 1: got = dec.decodeSymbol(big); break;
-      case 2: got = dec.readBits(op.b); break;
-      case 3: got = uint32_t(ic.decompress(dec, pred, op.b)); pred = int32_t(got) / 2; break;
-      case 4: got = dec.decodeSymbol(small); break;
+      case 0:
+        got = dec.decodeBit(bit);
+        break;
+      case 1:
+        got = dec.decodeSymbol(big);
+        break;
+      case 2:
+        got = dec.readBits(op.b);
+        break;
+      case 3:
+        got = uint32_t(ic.decompress(dec, pred, op.b));
+        pred = int32_t(got) / 2;
+        break;
+      case 4:
+        got = dec.decodeSymbol(small);
+        break;
     }
     wrong += got != op.a;
   }
@@ -315,20 +355,24 @@ std::string withTable(std::string f, const LazLayout& l, const std::vector<uint3
   {
     laz::ArithmeticEncoder enc(t);
     laz::IntegerDecoder ic(32, 2);
-    for (uint32_t i = 0; i < n; ++i) ic.compress(enc, i ? int32_t(bytes[i - 1]) : 0, int32_t(bytes[i]), 1);
+    for (uint32_t i = 0; i < n; ++i)
+      ic.compress(enc, i ? int32_t(bytes[i - 1]) : 0, int32_t(bytes[i]), 1);
     enc.done();
   }
   f.append(reinterpret_cast<const char*>(t.data()), t.size());
   return f;
 }
 
-std::string autzenLaz() { return test::readFile(laz("autzen_trim.laz")); }
+std::string autzenLaz() {
+  return test::readFile(laz("autzen_trim.laz"));
+}
 
 Error errorReading(const std::string& bytes, bool lenient = false) {
   return test::errorOf([&] {
     ReadOptions o;
     o.lenient = lenient;
-    auto r = openLas(memorySource("damaged.laz", std::vector<uint8_t>(bytes.begin(), bytes.end())), o);
+    auto r =
+        openLas(memorySource("damaged.laz", std::vector<uint8_t>(bytes.begin(), bytes.end())), o);
     test::readAll(*r, 100000);
   });
 }
@@ -340,7 +384,8 @@ struct LenientRead {
 LenientRead readLeniently(const std::string& bytes) {
   ReadOptions o;
   o.lenient = true;
-  auto r = openLas(memorySource("damaged.laz", std::vector<uint8_t>(bytes.begin(), bytes.end())), o);
+  auto r =
+      openLas(memorySource("damaged.laz", std::vector<uint8_t>(bytes.begin(), bytes.end())), o);
   LenientRead out;
   out.points = test::readAll(*r, 100000).size();
   out.unreadable = r->pointsUnreadable();
@@ -385,7 +430,8 @@ TEST(LazDamage, ChunkTablePointingPastTheEndIsAnError) {
   const std::string bad = withTable(f, l, b);
   const Error e = errorReading(bad);
   EXPECT_NE(e.reason().find("chunk 2 of 3"), std::string::npos) << e.what();
-  EXPECT_NE(e.reason().find("runs past the start of the chunk table"), std::string::npos) << e.what();
+  EXPECT_NE(e.reason().find("runs past the start of the chunk table"), std::string::npos)
+      << e.what();
   EXPECT_EQ(e.position(), Error::atByte(l.chunkStart(1)));
   const LenientRead r = readLeniently(bad);
   EXPECT_EQ(r.points, 50000u);
@@ -419,13 +465,16 @@ TEST(LazDamage, PointCountLargerThanTheDataIsAnError) {
   std::string f = autzenLaz();
   store<uint32_t>(f, 107, 110000 + 50001);  // one more chunk's worth than the table lists
   const Error e = errorReading(f);
-  EXPECT_NE(e.reason().find("header declares 160001 points but the 3 LAZ chunks hold at most 150000"),
-            std::string::npos) << e.what();
+  EXPECT_NE(
+      e.reason().find("header declares 160001 points but the 3 LAZ chunks hold at most 150000"),
+      std::string::npos)
+      << e.what();
   // One point more than the last chunk holds: that chunk's stream runs dry.
   std::string g = autzenLaz();
   store<uint32_t>(g, 107, 110001);
   const Error e2 = errorReading(g);
-  EXPECT_NE(e2.reason().find("chunk 3 of 3 (points 100001-110001)"), std::string::npos) << e2.what();
+  EXPECT_NE(e2.reason().find("chunk 3 of 3 (points 100001-110001)"), std::string::npos)
+      << e2.what();
 }
 
 TEST(LazDamage, UnknownCompressorOrItemNamesTheRecord) {
@@ -467,8 +516,10 @@ namespace {
 // LASzip itself did (the encoder makes the reference encoder's choices).
 TEST(LazWriter, RoundTripsTheTwinsAndCompressesLikeLaszip) {
   const std::pair<const char*, const char*> twins[] = {
-      {"point10.las", "point10.las.laz"},     {"point-time.las", "point-time.las.laz"},
-      {"point-color.las", "point-color.las.laz"}, {"point-color-time.las", "point-color-time.las.laz"},
+      {"point10.las", "point10.las.laz"},
+      {"point-time.las", "point-time.las.laz"},
+      {"point-color.las", "point-color.las.laz"},
+      {"point-color-time.las", "point-color-time.las.laz"},
       {"extrabytes.las", "extrabytes.laz"}};
   NL_REQUIRE_SHARED("laz/point10.las");
   test::TempDir t;
@@ -532,7 +583,8 @@ TEST(LazConvert, LazAndLasOfAutzenConvertToIdenticalOctrees) {
   test::buildOctreeFrom(laz("autzen_trim.laz"), t.path() / "z", 5000);
   test::buildOctreeFrom(sharedData() / "scans/autzen_trim.las", t.path() / "l", 5000);
   for (const char* f : {"octree.bin", "hierarchy.bin"})
-    EXPECT_TRUE(test::readFile((t.path() / "z" / f).string()) == test::readFile((t.path() / "l" / f).string()))
+    EXPECT_TRUE(test::readFile((t.path() / "z" / f).string()) ==
+                test::readFile((t.path() / "l" / f).string()))
         << f;
   OctreeReader z(t.path() / "z"), l(t.path() / "l");
   EXPECT_EQ(z.metadata().points, 110000u);
@@ -553,9 +605,14 @@ TEST(LazConvert, LenientConversionCountsTheDamagedChunkAsRejected) {
   test::TempDir t;
   test::writeFile(t.file("d.laz"), f);
   std::string out;
-  EXPECT_NE(test::runCli("convert " + t.file("d.laz") + " -o " + t.file("o") + " --progress quiet", &out), 0);
+  EXPECT_NE(
+      test::runCli("convert " + t.file("d.laz") + " -o " + t.file("o") + " --progress quiet", &out),
+      0);
   EXPECT_NE(out.find("chunk 2 of 3"), std::string::npos) << out;
-  ASSERT_EQ(test::runCli("convert " + t.file("d.laz") + " -o " + t.file("o") + " --lenient --progress quiet", &out), 0)
+  ASSERT_EQ(test::runCli(
+                "convert " + t.file("d.laz") + " -o " + t.file("o") + " --lenient --progress quiet",
+                &out),
+            0)
       << out;
   OctreeReader r(t.path() / "o");
   const Accounting& a = r.metadata().accounting;

@@ -185,11 +185,16 @@ class ByteEnc final : public ItemEncoder {
 
 std::unique_ptr<ItemEncoder> makeEncoder(const laz::Item& it) {
   switch (it.type) {
-    case laz::ItemType::Point10: return std::make_unique<Point10Enc>();
-    case laz::ItemType::GpsTime11: return std::make_unique<GpsTimeEnc>();
-    case laz::ItemType::Rgb12: return std::make_unique<Rgb12Enc>();
-    case laz::ItemType::Byte: return std::make_unique<ByteEnc>(it.size);
-    default: return nullptr;
+    case laz::ItemType::Point10:
+      return std::make_unique<Point10Enc>();
+    case laz::ItemType::GpsTime11:
+      return std::make_unique<GpsTimeEnc>();
+    case laz::ItemType::Rgb12:
+      return std::make_unique<Rgb12Enc>();
+    case laz::ItemType::Byte:
+      return std::make_unique<ByteEnc>(it.size);
+    default:
+      return nullptr;
   }
 }
 
@@ -220,7 +225,8 @@ std::vector<uint8_t> encodeChunk(const laz::LaszipInfo& info, const std::vector<
   }
   laz::ArithmeticEncoder enc(out);
   for (size_t p = 1; p < count; ++p)
-    for (size_t i = 0; i < encs.size(); ++i) encs[i]->write(enc, records.data() + p * rs + offsets[i]);
+    for (size_t i = 0; i < encs.size(); ++i)
+      encs[i]->write(enc, records.data() + p * rs + offsets[i]);
   enc.done();
   return out;
 }
@@ -285,7 +291,8 @@ std::vector<uint8_t> synthesise(const laz::LaszipInfo& info, size_t count, uint6
       z -= uni(100, 2500);
     }
     // Intensity: a third unchanged, mostly small changes, sometimes anything.
-    if (chance(0.66)) intensity = chance(0.03) ? uint16_t(uni(0, 65535)) : uint16_t(intensity + uni(-60, 60));
+    if (chance(0.66))
+      intensity = chance(0.03) ? uint16_t(uni(0, 65535)) : uint16_t(intensity + uni(-60, 60));
     if (chance(0.06)) {
       static constexpr uint8_t kClasses[] = {1, 2, 3, 4, 5, 6, 7, 9, 17};
       cls = kClasses[uni(0, 8)];
@@ -314,8 +321,9 @@ std::vector<uint8_t> synthesise(const laz::LaszipInfo& info, size_t count, uint6
       case 1:  // 16-bit colour walking in every byte
         for (auto& c : rgb) c = uint16_t(c + uni(-300, 300));
         break;
-      case 2: break;  // a run of one colour
-      case 3:         // only the low bytes move
+      case 2:
+        break;  // a run of one colour
+      case 3:   // only the low bytes move
         for (auto& c : rgb) c = uint16_t((c & 0xFF00) | uint8_t(c + uni(-3, 3)));
         break;
       default:  // 8-bit colour shifted up (low bytes zero)
@@ -326,22 +334,33 @@ std::vector<uint8_t> synthesise(const laz::LaszipInfo& info, size_t count, uint6
     for (const laz::Item& it : info.items) {
       uint8_t* f = rec + at;
       switch (it.type) {
-        case laz::ItemType::GpsTime11: st<double>(f, t); break;
+        case laz::ItemType::GpsTime11:
+          st<double>(f, t);
+          break;
         case laz::ItemType::Rgb12:
           for (int c = 0; c < 3; ++c) st<uint16_t>(f + 2 * c, rgb[c]);
           break;
         case laz::ItemType::Byte:
           for (size_t b = 0; b < it.size; ++b) {
             switch (b % 4) {
-              case 0: f[b] = counter; break;
-              case 1: f[b] = 0x5A; break;
-              case 2: f[b] = chance(0.2) ? uint8_t(uni(0, 255)) : uint8_t(p > 0 ? rec[b + at - rs] : 0); break;
-              default: f[b] = cls; break;
+              case 0:
+                f[b] = counter;
+                break;
+              case 1:
+                f[b] = 0x5A;
+                break;
+              case 2:
+                f[b] = chance(0.2) ? uint8_t(uni(0, 255)) : uint8_t(p > 0 ? rec[b + at - rs] : 0);
+                break;
+              default:
+                f[b] = cls;
+                break;
             }
           }
           ++counter;
           break;
-        default: break;
+        default:
+          break;
       }
       at += it.size;
     }
@@ -357,7 +376,9 @@ long firstDiff(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, siz
   return a.size() == b.size() ? -1 : long(n);
 }
 
-laz::Item item(laz::ItemType t, uint16_t size) { return {t, size, 1}; }
+laz::Item item(laz::ItemType t, uint16_t size) {
+  return {t, size, 1};
+}
 const laz::Item kPoint10 = item(laz::ItemType::Point10, 20);
 const laz::Item kGps = item(laz::ItemType::GpsTime11, 8);
 const laz::Item kRgb = item(laz::ItemType::Rgb12, 6);
@@ -430,7 +451,8 @@ TEST_P(LazV1Formats, TruncatedChunksThrowAndGarbageStaysInBounds) {
     std::vector<uint8_t> junk;
     if (round % 2) {
       junk = chunk;
-      for (int f = 0; f < 1 + round; ++f) junk[rs + rng() % (junk.size() - rs)] ^= uint8_t(1 + rng() % 255);
+      for (int f = 0; f < 1 + round; ++f)
+        junk[rs + rng() % (junk.size() - rs)] ^= uint8_t(1 + rng() % 255);
     } else {
       junk.resize(rs + 16 + rng() % 4000);
       for (auto& b : junk) b = uint8_t(rng());
@@ -445,7 +467,9 @@ TEST_P(LazV1Formats, TruncatedChunksThrowAndGarbageStaysInBounds) {
 }
 
 INSTANTIATE_TEST_SUITE_P(LazV1, LazV1Formats, testing::ValuesIn(layouts()),
-                         [](const testing::TestParamInfo<Layout>& i) { return std::string(i.param.name); });
+                         [](const testing::TestParamInfo<Layout>& i) {
+                           return std::string(i.param.name);
+                         });
 
 // ---- checks that do not use the encoder above --------------------------------------------------
 
@@ -482,7 +506,8 @@ TEST(LazV1, IdenticalPointsCostFewBits) {
   for (int i = 0; i < 9000; ++i) points.insert(points.end(), one.begin(), one.end());
   const size_t stream10000 = encodeChunk(info, points).size() - rs;
   EXPECT_LT(stream1000, 1000u * rs / 100) << "under 1% of the raw points, learning included";
-  EXPECT_LT(stream10000 - stream1000, 9000u / 8 / 8) << "once learnt, under an eighth of a bit a point";
+  EXPECT_LT(stream10000 - stream1000, 9000u / 8 / 8)
+      << "once learnt, under an eighth of a bit a point";
   std::vector<uint8_t> out(1000 * rs);
   laz::makePointwiseDecoder(info)->decode(chunk.data(), chunk.size(), 1000, out.data());
   EXPECT_TRUE(std::equal(out.begin(), out.end(), points.begin()));
@@ -578,7 +603,8 @@ TEST(LazV1, HandBuiltStreamDecodesAsTheReferenceReads) {
     enc.writeInt(uint32_t(rawTime));
     enc.writeInt(uint32_t(rawTime >> 32));
     enc.encodeSymbol(used, 63);
-    const uint8_t before[6] = {0x34, 0x12, 0x78, 0x57, 0xBC, 0x9A}, after[6] = {0x35, 0x13, 0x77, 0x56, 0xFF, 0x00};
+    const uint8_t before[6] = {0x34, 0x12, 0x78, 0x57, 0xBC, 0x9A},
+                  after[6] = {0x35, 0x13, 0x77, 0x56, 0xFF, 0x00};
     for (uint32_t i = 0; i < 6; ++i) rgb.compress(enc, before[i], after[i], i);
     bytes.compress(enc, 11, 11, 0);
     bytes.compress(enc, 0, 0, 1);
@@ -652,8 +678,9 @@ TEST(LazV1, WavePacketsAndMismatchedItemsAreNotSupported) {
   EXPECT_EQ(laz::makeItemV1({laz::ItemType::Point14, 30, 1}), nullptr);
   EXPECT_EQ(laz::makeItemV1({laz::ItemType::Point10, 20, 2}), nullptr);
   EXPECT_NE(laz::makeItemV1(kPoint10), nullptr);
-  EXPECT_THROW(laz::makePointwiseDecoder(infoOf({kPoint10, kGps, item(laz::ItemType::WavePacket13, 29)})),
-               laz::DecodeError);
+  EXPECT_THROW(
+      laz::makePointwiseDecoder(infoOf({kPoint10, kGps, item(laz::ItemType::WavePacket13, 29)})),
+      laz::DecodeError);
 }
 
 // Extreme values: coordinate differences that wrap 32 bits (the corrector of INT32_MIN
@@ -664,8 +691,9 @@ TEST(LazV1, ExtremeValuesRoundTrip) {
   const size_t rs = info.recordSize();
   std::mt19937_64 rng(7);
   const int32_t xs[] = {INT32_MIN, INT32_MAX, 0, -1, 1, INT32_MIN + 1, INT32_MAX - 1};
-  const int64_t dts[] = {INT32_MAX, INT32_MIN, 1, -1, 0, int64_t(INT32_MAX) + 1, int64_t(INT32_MIN) - 1,
-                         3, 1000000, 1000000 * 509LL, -7};
+  const int64_t dts[] = {
+      INT32_MAX, INT32_MIN,       1, -1, 0, int64_t(INT32_MAX) + 1, int64_t(INT32_MIN) - 1, 3,
+      1000000,   1000000 * 509LL, -7};
   std::vector<uint8_t> points(3000 * rs);
   int64_t t = 0;
   for (size_t i = 0; i < 3000; ++i) {

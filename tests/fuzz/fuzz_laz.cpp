@@ -63,7 +63,9 @@ void bareChunk(const uint8_t* data, size_t size) {
   static const uint16_t kSizes[15] = {0, 0, 0, 0, 0, 0, 20, 8, 6, 29, 30, 6, 8, 29, 0};
   for (ItemType t : kItems[pf])
     info.items.push_back({t, kSizes[static_cast<int>(t)], uint16_t(layered ? 3 : 2)});
-  if (extra) info.items.push_back({layered ? ItemType::Byte14 : ItemType::Byte, extra, uint16_t(layered ? 3 : 2)});
+  if (extra)
+    info.items.push_back(
+        {layered ? ItemType::Byte14 : ItemType::Byte, extra, uint16_t(layered ? 3 : 2)});
   const uint32_t count = 1 + data[1] % 64;
   std::vector<uint8_t> out(size_t(count) * info.recordSize());
   try {
