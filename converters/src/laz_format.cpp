@@ -5,15 +5,11 @@
 
 #include <cstring>
 
+#include "laz_common.h"
+
 namespace nestlight::laz {
 
 namespace {
-template <typename T>
-T get(const uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
 
 // The items LASzip writes for each point format, before any extra bytes (Byte / Byte14).
 bool expectedItems(int pf, std::vector<ItemType>& out) {
@@ -179,6 +175,8 @@ std::string parseLaszipVlr(const uint8_t* d, size_t length, int pf, size_t recor
     } else if (it.type != (layered ? ItemType::Byte14 : ItemType::Byte)) {
       return which + " is not expected after the fields of point format " + std::to_string(pf);
     }
+    if (it.type == ItemType::WavePacket13)
+      return which + ": waveform packets of point formats 4 and 5 are not supported";
     const size_t fixed = fixedSize(it.type);
     if (fixed ? it.size != fixed : it.size == 0)
       return which + " has size " + std::to_string(it.size) +

@@ -9,27 +9,10 @@
 #include <memory>
 
 #include "laz_arithmetic.h"
+#include "laz_common.h"
 #include "laz_format.h"
 
 namespace nestlight::laz {
-
-template <typename T>
-T get(const uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-template <typename T>
-void put(uint8_t* p, T v) {
-  std::memcpy(p, &v, sizeof v);
-}
-
-inline uint8_t fold8(int32_t v) {
-  return static_cast<uint8_t>(v);
-}  // wraps like U8_FOLD
-inline int32_t clamp8(int32_t v) {
-  return v <= 0 ? 0 : (v >= 255 ? 255 : v);
-}
 
 // Context of the x/y/intensity models by (number of returns, return number): 0-14 for the
 // valid combinations, the rest for files that number returns from 0 or swap the two fields.
@@ -42,62 +25,6 @@ constexpr uint8_t kReturnMap[8][8] = {
 constexpr uint8_t returnLevel(uint32_t n, uint32_t r) {
   return static_cast<uint8_t>(n > r ? n - r : r - n);
 }
-
-// Median of the last five values, updated in O(1) (LASzip's "streaming median").
-struct Median5 {
-  int32_t v[5] = {0, 0, 0, 0, 0};
-  bool high = true;
-  int32_t get() const { return v[2]; }
-  void add(int32_t x) {
-    if (high) {
-      if (x < v[2]) {
-        v[4] = v[3];
-        v[3] = v[2];
-        if (x < v[0]) {
-          v[2] = v[1];
-          v[1] = v[0];
-          v[0] = x;
-        } else if (x < v[1]) {
-          v[2] = v[1];
-          v[1] = x;
-        } else {
-          v[2] = x;
-        }
-      } else {
-        if (x < v[3]) {
-          v[4] = v[3];
-          v[3] = x;
-        } else {
-          v[4] = x;
-        }
-        high = false;
-      }
-    } else {
-      if (v[2] < x) {
-        v[0] = v[1];
-        v[1] = v[2];
-        if (v[4] < x) {
-          v[2] = v[3];
-          v[3] = v[4];
-          v[4] = x;
-        } else if (v[3] < x) {
-          v[2] = v[3];
-          v[3] = x;
-        } else {
-          v[2] = x;
-        }
-      } else {
-        if (v[1] < x) {
-          v[0] = v[1];
-          v[1] = x;
-        } else {
-          v[0] = x;
-        }
-        high = true;
-      }
-    }
-  }
-};
 
 // Symbol models created on first use and reset for every chunk: the reference creates them
 // lazily and re-initialises the existing ones per chunk, which decodes the same.
@@ -128,6 +55,87 @@ class ItemDecoder {
   // Starts a chunk whose first record (this item's bytes) is `first`.
   virtual void init(const uint8_t* first) = 0;
   virtual void read(ArithmeticDecoder& dec, uint8_t* out) = 0;
+};
+
+// The state of the version 2 coders, shared by the decoders (laz_pointwise.cpp) and the encoders
+// (laz_writer.cpp), which inherit it: their models must update in lock-step, so they are one
+// definition.
+struct Point10V2State {
+  uint8_t last_[20] = {};
+  Median5 xMedian_[16], yMedian_[16];
+  uint16_t lastIntensity_[16] = {};
+  int32_t lastHeight_[8] = {};
+  SymbolModel changed_{64};
+  IntegerDecoder intensity_{16, 4};
+  SymbolModel scanAngle_[2] = {SymbolModel(256), SymbolModel(256)};
+  IntegerDecoder pointSource_{16};
+  LazyModels bitByte_{256}, classification_{256}, userData_{256};
+  IntegerDecoder dx_{32, 2}, dy_{32, 22}, dz_{32, 20};
+
+  void reset(const uint8_t* first) {
+    for (int i = 0; i < 16; ++i) {
+      xMedian_[i] = Median5();
+      yMedian_[i] = Median5();
+      lastIntensity_[i] = 0;
+      lastHeight_[i / 2] = 0;
+    }
+    changed_.reset();
+    intensity_.reset();
+    scanAngle_[0].reset();
+    scanAngle_[1].reset();
+    pointSource_.reset();
+    bitByte_.reset();
+    classification_.reset();
+    userData_.reset();
+    dx_.reset();
+    dy_.reset();
+    dz_.reset();
+    std::memcpy(last_, first, 20);
+  }
+};
+
+struct GpsTime11V2State {
+  static constexpr int32_t kMulti = 500;
+  static constexpr int32_t kMultiMinus = -10;
+  static constexpr int32_t kMultiUnchanged = kMulti - kMultiMinus + 1;
+  static constexpr int32_t kMultiCodeFull = kMulti - kMultiMinus + 2;
+  static constexpr int32_t kMultiTotal = kMulti - kMultiMinus + 6;
+
+  uint32_t last_ = 0, next_ = 0;  // four interleaved time sequences
+  uint64_t time_[4] = {};
+  int32_t lastDiff_[4] = {};
+  int32_t extreme_[4] = {};
+  SymbolModel multi_{kMultiTotal};
+  SymbolModel zeroDiff_{6};
+  IntegerDecoder ic_{32, 9};
+
+  void reset(const uint8_t* first) {
+    last_ = next_ = 0;
+    for (int i = 0; i < 4; ++i) lastDiff_[i] = extreme_[i] = 0, time_[i] = 0;
+    multi_.reset();
+    zeroDiff_.reset();
+    ic_.reset();
+    time_[0] = get<uint64_t>(first);
+  }
+  // A difference far from the predicted multiple: after four in a row it becomes the new step.
+  void countExtreme(int32_t diff) {
+    if (++extreme_[last_] > 3) {
+      lastDiff_[last_] = diff;
+      extreme_[last_] = 0;
+    }
+  }
+};
+
+struct Rgb12V2State {
+  uint16_t last_[3] = {};
+  SymbolModel byteUsed_{128};
+  SymbolModel diff_[6] = {SymbolModel(256), SymbolModel(256), SymbolModel(256),
+                          SymbolModel(256), SymbolModel(256), SymbolModel(256)};
+  void reset(const uint8_t* first) {
+    byteUsed_.reset();
+    for (auto& m : diff_) m.reset();
+    for (int c = 0; c < 3; ++c) last_[c] = get<uint16_t>(first + 2 * c);
+  }
 };
 
 // Version 1 items (LASzip 1.x): POINT10, GPSTIME11, RGB12, BYTE; nullptr for others.

@@ -41,29 +41,16 @@
 #include <vector>
 
 #include "laz_arithmetic.h"
+#include "laz_common.h"
 #include "laz_format.h"
 
 namespace nestlight::laz {
 namespace {
 
-template <typename T>
-T get(const uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-template <typename T>
-void put(uint8_t* p, T v) {
-  std::memcpy(p, &v, sizeof v);
-}
-
 // Byte arithmetic of the colour and extra-byte predictors: sums wrap modulo 256 (values stay in
 // 0..510, so the reference's fold is the low byte), predictions clamp to 0..255.
 inline uint32_t low8(uint32_t v) {
   return v & 0xFFu;
-}
-inline int32_t clamp8(int32_t v) {
-  return v <= 0 ? 0 : (v >= 255 ? 255 : v);
 }
 
 // Context of the x/y models by (number of returns n, return number r): the valid combinations
@@ -90,63 +77,6 @@ inline uint32_t returnLevel(uint32_t n, uint32_t r) {
   const uint32_t d = n > r ? n - r : r - n;
   return d < 7 ? d : 7;
 }
-
-// Median of the last five values, updated in O(1) (LASzip's "streaming median"): the x and y
-// predictors use the median of recent differences, which a single outlier does not move.
-struct Median5 {
-  int32_t v[5] = {0, 0, 0, 0, 0};
-  bool high = true;
-  int32_t get() const { return v[2]; }
-  void add(int32_t x) {
-    if (high) {
-      if (x < v[2]) {
-        v[4] = v[3];
-        v[3] = v[2];
-        if (x < v[0]) {
-          v[2] = v[1];
-          v[1] = v[0];
-          v[0] = x;
-        } else if (x < v[1]) {
-          v[2] = v[1];
-          v[1] = x;
-        } else {
-          v[2] = x;
-        }
-      } else {
-        if (x < v[3]) {
-          v[4] = v[3];
-          v[3] = x;
-        } else {
-          v[4] = x;
-        }
-        high = false;
-      }
-    } else {
-      if (v[2] < x) {
-        v[0] = v[1];
-        v[1] = v[2];
-        if (v[4] < x) {
-          v[2] = v[3];
-          v[3] = v[4];
-          v[4] = x;
-        } else if (v[3] < x) {
-          v[2] = v[3];
-          v[3] = x;
-        } else {
-          v[2] = x;
-        }
-      } else {
-        if (v[1] < x) {
-          v[0] = v[1];
-          v[1] = x;
-        } else {
-          v[0] = x;
-        }
-        high = true;
-      }
-    }
-  }
-};
 
 // A model the reference creates on first use: allocated once per decoder, reset the first time a
 // context uses it after (re)initialisation, which is what a freshly created model is.

@@ -19,17 +19,12 @@
 #include <optional>
 
 #include "laz_arithmetic.h"
+#include "laz_common.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::laz {
 
 namespace {
-template <typename T>
-T get(const uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
 // A chunk is decoded whole, so its claimed point count decides an allocation: refuse claims no
 // writer makes (LASzip's default is 50,000 points; COPC writers stay far below this).
 constexpr uint32_t kMaxChunkPoints = 1u << 26;

@@ -24,27 +24,10 @@ namespace {
 
 // ---- version 2 ---------------------------------------------------------------------------------
 
-class Point10V2 final : public ItemDecoder {
+class Point10V2 final : public ItemDecoder, private Point10V2State {
  public:
   void init(const uint8_t* first) override {
-    for (int i = 0; i < 16; ++i) {
-      xMedian_[i] = Median5();
-      yMedian_[i] = Median5();
-      lastIntensity_[i] = 0;
-      lastHeight_[i / 2] = 0;
-    }
-    changed_.reset();
-    intensity_.reset();
-    scanAngle_[0].reset();
-    scanAngle_[1].reset();
-    pointSource_.reset();
-    bitByte_.reset();
-    classification_.reset();
-    userData_.reset();
-    dx_.reset();
-    dy_.reset();
-    dz_.reset();
-    std::memcpy(last_, first, 20);
+    reset(first);
     last_[12] = last_[13] = 0;  // the reference predicts the first intensity from zero
   }
 
@@ -99,36 +82,11 @@ class Point10V2 final : public ItemDecoder {
     lastHeight_[l] = z;
     std::memcpy(out, last_, 20);
   }
-
- private:
-  uint8_t last_[20] = {};
-  Median5 xMedian_[16], yMedian_[16];
-  uint16_t lastIntensity_[16] = {};
-  int32_t lastHeight_[8] = {};
-  SymbolModel changed_{64};
-  IntegerDecoder intensity_{16, 4};
-  SymbolModel scanAngle_[2] = {SymbolModel(256), SymbolModel(256)};
-  IntegerDecoder pointSource_{16};
-  LazyModels bitByte_{256}, classification_{256}, userData_{256};
-  IntegerDecoder dx_{32, 2}, dy_{32, 22}, dz_{32, 20};
 };
 
-class GpsTime11V2 final : public ItemDecoder {
-  static constexpr int32_t kMulti = 500;
-  static constexpr int32_t kMultiMinus = -10;
-  static constexpr int32_t kMultiUnchanged = kMulti - kMultiMinus + 1;
-  static constexpr int32_t kMultiCodeFull = kMulti - kMultiMinus + 2;
-  static constexpr int32_t kMultiTotal = kMulti - kMultiMinus + 6;
-
+class GpsTime11V2 final : public ItemDecoder, private GpsTime11V2State {
  public:
-  void init(const uint8_t* first) override {
-    last_ = next_ = 0;
-    for (int i = 0; i < 4; ++i) lastDiff_[i] = extreme_[i] = 0, time_[i] = 0;
-    multi_.reset();
-    zeroDiff_.reset();
-    ic_.reset();
-    time_[0] = get<uint64_t>(first);
-  }
+  void init(const uint8_t* first) override { reset(first); }
 
   void read(ArithmeticDecoder& dec, uint8_t* out) override {
     // A switch to another of the four interleaved sequences is followed by that sequence's own
@@ -191,12 +149,6 @@ class GpsTime11V2 final : public ItemDecoder {
   }
 
  private:
-  void countExtreme(int32_t diff) {
-    if (++extreme_[last_] > 3) {
-      lastDiff_[last_] = diff;
-      extreme_[last_] = 0;
-    }
-  }
   // A time that differs by more than 32 bits: the high half predicted, the low half raw.
   void readFull(ArithmeticDecoder& dec) {
     next_ = (next_ + 1) & 3;
@@ -207,23 +159,11 @@ class GpsTime11V2 final : public ItemDecoder {
     lastDiff_[last_] = 0;
     extreme_[last_] = 0;
   }
-
-  uint32_t last_ = 0, next_ = 0;
-  uint64_t time_[4] = {};
-  int32_t lastDiff_[4] = {};
-  int32_t extreme_[4] = {};
-  SymbolModel multi_{kMultiTotal};
-  SymbolModel zeroDiff_{6};
-  IntegerDecoder ic_{32, 9};
 };
 
-class Rgb12V2 final : public ItemDecoder {
+class Rgb12V2 final : public ItemDecoder, private Rgb12V2State {
  public:
-  void init(const uint8_t* first) override {
-    byteUsed_.reset();
-    for (auto& m : diff_) m.reset();
-    for (int c = 0; c < 3; ++c) last_[c] = get<uint16_t>(first + 2 * c);
-  }
+  void init(const uint8_t* first) override { reset(first); }
 
   void read(ArithmeticDecoder& dec, uint8_t* out) override {
     const uint32_t sym = dec.decodeSymbol(byteUsed_);
@@ -275,12 +215,6 @@ class Rgb12V2 final : public ItemDecoder {
       last_[c] = rgb[c];
     }
   }
-
- private:
-  uint16_t last_[3] = {};
-  SymbolModel byteUsed_{128};
-  SymbolModel diff_[6] = {SymbolModel(256), SymbolModel(256), SymbolModel(256),
-                          SymbolModel(256), SymbolModel(256), SymbolModel(256)};
 };
 
 class ByteV2 final : public ItemDecoder {

@@ -38,28 +38,9 @@ class ItemEncoder {
   virtual void write(ArithmeticEncoder& enc, const uint8_t* item) = 0;
 };
 
-class Point10Encoder final : public ItemEncoder {
+class Point10Encoder final : public ItemEncoder, private Point10V2State {
  public:
-  void init(const uint8_t* first) override {
-    for (int i = 0; i < 16; ++i) {
-      xMedian_[i] = Median5();
-      yMedian_[i] = Median5();
-      lastIntensity_[i] = 0;
-      lastHeight_[i / 2] = 0;
-    }
-    changed_.reset();
-    intensity_.reset();
-    scanAngle_[0].reset();
-    scanAngle_[1].reset();
-    pointSource_.reset();
-    bitByte_.reset();
-    classification_.reset();
-    userData_.reset();
-    dx_.reset();
-    dy_.reset();
-    dz_.reset();
-    std::memcpy(last_, first, 20);
-  }
+  void init(const uint8_t* first) override { reset(first); }
 
   void write(ArithmeticEncoder& enc, const uint8_t* item) override {
     const uint32_t r = item[14] & 7, n = (item[14] >> 3) & 7;
@@ -97,46 +78,21 @@ class Point10Encoder final : public ItemEncoder {
     lastHeight_[l] = z;
     std::memcpy(last_, item, 20);
   }
-
- private:
-  uint8_t last_[20] = {};
-  Median5 xMedian_[16], yMedian_[16];
-  uint16_t lastIntensity_[16] = {};
-  int32_t lastHeight_[8] = {};
-  SymbolModel changed_{64};
-  IntegerDecoder intensity_{16, 4};
-  SymbolModel scanAngle_[2] = {SymbolModel(256), SymbolModel(256)};
-  IntegerDecoder pointSource_{16};
-  LazyModels bitByte_{256}, classification_{256}, userData_{256};
-  IntegerDecoder dx_{32, 2}, dy_{32, 22}, dz_{32, 20};
 };
 
-class GpsTimeEncoder final : public ItemEncoder {
-  static constexpr int32_t kMulti = 500;
-  static constexpr int32_t kMultiMinus = -10;
-  static constexpr int32_t kMultiUnchanged = kMulti - kMultiMinus + 1;
-  static constexpr int32_t kMultiCodeFull = kMulti - kMultiMinus + 2;
-  static constexpr int32_t kMultiTotal = kMulti - kMultiMinus + 6;
-
+class GpsTimeEncoder final : public ItemEncoder, private GpsTime11V2State {
  public:
-  void init(const uint8_t* first) override {
-    last_ = next_ = 0;
-    for (int i = 0; i < 4; ++i) lastDiff_[i] = extreme_[i] = 0, time_[i] = 0;
-    multi_.reset();
-    zeroDiff_.reset();
-    ic_.reset();
-    time_[0] = get<int64_t>(first);
-  }
+  void init(const uint8_t* first) override { reset(first); }
 
   void write(ArithmeticEncoder& enc, const uint8_t* item) override {
-    const int64_t t = get<int64_t>(item);
+    const uint64_t t = get<uint64_t>(item);
     for (;;) {
       if (lastDiff_[last_] == 0) {
         if (t == time_[last_]) {
           enc.encodeSymbol(zeroDiff_, 0);
           return;
         }
-        const int64_t d = int64_t(uint64_t(t) - uint64_t(time_[last_]));
+        const int64_t d = int64_t(t - time_[last_]);
         if (d == int64_t(int32_t(d))) {
           enc.encodeSymbol(zeroDiff_, 1);
           ic_.compress(enc, 0, int32_t(d), 0);
@@ -158,7 +114,7 @@ class GpsTimeEncoder final : public ItemEncoder {
         enc.encodeSymbol(multi_, kMultiUnchanged);
         return;
       }
-      const int64_t d64 = int64_t(uint64_t(t) - uint64_t(time_[last_]));
+      const int64_t d64 = int64_t(t - time_[last_]);
       if (d64 == int64_t(int32_t(d64))) {
         const int32_t d = int32_t(d64);
         // Clamped before the conversion (the reference converts unclamped, undefined beyond
@@ -210,45 +166,27 @@ class GpsTimeEncoder final : public ItemEncoder {
 
  private:
   // Another of the four sequences within 32 bits of `t` (1-3 ahead of last_), else 0.
-  int otherSequence(int64_t t) const {
+  int otherSequence(uint64_t t) const {
     for (int i = 1; i < 4; ++i) {
-      const int64_t d = int64_t(uint64_t(t) - uint64_t(time_[(last_ + uint32_t(i)) & 3]));
+      const int64_t d = int64_t(t - time_[(last_ + uint32_t(i)) & 3]);
       if (d == int64_t(int32_t(d))) return i;
     }
     return 0;
   }
-  void writeFull(ArithmeticEncoder& enc, int64_t t) {
-    ic_.compress(enc, int32_t(uint64_t(time_[last_]) >> 32), int32_t(uint64_t(t) >> 32), 8);
-    enc.writeInt(uint32_t(uint64_t(t)));
+  void writeFull(ArithmeticEncoder& enc, uint64_t t) {
+    ic_.compress(enc, int32_t(time_[last_] >> 32), int32_t(t >> 32), 8);
+    enc.writeInt(uint32_t(t));
     next_ = (next_ + 1) & 3;
     last_ = next_;
     lastDiff_[last_] = 0;
     extreme_[last_] = 0;
     time_[last_] = t;
   }
-  void countExtreme(int32_t d) {
-    if (++extreme_[last_] > 3) {
-      lastDiff_[last_] = d;
-      extreme_[last_] = 0;
-    }
-  }
-
-  uint32_t last_ = 0, next_ = 0;
-  int64_t time_[4] = {};
-  int32_t lastDiff_[4] = {};
-  int32_t extreme_[4] = {};
-  SymbolModel multi_{kMultiTotal};
-  SymbolModel zeroDiff_{6};
-  IntegerDecoder ic_{32, 9};
 };
 
-class RgbEncoder final : public ItemEncoder {
+class RgbEncoder final : public ItemEncoder, private Rgb12V2State {
  public:
-  void init(const uint8_t* first) override {
-    byteUsed_.reset();
-    for (auto& m : diff_) m.reset();
-    for (int c = 0; c < 3; ++c) last_[c] = get<uint16_t>(first + 2 * c);
-  }
+  void init(const uint8_t* first) override { reset(first); }
 
   void write(ArithmeticEncoder& enc, const uint8_t* item) override {
     uint16_t v[3];
@@ -287,12 +225,6 @@ class RgbEncoder final : public ItemEncoder {
     }
     for (int c = 0; c < 3; ++c) last_[c] = v[c];
   }
-
- private:
-  uint16_t last_[3] = {};
-  SymbolModel byteUsed_{128};
-  SymbolModel diff_[6] = {SymbolModel(256), SymbolModel(256), SymbolModel(256),
-                          SymbolModel(256), SymbolModel(256), SymbolModel(256)};
 };
 
 class ByteEncoder final : public ItemEncoder {
@@ -402,11 +334,13 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
 
   // The LASzip VLR goes after the existing ones.
   std::vector<uint8_t> vlr(las::kVlrHeaderSize + 34 + 6 * info.items.size(), 0);
-  std::memcpy(&vlr[2], kLaszipUserId, std::strlen(kLaszipUserId));
+  const std::string user = kLaszipUserId;
+  std::copy(user.begin(), user.end(), vlr.begin() + 2);
   las::store<uint16_t>(&vlr[18], kLaszipRecordId);
   las::store<uint16_t>(&vlr[20], uint16_t(vlr.size() - las::kVlrHeaderSize));
   const char* description = "Nestlight LASzip 2 encoder";
-  std::memcpy(&vlr[22], description, std::strlen(description));
+  const std::string text = description;
+  std::copy(text.begin(), text.end(), vlr.begin() + 22);
   uint8_t* p = &vlr[las::kVlrHeaderSize];
   las::store<uint16_t>(p + 0, uint16_t(info.compressor));
   las::store<uint16_t>(p + 2, 0);  // arithmetic coder

@@ -557,8 +557,8 @@ TEST(LasReader, MalformedHeadersAreErrors) {
        "smaller than the 20 bytes point format 0 needs", "byte 105"},
       {"point format", [](std::string& s) { s[104] = 11; }, "unknown point data record format 11",
        "byte 104"},
-      {"laz", [](std::string& s) { s[104] = char(0x83); }, "there is no LASzip record", "byte 104"},
-      {"laz bit 6", [](std::string& s) { s[104] = char(0x43); }, "there is no LASzip record",
+      {"laz", [](std::string& s) { s[104] = char(0x80); }, "there is no LASzip record", "byte 104"},
+      {"laz bit 6", [](std::string& s) { s[104] = char(0x40); }, "there is no LASzip record",
        "byte 104"},
   };
   // VLRs that would run past the end of a file without points.
