@@ -49,7 +49,7 @@ void addBenchHdr(CLI::App& app, int& exitCode);      // after addBench: a sub-co
 void addBenchIbl(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 void addBenchLaz(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 
-// "5M" = 5,000,000, "800k", "1.5G", plain numbers: point counts are decimal.
+// "5M" = 5,000,000, "800k", "1.5G", "1B" (a billion), plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");
 // "1G", "512M", "64k", plain bytes.
 uint64_t parseBytes(const std::string& text);

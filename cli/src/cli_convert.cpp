@@ -17,7 +17,7 @@ uint64_t parseCount(const std::string& text, const std::string& option) {
   double mult = 1;
   const char c = s.empty() ? 0 : s.back();
   if (c == 'M' || c == 'm') mult = 1e6, s.pop_back();
-  else if (c == 'G' || c == 'g') mult = 1e9, s.pop_back();
+  else if (c == 'G' || c == 'g' || c == 'B' || c == 'b') mult = 1e9, s.pop_back();  // B: billion
   else if (c == 'k' || c == 'K') mult = 1e3, s.pop_back();
   size_t used = 0;
   double v = -1;
@@ -27,7 +27,7 @@ uint64_t parseCount(const std::string& text, const std::string& option) {
   }
   if (used != s.size() || !(v >= 0) || !(v * mult < 1.8e19))
     throw Error("", "", (option.empty() ? "" : option + ": ") + "cannot read '" + text +
-                            "' as a count (e.g. 5M, 800k, 1.5G)");
+                            "' as a count (e.g. 5M, 800k, 1.5G or 1B)");
   return static_cast<uint64_t>(v * mult);
 }
 

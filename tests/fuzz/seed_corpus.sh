@@ -30,7 +30,7 @@ case "$name" in
   fuzz_laz)
     # Whole files (a leading even byte): the small LAZ files of ../shared/data when present
     # (copied at run time, never committed), else a generated LAS file, which exercises the
-    # header paths; and bare chunks (a leading odd byte): the chunk bytes of those files.
+    # header paths; and a bare chunk (a leading odd byte): a raw first record and random bytes.
     shared=../shared/data/laz
     n=0
     for f in "$shared"/point10.las.laz "$shared"/point-color-time.las.laz "$shared"/extrabytes.laz "$shared"/1_4_w_evlr.laz "$shared"/simple.copc.laz; do
