@@ -16,9 +16,12 @@ uint64_t parseCount(const std::string& text, const std::string& option) {
   std::string s = text;
   double mult = 1;
   const char c = s.empty() ? 0 : s.back();
-  if (c == 'M' || c == 'm') mult = 1e6, s.pop_back();
-  else if (c == 'G' || c == 'g' || c == 'B' || c == 'b') mult = 1e9, s.pop_back();  // B: billion
-  else if (c == 'k' || c == 'K') mult = 1e3, s.pop_back();
+  if (c == 'M' || c == 'm')
+    mult = 1e6, s.pop_back();
+  else if (c == 'G' || c == 'g' || c == 'B' || c == 'b')
+    mult = 1e9, s.pop_back();  // B: billion
+  else if (c == 'k' || c == 'K')
+    mult = 1e3, s.pop_back();
   size_t used = 0;
   double v = -1;
   try {
@@ -26,8 +29,9 @@ uint64_t parseCount(const std::string& text, const std::string& option) {
   } catch (...) {
   }
   if (used != s.size() || !(v >= 0) || !(v * mult < 1.8e19))
-    throw Error("", "", (option.empty() ? "" : option + ": ") + "cannot read '" + text +
-                            "' as a count (e.g. 5M, 800k, 1.5G or 1B)");
+    throw Error("", "",
+                (option.empty() ? "" : option + ": ") + "cannot read '" + text +
+                    "' as a count (e.g. 5M, 800k, 1.5G or 1B)");
   return static_cast<uint64_t>(v * mult);
 }
 
@@ -42,16 +46,21 @@ uint64_t parseBytes(const std::string& text) {
   std::string unit = text.substr(used);
   std::transform(unit.begin(), unit.end(), unit.begin(), ::tolower);
   double mult = 1;
-  if (unit == "k" || unit == "kb" || unit == "kib") mult = 1024.0;
-  else if (unit == "m" || unit == "mb" || unit == "mib") mult = 1024.0 * 1024;
-  else if (unit == "g" || unit == "gb" || unit == "gib") mult = 1024.0 * 1024 * 1024;
-  else if (!unit.empty() && unit != "b") throw Error("", "", "unknown size unit in '" + text + "'");
+  if (unit == "k" || unit == "kb" || unit == "kib")
+    mult = 1024.0;
+  else if (unit == "m" || unit == "mb" || unit == "mib")
+    mult = 1024.0 * 1024;
+  else if (unit == "g" || unit == "gb" || unit == "gib")
+    mult = 1024.0 * 1024 * 1024;
+  else if (!unit.empty() && unit != "b")
+    throw Error("", "", "unknown size unit in '" + text + "'");
   if (!(v > 0)) throw Error("", "", "size must be positive: '" + text + "'");
   return static_cast<uint64_t>(v * mult);
 }
 
 std::vector<std::string> expandInputs(const std::vector<std::string>& inputs) {
-  static const std::vector<std::string> exts = {".las", ".laz", ".ply", ".pcd", ".xyz", ".pts", ".txt", ".csv"};
+  static const std::vector<std::string> exts = {".las", ".laz", ".ply", ".pcd",
+                                                ".xyz", ".pts", ".txt", ".csv"};
   std::vector<std::string> out;
   for (const auto& in : inputs) {
     if (!fs::exists(in)) throw Error(in, "", "no such file or directory");
@@ -84,10 +93,14 @@ std::string humanBytes(double b) {
 
 std::string humanCount(double n) {
   char buf[32];
-  if (n >= 1e9) std::snprintf(buf, sizeof buf, "%.2f G", n / 1e9);
-  else if (n >= 1e6) std::snprintf(buf, sizeof buf, "%.2f M", n / 1e6);
-  else if (n >= 1e3) std::snprintf(buf, sizeof buf, "%.1f k", n / 1e3);
-  else std::snprintf(buf, sizeof buf, "%.0f", n);
+  if (n >= 1e9)
+    std::snprintf(buf, sizeof buf, "%.2f G", n / 1e9);
+  else if (n >= 1e6)
+    std::snprintf(buf, sizeof buf, "%.2f M", n / 1e6);
+  else if (n >= 1e3)
+    std::snprintf(buf, sizeof buf, "%.1f k", n / 1e3);
+  else
+    std::snprintf(buf, sizeof buf, "%.0f", n);
   return buf;
 }
 
@@ -117,14 +130,16 @@ void printBuildSummary(const BuildReport& r, const fs::path& out) {
               humanCount(r.pointsPerSecond).c_str(), humanBytes(double(r.peakRssBytes)).c_str(),
               (unsigned long long)r.chunks);
   std::printf("  phases   ");
-  for (auto it = r.phases.begin(); it != r.phases.end(); ++it) std::printf(" %s %.2f s", it.key().c_str(), it.value().get<double>());
+  for (auto it = r.phases.begin(); it != r.phases.end(); ++it)
+    std::printf(" %s %.2f s", it.key().c_str(), it.value().get<double>());
   std::printf("\n");
 }
 
 void addConvert(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand("convert", "Build a nested octree from scans, in bounded memory");
   cmd->footer(
-      "Inputs: LAS 1.0-1.4 (.las), PLY (.ply), PCD (.pcd), text (.xyz .pts .txt .csv); a directory\n"
+      "Inputs: LAS 1.0-1.4 (.las), PLY (.ply), PCD (.pcd), text (.xyz .pts .txt .csv); a "
+      "directory\n"
       "stands for the point files in it. Every input point is kept, merged as an exact duplicate\n"
       "(--dedup) or rejected with a reason; `nestlight info` shows the counts.\n"
       "Normals (--estimate-normals) are fitted to the k nearest neighbours by a closed-form plane\n"
@@ -139,10 +154,14 @@ void addConvert(CLI::App& app, int& exitCode) {
   auto orient = std::make_shared<std::string>("outward");
   auto progress = std::make_shared<std::string>("auto");
   auto read = std::make_shared<ReadOptions>();
-  cmd->add_option("inputs", *inputs, "Scan files or directories")->required();
+  cmd->add_option("inputs", *inputs,
+                  "Scan files or directories: .las .laz (LAZ, COPC) .ply .pcd .xyz .pts .txt .csv")
+      ->required();
   cmd->add_option("-o,--output", *out, "Output octree folder")->required();
-  cmd->add_option("--memory", *memory, "Memory budget of the builder (e.g. 512M, 4G)")->capture_default_str();
-  cmd->add_option("--threads", opt->threads, "Worker threads (0: all cores)")->capture_default_str();
+  cmd->add_option("--memory", *memory, "Memory budget of the builder (e.g. 512M, 4G)")
+      ->capture_default_str();
+  cmd->add_option("--threads", opt->threads, "Worker threads (0: all cores)")
+      ->capture_default_str();
   cmd->add_option("--sampling", *sampling, "Node sampling: poisson (even) or grid (faster)")
       ->check(CLI::IsMember({"poisson", "grid"}))
       ->capture_default_str();
@@ -153,18 +172,22 @@ void addConvert(CLI::App& app, int& exitCode) {
                   "Position precision in world units (default: the inputs' LAS scale, else 0.001)");
   cmd->add_flag("--dedup", opt->dedup, "Merge exact duplicates (same position and attributes)");
   cmd->add_flag("--estimate-normals", opt->estimateNormals, "Fit normals where the scan has none");
-  cmd->add_option("--normal-neighbours", opt->normalNeighbours, "k for normal estimation")->capture_default_str();
+  cmd->add_option("--normal-neighbours", opt->normalNeighbours, "k for normal estimation")
+      ->capture_default_str();
   cmd->add_option("--normal-orientation", *orient, "outward, inward or up")
       ->check(CLI::IsMember({"outward", "inward", "up"}))
       ->capture_default_str();
-  cmd->add_option("--max-node-points", opt->maxNodePoints, "Points per node at most (leaves and samples)")
+  cmd->add_option("--max-node-points", opt->maxNodePoints,
+                  "Points per node at most (leaves and samples)")
       ->check(CLI::Range(1000u, 1000000u))
       ->capture_default_str();
   cmd->add_flag("--overwrite", opt->overwrite, "Replace an existing octree in the output folder");
   cmd->add_flag("--lenient", read->lenient,
-                "Keep the complete records of files whose header disagrees with their data");
+                "Keep the complete records of files whose header disagrees with their data, and "
+                "the intact chunks of a damaged LAZ file (its damaged chunks count as rejected)");
   cmd->add_option("--columns", read->columns, "Text inputs: column names, e.g. x,y,z,r,g,b");
-  cmd->add_flag("--in-memory", opt->inMemory, "Index everything as one chunk (reference build; needs RAM)");
+  cmd->add_flag("--in-memory", opt->inMemory,
+                "Index everything as one chunk (reference build; needs RAM)");
   cmd->add_option("--progress", *progress, "auto, terminal, json or quiet")
       ->check(CLI::IsMember({"auto", "terminal", "json", "quiet"}))
       ->capture_default_str();
@@ -174,12 +197,13 @@ void addConvert(CLI::App& app, int& exitCode) {
     o.memoryBytes = parseBytes(*memory);
     o.sampling = *sampling == "grid" ? Sampling::Grid : Sampling::Poisson;
     o.codec = *parseCodecName(*codec);
-    o.normalOrientation = *orient == "up" ? NormalOrientation::Up
+    o.normalOrientation = *orient == "up"       ? NormalOrientation::Up
                           : *orient == "inward" ? NormalOrientation::Inward
                                                 : NormalOrientation::Outward;
     o.progress = parseProgress(*progress);
     std::vector<std::string> files = expandInputs(*inputs);
-    o.commandLine = {{"inputs", files}, {"memory", *memory}, {"sampling", *sampling}, {"codec", *codec}};
+    o.commandLine = {
+        {"inputs", files}, {"memory", *memory}, {"sampling", *sampling}, {"codec", *codec}};
     std::vector<std::unique_ptr<PointReader>> readers;
     for (const auto& f : files) readers.push_back(openReader(f, *read));
     BuildReport r = buildOctree(std::move(readers), o);

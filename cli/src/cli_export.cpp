@@ -21,12 +21,14 @@ std::string formatOf(const std::string& out) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
   if (ext == ".las") return "las";
+  if (ext == ".laz") return "laz";
   if (ext == ".ply") return "ply";
   std::error_code ec;
   if (ext.empty() || fs::is_directory(p, ec)) return "potree";
   throw Error(out, "",
               "cannot tell the output format from the extension '" + ext +
-                  "': name a .las or .ply file, or a directory, or pass --format las|ply|potree");
+                  "': name a .las, .laz or .ply file, or a directory, or pass --format "
+                  "las|laz|ply|potree");
 }
 
 }  // namespace
@@ -34,16 +36,15 @@ std::string formatOf(const std::string& out) {
 void addExport(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
       "export",
-      "Write an octree's points to LAS or PLY (all, or one level), or as a Potree 2.0 dataset");
+      "Write an octree's points to LAS, LAZ or PLY (all, or one level), or as a Potree 2.0 "
+      "dataset");
   cmd->footer(
-      "Formats: las and ply write one file of points (all nodes, or --level N); potree writes a\n"
-      "directory that the Potree web viewer (1.8 and later) opens: metadata.json, hierarchy.bin "
-      "and\n"
-      "octree.bin, with the octree's own nodes and sampling (no reconversion) and positions exact "
-      "in\n"
-      "its integer grid. Without --format the format follows -o: .las, .ply, else (a directory or "
-      "a\n"
-      "name without extension) potree. An existing non-empty directory is refused unless --force.\n"
+      "Formats: las, laz (LASzip 2, point formats 0-3; docs/LAZ.md) and ply write one file of\n"
+      "points (all nodes, or --level N). potree writes a directory that the Potree web viewer\n"
+      "(1.8 and later) opens: metadata.json, hierarchy.bin and octree.bin, with the octree's own\n"
+      "nodes and sampling (no reconversion) and positions exact in its integer grid. Without\n"
+      "--format the format follows -o: .las, .laz, .ply, else (a directory or a name without\n"
+      "extension) potree. An existing non-empty directory is refused unless --force.\n"
       "Attribute mapping and limits: docs/POTREE_EXPORT.md.");
   auto dir = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
@@ -53,11 +54,11 @@ void addExport(CLI::App& app, int& exitCode) {
   auto progress = std::make_shared<std::string>("auto");
   auto potree = std::make_shared<PotreeExportOptions>();
   cmd->add_option("octree", *dir, "Octree folder")->required();
-  cmd->add_option("-o,--output", *out, "Output file (.las, .ply) or directory (potree)")
+  cmd->add_option("-o,--output", *out, "Output file (.las, .laz, .ply) or directory (potree)")
       ->required();
-  cmd->add_option("--format", *format, "las, ply or potree (default: from -o)")
-      ->check(CLI::IsMember({"las", "ply", "potree"}));
-  cmd->add_option("--level", *level, "las/ply: only the nodes of this level (0 = root)");
+  cmd->add_option("--format", *format, "las, laz, ply or potree (default: from -o)")
+      ->check(CLI::IsMember({"las", "laz", "ply", "potree"}));
+  cmd->add_option("--level", *level, "las/laz/ply: only the nodes of this level (0 = root)");
   cmd->add_flag("--force", *force,
                 "potree: write into a non-empty directory (replaces its Potree files)");
   cmd->add_option("--hierarchy-step", potree->stepSize, "potree: levels per hierarchy chunk")
@@ -96,7 +97,7 @@ void addExport(CLI::App& app, int& exitCode) {
       exitCode = 0;
       return;
     }
-    // las, ply: the writer follows the extension, which must agree with --format.
+    // las, laz, ply: the writer follows the extension, which must agree with --format.
     const std::string ext = fs::path(*out).extension().string();
     std::string lower = ext;
     std::transform(lower.begin(), lower.end(), lower.begin(),

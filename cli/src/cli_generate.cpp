@@ -59,7 +59,7 @@ void addGenerate(CLI::App& app, int& exitCode) {
   auto points = std::make_shared<std::string>("1000000");
   auto origin = std::make_shared<std::string>("0,0,0");
   auto spec = std::make_shared<SyntheticSpec>();
-  cmd->add_option("-o,--output", *out, "Output file (.las or .ply)")->required();
+  cmd->add_option("-o,--output", *out, "Output file (.las, .laz or .ply)")->required();
   cmd->add_option("--shape", *shape,
                   "surfaces (a building-like scene), cube (filled volume), duplicates (one point "
                   "repeated), plane (zero extent in z)")

@@ -594,6 +594,24 @@ TEST(LazConvert, LazAndLasOfAutzenConvertToIdenticalOctrees) {
   EXPECT_EQ(z.metadata().sources.at(0).format, "laz");
 }
 
+// `export -o x.laz` writes the records `export -o x.las` writes, compressed.
+TEST(LazConvert, ExportToLazHoldsTheRecordsOfExportToLas) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  test::TempDir t;
+  test::buildOctreeFrom(laz("autzen_trim.laz"), t.path() / "o", 20000);
+  std::string out;
+  ASSERT_EQ(test::runCli("export " + t.file("o") + " -o " + t.file("a.laz"), &out), 0) << out;
+  ASSERT_EQ(test::runCli("export " + t.file("o") + " -o " + t.file("a.las"), &out), 0) << out;
+  const Records z = records(t.file("a.laz")), l = records(t.file("a.las"));
+  EXPECT_EQ(z.count(), 110000u);
+  EXPECT_TRUE(z.bytes == l.bytes) << firstDifference(z, l);
+  EXPECT_LT(std::filesystem::file_size(t.file("a.laz")),
+            std::filesystem::file_size(t.file("a.las")) / 2);
+  EXPECT_NE(
+      test::runCli("export " + t.file("o") + " -o " + t.file("b.las") + " --format laz", &out), 0);
+  EXPECT_NE(out.find("needs an output file ending in .laz"), std::string::npos) << out;
+}
+
 // A damaged LAZ read leniently: the accounting covers every declared point, the damaged chunk's
 // as rejected, nothing counted twice.
 TEST(LazConvert, LenientConversionCountsTheDamagedChunkAsRejected) {
