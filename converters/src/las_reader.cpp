@@ -10,16 +10,16 @@
 // The reader parses in place from the mapped bytes. Everything it reads is checked against the
 // size of the input first, because the reader is fuzzed and a header is just a claim: counts,
 // offsets and lengths are compared without multiplying so that they cannot overflow.
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <charconv>
-#include <set>
-#include <functional>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
+#include <set>
 #include <string>
-
-#include <tbb/task_arena.h>
 
 #include "las_format.h"
 #include "laz_points.h"
@@ -199,7 +199,8 @@ class LasReader final : public PointReader {
     // Planning passes sample whole chunks; a coarser step than for LAS keeps their decoding cost
     // small, as long as enough chunks remain to stand for the rest.
     size_t chunkStep = 1;
-    if (step > 1) chunkStep = chunks.size() >= 8 * step ? 4 * step : chunks.size() >= 2 * step ? step : 1;
+    if (step > 1)
+      chunkStep = chunks.size() >= 8 * step ? 4 * step : chunks.size() >= 2 * step ? step : 1;
     std::vector<size_t> which;
     uint64_t points = 0;
     size_t c = nextChunk_;
@@ -212,7 +213,7 @@ class LasReader final : public PointReader {
     nextChunk_ = std::min(c, chunks.size());
     batch.pendingPoints = static_cast<size_t>(points);
     batch.pending = [this, which = std::move(which)](PointBatch& b) {
-      thread_local std::vector<uint8_t> records;
+      thread_local laz::RecordBuffer records;
       const size_t n = static_cast<size_t>(laz_->decode(which, records, false));
       const size_t stride = header_.layout.stride();
       b.xyz.resize(3 * n);
@@ -237,7 +238,11 @@ class LasReader final : public PointReader {
   [[noreturn]] void fail(uint64_t at, const std::string& reason) const {
     throw Error(src_->name(), Error::atByte(at), reason);
   }
-  void warn(std::string w) { warnings_.push_back(std::move(w)); }
+  // A damaged chunk met by the sampled planning pass and again by the full pass is one warning.
+  void warn(std::string w) {
+    if (std::find(warnings_.begin(), warnings_.end(), w) == warnings_.end())
+      warnings_.push_back(std::move(w));
+  }
 
   void parse();
   void readVlrs(uint64_t start, uint32_t count, uint64_t limit);
@@ -268,9 +273,9 @@ class LasReader final : public PointReader {
   uint64_t laszipVlrLength_ = 0, laszipVlrAt_ = 0;
   bool compressed_ = false;
   std::unique_ptr<laz::LazPoints> laz_;
-  std::vector<uint8_t> cache_;  // decoded LAZ records not yet returned
+  laz::RecordBuffer cache_;  // decoded LAZ records not yet returned
   size_t cacheAt_ = 0, cacheCount_ = 0, cacheWeight_ = 1;
-  size_t nextChunk_ = 0;        // first LAZ chunk not decoded yet
+  size_t nextChunk_ = 0;  // first LAZ chunk not decoded yet
   const uint8_t* extraBytesVlr_ = nullptr;
   uint64_t extraBytesVlrLength_ = 0;
   uint64_t extraBytesVlrAt_ = 0;
@@ -422,31 +427,32 @@ void LasReader::parse() {
   if (compressed_) {
     setupLaz(declared, dataEnd);
   } else {
-  const uint64_t complete = (dataEnd - pointStart_) / recordLength_;
-  if (declared > complete) {
-    const uint64_t at = pointStart_ + complete * recordLength_;
-    const std::string what = "header declares " + std::to_string(declared) +
-                             " points but the file holds only " + std::to_string(complete) +
-                             " complete records of " + std::to_string(recordLength_) +
-                             " bytes (point data from byte " + std::to_string(pointStart_) +
-                             " to byte " + std::to_string(dataEnd) + ")";
-    if (!options_.lenient) fail(at, what + "; the file is truncated or its header is wrong");
-    warn(src_->name() + ": " + Error::atByte(at) + ": " + what + "; read the " +
-         std::to_string(complete) + " complete records");
-    count_ = complete;
-  } else {
-    count_ = declared;
-    const uint64_t end = pointStart_ + declared * recordLength_;
-    if (end < dataEnd) {
-      const uint64_t trailing = dataEnd - end;
-      std::string what = std::to_string(trailing) + " bytes after the " + std::to_string(declared) +
-                         " declared points (from byte " + std::to_string(end) + ") are not EVLRs";
-      if (trailing >= recordLength_)
-        what += "; they would hold " + std::to_string(trailing / recordLength_) +
-                " more records: does the header claim fewer points than the file holds?";
-      warn(what);
+    const uint64_t complete = (dataEnd - pointStart_) / recordLength_;
+    if (declared > complete) {
+      const uint64_t at = pointStart_ + complete * recordLength_;
+      const std::string what = "header declares " + std::to_string(declared) +
+                               " points but the file holds only " + std::to_string(complete) +
+                               " complete records of " + std::to_string(recordLength_) +
+                               " bytes (point data from byte " + std::to_string(pointStart_) +
+                               " to byte " + std::to_string(dataEnd) + ")";
+      if (!options_.lenient) fail(at, what + "; the file is truncated or its header is wrong");
+      warn(src_->name() + ": " + Error::atByte(at) + ": " + what + "; read the " +
+           std::to_string(complete) + " complete records");
+      count_ = complete;
+    } else {
+      count_ = declared;
+      const uint64_t end = pointStart_ + declared * recordLength_;
+      if (end < dataEnd) {
+        const uint64_t trailing = dataEnd - end;
+        std::string what = std::to_string(trailing) + " bytes after the " +
+                           std::to_string(declared) + " declared points (from byte " +
+                           std::to_string(end) + ") are not EVLRs";
+        if (trailing >= recordLength_)
+          what += "; they would hold " + std::to_string(trailing / recordLength_) +
+                  " more records: does the header claim fewer points than the file holds?";
+        warn(what);
+      }
     }
-  }
   }
 
   buildLayout();
@@ -631,11 +637,11 @@ void LasReader::setupLaz(uint64_t declared, uint64_t dataEnd) {
                   "(VLR \"laszip encoded\" 22204)");
   laz::LaszipInfo info;
   const std::string bad = laz::parseLaszipVlr(laszipVlr_, static_cast<size_t>(laszipVlrLength_),
-                                             pointFormat_, recordLength_, info);
+                                              pointFormat_, recordLength_, info);
   if (!bad.empty()) fail(laszipVlrAt_ + las::kVlrHeaderSize, bad);
-  laz_ = std::make_unique<laz::LazPoints>(src_, info, pointStart_, dataEnd, declared,
-                                          options_.lenient, [this](std::string w) { warn(std::move(w)); },
-                                          copcChunks());
+  laz_ = std::make_unique<laz::LazPoints>(
+      src_, info, pointStart_, dataEnd, declared, options_.lenient,
+      [this](std::string w) { warn(std::move(w)); }, copcChunks());
   count_ = laz_->points();
 
   nlohmann::json items = nlohmann::json::array();
@@ -644,8 +650,8 @@ void LasReader::setupLaz(uint64_t declared, uint64_t dataEnd) {
                     std::to_string(it.size) + " bytes)");
   static const char* kCompressors[] = {"none", "pointwise", "pointwise chunked", "layered chunked"};
   header_.details["laszip"] = {
-      {"version", std::to_string(info.versionMajor) + "." + std::to_string(info.versionMinor) + "." +
-                      std::to_string(info.versionRevision)},
+      {"version", std::to_string(info.versionMajor) + "." + std::to_string(info.versionMinor) +
+                      "." + std::to_string(info.versionRevision)},
       {"compressor", kCompressors[static_cast<int>(info.compressor)]},
       {"items", std::move(items)},
       {"chunk_size", info.chunkSize == laz::kVariableChunkSize ? nlohmann::json("variable")
@@ -662,22 +668,28 @@ std::vector<laz::Chunk> LasReader::copcChunks() {
   const uint8_t* d = src_->data();
   const uint64_t size = src_->size();
   const uint8_t* info = copcInfo_;
-  nlohmann::json copc = {{"center", {load<double>(info), load<double>(info + 8), load<double>(info + 16)}},
-                         {"halfsize", load<double>(info + 24)},
-                         {"spacing", load<double>(info + 32)},
-                         {"gps_time", {load<double>(info + 56), load<double>(info + 64)}}};
+  nlohmann::json copc = {
+      {"center", {load<double>(info), load<double>(info + 8), load<double>(info + 16)}},
+      {"halfsize", load<double>(info + 24)},
+      {"spacing", load<double>(info + 32)},
+      {"gps_time", {load<double>(info + 56), load<double>(info + 64)}}};
   std::vector<laz::Chunk> chunks;
-  std::vector<std::pair<uint64_t, uint64_t>> pages = {{load<uint64_t>(info + 40), load<uint64_t>(info + 48)}};
+  std::vector<std::pair<uint64_t, uint64_t>> pages = {
+      {load<uint64_t>(info + 40), load<uint64_t>(info + 48)}};
   std::set<uint64_t> seen;
-  uint64_t entries = 0;
+  uint64_t entries = 0, visited = 0;
   int maxLevel = 0;
   while (!pages.empty()) {
     const auto [at, bytes] = pages.back();
     pages.pop_back();
-    if (at > size || bytes > size - at || bytes % 32 != 0 || !seen.insert(at).second) {
+    // Valid pages are disjoint, so together they fit in the file: a hierarchy whose pages
+    // overlap (which could make the walk quadratic) stops here.
+    visited += bytes;
+    if (at > size || bytes > size - at || bytes % 32 != 0 || !seen.insert(at).second ||
+        visited > size) {
       warn(Error::atByte(at) + ": COPC hierarchy page of " + std::to_string(bytes) +
-           " bytes is damaged (outside the file, not whole entries, or listed twice); the "
-           "hierarchy is ignored");
+           " bytes is damaged (outside the file, not whole entries, listed twice or "
+           "overlapping); the hierarchy is ignored");
       return {};
     }
     for (uint64_t e = at; e < at + bytes; e += 32) {
@@ -711,7 +723,10 @@ size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool
   if (maxPoints == 0) return 0;
   while (cacheAt_ >= cacheCount_) {
     const auto& chunks = laz_->chunks();
-    if (nextChunk_ >= chunks.size()) return 0;
+    if (nextChunk_ >= chunks.size()) {
+      cache_.release();  // up to 64 MiB per reader, and a conversion may have many inputs
+      return 0;
+    }
     // Enough chunks to keep every core busy, within 64 MiB of records.
     const uint64_t threads = static_cast<uint64_t>(tbb::this_task_arena::max_concurrency());
     const uint64_t cap = std::max<uint64_t>((64u << 20) / recordLength_, 1);
@@ -735,7 +750,7 @@ size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool
     cacheAt_ = 0;
     cacheWeight_ = step;
     src_->releaseBefore(nextChunk_ < laz_->chunks().size() ? laz_->chunks()[nextChunk_].offset
-                                                          : src_->size());
+                                                           : src_->size());
   }
   if (!decodeFields) return cacheWeight_;
   const size_t n = std::min(maxPoints, cacheCount_ - cacheAt_);

@@ -381,7 +381,9 @@ class LayeredDecoder final : public ChunkDecoder {
       throw DecodeError(at,
                         "chunk ends before its point count (" + std::to_string(size) + " bytes)");
     const uint32_t inner = get<uint32_t>(data + at);
-    if (inner != count)
+    // More than asked for is fine (the header declares fewer points than the chunks hold, and
+    // is trusted): the layers are independent, so the first `count` points decode alone.
+    if (inner < count)
       throw DecodeError(at, "chunk says it holds " + std::to_string(inner) +
                                 " points, the chunk table " + std::to_string(count));
     at += 4;

@@ -28,6 +28,8 @@ namespace {
 // A chunk is decoded whole, so its claimed point count decides an allocation: refuse claims no
 // writer makes (LASzip's default is 50,000 points; COPC writers stay far below this).
 constexpr uint32_t kMaxChunkPoints = 1u << 26;
+// The same for the records' bytes: points of very long records (extra bytes) may claim less.
+constexpr uint64_t kMaxChunkRecordBytes = uint64_t(1) << 30;
 }  // namespace
 
 struct LazPoints::Decoders : tbb::enumerable_thread_specific<std::unique_ptr<ChunkDecoder>> {
@@ -46,10 +48,15 @@ LazPoints::LazPoints(std::shared_ptr<ByteSource> src, LaszipInfo info, uint64_t 
       dataEnd_(dataEnd),
       lenient_(lenient),
       warn_(std::move(warn)),
-      hierarchy_(std::move(hierarchyChunks)) {
+      hierarchy_(std::move(hierarchyChunks)),
+      decoders_(std::make_unique<Decoders>([this] {
+        // One per thread that decodes, made on its first chunk.
+        return info_.compressor == Compressor::LayeredChunked ? makeLayeredDecoder(info_)
+                                                              : makePointwiseDecoder(info_);
+      })) {
   if (info_.compressor == Compressor::Pointwise) {
     // LASzip 1.0: one stream for every point, no chunk table.
-    if (declaredPoints > kMaxChunkPoints)
+    if (declaredPoints > kMaxChunkPoints || declaredPoints * recordSize_ > kMaxChunkRecordBytes)
       fail(pointStart_, "the unchunked LAZ stream (LASzip compressor 1) holds " +
                             std::to_string(declaredPoints) +
                             " points; this reader decodes at most " +
@@ -162,7 +169,7 @@ void LazPoints::readChunkTable(uint64_t declared) {
         fixed
             ? uint32_t(std::min<uint64_t>(info_.chunkSize, declared > first ? declared - first : 0))
             : counts[i];
-    if (c.points > kMaxChunkPoints)
+    if (c.points > kMaxChunkPoints || uint64_t(c.points) * recordSize_ > kMaxChunkRecordBytes)
       fail(c.offset, "chunk " + std::to_string(i + 1) + " of " + std::to_string(n) + " claims " +
                          std::to_string(c.points) +
                          " points, more than this reader decodes at once (" +
@@ -193,21 +200,17 @@ void LazPoints::readChunkTable(uint64_t declared) {
                              " points but the " + std::to_string(n) + " LAZ chunks hold " +
                              (fixed ? "at most " : "") + std::to_string(listed);
     if (!lenient_) fail(tableStart_, what + "; the file is truncated or its header is wrong");
-    warn_(src_->name() + ": " + what + "; read the " + std::to_string(points_) + " they hold");
+    // The declared points no chunk holds are unreadable too: the accounting covers them all.
+    unreadableAtOpen_ += declared - listed;
+    warn_(src_->name() + ": " + what + "; read the " + std::to_string(points_) +
+          " they hold and count the other " + std::to_string(declared - points_) +
+          " as unreadable");
   } else if (listed > declared) {
     // Trust the header for how many points there are, as LASzip does.
     warn_(src_->name() + ": the LAZ chunks hold " + std::to_string(listed) +
           " points, more than the " + std::to_string(declared) + " the header declares; read " +
           std::to_string(declared));
-    uint64_t keep = declared;
-    size_t k = 0;
-    for (; k < chunks_.size() && keep; ++k) {
-      chunks_[k].points = uint32_t(std::min<uint64_t>(chunks_[k].points, keep));
-      keep -= chunks_[k].points;
-    }
-    chunks_.resize(k);
-    points_ = std::min(points_, declared);
-    unreadableAtOpen_ = 0;
+    trimTo(declared);
   }
   if (dataEnd_ < tableStart_)
     fail(tableStart_, "the LAZ chunk table at byte " + std::to_string(tableStart_) +
@@ -215,6 +218,24 @@ void LazPoints::readChunkTable(uint64_t declared) {
                           std::to_string(dataEnd_) + ")");
   unreadable_ = unreadableAtOpen_;
   if (!hierarchy_.empty()) checkHierarchy();
+}
+
+// Keeps the first `declared` points of the chunks listed (the header is trusted for the count):
+// the chunks kept hold points_ of them, the rest (lost at open) are unreadable.
+void LazPoints::trimTo(uint64_t declared) {
+  if (points_ > declared) {
+    uint64_t keep = declared;
+    size_t k = 0;
+    for (; k < chunks_.size() && keep; ++k) {
+      chunks_[k].points = uint32_t(std::min<uint64_t>(chunks_[k].points, keep));
+      keep -= chunks_[k].points;
+    }
+    chunks_.resize(k);
+    points_ = declared;
+    unreadableAtOpen_ = 0;
+  } else {
+    unreadableAtOpen_ = declared - points_;
+  }
 }
 
 // COPC lists every chunk in its hierarchy (offset, bytes, points): the same facts as the table.
@@ -245,7 +266,7 @@ void LazPoints::useHierarchy(uint64_t declared) {
       fail(c.offset, "the COPC hierarchy lists a chunk of " + std::to_string(c.bytes) +
                          " bytes at byte " + std::to_string(c.offset) +
                          " that overlaps another or lies outside the point data");
-    if (c.points > kMaxChunkPoints)
+    if (c.points > kMaxChunkPoints || uint64_t(c.points) * recordSize_ > kMaxChunkRecordBytes)
       fail(c.offset, "a COPC chunk claims " + std::to_string(c.points) + " points");
     c.firstPoint = first;
     first += c.points;
@@ -260,33 +281,34 @@ void LazPoints::useHierarchy(uint64_t declared) {
                              " points but the COPC hierarchy lists " + std::to_string(first);
     if (!lenient_ && first < declared) fail(pointStart_, what);
     warn_(src_->name() + ": " + what);
+    if (first < declared)
+      unreadableAtOpen_ = declared - first;
+    else
+      trimTo(declared);
   }
+  unreadable_ = unreadableAtOpen_;
   hierarchy_.clear();  // nothing left to cross-check
 }
 
-uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t>& out,
-                           bool parallel) {
+uint64_t LazPoints::decode(const std::vector<size_t>& which, RecordBuffer& out, bool parallel) {
   const uint8_t* d = src_->data();
-  if (!decoders_)
-    decoders_ = std::make_unique<Decoders>([this] {
-      return info_.compressor == Compressor::LayeredChunked ? makeLayeredDecoder(info_)
-                                                            : makePointwiseDecoder(info_);
-    });
   auto& pool = *decoders_;
-  out.clear();
+  out.resize(0);
   if (which.empty()) return 0;
 
   if (!tabled_) {
-    // Files without a table: one chunk at a time, each found where the previous one ended.
-    NL_CHECK(which.size() == 1 && which[0] + 1 == chunks_.size());
+    // Files without a table: one chunk at a time, each found where the previous one ended (the
+    // frontier), or where an earlier pass found it.
+    NL_CHECK(which.size() == 1 && which[0] < chunks_.size());
     const size_t i = which[0];
+    const bool frontier = i + 1 == chunks_.size();
     out.resize(size_t(chunks_[i].points) * recordSize_);
     size_t used = 0;
     try {
       if (chunks_[i].offset >= dataEnd_)
         throw DecodeError(0, "starts past the end of the point data");
-      used = pool.local()->decode(d + chunks_[i].offset, dataEnd_ - chunks_[i].offset,
-                                  chunks_[i].points, out.data());
+      const uint64_t avail = chunks_[i].bytes ? chunks_[i].bytes : dataEnd_ - chunks_[i].offset;
+      used = pool.local()->decode(d + chunks_[i].offset, avail, chunks_[i].points, out.data());
     } catch (const DecodeError& e) {
       // Without a table nothing after a damaged chunk can be found.
       const std::string what = chunkName(i) + ": " + e.what();
@@ -295,9 +317,10 @@ uint64_t LazPoints::decode(const std::vector<size_t>& which, std::vector<uint8_t
       warn_(src_->name() + ": " + Error::atByte(chunks_[i].offset + e.offset) + ": " + what +
             "; the " + std::to_string(lost) + " points from here on are counted as unreadable");
       unreadable_ += lost;
-      out.clear();
+      out.resize(0);
       return 0;
     }
+    if (!frontier) return chunks_[i].points;
     chunks_[i].bytes = used;
     const uint64_t next = chunks_[i].firstPoint + chunks_[i].points;
     if (next < points_)

@@ -16,6 +16,26 @@
 
 namespace nestlight::laz {
 
+// Decoded records. Not zero-filled: a chunk that claims more points than its bytes hold runs dry
+// after writing a few pages, and untouched pages of a large claim cost no memory.
+struct RecordBuffer {
+  std::unique_ptr<uint8_t[]> bytes;
+  size_t size = 0, capacity = 0;
+  uint8_t* data() { return bytes.get(); }
+  const uint8_t* data() const { return bytes.get(); }
+  void resize(size_t n) {
+    if (n > capacity) {
+      bytes.reset(new uint8_t[n]);
+      capacity = n;
+    }
+    size = n;
+  }
+  void release() {
+    bytes.reset();
+    size = capacity = 0;
+  }
+};
+
 struct Chunk {
   uint64_t offset = 0;      // first byte in the file
   uint64_t bytes = 0;       // 0 while unknown (files without a chunk table)
@@ -49,8 +69,7 @@ class LazPoints {
   // throws, or with `lenient` is skipped, warned about and its points added to unreadable().
   // Without a chunk table, chunks are found as they are decoded: `which` must be the last one
   // known, and calls must not overlap. With a table, calls may run concurrently.
-  uint64_t decode(const std::vector<size_t>& which, std::vector<uint8_t>& out,
-                  bool parallel = true);
+  uint64_t decode(const std::vector<size_t>& which, RecordBuffer& out, bool parallel = true);
   // Points the file declares that could not be decoded: chunks lost at open (lenient) and
   // damaged chunks met since the last rewind().
   uint64_t unreadable() const { return unreadable_.load(); }
@@ -59,6 +78,7 @@ class LazPoints {
  private:
   void readChunkTable(uint64_t declaredPoints);
   void checkHierarchy();
+  void trimTo(uint64_t declaredPoints);
   void useHierarchy(uint64_t declaredPoints);
   [[noreturn]] void fail(uint64_t at, const std::string& reason) const;
   std::string chunkName(size_t i) const;

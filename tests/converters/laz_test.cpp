@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
 #include <tuple>
 
 #include "nestlight/converters/reader.h"
@@ -169,9 +170,12 @@ TEST(Laz, CopcHierarchyAgreesWithTheTableAndStandsInForIt) {
   auto r = openLas(memorySource("b.copc.laz", std::vector<uint8_t>(f.begin(), f.end())));
   EXPECT_EQ(r->header().details["laszip"]["chunks_from"], "COPC hierarchy");
   EXPECT_TRUE(test::anyContains(r->warnings(), "read from the COPC hierarchy"));
-  const Records rec = records(laz("simple.copc.laz"));
-  const test::Points p = test::readAll(*r, 100);
+  // The same points, in the same order, as through the chunk table.
+  auto tabled = openReader(laz("simple.copc.laz"));
+  const test::Points p = test::readAll(*r, 100), q = test::readAll(*tabled, 100);
   EXPECT_EQ(p.size(), 1065u);
+  EXPECT_TRUE(p.xyz == q.xyz);
+  EXPECT_TRUE(p.attrs == q.attrs);
   // Without hierarchy and table, a variable-size chunked file cannot be read: a clear error.
   std::string g = f;
   const size_t copc = g.find("copc");
@@ -564,6 +568,113 @@ TEST(LazWriter, ManyChunksRoundTripThroughTheConverterPath) {
   EXPECT_TRUE(back.bytes == records(laz("autzen_trim.laz")).bytes);
   EXPECT_FALSE(std::filesystem::exists(out + ".tmp"));
   EXPECT_FALSE(std::filesystem::exists(out + ".laztmp"));
+}
+
+}  // namespace
+
+#include "nestlight/octree/octree_reader.h"
+
+namespace {
+
+// A table-less file is read chunk by chunk; a second pass (the converter makes two) finds the
+// chunks again where the first one found them.
+TEST(LazDamage, FileWithoutAChunkTableConvertsInTwoPasses) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  std::string f = autzenLaz();
+  const LazLayout l = layoutOf(f);
+  store<int64_t>(f, l.pointStart, int64_t(l.pointStart));  // "the compressor was interrupted"
+  test::TempDir t;
+  test::writeFile(t.file("n.laz"), f);
+  std::string out;
+  ASSERT_EQ(
+      test::runCli("convert " + t.file("n.laz") + " -o " + t.file("o") + " --progress quiet", &out),
+      0)
+      << out;
+  OctreeReader r(t.path() / "o");
+  EXPECT_EQ(r.metadata().accounting.input, 110000u);
+  EXPECT_EQ(r.metadata().sources.at(0).details["laszip"]["chunks_from"], "sequential");
+}
+
+// Deferred batches decode on any thread, concurrently, to what one thread reads.
+TEST(Laz, DeferredBatchesFinishConcurrently) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  auto serial = openReader(laz("autzen_trim.laz"));
+  const test::Points want = test::readAll(*serial, 100000);
+  auto r = openReader(laz("autzen_trim.laz"));
+  std::vector<PointBatch> batches(8);
+  size_t n = 0;
+  while (n < batches.size() && r->readDeferred(batches[n], 20000, 1)) ++n;
+  ASSERT_GE(n, 3u);
+  std::vector<std::thread> threads;
+  for (size_t i = 0; i < n; ++i) threads.emplace_back([&, i] { batches[i].finish(); });
+  for (auto& th : threads) th.join();
+  test::Points got;
+  for (size_t i = 0; i < n; ++i) {
+    got.xyz.insert(got.xyz.end(), batches[i].xyz.begin(), batches[i].xyz.end());
+    got.attrs.insert(got.attrs.end(), batches[i].attrs.begin(), batches[i].attrs.end());
+  }
+  ASSERT_EQ(got.size(), want.size());
+  EXPECT_TRUE(got.xyz == want.xyz);
+  EXPECT_TRUE(got.attrs == want.attrs);
+}
+
+// Variable-size chunks (COPC): a chunk past the table, read leniently, loses its points and the
+// following ones to the accounting, and a header that declares fewer points than the chunks hold
+// is trusted; either way every declared point is delivered or counted, once.
+TEST(LazDamage, VariableChunksAccountForEveryDeclaredPoint) {
+  NL_REQUIRE_SHARED("laz/simple.copc.laz");
+  const std::string f = test::readFile(laz("simple.copc.laz"));
+  const uint64_t pointStart = load<uint32_t>(f, 96), table = uint64_t(load<int64_t>(f, pointStart));
+  const uint32_t n = load<uint32_t>(f, table + 4);
+  std::vector<uint32_t> counts, bytes;
+  {
+    laz::ArithmeticDecoder dec;
+    const auto* d = reinterpret_cast<const uint8_t*>(f.data());
+    dec.init(d + table + 8, d + f.size());
+    laz::IntegerDecoder ic(32, 2);
+    for (uint32_t i = 0; i < n; ++i) {
+      counts.push_back(uint32_t(ic.decompress(dec, i ? int32_t(counts.back()) : 0, 0)));
+      bytes.push_back(uint32_t(ic.decompress(dec, i ? int32_t(bytes.back()) : 0, 1)));
+    }
+  }
+  ASSERT_EQ(n, 65u);
+  auto rewrite = [&](std::vector<uint32_t> b, uint64_t declared) {
+    std::string g = f.substr(0, table);
+    std::vector<uint8_t> t(8);
+    std::memcpy(t.data() + 4, &n, 4);
+    laz::ArithmeticEncoder enc(t);
+    laz::IntegerDecoder ic(32, 2);
+    for (uint32_t i = 0; i < n; ++i) {
+      ic.compress(enc, i ? int32_t(counts[i - 1]) : 0, int32_t(counts[i]), 0);
+      ic.compress(enc, i ? int32_t(b[i - 1]) : 0, int32_t(b[i]), 1);
+    }
+    enc.done();
+    g.append(reinterpret_cast<const char*>(t.data()), t.size());
+    // The COPC hierarchy EVLR sat after the table and is gone with it: no EVLRs, so that only
+    // the table speaks; and the declared count.
+    store<uint32_t>(g, 243, 0);
+    store<uint64_t>(g, 247, declared);
+    store<uint32_t>(g, 107, uint32_t(declared));
+    return g;
+  };
+  // Untouched but for the rewrite: every point.
+  EXPECT_EQ(readLeniently(rewrite(bytes, 1065)).points, 1065u);
+  std::vector<uint32_t> b = bytes;
+  b[9] += 1u << 20;  // chunk 10 runs past the table
+  uint64_t lost = 0;
+  for (size_t i = 9; i < n; ++i) lost += counts[i];
+  const LenientRead r = readLeniently(rewrite(b, 1065));
+  EXPECT_EQ(r.unreadable, lost);
+  EXPECT_EQ(r.points + r.unreadable, 1065u);
+  // The header declares fewer points than the chunks list, and some are lost: still balanced.
+  const LenientRead s = readLeniently(rewrite(b, 1000));
+  EXPECT_EQ(s.points + s.unreadable, 1000u);
+  // And more than they list: the missing ones are counted too.
+  const LenientRead m = readLeniently(rewrite(bytes, 1100));
+  EXPECT_EQ(m.points, 1065u);
+  EXPECT_EQ(m.unreadable, 35u);
+  EXPECT_NE(errorReading(rewrite(bytes, 1100)).reason().find("chunks hold 1065"),
+            std::string::npos);
 }
 
 }  // namespace
