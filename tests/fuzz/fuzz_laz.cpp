@@ -67,11 +67,11 @@ void bareChunk(const uint8_t* data, size_t size) {
       {ItemType::Point14},
       {ItemType::Point14, ItemType::RgbNir14}};
   static const uint16_t kSizes[15] = {0, 0, 0, 0, 0, 0, 20, 8, 6, 29, 30, 6, 8, 29, 0};
-  for (ItemType t : kItems[pf])
-    info.items.push_back({t, kSizes[static_cast<int>(t)], uint16_t(layered ? 3 : 2)});
-  if (extra)
-    info.items.push_back(
-        {layered ? ItemType::Byte14 : ItemType::Byte, extra, uint16_t(layered ? 3 : 2)});
+  // Item versions from the top bits of the count byte: 1 or 2 pointwise, 2 to 4 layered.
+  const uint16_t version =
+      layered ? uint16_t(2 + (data[1] >> 6) % 3) : uint16_t(1 + ((data[1] >> 6) & 1));
+  for (ItemType t : kItems[pf]) info.items.push_back({t, kSizes[static_cast<int>(t)], version});
+  if (extra) info.items.push_back({layered ? ItemType::Byte14 : ItemType::Byte, extra, version});
   const uint32_t count = 1 + data[1] % 64;
   std::vector<uint8_t> out(size_t(count) * info.recordSize());
   try {
