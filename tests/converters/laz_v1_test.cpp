@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "laz_arithmetic.h"
+#include "laz_common.h"
 #include "laz_format.h"
 #include "laz_items.h"
 
@@ -24,16 +25,8 @@ namespace laz = nestlight::laz;
 
 namespace {
 
-template <typename T>
-T ld(const uint8_t* p) {
-  T v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-template <typename T>
-void st(uint8_t* p, T v) {
-  std::memcpy(p, &v, sizeof v);
-}
+using laz::get;  // little-endian field access (laz_common.h)
+using laz::put;
 
 // ---- the encoders (LASzip's version 1 writer) -------------------------------------------------
 
@@ -54,24 +47,24 @@ class Point10Enc final : public ItemEncoder {
       std::sort(s, s + 3);
       return s[1];
     };
-    const int32_t dx = int32_t(ld<uint32_t>(item) - ld<uint32_t>(last_));
-    const int32_t dy = int32_t(ld<uint32_t>(item + 4) - ld<uint32_t>(last_ + 4));
+    const int32_t dx = int32_t(get<uint32_t>(item) - get<uint32_t>(last_));
+    const int32_t dy = int32_t(get<uint32_t>(item + 4) - get<uint32_t>(last_ + 4));
     dx_.compress(enc, median(lastDx_), dx, 0);
     uint32_t k = dx_.k();
     dy_.compress(enc, median(lastDy_), dy, std::min(k, 19u));
     k = (k + dy_.k()) / 2;
-    dz_.compress(enc, ld<int32_t>(last_ + 8), ld<int32_t>(item + 8), std::min(k, 19u));
-    const uint32_t changed = (ld<uint16_t>(item + 12) != ld<uint16_t>(last_ + 12)) << 5 |
+    dz_.compress(enc, get<int32_t>(last_ + 8), get<int32_t>(item + 8), std::min(k, 19u));
+    const uint32_t changed = (get<uint16_t>(item + 12) != get<uint16_t>(last_ + 12)) << 5 |
                              (item[14] != last_[14]) << 4 | (item[15] != last_[15]) << 3 |
                              (item[16] != last_[16]) << 2 | (item[17] != last_[17]) << 1 |
-                             (ld<uint16_t>(item + 18) != ld<uint16_t>(last_ + 18));
+                             (get<uint16_t>(item + 18) != get<uint16_t>(last_ + 18));
     enc.encodeSymbol(changed_, changed);
-    if (changed & 32) intensity_.compress(enc, ld<uint16_t>(last_ + 12), ld<uint16_t>(item + 12));
+    if (changed & 32) intensity_.compress(enc, get<uint16_t>(last_ + 12), get<uint16_t>(item + 12));
     if (changed & 16) enc.encodeSymbol(bitByte_[last_[14]], item[14]);
     if (changed & 8) enc.encodeSymbol(classification_[last_[15]], item[15]);
     if (changed & 4) scanAngle_.compress(enc, last_[16], item[16], k < 3 ? 1 : 0);
     if (changed & 2) enc.encodeSymbol(userData_[last_[17]], item[17]);
-    if (changed & 1) pointSource_.compress(enc, ld<uint16_t>(last_ + 18), ld<uint16_t>(item + 18));
+    if (changed & 1) pointSource_.compress(enc, get<uint16_t>(last_ + 18), get<uint16_t>(item + 18));
     lastDx_[slot_] = dx;
     lastDy_[slot_] = dy;
     slot_ = (slot_ + 1) % 3;
@@ -90,9 +83,9 @@ class Point10Enc final : public ItemEncoder {
 
 class GpsTimeEnc final : public ItemEncoder {
  public:
-  void init(const uint8_t* first) override { last_ = ld<int64_t>(first); }
+  void init(const uint8_t* first) override { last_ = get<int64_t>(first); }
   void write(laz::ArithmeticEncoder& enc, const uint8_t* item) override {
-    const int64_t now = ld<int64_t>(item);
+    const int64_t now = get<int64_t>(item);
     const bool same = now == last_;
     const int64_t diff64 = int64_t(uint64_t(now) - uint64_t(last_));
     const bool fits = diff64 == int64_t(int32_t(diff64));
@@ -299,15 +292,15 @@ std::vector<uint8_t> synthesise(const laz::LaszipInfo& info, size_t count, uint6
     }
     if (chance(0.01)) user = uint8_t(uni(0, 255));
     const int8_t angle = int8_t(std::clamp(-30 + column * 60 / 400 + (dir ? 0 : 1), -90, 90));
-    st<int32_t>(rec, x);
-    st<int32_t>(rec + 4, y);
-    st<int32_t>(rec + 8, z);
-    st<uint16_t>(rec + 12, intensity);
+    put<int32_t>(rec, x);
+    put<int32_t>(rec + 4, y);
+    put<int32_t>(rec + 8, z);
+    put<uint16_t>(rec + 12, intensity);
     rec[14] = uint8_t(r | n << 3 | dir << 6 | edge << 7);
     rec[15] = cls;
     rec[16] = uint8_t(angle);
     rec[17] = user;
-    st<uint16_t>(rec + 18, source);
+    put<uint16_t>(rec + 18, source);
     // The other items at their offsets.
     if (chance(0.005)) colourMode = uni(0, 4);
     switch (colourMode) {
@@ -335,10 +328,10 @@ std::vector<uint8_t> synthesise(const laz::LaszipInfo& info, size_t count, uint6
       uint8_t* f = rec + at;
       switch (it.type) {
         case laz::ItemType::GpsTime11:
-          st<double>(f, t);
+          put<double>(f, t);
           break;
         case laz::ItemType::Rgb12:
-          for (int c = 0; c < 3; ++c) st<uint16_t>(f + 2 * c, rgb[c]);
+          for (int c = 0; c < 3; ++c) put<uint16_t>(f + 2 * c, rgb[c]);
           break;
         case laz::ItemType::Byte:
           for (size_t b = 0; b < it.size; ++b) {
@@ -525,19 +518,19 @@ TEST(LazV1, HandBuiltStreamDecodesAsTheReferenceReads) {
   ASSERT_EQ(rs, 36u);
   std::vector<std::array<uint8_t, 36>> expect(7);
   uint8_t* p = expect[0].data();
-  st<int32_t>(p, 1000);
-  st<int32_t>(p + 4, -2000);
-  st<int32_t>(p + 8, 300);
-  st<uint16_t>(p + 12, 100);
+  put<int32_t>(p, 1000);
+  put<int32_t>(p + 4, -2000);
+  put<int32_t>(p + 8, 300);
+  put<uint16_t>(p + 12, 100);
   p[14] = 1 | 1 << 3;
   p[15] = 2;
   p[16] = uint8_t(int8_t(-5));
   p[17] = 7;
-  st<uint16_t>(p + 18, 42);
-  st<int64_t>(p + 20, 1000000);
-  st<uint16_t>(p + 28, 0x1234);
-  st<uint16_t>(p + 30, 0x5678);
-  st<uint16_t>(p + 32, 0x9ABC);
+  put<uint16_t>(p + 18, 42);
+  put<int64_t>(p + 20, 1000000);
+  put<uint16_t>(p + 28, 0x1234);
+  put<uint16_t>(p + 30, 0x5678);
+  put<uint16_t>(p + 32, 0x9ABC);
   p[34] = 10;
   p[35] = 250;
   const uint64_t rawTime = (uint64_t(1) << 40) + 12345;
@@ -634,34 +627,34 @@ TEST(LazV1, HandBuiltStreamDecodesAsTheReferenceReads) {
   }
   expect[1] = expect[0];
   p = expect[1].data();
-  st<int32_t>(p, 1005);
-  st<int32_t>(p + 8, 304);
-  st<uint16_t>(p + 12, 90);
+  put<int32_t>(p, 1005);
+  put<int32_t>(p + 8, 304);
+  put<uint16_t>(p + 12, 90);
   p[15] = 6;
-  st<int64_t>(p + 20, 1000100);
-  st<uint16_t>(p + 30, 0x5778);
+  put<int64_t>(p + 20, 1000100);
+  put<uint16_t>(p + 30, 0x5778);
   p[34] = 11;
   expect[2] = expect[1];
   p = expect[2].data();
-  st<int32_t>(p, 1012);
-  st<int32_t>(p + 4, -2001);
+  put<int32_t>(p, 1012);
+  put<int32_t>(p + 4, -2001);
   p[14] = 1 | 2 << 3;
   p[16] = uint8_t(int8_t(-4));
-  st<int64_t>(p + 20, 1000400);
+  put<int64_t>(p + 20, 1000400);
   p[35] = 0;
   expect[3] = expect[2];
   expect[4] = expect[3];
   p = expect[4].data();
-  st<int32_t>(p, 1017);
-  st<uint16_t>(p + 18, 43);
-  st<uint64_t>(p + 20, rawTime);
-  st<uint16_t>(p + 28, 0x1335);
-  st<uint16_t>(p + 30, 0x5677);
-  st<uint16_t>(p + 32, 0x00FF);
+  put<int32_t>(p, 1017);
+  put<uint16_t>(p + 18, 43);
+  put<uint64_t>(p + 20, rawTime);
+  put<uint16_t>(p + 28, 0x1335);
+  put<uint16_t>(p + 30, 0x5677);
+  put<uint16_t>(p + 32, 0x00FF);
   expect[5] = expect[4];
-  st<uint64_t>(expect[5].data() + 20, rawTime + 97);
+  put<uint64_t>(expect[5].data() + 20, rawTime + 97);
   expect[6] = expect[5];
-  st<uint64_t>(expect[6].data() + 20, rawTime + 97 - 50);
+  put<uint64_t>(expect[6].data() + 20, rawTime + 97 - 50);
 
   std::vector<uint8_t> out(7 * rs);
   laz::makePointwiseDecoder(info)->decode(chunk.data(), chunk.size(), 7, out.data());
@@ -698,18 +691,18 @@ TEST(LazV1, ExtremeValuesRoundTrip) {
   int64_t t = 0;
   for (size_t i = 0; i < 3000; ++i) {
     uint8_t* r = points.data() + i * rs;
-    for (int f = 0; f < 3; ++f) st<int32_t>(r + 4 * f, rng() % 3 ? xs[rng() % 7] : int32_t(rng()));
-    st<uint16_t>(r + 12, uint16_t(rng() % 2 ? 0 : 65535 - rng() % 3));
+    for (int f = 0; f < 3; ++f) put<int32_t>(r + 4 * f, rng() % 3 ? xs[rng() % 7] : int32_t(rng()));
+    put<uint16_t>(r + 12, uint16_t(rng() % 2 ? 0 : 65535 - rng() % 3));
     r[14] = uint8_t(rng());
     r[15] = uint8_t(rng() % 2 ? 0 : 255);
     r[16] = uint8_t(rng() % 2 ? 0x80 : 0x7F);
     r[17] = uint8_t(rng());
-    st<uint16_t>(r + 18, uint16_t(rng() % 2 ? 0 : 0xFFFF));
+    put<uint16_t>(r + 18, uint16_t(rng() % 2 ? 0 : 0xFFFF));
     // The first steps: the same time, then a jump beyond 32 bits while no difference is known
     // yet (raw after the zero-difference symbol), then the same again.
     const int64_t dt = i == 2 ? int64_t(1) << 40 : i < 4 ? 0 : dts[rng() % 11];
     t = int64_t(uint64_t(t) + uint64_t(dt));
-    st<int64_t>(r + 20, t);
+    put<int64_t>(r + 20, t);
     for (int b = 28; b < 36; ++b) r[b] = uint8_t(rng() % 2 ? 0 : 255);
   }
   const std::vector<uint8_t> chunk = encodeChunk(info, points);
