@@ -33,25 +33,23 @@ Decode decodeRate(const std::string& path, unsigned threads, int runs, double mi
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   auto src = mapFile(path);
   std::vector<double> rates;
-  uint64_t points = 0;
+  uint64_t perPass = 0;
   for (int r = 0; r < runs; ++r) {
     const auto t = std::chrono::steady_clock::now();
-    uint64_t n = 0;
+    uint64_t n = 0, passes = 0;
     double s = 0;
     do {
       readLasRecords(src, {}, [&](const uint8_t*, size_t k, size_t) { n += k; });
+      ++passes;
       s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     } while (s < minSeconds);
     rates.push_back(double(n) / s);
-    points = n;
+    perPass = n / passes;
   }
   Decode d;
   d.pointsPerSecond = median(rates);
-  uint64_t perPass = 0;
-  readLasRecords(src, {}, [&](const uint8_t*, size_t k, size_t) { perPass += k; });
   d.points = perPass;
   d.bytesPerSecond = perPass ? d.pointsPerSecond * double(src->size()) / double(perPass) : 0;
-  (void)points;
   return d;
 }
 

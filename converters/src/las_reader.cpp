@@ -132,7 +132,7 @@ class LasReader final : public PointReader {
   uint64_t pointsUnreadable() const override { return laz_ ? laz_->unreadable() : 0; }
 
   bool read(PointBatch& batch, size_t maxPoints) override {
-    if (laz_) return readLaz(batch, maxPoints, 1) != 0;
+    if (laz_) return readLaz(batch, maxPoints) != 0;
     batch.clear();
     if (next_ >= count_ || maxPoints == 0) return false;
     const size_t n = static_cast<size_t>(std::min<uint64_t>(maxPoints, count_ - next_));
@@ -151,8 +151,12 @@ class LasReader final : public PointReader {
   size_t readSampled(PointBatch& batch, size_t maxPoints, size_t step) override {
     if (laz_) {
       // Compressed points cannot be skipped one by one, but whole chunks can.
-      if (step <= 1 || !laz_->hasChunkTable() || laz_->chunks().size() < 2 * step) step = 1;
-      return readLaz(batch, maxPoints, step);
+      if (step <= 1 || !laz_->hasChunkTable()) return readLaz(batch, maxPoints) ? 1 : 0;
+      batch.clear();
+      std::vector<size_t> which;
+      const size_t weight = takeChunks(maxPoints, step, which);
+      if (weight) decodeChunks(which, batch);
+      return weight;
     }
     batch.clear();
     if (step <= 1) return read(batch, maxPoints) ? 1 : 0;
@@ -182,7 +186,7 @@ class LasReader final : public PointReader {
       return;
     }
     PointBatch unused;
-    while (readLaz(unused, SIZE_MAX, 1, false)) {
+    while (readLaz(unused, SIZE_MAX, false)) {
       sink(cache_.data(), cacheCount_);
       cacheAt_ = cacheCount_;
     }
@@ -194,34 +198,12 @@ class LasReader final : public PointReader {
     if (!laz_ || !laz_->hasChunkTable() || cacheAt_ < cacheCount_)
       return PointReader::readDeferred(batch, maxPoints, step);
     batch.clear();
-    const auto& chunks = laz_->chunks();
-    if (nextChunk_ >= chunks.size() || maxPoints == 0) return 0;
-    // Planning passes sample whole chunks; a coarser step than for LAS keeps their decoding cost
-    // small, as long as enough chunks remain to stand for the rest.
-    size_t chunkStep = 1;
-    if (step > 1)
-      chunkStep = chunks.size() >= 8 * step ? 4 * step : chunks.size() >= 2 * step ? step : 1;
     std::vector<size_t> which;
-    uint64_t points = 0;
-    size_t c = nextChunk_;
-    while (c < chunks.size() && (which.empty() || points + chunks[c].points <= maxPoints)) {
-      which.push_back(c);
-      points += chunks[c].points;
-      c += chunkStep;
-    }
-    src_->releaseBefore(chunks[nextChunk_].offset);
-    nextChunk_ = std::min(c, chunks.size());
-    batch.pendingPoints = static_cast<size_t>(points);
-    batch.pending = [this, which = std::move(which)](PointBatch& b) {
-      thread_local laz::RecordBuffer records;
-      const size_t n = static_cast<size_t>(laz_->decode(which, records, false));
-      const size_t stride = header_.layout.stride();
-      b.xyz.resize(3 * n);
-      b.attrs.resize(n * stride);
-      kDecoders[pointFormat_](records.data(), n, recordLength_, scale_, offset_, b.xyz.data(),
-                              b.attrs.data(), stride, extraBytes_);
-    };
-    return chunkStep;
+    const size_t weight = takeChunks(maxPoints, step, which);
+    if (!weight) return 0;
+    for (size_t c : which) batch.pendingPoints += laz_->chunks()[c].points;
+    batch.pending = [this, which = std::move(which)](PointBatch& b) { decodeChunks(which, b); };
+    return weight;
   }
 
   void rewind() override {
@@ -252,7 +234,9 @@ class LasReader final : public PointReader {
   void buildLayout();
   void setupLaz(uint64_t declared, uint64_t dataEnd);
   std::vector<laz::Chunk> copcChunks();
-  size_t readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool decodeFields = true);
+  size_t readLaz(PointBatch& batch, size_t maxPoints, bool decodeFields = true);
+  size_t takeChunks(size_t maxPoints, size_t step, std::vector<size_t>& which);
+  void decodeChunks(const std::vector<size_t>& which, PointBatch& batch) const;
 
   std::shared_ptr<ByteSource> src_;
   ReadOptions options_;
@@ -274,7 +258,7 @@ class LasReader final : public PointReader {
   bool compressed_ = false;
   std::unique_ptr<laz::LazPoints> laz_;
   laz::RecordBuffer cache_;  // decoded LAZ records not yet returned
-  size_t cacheAt_ = 0, cacheCount_ = 0, cacheWeight_ = 1;
+  size_t cacheAt_ = 0, cacheCount_ = 0;
   size_t nextChunk_ = 0;  // first LAZ chunk not decoded yet
   const uint8_t* extraBytesVlr_ = nullptr;
   uint64_t extraBytesVlrLength_ = 0;
@@ -716,9 +700,41 @@ std::vector<laz::Chunk> LasReader::copcChunks() {
   return chunks;
 }
 
-// LAZ: chunks are decoded in groups, in parallel, into cache_; batches are cut from it. With
-// `step` > 1 (planning passes) only every step-th chunk is decoded, standing for `step` chunks.
-size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool decodeFields) {
+// LAZ with a chunk table, for readDeferred and readSampled: the next whole chunks up to maxPoints
+// (at least one). Planning passes (`step` > 1) sample whole chunks, a coarser step than for LAS
+// keeping their decoding cost small as long as enough chunks remain to stand for the rest.
+// Returns how many chunks each taken one stands for; 0 at the end.
+size_t LasReader::takeChunks(size_t maxPoints, size_t step, std::vector<size_t>& which) {
+  const auto& chunks = laz_->chunks();
+  if (nextChunk_ >= chunks.size() || maxPoints == 0) return 0;
+  size_t chunkStep = 1;
+  if (step > 1)
+    chunkStep = chunks.size() >= 8 * step ? 4 * step : chunks.size() >= 2 * step ? step : 1;
+  uint64_t points = 0;
+  size_t c = nextChunk_;
+  while (c < chunks.size() && (which.empty() || points + chunks[c].points <= maxPoints)) {
+    which.push_back(c);
+    points += chunks[c].points;
+    c += chunkStep;
+  }
+  src_->releaseBefore(chunks[nextChunk_].offset);
+  nextChunk_ = std::min(c, chunks.size());
+  return chunkStep;
+}
+
+// Decodes chunks on the calling thread (a worker of the caller's) into the batch's fields.
+void LasReader::decodeChunks(const std::vector<size_t>& which, PointBatch& b) const {
+  thread_local laz::RecordBuffer records;
+  const size_t n = static_cast<size_t>(laz_->decode(which, records, false));
+  const size_t stride = header_.layout.stride();
+  b.xyz.resize(3 * n);
+  b.attrs.resize(n * stride);
+  kDecoders[pointFormat_](records.data(), n, recordLength_, scale_, offset_, b.xyz.data(),
+                          b.attrs.data(), stride, extraBytes_);
+}
+
+// LAZ read(): chunks are decoded in groups, in parallel, into cache_; batches are cut from it.
+size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, bool decodeFields) {
   batch.clear();
   if (maxPoints == 0) return 0;
   while (cacheAt_ >= cacheCount_) {
@@ -742,17 +758,16 @@ size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool
       while (c < chunks.size() && (which.empty() || points + chunks[c].points <= target)) {
         which.push_back(c);
         points += chunks[c].points;
-        c += step;
+        ++c;
       }
     }
     nextChunk_ = std::min(c, chunks.size());
     cacheCount_ = static_cast<size_t>(laz_->decode(which, cache_));
     cacheAt_ = 0;
-    cacheWeight_ = step;
     src_->releaseBefore(nextChunk_ < laz_->chunks().size() ? laz_->chunks()[nextChunk_].offset
                                                            : src_->size());
   }
-  if (!decodeFields) return cacheWeight_;
+  if (!decodeFields) return 1;
   const size_t n = std::min(maxPoints, cacheCount_ - cacheAt_);
   const size_t stride = header_.layout.stride();
   batch.xyz.resize(3 * n);
@@ -761,7 +776,7 @@ size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, size_t step, bool
                           offset_, batch.xyz.data(), batch.attrs.data(), stride, extraBytes_);
   cacheAt_ += n;
   next_ += n;
-  return cacheWeight_;
+  return 1;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <vector>
 
 #include "laz_arithmetic.h"
 #include "laz_common.h"
@@ -135,6 +136,19 @@ struct Rgb12V2State {
     byteUsed_.reset();
     for (auto& m : diff_) m.reset();
     for (int c = 0; c < 3; ++c) last_[c] = get<uint16_t>(first + 2 * c);
+  }
+};
+
+struct ByteV2State {
+  std::vector<uint8_t> last_;
+  std::vector<SymbolModel> models_;  // one per byte
+  explicit ByteV2State(size_t n) : last_(n) {
+    models_.reserve(n);
+    for (size_t i = 0; i < n; ++i) models_.emplace_back(256);
+  }
+  void reset(const uint8_t* first) {
+    for (auto& m : models_) m.reset();
+    std::memcpy(last_.data(), first, last_.size());
   }
 };
 

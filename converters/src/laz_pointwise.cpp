@@ -217,26 +217,16 @@ class Rgb12V2 final : public ItemDecoder, private Rgb12V2State {
   }
 };
 
-class ByteV2 final : public ItemDecoder {
+class ByteV2 final : public ItemDecoder, private ByteV2State {
  public:
-  explicit ByteV2(size_t n) : last_(n) {
-    models_.reserve(n);
-    for (size_t i = 0; i < n; ++i) models_.emplace_back(256);
-  }
-  void init(const uint8_t* first) override {
-    for (auto& m : models_) m.reset();
-    std::memcpy(last_.data(), first, last_.size());
-  }
+  explicit ByteV2(size_t n) : ByteV2State(n) {}
+  void init(const uint8_t* first) override { reset(first); }
   void read(ArithmeticDecoder& dec, uint8_t* out) override {
     for (size_t i = 0; i < last_.size(); ++i) {
       last_[i] = fold8(int32_t(last_[i]) + static_cast<int32_t>(dec.decodeSymbol(models_[i])));
       out[i] = last_[i];
     }
   }
-
- private:
-  std::vector<uint8_t> last_;
-  std::vector<SymbolModel> models_;
 };
 
 // ---- the chunk ------------------------------------------------------------------------------

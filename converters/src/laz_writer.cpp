@@ -227,26 +227,16 @@ class RgbEncoder final : public ItemEncoder, private Rgb12V2State {
   }
 };
 
-class ByteEncoder final : public ItemEncoder {
+class ByteEncoder final : public ItemEncoder, private ByteV2State {
  public:
-  explicit ByteEncoder(size_t n) : last_(n) {
-    models_.reserve(n);
-    for (size_t i = 0; i < n; ++i) models_.emplace_back(256);
-  }
-  void init(const uint8_t* first) override {
-    for (auto& m : models_) m.reset();
-    std::memcpy(last_.data(), first, last_.size());
-  }
+  explicit ByteEncoder(size_t n) : ByteV2State(n) {}
+  void init(const uint8_t* first) override { reset(first); }
   void write(ArithmeticEncoder& enc, const uint8_t* item) override {
     for (size_t i = 0; i < last_.size(); ++i) {
       enc.encodeSymbol(models_[i], fold8(int32_t(item[i]) - int32_t(last_[i])));
       last_[i] = item[i];
     }
   }
-
- private:
-  std::vector<uint8_t> last_;
-  std::vector<SymbolModel> models_;
 };
 
 // One thread's encoders for a record layout.

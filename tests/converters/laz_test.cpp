@@ -353,7 +353,6 @@ LazLayout layoutOf(const std::string& f) {
 std::string withTable(std::string f, const LazLayout& l, const std::vector<uint32_t>& bytes) {
   f.resize(l.table);
   std::vector<uint8_t> t(8);
-  store<uint32_t>(f, 0, load<uint32_t>(f, 0));  // no-op: keeps the helpers symmetric
   const uint32_t n = uint32_t(bytes.size());
   std::memcpy(t.data() + 4, &n, 4);
   {

@@ -82,7 +82,8 @@ class PointReader {
   }
   // read() (step 1) or readSampled() that may leave the decoding to batch.finish(), so that a
   // caller with parallel workers decodes batches there (compressed sources) instead of on the
-  // reading thread. The reader must outlive the batch's finish().
+  // reading thread. The reader must outlive the batch's finish(). Compressed sources sample and
+  // defer whole chunks: such a batch may hold more than maxPoints when one chunk does.
   virtual size_t readDeferred(PointBatch& batch, size_t maxPoints, size_t step) {
     return step > 1 ? readSampled(batch, maxPoints, step) : (read(batch, maxPoints) ? 1 : 0);
   }
