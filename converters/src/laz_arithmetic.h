@@ -21,6 +21,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstring>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -69,7 +70,8 @@ class SymbolModel {
     bits = std::min(bits + 2, kSymbolLengthShift);
     tableSize_ = 1u << bits;
     tableShift_ = kSymbolLengthShift - bits;
-    storage_.resize(2 * size_t(symbols) + tableSize_ + 2);
+    storage_.resize(size_t(symbols) + tableSize_ + 2);
+    counts_.resize(symbols);
     reset();
   }
   SymbolModel(const SymbolModel&) = delete;
@@ -91,29 +93,29 @@ class SymbolModel {
  private:
   friend class ArithmeticDecoder;
   friend class ArithmeticEncoder;
-  uint32_t* distribution() { return storage_.data(); }
-  uint32_t* counts() { return storage_.data() + symbols_; }
-  uint32_t* table() { return storage_.data() + 2 * size_t(symbols_); }
+  uint16_t* distribution() { return storage_.data(); }
+  uint32_t* counts() { return counts_.data(); }
+  uint16_t* table() { return storage_.data() + size_t(symbols_); }
 
   void update() {
     uint32_t* count = counts();
-    uint32_t* dist = distribution();
+    uint16_t* dist = distribution();
     if ((totalCount_ += updateCycle_) > kSymbolMaxCount) {
       totalCount_ = 0;
       for (uint32_t n = 0; n < symbols_; ++n) totalCount_ += (count[n] = (count[n] + 1) >> 1);
     }
     const uint32_t scale = 0x80000000u / totalCount_;
     uint32_t sum = 0;
-    uint32_t* tab = table();
+    uint16_t* tab = table();
     uint32_t s = 0;
     for (uint32_t k = 0; k < symbols_; ++k) {
-      dist[k] = (scale * sum) >> (31 - kSymbolLengthShift);
+      dist[k] = static_cast<uint16_t>((scale * sum) >> (31 - kSymbolLengthShift));
       sum += count[k];
       const uint32_t w = dist[k] >> tableShift_;
-      while (s < w) tab[++s] = k - 1;
+      while (s < w) tab[++s] = static_cast<uint16_t>(k - 1);
     }
     tab[0] = 0;
-    while (s <= tableSize_) tab[++s] = symbols_ - 1;
+    while (s <= tableSize_) tab[++s] = static_cast<uint16_t>(symbols_ - 1);
     updateCycle_ = (5 * updateCycle_) >> 2;
     const uint32_t maxCycle = (symbols_ + 6) << 3;
     if (updateCycle_ > maxCycle) updateCycle_ = maxCycle;
@@ -123,7 +125,8 @@ class SymbolModel {
   uint32_t symbols_, last_;
   uint32_t tableSize_ = 0, tableShift_ = 0;  // decoder table: tableSize_ + 2 entries
   uint32_t totalCount_ = 0, updateCycle_ = 0, symbolsUntilUpdate_ = 0;
-  std::vector<uint32_t> storage_;  // distribution, counts, decoder table
+  std::vector<uint16_t> storage_;  // distribution (< 2^15), decoder table (symbols < 2^11)
+  std::vector<uint32_t> counts_;
 };
 
 class ArithmeticDecoder {
@@ -158,7 +161,7 @@ class ArithmeticDecoder {
       value_ -= x;
       length_ -= x;
     }
-    if (length_ < kMinLength) renormalise();
+    renormaliseFast();
     if (--m.bitsUntilUpdate == 0) m.update();
     return sym;
   }
@@ -166,12 +169,12 @@ class ArithmeticDecoder {
   // Inlined into the item decoders: a call per symbol costs measurably at ~40 cycles a symbol.
   [[gnu::always_inline]] inline uint32_t decodeSymbol(SymbolModel& m) {
     uint32_t y = length_;
-    const uint32_t* dist = m.distribution();
+    const uint16_t* dist = m.distribution();
     length_ >>= kSymbolLengthShift;
     const uint32_t dv = value_ / length_;
     uint32_t t = dv >> m.tableShift_;
     if (t > m.tableSize_) t = m.tableSize_;  // only a damaged stream gets here
-    const uint32_t* tab = m.table();
+    const uint16_t* tab = m.table();
     uint32_t sym = tab[t];
     uint32_t n = tab[t + 1] + 1;
     while (n > sym + 1) {  // rarely more than one step with four table entries per symbol
@@ -185,7 +188,7 @@ class ArithmeticDecoder {
     if (sym != m.last_) y = dist[sym + 1] * length_;
     value_ -= x;
     length_ = y - x;
-    if (length_ < kMinLength) renormalise();
+    renormaliseFast();
     ++m.counts()[sym];
     if (--m.symbolsUntilUpdate_ == 0) m.update();
     return sym;
@@ -194,7 +197,7 @@ class ArithmeticDecoder {
   uint32_t readBit() {
     const uint32_t sym = value_ / (length_ >>= 1);
     value_ -= length_ * sym;
-    if (length_ < kMinLength) renormalise();
+    renormaliseFast();
     return sym;
   }
 
@@ -207,7 +210,7 @@ class ArithmeticDecoder {
     }
     const uint32_t sym = value_ / (length_ >>= bits);
     value_ -= length_ * sym;
-    if (length_ < kMinLength) renormalise();
+    renormaliseFast();
     return sym;
   }
 
@@ -215,7 +218,7 @@ class ArithmeticDecoder {
   uint16_t readShort() {
     const uint32_t sym = value_ / (length_ >>= 16);
     value_ -= length_ * sym;
-    if (length_ < kMinLength) renormalise();
+    renormaliseFast();
     return static_cast<uint16_t>(sym);
   }
   uint32_t readInt() {
@@ -230,6 +233,22 @@ class ArithmeticDecoder {
   }
 
  private:
+  // Renormalisation without a branch on the length (which a high-entropy field would
+  // mispredict): shifts in the 0 to 3 bytes it needs from a 4-byte read; the last bytes of the
+  // stream take the bounded byte-wise path.
+  [[gnu::always_inline]] inline void renormaliseFast() {
+    if (end_ - p_ >= 4) [[likely]] {
+      const uint32_t shift = uint32_t(__builtin_clz(length_)) & 24u;  // length_ is never 0
+      uint32_t next;
+      std::memcpy(&next, p_, 4);
+      next = __builtin_bswap32(next);
+      value_ = uint32_t((((uint64_t(value_) << 32) | next) << shift) >> 32);
+      length_ <<= shift;
+      p_ += shift >> 3;
+    } else if (length_ < kMinLength) {
+      renormalise();
+    }
+  }
   uint8_t byte() {
     if (p_ < end_) return *p_++;
     ++overrun_;
@@ -267,7 +286,7 @@ class ArithmeticEncoder {
   }
 
   void encodeSymbol(SymbolModel& m, uint32_t sym) {
-    const uint32_t* dist = m.distribution();
+    const uint16_t* dist = m.distribution();
     if (sym == m.last_) {
       const uint32_t x = dist[sym] * (length_ >> kSymbolLengthShift);
       add(x);
@@ -395,8 +414,50 @@ class IntegerDecoder {
 
   // The prediction plus the decoded corrector, wrapped into the corrector range.
   int32_t decompress(ArithmeticDecoder& dec, int32_t pred, uint32_t context = 0) {
-    uint32_t real =
-        static_cast<uint32_t>(pred) + static_cast<uint32_t>(readCorrector(dec, context));
+    readK(dec, context);
+    return finish(dec, readHigh(dec), pred);
+  }
+
+  // decompress() for N independent streams at once (the chunks of one thread, each with its own
+  // IntegerDecoder): lane by lane at every step, so that the processor overlaps their serial
+  // chains of interval arithmetic. Each lane decodes exactly what decompress() would.
+  template <size_t N>
+  [[gnu::always_inline]] static inline void decompressLanes(IntegerDecoder* const ic[],
+                                                            ArithmeticDecoder* const dec[],
+                                                            const int32_t pred[],
+                                                            const uint32_t context[],
+                                                            int32_t out[]) {
+    uint32_t high[N];
+    for (size_t l = 0; l < N; ++l) ic[l]->readK(*dec[l], context[l]);
+    for (size_t l = 0; l < N; ++l) high[l] = ic[l]->readHigh(*dec[l]);
+    for (size_t l = 0; l < N; ++l) out[l] = ic[l]->finish(*dec[l], high[l], pred[l]);
+  }
+
+  // The three steps of decompress(): the corrector's bit count k (a symbol of the context's
+  // model), its high part (a symbol of k's model; the bit of k = 0), then its raw low bits and
+  // the sum with the prediction.
+  [[gnu::always_inline]] inline void readK(ArithmeticDecoder& dec, uint32_t context) {
+    k_ = dec.decodeSymbol(bitsModel(context));
+  }
+  [[gnu::always_inline]] inline uint32_t readHigh(ArithmeticDecoder& dec) {
+    if (k_ == 0) return dec.decodeBit(corrector0_);
+    if (k_ >= 32) return 0;  // the encoder never emits this; keep it defined
+    return dec.decodeSymbol(correctorModel(k_));
+  }
+  [[gnu::always_inline]] inline int32_t finish(ArithmeticDecoder& dec, uint32_t c, int32_t pred) {
+    uint32_t corr;
+    if (k_ == 0) {
+      corr = c;
+    } else if (k_ >= 32) {
+      corr = static_cast<uint32_t>(corrMin_);
+    } else {
+      if (k_ > bitsHigh_) {
+        const uint32_t k1 = k_ - bitsHigh_;
+        c = (c << k1) | dec.readBits(k1);
+      }
+      corr = c >= (1u << (k_ - 1)) ? c + 1 : c - ((1u << k_) - 1);
+    }
+    uint32_t real = static_cast<uint32_t>(pred) + corr;
     if (corrRange_) {
       if (static_cast<int32_t>(real) < 0)
         real += corrRange_;
@@ -439,22 +500,6 @@ class IntegerDecoder {
     return corrector_[k];
   }
 
-  int32_t readCorrector(ArithmeticDecoder& dec, uint32_t context) {
-    k_ = dec.decodeSymbol(bitsModel(context));
-    if (k_ == 0) return static_cast<int32_t>(dec.decodeBit(corrector0_));
-    if (k_ >= 32) return corrMin_;  // the encoder never emits this; keep it defined
-    uint32_t c;
-    if (k_ <= bitsHigh_) {
-      c = dec.decodeSymbol(correctorModel(k_));
-    } else {
-      const uint32_t k1 = k_ - bitsHigh_;
-      c = dec.decodeSymbol(correctorModel(k_));
-      c = (c << k1) | dec.readBits(k1);
-    }
-    if (c >= (1u << (k_ - 1))) return static_cast<int32_t>(c + 1);
-    return static_cast<int32_t>(c - ((1u << k_) - 1));
-  }
-
   void writeCorrector(ArithmeticEncoder& enc, int32_t c, uint32_t context) {
     // k: the smallest with c in [-(2^k - 1), 2^k]
     uint32_t c1 = c <= 0 ? 0u - static_cast<uint32_t>(c) : static_cast<uint32_t>(c) - 1;
@@ -468,7 +513,7 @@ class IntegerDecoder {
       enc.encodeBit(corrector0_, static_cast<uint32_t>(c));
       return;
     }
-    if (k_ >= 32) return;  // INT32_MIN (see readCorrector)
+    if (k_ >= 32) return;  // INT32_MIN (see finish)
     uint32_t v = c < 0 ? static_cast<uint32_t>(c) + ((1u << k_) - 1) : static_cast<uint32_t>(c) - 1;
     if (k_ <= bitsHigh_) {
       enc.encodeSymbol(correctorModel(k_), v);

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -95,6 +96,34 @@ class ChunkDecoder {
   // starts there). Throws DecodeError when the chunk is damaged: its bytes end before its points
   // do, a count inside the chunk disagrees, or a field cannot be decoded.
   virtual size_t decode(const uint8_t* data, size_t size, uint32_t count, uint8_t* out) = 0;
+
+  struct Job {
+    const uint8_t* data;
+    size_t size;
+    uint32_t count;
+    uint8_t* out;
+  };
+  struct Outcome {
+    size_t used = 0;
+    std::optional<DecodeError> error;
+    bool lockstep = false;  // decoded in lock step with the other chunk (else one by one)
+  };
+  // Decodes two chunks, each exactly as decode() would (the same records, bytes used and
+  // errors). Decoders whose symbols can interleave the two arithmetic streams do so: one stream
+  // is a serial chain of divisions and table lookups, two overlap in the processor.
+  virtual void decodePair(const Job& a, const Job& b, Outcome& ra, Outcome& rb) {
+    decodeOne(a, ra);
+    decodeOne(b, rb);
+  }
+
+ protected:
+  void decodeOne(const Job& j, Outcome& r) {
+    try {
+      r.used = decode(j.data, j.size, j.count, j.out);
+    } catch (const DecodeError& e) {
+      r.error = e;
+    }
+  }
 };
 
 // Compressors 1 and 2 with items of versions 1 and 2 (point formats 0-5).

@@ -56,6 +56,14 @@ class ItemDecoder {
   // Starts a chunk whose first record (this item's bytes) is `first`.
   virtual void init(const uint8_t* first) = 0;
   virtual void read(ArithmeticDecoder& dec, uint8_t* out) = 0;
+  // Reads this item of one point of each of two chunks: this decoder's with `a`, `twin`'s (an
+  // item decoder of the same type) with `b`. Items that interleave the two streams symbol by
+  // symbol override it; the two chains of interval arithmetic then overlap in the processor.
+  virtual void readPair(ItemDecoder& twin, ArithmeticDecoder& a, uint8_t* outA,
+                        ArithmeticDecoder& b, uint8_t* outB) {
+    read(a, outA);
+    twin.read(b, outB);
+  }
 };
 
 // The state of the version 2 coders, shared by the decoders (laz_pointwise.cpp) and the encoders

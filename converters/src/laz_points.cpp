@@ -11,6 +11,7 @@
 // add up to the header's, and a chunk may not ask for more memory than a bounded batch.
 #include "laz_points.h"
 
+#include <tbb/task_arena.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -343,10 +344,31 @@ uint64_t LazPoints::decode(const std::vector<size_t>& which, RecordBuffer& out, 
       failed[k] = e;
     }
   };
-  if (parallel && n > 1)
-    tbb::parallel_for(size_t(0), n, size_t(1), one);
-  else
-    for (size_t k = 0; k < n; ++k) one(k);
+  // Chunks go to the decoders two at a time (see ChunkDecoder::decodePair): 1.3 to 1.5 times
+  // the speed of one at a time on a core. In parallel, only while there are pairs enough to keep
+  // every core busy.
+  auto job = [&](size_t k) {
+    const Chunk& c = chunks_[which[k]];
+    return ChunkDecoder::Job{d + c.offset, c.bytes, c.points,
+                             out.data() + size_t(at[k]) * recordSize_};
+  };
+  auto pair = [&](size_t q) {
+    const size_t k = 2 * q;
+    if (k + 1 == n) return one(k);
+    ChunkDecoder::Outcome a, b;
+    pool.local()->decodePair(job(k), job(k + 1), a, b);
+    failed[k] = std::move(a.error);
+    failed[k + 1] = std::move(b.error);
+  };
+  const size_t pairs = (n + 1) / 2;
+  if (parallel && n > 1) {
+    if (pairs >= 2 * size_t(tbb::this_task_arena::max_concurrency()))
+      tbb::parallel_for(size_t(0), pairs, size_t(1), pair);
+    else
+      tbb::parallel_for(size_t(0), n, size_t(1), one);
+  } else {
+    for (size_t q = 0; q < pairs; ++q) pair(q);
+  }
   // Damaged chunks: an error, or (lenient) their points leave the batch and are counted.
   uint64_t kept = at.back();
   size_t write = 0;

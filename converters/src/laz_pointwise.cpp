@@ -32,55 +32,96 @@ class Point10V2 final : public ItemDecoder, private Point10V2State {
   }
 
   void read(ArithmeticDecoder& dec, uint8_t* out) override {
-    const uint32_t changed = dec.decodeSymbol(changed_);
-    uint32_t r, n, m, l;
-    if (changed) {
-      if (changed & 32) last_[14] = static_cast<uint8_t>(dec.decodeSymbol(bitByte_[last_[14]]));
-      r = last_[14] & 7;
-      n = (last_[14] >> 3) & 7;
-      m = kReturnMap[n][r];
-      l = returnLevel(n, r);
-      uint16_t intensity;
-      if (changed & 16) {
-        intensity =
-            static_cast<uint16_t>(intensity_.decompress(dec, lastIntensity_[m], m < 3 ? m : 3));
-        lastIntensity_[m] = intensity;
-      } else {
-        intensity = lastIntensity_[m];
+    Point10V2* s[1] = {this};
+    ArithmeticDecoder* d[1] = {&dec};
+    uint8_t* o[1] = {out};
+    readLanes<1>(s, d, o);
+  }
+  void readPair(ItemDecoder& twin, ArithmeticDecoder& a, uint8_t* outA, ArithmeticDecoder& b,
+                uint8_t* outB) override {
+    Point10V2* s[2] = {this, static_cast<Point10V2*>(&twin)};
+    ArithmeticDecoder* d[2] = {&a, &b};
+    uint8_t* o[2] = {outA, outB};
+    readLanes<2>(s, d, o);
+  }
+
+ private:
+  // One point of each of N chunks; every step runs lane by lane (see decompressLanes). Within a
+  // lane the order of the fields is the reference's: the changed-field mask, returns, intensity,
+  // classification, scan angle, user data, point source, then x, y and z.
+  template <size_t N>
+  [[gnu::always_inline]] static inline void readLanes(Point10V2* const s[],
+                                                      ArithmeticDecoder* const d[],
+                                                      uint8_t* const out[]) {
+    uint32_t changed[N], n[N], m[N], lv[N], high[N], ctx[N];
+    int32_t pred[N], diff[N];
+    IntegerDecoder* ic[N];
+    for (size_t l = 0; l < N; ++l) changed[l] = d[l]->decodeSymbol(s[l]->changed_);
+    for (size_t l = 0; l < N; ++l) {
+      Point10V2& p = *s[l];
+      if (changed[l] & 32)
+        p.last_[14] = static_cast<uint8_t>(d[l]->decodeSymbol(p.bitByte_[p.last_[14]]));
+      const uint32_t r = p.last_[14] & 7;
+      n[l] = (p.last_[14] >> 3) & 7;
+      m[l] = kReturnMap[n[l]][r];
+      lv[l] = returnLevel(n[l], r);
+    }
+    for (size_t l = 0; l < N; ++l)
+      if (changed[l] & 16) s[l]->intensity_.readK(*d[l], m[l] < 3 ? m[l] : 3);
+    for (size_t l = 0; l < N; ++l)
+      if (changed[l] & 16) high[l] = s[l]->intensity_.readHigh(*d[l]);
+    for (size_t l = 0; l < N; ++l) {
+      Point10V2& p = *s[l];
+      ArithmeticDecoder& dec = *d[l];
+      if (changed[l] & 16)
+        p.lastIntensity_[m[l]] = static_cast<uint16_t>(
+            p.intensity_.finish(dec, high[l], p.lastIntensity_[m[l]]));
+      put<uint16_t>(p.last_ + 12, p.lastIntensity_[m[l]]);
+      if (changed[l] & 8)
+        p.last_[15] = static_cast<uint8_t>(dec.decodeSymbol(p.classification_[p.last_[15]]));
+      if (changed[l] & 4) {
+        const uint32_t v = dec.decodeSymbol(p.scanAngle_[(p.last_[14] >> 6) & 1]);
+        p.last_[16] = fold8(static_cast<int32_t>(v + p.last_[16]));
       }
-      put<uint16_t>(last_ + 12, intensity);
-      if (changed & 8)
-        last_[15] = static_cast<uint8_t>(dec.decodeSymbol(classification_[last_[15]]));
-      if (changed & 4) {
-        const uint32_t v = dec.decodeSymbol(scanAngle_[(last_[14] >> 6) & 1]);
-        last_[16] = fold8(static_cast<int32_t>(v + last_[16]));
-      }
-      if (changed & 2) last_[17] = static_cast<uint8_t>(dec.decodeSymbol(userData_[last_[17]]));
-      if (changed & 1)
-        put<uint16_t>(last_ + 18, static_cast<uint16_t>(
-                                      pointSource_.decompress(dec, get<uint16_t>(last_ + 18))));
-    } else {
-      r = last_[14] & 7;
-      n = (last_[14] >> 3) & 7;
-      m = kReturnMap[n][r];
-      l = returnLevel(n, r);
+      if (changed[l] & 2)
+        p.last_[17] = static_cast<uint8_t>(dec.decodeSymbol(p.userData_[p.last_[17]]));
+      if (changed[l] & 1)
+        put<uint16_t>(p.last_ + 18, static_cast<uint16_t>(p.pointSource_.decompress(
+                                        dec, get<uint16_t>(p.last_ + 18))));
     }
 
-    int32_t diff = dx_.decompress(dec, xMedian_[m].get(), n == 1);
-    put<uint32_t>(last_, get<uint32_t>(last_) + static_cast<uint32_t>(diff));
-    xMedian_[m].add(diff);
-
-    uint32_t kBits = dx_.k();
-    diff = dy_.decompress(dec, yMedian_[m].get(), (n == 1) + (kBits < 20 ? (kBits & ~1u) : 20));
-    put<uint32_t>(last_ + 4, get<uint32_t>(last_ + 4) + static_cast<uint32_t>(diff));
-    yMedian_[m].add(diff);
-
-    kBits = (dx_.k() + dy_.k()) / 2;
-    const int32_t z =
-        dz_.decompress(dec, lastHeight_[l], (n == 1) + (kBits < 18 ? (kBits & ~1u) : 18));
-    put<int32_t>(last_ + 8, z);
-    lastHeight_[l] = z;
-    std::memcpy(out, last_, 20);
+    for (size_t l = 0; l < N; ++l) {
+      ic[l] = &s[l]->dx_;
+      pred[l] = s[l]->xMedian_[m[l]].get();
+      ctx[l] = n[l] == 1;
+    }
+    IntegerDecoder::decompressLanes<N>(ic, d, pred, ctx, diff);
+    for (size_t l = 0; l < N; ++l) {
+      Point10V2& p = *s[l];
+      put<uint32_t>(p.last_, get<uint32_t>(p.last_) + static_cast<uint32_t>(diff[l]));
+      p.xMedian_[m[l]].add(diff[l]);
+      const uint32_t kBits = p.dx_.k();
+      ic[l] = &p.dy_;
+      pred[l] = p.yMedian_[m[l]].get();
+      ctx[l] = (n[l] == 1) + (kBits < 20 ? (kBits & ~1u) : 20);
+    }
+    IntegerDecoder::decompressLanes<N>(ic, d, pred, ctx, diff);
+    for (size_t l = 0; l < N; ++l) {
+      Point10V2& p = *s[l];
+      put<uint32_t>(p.last_ + 4, get<uint32_t>(p.last_ + 4) + static_cast<uint32_t>(diff[l]));
+      p.yMedian_[m[l]].add(diff[l]);
+      const uint32_t kBits = (p.dx_.k() + p.dy_.k()) / 2;
+      ic[l] = &p.dz_;
+      pred[l] = p.lastHeight_[lv[l]];
+      ctx[l] = (n[l] == 1) + (kBits < 18 ? (kBits & ~1u) : 18);
+    }
+    IntegerDecoder::decompressLanes<N>(ic, d, pred, ctx, diff);
+    for (size_t l = 0; l < N; ++l) {
+      Point10V2& p = *s[l];
+      put<int32_t>(p.last_ + 8, diff[l]);
+      p.lastHeight_[lv[l]] = diff[l];
+      std::memcpy(out[l], p.last_, 20);
+    }
   }
 };
 
@@ -166,54 +207,93 @@ class Rgb12V2 final : public ItemDecoder, private Rgb12V2State {
   void init(const uint8_t* first) override { reset(first); }
 
   void read(ArithmeticDecoder& dec, uint8_t* out) override {
-    const uint32_t sym = dec.decodeSymbol(byteUsed_);
-    uint16_t rgb[3];
+    Rgb12V2* s[1] = {this};
+    ArithmeticDecoder* d[1] = {&dec};
+    uint8_t* o[1] = {out};
+    readLanes<1>(s, d, o);
+  }
+  void readPair(ItemDecoder& twin, ArithmeticDecoder& a, uint8_t* outA, ArithmeticDecoder& b,
+                uint8_t* outB) override {
+    Rgb12V2* s[2] = {this, static_cast<Rgb12V2*>(&twin)};
+    ArithmeticDecoder* d[2] = {&a, &b};
+    uint8_t* o[2] = {outA, outB};
+    readLanes<2>(s, d, o);
+  }
+
+ private:
+  // The mask of changed bytes, then each byte's difference to its prediction: red low and high,
+  // and when green and blue differ from red: green low, blue low, green high, blue high (the
+  // reference's order within each lane).
+  template <size_t N>
+  [[gnu::always_inline]] static inline void readLanes(Rgb12V2* const s[],
+                                                      ArithmeticDecoder* const d[],
+                                                      uint8_t* const out[]) {
     auto low = [](uint16_t v) { return int32_t(v & 0xFF); };
     auto high = [](uint16_t v) { return int32_t(v >> 8); };
-    if (sym & 1)
-      rgb[0] = fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[0])) + low(last_[0]));
-    else
-      rgb[0] = last_[0] & 0xFF;
-    if (sym & 2)
-      rgb[0] |=
-          uint16_t(fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[1])) + high(last_[0])) << 8);
-    else
-      rgb[0] |= last_[0] & 0xFF00;
-    if (sym & 64) {
-      int32_t diff = low(rgb[0]) - low(last_[0]);
-      if (sym & 4)
-        rgb[1] =
-            fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[2])) + clamp8(diff + low(last_[1])));
-      else
-        rgb[1] = last_[1] & 0xFF;
-      if (sym & 16) {
-        const int32_t corr = static_cast<int32_t>(dec.decodeSymbol(diff_[4]));
-        diff = (diff + (low(rgb[1]) - low(last_[1]))) / 2;
-        rgb[2] = fold8(corr + clamp8(diff + low(last_[2])));
-      } else {
-        rgb[2] = last_[2] & 0xFF;
-      }
-      diff = high(rgb[0]) - high(last_[0]);
-      if (sym & 8)
-        rgb[1] |= uint16_t(
-            fold8(static_cast<int32_t>(dec.decodeSymbol(diff_[3])) + clamp8(diff + high(last_[1])))
-            << 8);
-      else
-        rgb[1] |= last_[1] & 0xFF00;
-      if (sym & 32) {
-        const int32_t corr = static_cast<int32_t>(dec.decodeSymbol(diff_[5]));
-        diff = (diff + (high(rgb[1]) - high(last_[1]))) / 2;
-        rgb[2] |= uint16_t(fold8(corr + clamp8(diff + high(last_[2]))) << 8);
-      } else {
-        rgb[2] |= last_[2] & 0xFF00;
-      }
-    } else {
-      rgb[1] = rgb[2] = rgb[0];
+    uint32_t sym[N];
+    uint16_t rgb[N][3] = {};
+    int32_t diff[N];
+    for (size_t l = 0; l < N; ++l) sym[l] = d[l]->decodeSymbol(s[l]->byteUsed_);
+    for (size_t l = 0; l < N; ++l) {
+      const uint16_t* last = s[l]->last_;
+      rgb[l][0] = sym[l] & 1 ? fold8(static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[0])) +
+                                     low(last[0]))
+                             : last[0] & 0xFF;
     }
-    for (int c = 0; c < 3; ++c) {
-      put<uint16_t>(out + 2 * c, rgb[c]);
-      last_[c] = rgb[c];
+    for (size_t l = 0; l < N; ++l) {
+      const uint16_t* last = s[l]->last_;
+      rgb[l][0] |= sym[l] & 2 ? uint16_t(fold8(static_cast<int32_t>(
+                                                   d[l]->decodeSymbol(s[l]->diff_[1])) +
+                                               high(last[0]))
+                                         << 8)
+                              : last[0] & 0xFF00;
+      if (!(sym[l] & 64)) rgb[l][1] = rgb[l][2] = rgb[l][0];
     }
+    for (size_t l = 0; l < N; ++l) {
+      if (!(sym[l] & 64)) continue;
+      const uint16_t* last = s[l]->last_;
+      diff[l] = low(rgb[l][0]) - low(last[0]);
+      rgb[l][1] = sym[l] & 4 ? fold8(static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[2])) +
+                                     clamp8(diff[l] + low(last[1])))
+                             : last[1] & 0xFF;
+    }
+    for (size_t l = 0; l < N; ++l) {
+      if (!(sym[l] & 64)) continue;
+      const uint16_t* last = s[l]->last_;
+      if (sym[l] & 16) {
+        const int32_t corr = static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[4]));
+        const int32_t d2 = (diff[l] + (low(rgb[l][1]) - low(last[1]))) / 2;
+        rgb[l][2] = fold8(corr + clamp8(d2 + low(last[2])));
+      } else {
+        rgb[l][2] = last[2] & 0xFF;
+      }
+      diff[l] = high(rgb[l][0]) - high(last[0]);
+    }
+    for (size_t l = 0; l < N; ++l) {
+      if (!(sym[l] & 64)) continue;
+      const uint16_t* last = s[l]->last_;
+      rgb[l][1] |= sym[l] & 8 ? uint16_t(fold8(static_cast<int32_t>(
+                                                   d[l]->decodeSymbol(s[l]->diff_[3])) +
+                                               clamp8(diff[l] + high(last[1])))
+                                         << 8)
+                              : last[1] & 0xFF00;
+    }
+    for (size_t l = 0; l < N; ++l) {
+      if (!(sym[l] & 64)) continue;
+      const uint16_t* last = s[l]->last_;
+      if (sym[l] & 32) {
+        const int32_t corr = static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[5]));
+        const int32_t d2 = (diff[l] + (high(rgb[l][1]) - high(last[1]))) / 2;
+        rgb[l][2] |= uint16_t(fold8(corr + clamp8(d2 + high(last[2]))) << 8);
+      } else {
+        rgb[l][2] |= last[2] & 0xFF00;
+      }
+    }
+    for (size_t l = 0; l < N; ++l)
+      for (int c = 0; c < 3; ++c) {
+        put<uint16_t>(out[l] + 2 * c, rgb[l][c]);
+        s[l]->last_[c] = rgb[l][c];
+      }
   }
 };
 
@@ -227,13 +307,23 @@ class ByteV2 final : public ItemDecoder, private ByteV2State {
       out[i] = last_[i];
     }
   }
+  void readPair(ItemDecoder& twin, ArithmeticDecoder& a, uint8_t* outA, ArithmeticDecoder& b,
+                uint8_t* outB) override {
+    ByteV2& t = static_cast<ByteV2&>(twin);
+    for (size_t i = 0; i < last_.size(); ++i) {
+      last_[i] = fold8(int32_t(last_[i]) + static_cast<int32_t>(a.decodeSymbol(models_[i])));
+      t.last_[i] = fold8(int32_t(t.last_[i]) + static_cast<int32_t>(b.decodeSymbol(t.models_[i])));
+      outA[i] = last_[i];
+      outB[i] = t.last_[i];
+    }
+  }
 };
 
 // ---- the chunk ------------------------------------------------------------------------------
 
 class PointwiseDecoder final : public ChunkDecoder {
  public:
-  explicit PointwiseDecoder(const LaszipInfo& info) : recordSize_(info.recordSize()) {
+  explicit PointwiseDecoder(const LaszipInfo& info) : info_(info), recordSize_(info.recordSize()) {
     size_t at = 0;
     for (const Item& it : info.items) {
       items_.push_back(makeItem(it));
@@ -244,6 +334,36 @@ class PointwiseDecoder final : public ChunkDecoder {
 
   size_t decode(const uint8_t* data, size_t size, uint32_t count, uint8_t* out) override {
     if (count == 0) return 0;
+    start(data, size, out);
+    return run(1, count, out);
+  }
+
+  // Two chunks in lock step while both have points (items interleave their symbols, see
+  // ItemDecoder::readPair), then the rest of the longer one alone. A stream that runs dry sends
+  // both chunks back to decode() one by one, which reports exactly where.
+  void decodePair(const Job& a, const Job& b, Outcome& ra, Outcome& rb) override {
+    if (a.count < 2 || b.count < 2 || a.size < recordSize_ || b.size < recordSize_)
+      return ChunkDecoder::decodePair(a, b, ra, rb);
+    if (!twin_) twin_ = std::make_unique<PointwiseDecoder>(info_);
+    PointwiseDecoder& t = *twin_;
+    start(a.data, a.size, a.out);
+    t.start(b.data, b.size, b.out);
+    const uint32_t common = std::min(a.count, b.count);
+    for (uint32_t p = 1; p < common; ++p) {
+      uint8_t* recA = a.out + size_t(p) * recordSize_;
+      uint8_t* recB = b.out + size_t(p) * recordSize_;
+      for (size_t i = 0; i < items_.size(); ++i)
+        items_[i]->readPair(*t.items_[i], dec_, recA + offsets_[i], t.dec_, recB + offsets_[i]);
+      if (dec_.overrun() > 8 || t.dec_.overrun() > 8) return ChunkDecoder::decodePair(a, b, ra, rb);
+    }
+    ra.lockstep = rb.lockstep = true;
+    finish(a, common, ra);
+    t.finish(b, common, rb);
+  }
+
+ private:
+  // The first record raw, and every item and the arithmetic decoder started on the chunk.
+  void start(const uint8_t* data, size_t size, uint8_t* out) {
     if (size < recordSize_)
       throw DecodeError(0, "chunk of " + std::to_string(size) +
                                " bytes is too short for its first point (" +
@@ -251,23 +371,34 @@ class PointwiseDecoder final : public ChunkDecoder {
     std::memcpy(out, data, recordSize_);
     for (size_t i = 0; i < items_.size(); ++i) items_[i]->init(data + offsets_[i]);
     dec_.init(data + recordSize_, data + size);
-    for (uint32_t p = 1; p < count; ++p) {
+    size_ = size;
+  }
+
+  // Points [from, count) of the started chunk; returns the bytes the chunk used.
+  size_t run(uint32_t from, uint32_t count, uint8_t* out) {
+    for (uint32_t p = from; p < count; ++p) {
       uint8_t* rec = out + size_t(p) * recordSize_;
       for (size_t i = 0; i < items_.size(); ++i) items_[i]->read(dec_, rec + offsets_[i]);
       // A damaged stream decodes garbage but stays in bounds; stop early once it ran dry.
       if (dec_.overrun() > 8)
-        throw DecodeError(size, "chunk data ends at point " + std::to_string(p + 1) + " of " +
-                                    std::to_string(count) +
-                                    " (truncated or damaged compressed data)");
+        throw DecodeError(size_, "chunk data ends at point " + std::to_string(p + 1) + " of " +
+                                 std::to_string(count) +
+                                 " (truncated or damaged compressed data)");
     }
     if (dec_.overrun())
-      throw DecodeError(size, "chunk data ends " + std::to_string(dec_.overrun()) +
-                                  " bytes before its " + std::to_string(count) +
-                                  " points are decoded (truncated or damaged compressed data)");
+      throw DecodeError(size_, "chunk data ends " + std::to_string(dec_.overrun()) +
+                               " bytes before its " + std::to_string(count) +
+                               " points are decoded (truncated or damaged compressed data)");
     return recordSize_ + dec_.consumed();
   }
+  void finish(const Job& j, uint32_t from, Outcome& r) {
+    try {
+      r.used = run(from, j.count, j.out);
+    } catch (const DecodeError& e) {
+      r.error = e;
+    }
+  }
 
- private:
   static std::unique_ptr<ItemDecoder> makeItem(const Item& it) {
     if (it.version == 2) {
       switch (it.type) {
@@ -289,10 +420,13 @@ class PointwiseDecoder final : public ChunkDecoder {
                              std::to_string(it.version) + " is not supported");
   }
 
+  LaszipInfo info_;
+  std::unique_ptr<PointwiseDecoder> twin_;  // the second chunk's items in decodePair
   size_t recordSize_;
   std::vector<std::unique_ptr<ItemDecoder>> items_;
   std::vector<size_t> offsets_;
   ArithmeticDecoder dec_;
+  size_t size_ = 0;  // of the started chunk
 };
 
 }  // namespace

@@ -751,3 +751,194 @@ TEST(LazConvert, LenientConversionCountsTheDamagedChunkAsRejected) {
 }
 
 }  // namespace
+
+// ---- two chunks at a time -----------------------------------------------------------------------
+
+#include <random>
+
+#include "laz_format.h"
+#include "laz_writer.h"
+
+namespace {
+
+// The chunks of a LASzip 2 or 3 file with a fixed chunk size, as decoder jobs (outputs unset).
+struct LazChunks {
+  std::string file;
+  laz::LaszipInfo info;
+  std::vector<laz::ChunkDecoder::Job> jobs;
+};
+
+LazChunks chunksOf(const std::string& path) {
+  LazChunks c;
+  c.file = test::readFile(path);
+  const std::string& f = c.file;
+  const auto* d = reinterpret_cast<const uint8_t*>(f.data());
+  const int format = uint8_t(f[104]) & 0x3F;  // without the compressed-data flag
+  const uint16_t recordLength = load<uint16_t>(f, 105);
+  uint64_t points = load<uint32_t>(f, 107);
+  if (points == 0 && f[25] >= 4) points = load<uint64_t>(f, 247);
+  size_t at = load<uint16_t>(f, 94);
+  for (uint32_t v = 0, n = load<uint32_t>(f, 100); v < n; ++v) {
+    const uint16_t length = load<uint16_t>(f, at + 20);
+    if (f.compare(at + 2, 14, laz::kLaszipUserId) == 0 &&
+        load<uint16_t>(f, at + 18) == laz::kLaszipRecordId) {
+      EXPECT_EQ(laz::parseLaszipVlr(d + at + 54, length, format, recordLength, c.info), "");
+    }
+    at += 54 + length;
+  }
+  const LazLayout l = layoutOf(f);
+  uint64_t left = points;
+  for (size_t i = 0; i < l.bytes.size(); ++i) {
+    const uint32_t n = uint32_t(std::min<uint64_t>(left, c.info.chunkSize));
+    c.jobs.push_back({d + l.chunkStart(i), l.bytes[i], n, nullptr});
+    left -= n;
+  }
+  EXPECT_EQ(left, 0u) << path;
+  return c;
+}
+
+std::unique_ptr<laz::ChunkDecoder> decoderFor(const laz::LaszipInfo& info) {
+  return info.compressor == laz::Compressor::LayeredChunked ? laz::makeLayeredDecoder(info)
+                                                            : laz::makePointwiseDecoder(info);
+}
+
+// What decode() makes of a job: its records and bytes used, or its error.
+struct Decoded {
+  std::vector<uint8_t> records;
+  laz::ChunkDecoder::Outcome outcome;
+};
+Decoded alone(laz::ChunkDecoder& dec, laz::ChunkDecoder::Job j, size_t recordSize) {
+  Decoded r;
+  r.records.assign(size_t(j.count) * recordSize, 0);
+  j.out = r.records.data();
+  try {
+    r.outcome.used = dec.decode(j.data, j.size, j.count, j.out);
+  } catch (const laz::DecodeError& e) {
+    r.outcome.error = e;
+  }
+  return r;
+}
+std::pair<Decoded, Decoded> paired(laz::ChunkDecoder& dec, laz::ChunkDecoder::Job a,
+                                   laz::ChunkDecoder::Job b, size_t recordSize) {
+  std::pair<Decoded, Decoded> r;
+  r.first.records.assign(size_t(a.count) * recordSize, 0);
+  r.second.records.assign(size_t(b.count) * recordSize, 0);
+  a.out = r.first.records.data();
+  b.out = r.second.records.data();
+  dec.decodePair(a, b, r.first.outcome, r.second.outcome);
+  return r;
+}
+
+// Equal records (when intact) and equal outcomes: bytes used, or the same error at the same byte.
+void expectSame(const Decoded& want, const Decoded& got, const std::string& what) {
+  ASSERT_EQ(bool(want.outcome.error), bool(got.outcome.error))
+      << what << ": " << (want.outcome.error ? want.outcome.error->what() : "")
+      << (got.outcome.error ? got.outcome.error->what() : "");
+  if (want.outcome.error) {
+    EXPECT_STREQ(want.outcome.error->what(), got.outcome.error->what()) << what;
+    EXPECT_EQ(want.outcome.error->offset, got.outcome.error->offset) << what;
+    return;
+  }
+  EXPECT_EQ(want.outcome.used, got.outcome.used) << what;
+  EXPECT_TRUE(want.records == got.records) << what;
+}
+
+// A LAZ of 120,000 format 3 records with 27 extra bytes (three chunks: 50,000, 50,000 and
+// 20,000), compressed by our writer from the header of extrabytes.las and records that are in
+// turn random and near copies of the one before, so that every field takes both the predicted
+// and the surprising paths of its models.
+std::string variedLaz(const test::TempDir& t) {
+  std::string f = test::readFile(laz("extrabytes.las"));
+  const uint32_t pointStart = load<uint32_t>(f, 96);
+  const uint16_t recordLength = load<uint16_t>(f, 105);
+  f.resize(pointStart);
+  const uint32_t n = 120000;
+  store<uint32_t>(f, 107, n);
+  std::mt19937 rng(7);
+  std::string rec(recordLength, '\0');
+  for (uint32_t i = 0; i < n; ++i) {
+    if (rng() % 2) {
+      for (char& b : rec) b = char(rng());
+    } else {
+      for (int k = 0; k < 4; ++k) rec[rng() % recordLength] += char(1 + rng() % 3);
+    }
+    f += rec;
+  }
+  test::writeFile(t.file("varied.las"), f);
+  laz::compressLas(t.file("varied.las"), t.file("varied.laz"), "varied.las");
+  return t.file("varied.laz");
+}
+
+// Every pair of chunks (of equal and unequal lengths, a chunk with itself) decodes in lock step
+// to what each decodes alone, for every item the files hold: POINT10, GPSTIME11, RGB12 and BYTE
+// version 2, and the layered format 6 (whose decoder pairs one by one).
+TEST(LazPairs, TwoChunksAtOnceDecodeAsEachAlone) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  test::TempDir t;
+  const std::string varied = variedLaz(t);
+  for (const std::string& path :
+       {laz("point10.las.laz"), laz("point-color.las.laz"), laz("point-time.las.laz"),
+        laz("point-color-time.las.laz"), laz("extrabytes.laz"), laz("autzen_trim.laz"),
+        laz("1_4_w_evlr.laz"), varied}) {
+    const LazChunks c = chunksOf(path);
+    const std::string name = std::filesystem::path(path).filename().string();
+    const size_t rs = c.info.recordSize();
+    auto dec = decoderFor(c.info);
+    std::vector<Decoded> want;
+    for (const auto& j : c.jobs) want.push_back(alone(*dec, j, rs));
+    for (size_t i = 0; i < c.jobs.size(); ++i)
+      for (size_t k = 0; k < c.jobs.size(); ++k) {
+        const auto got = paired(*dec, c.jobs[i], c.jobs[k], rs);
+        const std::string what =
+            name + " chunks " + std::to_string(i) + "+" + std::to_string(k);
+        expectSame(want[i], got.first, what + " (first)");
+        expectSame(want[k], got.second, what + " (second)");
+        // Intact pointwise chunks really ran in lock step (a stream that runs dry would fall
+        // back to one by one and hide a lane that decodes the wrong stream).
+        const bool pointwise = c.info.compressor != laz::Compressor::LayeredChunked;
+        EXPECT_EQ(got.first.outcome.lockstep, pointwise) << what;
+        EXPECT_EQ(got.second.outcome.lockstep, pointwise) << what;
+      }
+    // The decoder is still good for one chunk at a time afterwards.
+    expectSame(want[0], alone(*dec, c.jobs[0], rs), name + " after pairs");
+  }
+}
+
+// A damaged chunk beside an intact one: the intact one decodes, the damaged one fails (or
+// decodes to garbage) exactly as it would alone, with the same message and byte, either side.
+TEST(LazPairs, ADamagedChunkFailsInAPairAsItWouldAlone) {
+  NL_REQUIRE_SHARED("laz/autzen_trim.laz");
+  const LazChunks c = chunksOf(laz("autzen_trim.laz"));
+  ASSERT_EQ(c.jobs.size(), 3u);
+  const size_t rs = c.info.recordSize();
+  auto dec = decoderFor(c.info);
+  std::vector<std::vector<uint8_t>> damagedBytes;
+  std::vector<laz::ChunkDecoder::Job> damaged;
+  const laz::ChunkDecoder::Job good = c.jobs[1];
+  damaged.push_back({good.data, good.size / 2, good.count, nullptr});  // truncated midway
+  damaged.push_back({good.data, 20, good.count, nullptr});  // shorter than the first record
+  damaged.push_back({good.data, good.size - 3, good.count, nullptr});  // runs dry at the end
+  for (size_t flip : {size_t(500), good.size / 2}) {  // bytes changed: garbage or an error
+    damagedBytes.emplace_back(good.data, good.data + good.size);
+    damagedBytes.back()[flip] ^= 0x5A;
+    damagedBytes.back()[flip + 1] ^= 0xA5;
+  }
+  for (const auto& b : damagedBytes) damaged.push_back({b.data(), b.size(), good.count, nullptr});
+  size_t errors = 0;
+  for (size_t d = 0; d < damaged.size(); ++d)
+    for (size_t other : {size_t(0), size_t(2)}) {  // a longer and a shorter intact chunk
+      const Decoded bad = alone(*dec, damaged[d], rs);
+      const Decoded intact = alone(*dec, c.jobs[other], rs);
+      errors += bool(bad.outcome.error);
+      const std::string what = "damage " + std::to_string(d) + " with chunk " + std::to_string(other);
+      auto got = paired(*dec, damaged[d], c.jobs[other], rs);
+      expectSame(bad, got.first, what + " (damaged first)");
+      expectSame(intact, got.second, what + " (intact second)");
+      got = paired(*dec, c.jobs[other], damaged[d], rs);
+      expectSame(intact, got.first, what + " (intact first)");
+      expectSame(bad, got.second, what + " (damaged second)");
+    }
+  EXPECT_GE(errors, 6u);  // the three cut chunks fail beside both partners
+}
+
+}  // namespace
