@@ -70,7 +70,8 @@ class SymbolModel {
     bits = std::min(bits + 2, kSymbolLengthShift);
     tableSize_ = 1u << bits;
     tableShift_ = kSymbolLengthShift - bits;
-    storage_.resize(size_t(symbols) + tableSize_ + 2);
+    storage_.resize(size_t(symbols) + 1 + tableSize_ + 2);
+    storage_[symbols] = 0xFFFF;  // the decoder's sentinel (distribution values are < 2^15)
     counts_.resize(symbols);
     reset();
   }
@@ -95,7 +96,7 @@ class SymbolModel {
   friend class ArithmeticEncoder;
   uint16_t* distribution() { return storage_.data(); }
   uint32_t* counts() { return counts_.data(); }
-  uint16_t* table() { return storage_.data() + size_t(symbols_); }
+  uint16_t* table() { return storage_.data() + size_t(symbols_) + 1; }
 
   void update() {
     uint32_t* count = counts();
@@ -105,17 +106,24 @@ class SymbolModel {
       for (uint32_t n = 0; n < symbols_; ++n) totalCount_ += (count[n] = (count[n] + 1) >> 1);
     }
     const uint32_t scale = 0x80000000u / totalCount_;
+    // The decoder table: entry t is the last symbol whose distribution starts below cell t (the
+    // first candidate for a value in cell t), built without a data-dependent branch (a loop per
+    // symbol over its cells mispredicts at every end): each symbol counted in the cell after
+    // its start, then a running sum.
     uint32_t sum = 0;
     uint16_t* tab = table();
-    uint32_t s = 0;
+    std::fill(tab, tab + tableSize_ + 2, uint16_t(0));
     for (uint32_t k = 0; k < symbols_; ++k) {
       dist[k] = static_cast<uint16_t>((scale * sum) >> (31 - kSymbolLengthShift));
       sum += count[k];
-      const uint32_t w = dist[k] >> tableShift_;
-      while (s < w) tab[++s] = static_cast<uint16_t>(k - 1);
+      ++tab[(dist[k] >> tableShift_) + 1];
+    }
+    uint32_t below = 0;
+    for (uint32_t t = 0; t < tableSize_ + 2; ++t) {
+      below += tab[t];
+      tab[t] = static_cast<uint16_t>(below - 1);
     }
     tab[0] = 0;
-    while (s <= tableSize_) tab[++s] = static_cast<uint16_t>(symbols_ - 1);
     updateCycle_ = (5 * updateCycle_) >> 2;
     const uint32_t maxCycle = (symbols_ + 6) << 3;
     if (updateCycle_ > maxCycle) updateCycle_ = maxCycle;
@@ -125,7 +133,7 @@ class SymbolModel {
   uint32_t symbols_, last_;
   uint32_t tableSize_ = 0, tableShift_ = 0;  // decoder table: tableSize_ + 2 entries
   uint32_t totalCount_ = 0, updateCycle_ = 0, symbolsUntilUpdate_ = 0;
-  std::vector<uint16_t> storage_;  // distribution (< 2^15), decoder table (symbols < 2^11)
+  std::vector<uint16_t> storage_;  // distribution (< 2^15), sentinel, decoder table (< 2^11)
   std::vector<uint32_t> counts_;
 };
 
@@ -176,14 +184,11 @@ class ArithmeticDecoder {
     if (t > m.tableSize_) t = m.tableSize_;  // only a damaged stream gets here
     const uint16_t* tab = m.table();
     uint32_t sym = tab[t];
-    uint32_t n = tab[t + 1] + 1;
-    while (n > sym + 1) {  // rarely more than one step with four table entries per symbol
-      const uint32_t k = (sym + n) >> 1;
-      if (dist[k] > dv)
-        n = k;
-      else
-        sym = k;
-    }
+    // Forward from the cell's first candidate (rarely more than one step with four table
+    // entries per symbol). The sentinel after the last symbol stops it; a damaged stream's
+    // larger values are clamped below the sentinel.
+    const uint32_t bound = dv < 0xFFFEu ? dv : 0xFFFEu;
+    while (dist[sym + 1] <= bound) ++sym;
     const uint32_t x = dist[sym] * length_;
     if (sym != m.last_) y = dist[sym + 1] * length_;
     value_ -= x;
@@ -202,12 +207,15 @@ class ArithmeticDecoder {
   }
 
   // 1 to 32 raw bits (more than 19 are read as 16 low bits and the rest).
-  uint32_t readBits(uint32_t bits) {
-    if (bits > 19) {
+  [[gnu::always_inline]] inline uint32_t readBits(uint32_t bits) {
+    if (bits > 19) [[unlikely]] {
       const uint32_t low = readShort();
-      const uint32_t high = readBits(bits - 16);
+      const uint32_t high = readBitsUpTo19(bits - 16);
       return (high << 16) | low;
     }
+    return readBitsUpTo19(bits);
+  }
+  [[gnu::always_inline]] inline uint32_t readBitsUpTo19(uint32_t bits) {
     const uint32_t sym = value_ / (length_ >>= bits);
     value_ -= length_ * sym;
     renormaliseFast();
@@ -485,14 +493,14 @@ class IntegerDecoder {
   uint32_t contexts() const { return static_cast<uint32_t>(bits_.size()); }
 
  private:
-  SymbolModel& bitsModel(uint32_t context) {
+  [[gnu::always_inline]] inline SymbolModel& bitsModel(uint32_t context) {
     if (bitsStamp_[context] != generation_) {
       bits_[context].reset();
       bitsStamp_[context] = generation_;
     }
     return bits_[context];
   }
-  SymbolModel& correctorModel(uint32_t k) {
+  [[gnu::always_inline]] inline SymbolModel& correctorModel(uint32_t k) {
     if (correctorStamp_[k] != generation_) {
       corrector_[k].reset();
       correctorStamp_[k] = generation_;
