@@ -717,6 +717,11 @@ size_t LasReader::takeChunks(size_t maxPoints, size_t step, std::vector<size_t>&
     points += chunks[c].points;
     c += chunkStep;
   }
+  // An even number of chunks while more follow: chunks decode two at a time on a thread.
+  if (which.size() > 2 && which.size() % 2 && c < chunks.size()) {
+    c = which.back();
+    which.pop_back();
+  }
   src_->releaseBefore(chunks[nextChunk_].offset);
   nextChunk_ = std::min(c, chunks.size());
   return chunkStep;
