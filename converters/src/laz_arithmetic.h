@@ -21,9 +21,9 @@
 #pragma once
 
 #include <algorithm>
-#include <cstring>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace nestlight::laz {

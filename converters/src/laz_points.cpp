@@ -11,9 +11,9 @@
 // add up to the header's, and a chunk may not ask for more memory than a bounded batch.
 #include "laz_points.h"
 
-#include <tbb/task_arena.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cstring>

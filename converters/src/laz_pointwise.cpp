@@ -74,8 +74,8 @@ class Point10V2 final : public ItemDecoder, private Point10V2State {
       Point10V2& p = *s[l];
       ArithmeticDecoder& dec = *d[l];
       if (changed[l] & 16)
-        p.lastIntensity_[m[l]] = static_cast<uint16_t>(
-            p.intensity_.finish(dec, high[l], p.lastIntensity_[m[l]]));
+        p.lastIntensity_[m[l]] =
+            static_cast<uint16_t>(p.intensity_.finish(dec, high[l], p.lastIntensity_[m[l]]));
       put<uint16_t>(p.last_ + 12, p.lastIntensity_[m[l]]);
       if (changed[l] & 8)
         p.last_[15] = static_cast<uint8_t>(dec.decodeSymbol(p.classification_[p.last_[15]]));
@@ -236,17 +236,19 @@ class Rgb12V2 final : public ItemDecoder, private Rgb12V2State {
     for (size_t l = 0; l < N; ++l) sym[l] = d[l]->decodeSymbol(s[l]->byteUsed_);
     for (size_t l = 0; l < N; ++l) {
       const uint16_t* last = s[l]->last_;
-      rgb[l][0] = sym[l] & 1 ? fold8(static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[0])) +
-                                     low(last[0]))
-                             : last[0] & 0xFF;
+      rgb[l][0] =
+          sym[l] & 1
+              ? fold8(static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[0])) + low(last[0]))
+              : last[0] & 0xFF;
     }
     for (size_t l = 0; l < N; ++l) {
       const uint16_t* last = s[l]->last_;
-      rgb[l][0] |= sym[l] & 2 ? uint16_t(fold8(static_cast<int32_t>(
-                                                   d[l]->decodeSymbol(s[l]->diff_[1])) +
-                                               high(last[0]))
-                                         << 8)
-                              : last[0] & 0xFF00;
+      rgb[l][0] |=
+          sym[l] & 2
+              ? uint16_t(
+                    fold8(static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[1])) + high(last[0]))
+                    << 8)
+              : last[0] & 0xFF00;
       if (!(sym[l] & 64)) rgb[l][1] = rgb[l][2] = rgb[l][0];
     }
     for (size_t l = 0; l < N; ++l) {
@@ -272,11 +274,11 @@ class Rgb12V2 final : public ItemDecoder, private Rgb12V2State {
     for (size_t l = 0; l < N; ++l) {
       if (!(sym[l] & 64)) continue;
       const uint16_t* last = s[l]->last_;
-      rgb[l][1] |= sym[l] & 8 ? uint16_t(fold8(static_cast<int32_t>(
-                                                   d[l]->decodeSymbol(s[l]->diff_[3])) +
-                                               clamp8(diff[l] + high(last[1])))
-                                         << 8)
-                              : last[1] & 0xFF00;
+      rgb[l][1] |= sym[l] & 8
+                       ? uint16_t(fold8(static_cast<int32_t>(d[l]->decodeSymbol(s[l]->diff_[3])) +
+                                        clamp8(diff[l] + high(last[1])))
+                                  << 8)
+                       : last[1] & 0xFF00;
     }
     for (size_t l = 0; l < N; ++l) {
       if (!(sym[l] & 64)) continue;
@@ -382,13 +384,13 @@ class PointwiseDecoder final : public ChunkDecoder {
       // A damaged stream decodes garbage but stays in bounds; stop early once it ran dry.
       if (dec_.overrun() > 8)
         throw DecodeError(size_, "chunk data ends at point " + std::to_string(p + 1) + " of " +
-                                 std::to_string(count) +
-                                 " (truncated or damaged compressed data)");
+                                     std::to_string(count) +
+                                     " (truncated or damaged compressed data)");
     }
     if (dec_.overrun())
       throw DecodeError(size_, "chunk data ends " + std::to_string(dec_.overrun()) +
-                               " bytes before its " + std::to_string(count) +
-                               " points are decoded (truncated or damaged compressed data)");
+                                   " bytes before its " + std::to_string(count) +
+                                   " points are decoded (truncated or damaged compressed data)");
     return recordSize_ + dec_.consumed();
   }
   void finish(const Job& j, uint32_t from, Outcome& r) {

@@ -889,8 +889,7 @@ TEST(LazPairs, TwoChunksAtOnceDecodeAsEachAlone) {
     for (size_t i = 0; i < c.jobs.size(); ++i)
       for (size_t k = 0; k < c.jobs.size(); ++k) {
         const auto got = paired(*dec, c.jobs[i], c.jobs[k], rs);
-        const std::string what =
-            name + " chunks " + std::to_string(i) + "+" + std::to_string(k);
+        const std::string what = name + " chunks " + std::to_string(i) + "+" + std::to_string(k);
         expectSame(want[i], got.first, what + " (first)");
         expectSame(want[k], got.second, what + " (second)");
         // Intact pointwise chunks really ran in lock step (a stream that runs dry would fall
@@ -930,7 +929,8 @@ TEST(LazPairs, ADamagedChunkFailsInAPairAsItWouldAlone) {
       const Decoded bad = alone(*dec, damaged[d], rs);
       const Decoded intact = alone(*dec, c.jobs[other], rs);
       errors += bool(bad.outcome.error);
-      const std::string what = "damage " + std::to_string(d) + " with chunk " + std::to_string(other);
+      const std::string what =
+          "damage " + std::to_string(d) + " with chunk " + std::to_string(other);
       auto got = paired(*dec, damaged[d], c.jobs[other], rs);
       expectSame(bad, got.first, what + " (damaged first)");
       expectSame(intact, got.second, what + " (intact second)");
