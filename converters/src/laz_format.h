@@ -126,6 +126,17 @@ class ChunkDecoder {
   }
 };
 
+// Encodes chunks of one file's point records (laz_writer.cpp, laz_layered_encoder.cpp). Not
+// thread-safe: each thread makes its own.
+class ChunkEncoder {
+ public:
+  virtual ~ChunkEncoder() = default;
+  // Appends nothing: `out` becomes the chunk of the `count` records (as decode() reads it).
+  virtual void encode(const uint8_t* records, size_t count, std::vector<uint8_t>& out) = 0;
+};
+// The layered compressor's encoder: POINT14, then RGB14, RGBNIR14 or BYTE14, all version 3.
+std::unique_ptr<ChunkEncoder> makeLayeredEncoder(const LaszipInfo& info);
+
 // Compressors 1 and 2 with items of versions 1 and 2 (point formats 0-5).
 std::unique_ptr<ChunkDecoder> makePointwiseDecoder(const LaszipInfo& info);
 // Compressor 3 with items of version 3 (point formats 6-10).

@@ -1,12 +1,13 @@
-// LAZ output: compresses an uncompressed LAS file of point format 0-5 (without waveform packets)
-// into LASzip 2's pointwise chunked format: items POINT10, GPSTIME11, RGB12 and BYTE of version
-// 2, chunks of 50,000 points encoded in parallel, and the chunk table.
+// LAZ output: compresses an uncompressed LAS file into chunks of 50,000 points, encoded in
+// parallel, with the chunk table. Point formats 0-3 (without waveform packets) become LASzip 2's
+// pointwise chunked format (items POINT10, GPSTIME11, RGB12 and BYTE of version 2); formats 6-8,
+// which the LAS writer chooses when legacy formats cannot hold the points, become the layered
+// chunked format of LASzip 3 (laz_layered_encoder.cpp).
 //
 // Isenburg, "LASzip: lossless compression of LiDAR data", PE&RS 79(2), 2013; the encoders mirror
 // the decoders of laz_pointwise.cpp and make the same choices as the LASzip 2 reference encoder
 // (laswriteitemcompressed_v2), so that the files it writes decode with any LASzip reader. Written
-// by hand because Debian packages neither LASzip nor LAZperf. The layered compressor of formats
-// 6-10 is not written (LAS 1.4 exports that need those formats stay .las).
+// by hand because Debian packages neither LASzip nor LAZperf.
 #include "laz_writer.h"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -240,9 +241,9 @@ class ByteEncoder final : public ItemEncoder, private ByteV2State {
 };
 
 // One thread's encoders for a record layout.
-class ChunkEncoder {
+class PointwiseEncoder final : public ChunkEncoder {
  public:
-  explicit ChunkEncoder(const LaszipInfo& info) : recordSize_(info.recordSize()) {
+  explicit PointwiseEncoder(const LaszipInfo& info) : recordSize_(info.recordSize()) {
     size_t at = 0;
     for (const Item& it : info.items) {
       switch (it.type) {
@@ -265,7 +266,7 @@ class ChunkEncoder {
       at += it.size;
     }
   }
-  void encode(const uint8_t* records, size_t n, std::vector<uint8_t>& out) {
+  void encode(const uint8_t* records, size_t n, std::vector<uint8_t>& out) override {
     out.assign(records, records + recordSize_);
     for (size_t i = 0; i < items_.size(); ++i) items_[i]->init(records + offsets_[i]);
     ArithmeticEncoder enc(out);
@@ -303,23 +304,34 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
     if (las::load<uint32_t>(d + 243) != 0)
       throw Error(nameForErrors, "", "LAZ output of files with EVLRs is not supported");
   }
-  if (pf > 3)
-    throw Error(
-        nameForErrors, "",
-        "LAZ output covers point formats 0-3 (LASzip 2); these points need LAS point format " +
-            std::to_string(pf) + ": write .las instead");
+  if (pf > 8 || pf == 4 || pf == 5)
+    throw Error(nameForErrors, "",
+                "LAZ output covers point formats 0-3 and 6-8 (no waveform packets); these points "
+                "need LAS point format " +
+                    std::to_string(pf) + ": write .las instead");
   NL_CHECK(uint64_t(pointStart) + count * recordLength <= size);
 
   LaszipInfo info;
-  info.compressor = Compressor::PointwiseChunked;
-  info.versionMajor = 2;
-  info.versionMinor = 2;
   info.chunkSize = kChunkPoints;
-  info.items.push_back({ItemType::Point10, 20, 2});
-  if (las::hasGps(pf)) info.items.push_back({ItemType::GpsTime11, 8, 2});
-  if (las::hasRgb(pf)) info.items.push_back({ItemType::Rgb12, 6, 2});
   const size_t extra = recordLength - las::kBaseRecordSize[pf];
-  if (extra) info.items.push_back({ItemType::Byte, uint16_t(extra), 2});
+  if (pf <= 3) {
+    info.compressor = Compressor::PointwiseChunked;
+    info.versionMajor = 2;
+    info.versionMinor = 2;
+    info.items.push_back({ItemType::Point10, 20, 2});
+    if (las::hasGps(pf)) info.items.push_back({ItemType::GpsTime11, 8, 2});
+    if (las::hasRgb(pf)) info.items.push_back({ItemType::Rgb12, 6, 2});
+    if (extra) info.items.push_back({ItemType::Byte, uint16_t(extra), 2});
+  } else {
+    info.compressor = Compressor::LayeredChunked;
+    info.versionMajor = 3;
+    info.versionMinor = 4;
+    info.versionRevision = 3;
+    info.items.push_back({ItemType::Point14, 30, 3});
+    if (pf == 7) info.items.push_back({ItemType::Rgb14, 6, 3});
+    if (pf == 8) info.items.push_back({ItemType::RgbNir14, 8, 3});
+    if (extra) info.items.push_back({ItemType::Byte14, uint16_t(extra), 3});
+  }
   NL_CHECK(info.recordSize() == recordLength);
 
   // The LASzip VLR goes after the existing ones.
@@ -328,7 +340,7 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
   std::copy(user.begin(), user.end(), vlr.begin() + 2);
   las::store<uint16_t>(&vlr[18], kLaszipRecordId);
   las::store<uint16_t>(&vlr[20], uint16_t(vlr.size() - las::kVlrHeaderSize));
-  const char* description = "Nestlight LASzip 2 encoder";
+  const char* description = "Nestlight LASzip encoder";
   const std::string text = description;
   std::copy(text.begin(), text.end(), vlr.begin() + 22);
   uint8_t* p = &vlr[las::kVlrHeaderSize];
@@ -336,7 +348,7 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
   las::store<uint16_t>(p + 2, 0);  // arithmetic coder
   p[4] = info.versionMajor;
   p[5] = info.versionMinor;
-  las::store<uint16_t>(p + 6, 0);
+  las::store<uint16_t>(p + 6, info.versionRevision);
   las::store<uint32_t>(p + 8, 0);
   las::store<uint32_t>(p + 12, info.chunkSize);
   las::store<int64_t>(p + 16, -1);  // no special EVLRs
@@ -371,7 +383,10 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
   std::vector<uint32_t> chunkBytes;
   chunkBytes.reserve(chunks);
   tbb::enumerable_thread_specific<std::unique_ptr<ChunkEncoder>> encoders(
-      [&] { return std::make_unique<ChunkEncoder>(info); });
+      [&]() -> std::unique_ptr<ChunkEncoder> {
+        if (info.compressor == Compressor::LayeredChunked) return makeLayeredEncoder(info);
+        return std::make_unique<PointwiseEncoder>(info);
+      });
   const uint64_t group = 64;  // chunks in memory at once: a few tens of MiB
   for (uint64_t c0 = 0; c0 < chunks; c0 += group) {
     const uint64_t c1 = std::min(chunks, c0 + group);

@@ -5,8 +5,9 @@
 
 namespace nestlight::laz {
 
-// Writes the uncompressed LAS file `lasPath` (point format 0-3, no EVLRs) compressed to
-// `lazPath` (LASzip 2, pointwise chunked). Errors name `nameForErrors`.
+// Writes the uncompressed LAS file `lasPath` (point format 0-3 or 6-8, no EVLRs) compressed to
+// `lazPath` (formats 0-3: LASzip 2, pointwise chunked; 6-8: LASzip 3, layered chunked). Errors
+// name `nameForErrors`.
 void compressLas(const std::string& lasPath, const std::string& lazPath,
                  const std::string& nameForErrors);
 

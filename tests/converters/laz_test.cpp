@@ -942,3 +942,139 @@ TEST(LazPairs, ADamagedChunkFailsInAPairAsItWouldAlone) {
 }
 
 }  // namespace
+
+// ---- the layered encoder (LAZ output of formats 6-8) --------------------------------------------
+
+namespace {
+
+// LASzip's own chunk of 1_4_w_evlr.laz (format 6) is what our encoder makes of the LAS twin's
+// records, bit for bit: the same models, the same choices, the same dropped layers.
+TEST(LazLayeredWriter, TheChunkOfTheLas14TwinIsLaszipsOwnByteForByte) {
+  NL_REQUIRE_SHARED("laz/1_4_w_evlr.laz");
+  const LazChunks c = chunksOf(laz("1_4_w_evlr.laz"));
+  ASSERT_EQ(c.jobs.size(), 1u);
+  const std::string las = test::readFile(laz("1_4_w_evlr.las"));
+  const auto* records = reinterpret_cast<const uint8_t*>(las.data()) + load<uint32_t>(las, 96);
+  std::vector<uint8_t> chunk;
+  laz::makeLayeredEncoder(c.info)->encode(records, c.jobs[0].count, chunk);
+  ASSERT_EQ(chunk.size(), c.jobs[0].size);
+  EXPECT_TRUE(std::equal(chunk.begin(), chunk.end(), c.jobs[0].data));
+}
+
+// Records of format 6, 7 or 8 (with extra bytes), in turn random and near copies of the one
+// before, with scanner channel switches, GPS times that step, jump and return to earlier
+// sequences: every context switch and coding path of the layered items.
+std::vector<uint8_t> variedRecords14(size_t recordSize, size_t n, uint32_t seed) {
+  std::vector<uint8_t> out(n * recordSize);
+  std::mt19937 rng(seed);
+  std::vector<uint8_t> rec(recordSize);
+  double t[2] = {1e8, 3e8};
+  int sequence = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (rng() % 4 == 0) {
+      for (auto& b : rec) b = uint8_t(rng());
+    } else {
+      for (int k = 0; k < 3; ++k) rec[rng() % recordSize] += uint8_t(1 + rng() % 3);
+      uint32_t x;
+      std::memcpy(&x, rec.data(), 4);
+      x += rng() % 100;
+      std::memcpy(rec.data(), &x, 4);
+      if (rng() % 3 == 0) rec[14] = uint8_t((rec[14] & 0xF0) | (((rec[14] & 15) + 1) & 15));
+      if (rng() % 50 == 0) rec[15] = uint8_t((rec[15] & 0xCF) | ((rng() % 4) << 4));
+      if (rng() % 300 == 0) sequence ^= 1;  // back to the other time sequence
+      t[sequence] += rng() % 2 ? (rng() % 1000) * 1e-6 : 0.0;
+      if (rng() % 500 == 0) t[sequence] += 1e7;  // beyond 32 bits of difference
+      std::memcpy(rec.data() + 22, &t[sequence], 8);
+    }
+    std::memcpy(out.data() + i * recordSize, rec.data(), recordSize);
+  }
+  return out;
+}
+
+// Chunks of every layered item the encoder writes decode (with the decoder that matches LASzip's
+// files) to the records they were made of: 30,000 points, one point and two points; a field
+// that never changes leaves its layer empty.
+TEST(LazLayeredWriter, ChunksOfFormats6To8RoundTripThroughTheDecoder) {
+  struct Case {
+    const char* name;
+    std::vector<laz::Item> items;
+  };
+  const std::vector<Case> cases = {
+      {"format 6", {{laz::ItemType::Point14, 30, 3}}},
+      {"format 7", {{laz::ItemType::Point14, 30, 3}, {laz::ItemType::Rgb14, 6, 3}}},
+      {"format 8", {{laz::ItemType::Point14, 30, 3}, {laz::ItemType::RgbNir14, 8, 3}}},
+      {"format 7 + 5 extra bytes",
+       {{laz::ItemType::Point14, 30, 3},
+        {laz::ItemType::Rgb14, 6, 3},
+        {laz::ItemType::Byte14, 5, 3}}}};
+  uint32_t seed = 1;
+  for (const Case& k : cases) {
+    laz::LaszipInfo info;
+    info.compressor = laz::Compressor::LayeredChunked;
+    info.chunkSize = 50000;
+    info.items = k.items;
+    const size_t rs = info.recordSize();
+    std::vector<uint8_t> records = variedRecords14(rs, 30000, seed++);
+    auto enc = laz::makeLayeredEncoder(info);
+    auto dec = laz::makeLayeredDecoder(info);
+    for (size_t n : {size_t(30000), size_t(1), size_t(2)}) {
+      std::vector<uint8_t> chunk, back(n * rs);
+      enc->encode(records.data(), n, chunk);
+      EXPECT_EQ(dec->decode(chunk.data(), chunk.size(), uint32_t(n), back.data()), chunk.size())
+          << k.name << ", " << n << " points";
+      EXPECT_TRUE(std::equal(back.begin(), back.end(), records.begin()))
+          << k.name << ", " << n << " points";
+    }
+    // Class, user data and the extra bytes held still: their layers are empty, and the
+    // decoder keeps the first point's values.
+    for (size_t p = 0; p < 30000; ++p) {
+      records[p * rs + 16] = 7;
+      records[p * rs + 17] = 9;
+      for (size_t b = 36; b < rs && rs == 41; ++b) records[p * rs + b] = 3;
+    }
+    std::vector<uint8_t> chunk, back(30000 * rs);
+    enc->encode(records.data(), 30000, chunk);
+    EXPECT_EQ(load<uint32_t>(std::string(chunk.begin(), chunk.end()), rs + 4 + 4 * 2), 0u)
+        << k.name << ": classification layer";
+    EXPECT_EQ(load<uint32_t>(std::string(chunk.begin(), chunk.end()), rs + 4 + 4 * 6), 0u)
+        << k.name << ": user data layer";
+    dec->decode(chunk.data(), chunk.size(), 30000, back.data());
+    EXPECT_TRUE(back == records) << k.name << " with fields held still";
+  }
+}
+
+// export-style LAZ output of LAS 1.4 format 7 and 8 files (three chunks) reads back to the
+// records of the LAS file it was made from.
+TEST(LazLayeredWriter, Las14FilesOfFormats7And8CompressAndReadBack) {
+  NL_REQUIRE_SHARED("laz/1_4_w_evlr.las");
+  for (const int pf : {7, 8}) {
+    const size_t rs = pf == 7 ? 36 : 38, n = 120000;
+    std::string f = test::readFile(laz("1_4_w_evlr.las"));
+    const uint32_t pointStart = load<uint32_t>(f, 96);
+    f.resize(pointStart);
+    f[104] = char(pf);
+    store<uint16_t>(f, 105, uint16_t(rs));
+    store<uint64_t>(f, 235, 0);  // no EVLRs
+    store<uint32_t>(f, 243, 0);
+    store<uint32_t>(f, 107, 0);  // formats 6+ keep the legacy counts zero
+    for (size_t at = 111; at < 131; at += 4) store<uint32_t>(f, at, 0);
+    store<uint64_t>(f, 247, n);
+    for (size_t at = 255; at < 375; at += 8) store<uint64_t>(f, at, 0);
+    const std::vector<uint8_t> recs = variedRecords14(rs, n, uint32_t(pf));
+    f.append(reinterpret_cast<const char*>(recs.data()), recs.size());
+    test::TempDir t;
+    test::writeFile(t.file("in.las"), f);
+    laz::compressLas(t.file("in.las"), t.file("out.laz"), "in.las");
+    const Records plain = records(t.file("in.las"));
+    const Records back = records(t.file("out.laz"));
+    EXPECT_EQ(back.header.details["laszip"]["compressor"], "layered chunked")
+        << back.header.details.dump();
+    EXPECT_EQ(back.header.details["laszip"]["chunks"], 3);
+    ASSERT_EQ(back.count(), n);
+    EXPECT_TRUE(back.bytes == plain.bytes)
+        << "format " << pf << ": " << firstDifference(plain, back);
+    EXPECT_LT(std::filesystem::file_size(t.file("out.laz")), f.size());
+  }
+}
+
+}  // namespace
