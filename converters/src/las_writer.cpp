@@ -266,10 +266,6 @@ class LasWriter final : public PointWriter {
     }
 
     const bool needs14 = hasKnown(kFScannerChannel) || hasKnown(kFScanAngle) || hasKnown(kFNir);
-    if (compress_ && needs14)
-      throw Error(path_, "",
-                  "LAZ output covers LAS point formats 0-3 (LASzip 2); these points carry fields "
-                  "only formats 6-8 hold (scanner channel, 16-bit scan angle or NIR): write .las");
     plan_ = makePlan(layout_, needs14 ? modernFormat() : legacyFormat(), needs14 ? 4 : 2);
 
     file_ = std::fopen(tmp_.c_str(), "w+b");

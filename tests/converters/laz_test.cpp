@@ -1078,3 +1078,31 @@ TEST(LazLayeredWriter, Las14FilesOfFormats7And8CompressAndReadBack) {
 }
 
 }  // namespace
+
+namespace {
+
+// The LAS writer's LAZ output of points that need LAS 1.4 (this twin's 16-bit scan angles) is a
+// layered LAZ of format 6 that reads back to the same points and attributes.
+TEST(LazLayeredWriter, WriterOutputOfLas14PointsReadsBack) {
+  NL_REQUIRE_SHARED("laz/1_4_w_evlr.las");
+  test::TempDir t;
+  auto r = openReader(laz("1_4_w_evlr.las"));
+  const std::string out = t.file("a.laz");
+  {
+    auto w = createWriter(out, r->header());
+    PointBatch b;
+    while (r->read(b, 300)) w->write(b);
+    w->close();
+  }
+  const Records back = records(out);
+  EXPECT_EQ(back.header.details["laszip"]["compressor"], "layered chunked");
+  auto a = openReader(laz("1_4_w_evlr.las"));
+  auto z = openReader(out);
+  const test::Points pa = test::readAll(*a, 1000), pz = test::readAll(*z, 1000);
+  ASSERT_EQ(pz.size(), 1000u);
+  EXPECT_TRUE(pa.xyz == pz.xyz);
+  ASSERT_EQ(a->header().layout.stride(), z->header().layout.stride());
+  EXPECT_TRUE(pa.attrs == pz.attrs);
+}
+
+}  // namespace
