@@ -39,7 +39,7 @@ void addExport(CLI::App& app, int& exitCode) {
       "Write an octree's points to LAS, LAZ or PLY (all, or one level), or as a Potree 2.0 "
       "dataset");
   cmd->footer(
-      "Formats: las, laz (LASzip 2, point formats 0-3; docs/LAZ.md) and ply write one file of\n"
+      "Formats: las, laz (LASzip; point formats 0-3 and 6-8; docs/LAZ.md) and ply write one file of\n"
       "points (all nodes, or --level N). potree writes a directory that the Potree web viewer\n"
       "(1.8 and later) opens: metadata.json, hierarchy.bin and octree.bin, with the octree's own\n"
       "nodes and sampling (no reconversion) and positions exact in its integer grid. Without\n"
