@@ -228,11 +228,6 @@ class LayeredDecoder final : public ChunkDecoder {
                                                " (truncated or damaged compressed data)");
   }
 
-  Point14Context& pointContext(uint32_t c) {
-    if (!pctx_[c]) pctx_[c] = std::make_unique<Point14Context>();
-    return *pctx_[c];
-  }
-
   void decodePoint14(uint8_t* out, uint32_t count) {
     const size_t rs = recordSize_;
     ArithmeticDecoder& xy = layers_[0].dec;
@@ -248,20 +243,14 @@ class LayeredDecoder final : public ChunkDecoder {
                hasUser = layers_[6].active, hasSource = layers_[7].active,
                hasGps = layers_[8].active;
 
-    for (auto& c : pctx_)
-      if (c) c->used = false;
     Point14 first;
     first.unpack(out);
-    uint32_t cur = first.channel;
-    Point14Context* c = &pointContext(cur);
-    c->init(first);
+    uint32_t cur = 0;
+    Point14Context* c = startChunk(pctx_, first, cur);
 
     for (uint32_t p = 1; p < count; ++p) {
-      // Which fields change, in the context of the last point's return (single, first, last or
-      // intermediate) and whether its GPS time changed.
-      const uint32_t lpr = (c->last.returnNumber == 1 ? 1u : 0u) |
-                           (c->last.returnNumber >= c->last.numberOfReturns ? 2u : 0u) |
-                           (c->last.gpsTimeChanged ? 4u : 0u);
+      // Which fields change, in the context of the last point's return.
+      const uint32_t lpr = lastReturnContext(c->last);
       const uint32_t changed =
           xy.decodeSymbol(fresh(c->changed[lpr], c->pending, Point14Context::kChanged + lpr));
       if (changed & 64) {  // the scanner channel switched: code 0-2 means +1..+3
@@ -270,7 +259,7 @@ class LayeredDecoder final : public ChunkDecoder {
                                                      Point14Context::kScannerChannel)) +
                                1) &
                               3;
-        Point14Context& nc = pointContext(next);
+        Point14Context& nc = pointContext(pctx_, next);
         if (!nc.used) nc.init(c->last);  // a new channel starts from the point before
         cur = next;
         c = &nc;
@@ -465,16 +454,9 @@ class LayeredDecoder final : public ChunkDecoder {
     ArithmeticDecoder* nirDec = nir ? &layers_[s.firstLayer + 1].dec : nullptr;
     const bool hasNir = nir && layers_[s.firstLayer + 1].active;
 
-    auto init = [&](uint32_t c, const std::array<uint16_t, 4>& from) {
-      if (!s.rgb[c]) s.rgb[c] = std::make_unique<RgbContext>();
-      s.rgb[c]->init(from);
-    };
-    for (auto& c : s.rgb)
-      if (c) c->used = false;
-    std::array<uint16_t, 4> first{};
-    for (size_t i = 0; i < (nir ? 4u : 3u); ++i) first[i] = get<uint16_t>(out + s.offset + 2 * i);
+    auto init = [&](uint32_t c, const std::array<uint16_t, 4>& from) { initRgb(s.rgb, c, from); };
     s.current = itemContext0(out);
-    init(s.current, first);
+    startRgbChunk(s.rgb, s.current, out + s.offset, nir);
 
     for (uint32_t p = 1; p < count; ++p) {
       uint16_t* last =

@@ -270,6 +270,47 @@ struct ByteContext {
   }
 };
 
+// POINT14's context of scanner channel `c`, made on first use.
+inline Point14Context& pointContext(std::array<std::unique_ptr<Point14Context>, 4>& ctxs,
+                                    uint32_t c) {
+  if (!ctxs[c]) ctxs[c] = std::make_unique<Point14Context>();
+  return *ctxs[c];
+}
+// A chunk starts with every context unused but that of its first point's channel (`current`),
+// initialised from that point.
+inline Point14Context* startChunk(std::array<std::unique_ptr<Point14Context>, 4>& ctxs,
+                                  const Point14& first, uint32_t& current) {
+  for (auto& c : ctxs)
+    if (c) c->used = false;
+  current = first.channel;
+  Point14Context* c = &pointContext(ctxs, current);
+  c->init(first);
+  return c;
+}
+// The context of the changed-fields model: the last point's return (single, first, last or
+// intermediate) and whether its GPS time changed.
+inline uint32_t lastReturnContext(const Point14& last) {
+  return (last.returnNumber == 1 ? 1u : 0u) |
+         (last.returnNumber >= last.numberOfReturns ? 2u : 0u) | (last.gpsTimeChanged ? 4u : 0u);
+}
+
+// RGB14/RGBNIR14 context `c` made (on first use) and initialised from the last values `from`.
+inline void initRgb(std::array<std::unique_ptr<RgbContext>, 4>& ctxs, uint32_t c,
+                    const std::array<uint16_t, 4>& from) {
+  if (!ctxs[c]) ctxs[c] = std::make_unique<RgbContext>();
+  ctxs[c]->init(from);
+}
+// At a chunk's start: every context unused but `current`, initialised from the first point's
+// item `first` (3 or, with NIR, 4 values).
+inline void startRgbChunk(std::array<std::unique_ptr<RgbContext>, 4>& ctxs, uint32_t current,
+                          const uint8_t* first, bool nir) {
+  for (auto& c : ctxs)
+    if (c) c->used = false;
+  std::array<uint16_t, 4> values{};
+  for (size_t i = 0; i < (nir ? 4u : 3u); ++i) values[i] = get<uint16_t>(first + 2 * i);
+  initRgb(ctxs, current, values);
+}
+
 // The context POINT14 hands the other items at point p of `records` (of `recordSize` bytes):
 // version 3 names the channel only on the point where it switched (a switch always changes it)
 // and context 0 otherwise; version 4 always names it.

@@ -128,11 +128,6 @@ class LayeredEncoder final : public ChunkEncoder {
     }
   }
 
-  Point14Context& pointContext(uint32_t c) {
-    if (!pctx_[c]) pctx_[c] = std::make_unique<Point14Context>();
-    return *pctx_[c];
-  }
-
   // How the return number follows the last one: 0 the same, 1 one more, 2 one less, 3 other.
   static uint32_t returnCode(uint32_t last, uint32_t r) {
     if (r == last) return 0;
@@ -152,13 +147,10 @@ class LayeredEncoder final : public ChunkEncoder {
     ArithmeticEncoder& userEnc = encoders_[6];
     ArithmeticEncoder& sourceEnc = encoders_[7];
 
-    for (auto& c : pctx_)
-      if (c) c->used = false;
     Point14 first;
     first.unpack(records);
-    uint32_t cur = first.channel;
-    Point14Context* c = &pointContext(cur);
-    c->init(first);
+    uint32_t cur = 0;
+    Point14Context* c = startChunk(pctx_, first, cur);
 
     for (uint32_t p = 1; p < count; ++p) {
       Point14 pt;
@@ -166,9 +158,7 @@ class LayeredEncoder final : public ChunkEncoder {
       // The changed-field symbol is coded in the current context, from its last point's return;
       // the changes it names are those against the context the point goes to (the one it
       // switches to keeps its own last values, a new one starts from the current one's).
-      const uint32_t lpr = (c->last.returnNumber == 1 ? 1u : 0u) |
-                           (c->last.returnNumber >= c->last.numberOfReturns ? 2u : 0u) |
-                           (c->last.gpsTimeChanged ? 4u : 0u);
+      const uint32_t lpr = lastReturnContext(c->last);
       const uint32_t target = pt.channel;
       const Point14* ref = &c->last;
       if (target != cur && pctx_[target] && pctx_[target]->used) ref = &pctx_[target]->last;
@@ -182,7 +172,7 @@ class LayeredEncoder final : public ChunkEncoder {
       if (changed & 64) {
         xy.encodeSymbol(fresh(c->scannerChannel, c->pending, Point14Context::kScannerChannel),
                         (target - cur - 1) & 3);
-        Point14Context& nc = pointContext(target);
+        Point14Context& nc = pointContext(pctx_, target);
         if (!nc.used) nc.init(c->last);
         cur = target;
         c = &nc;
@@ -383,17 +373,9 @@ class LayeredEncoder final : public ChunkEncoder {
     const bool nir = s.type == ItemType::RgbNir14;
     ArithmeticEncoder& rgbEnc = encoders_[s.firstLayer];
     ArithmeticEncoder* nirEnc = nir ? &encoders_[s.firstLayer + 1] : nullptr;
-    auto init = [&](uint32_t c, const std::array<uint16_t, 4>& from) {
-      if (!s.rgb[c]) s.rgb[c] = std::make_unique<RgbContext>();
-      s.rgb[c]->init(from);
-    };
-    for (auto& c : s.rgb)
-      if (c) c->used = false;
-    std::array<uint16_t, 4> first{};
-    for (size_t i = 0; i < (nir ? 4u : 3u); ++i)
-      first[i] = get<uint16_t>(records + s.offset + 2 * i);
+    auto init = [&](uint32_t c, const std::array<uint16_t, 4>& from) { initRgb(s.rgb, c, from); };
     s.current = itemContext0(records);
-    init(s.current, first);
+    startRgbChunk(s.rgb, s.current, records + s.offset, nir);
 
     for (uint32_t p = 1; p < count; ++p) {
       uint16_t* last = follow<RgbContext, std::array<uint16_t, 4>>(

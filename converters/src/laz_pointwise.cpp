@@ -24,28 +24,35 @@ namespace {
 
 // ---- version 2 ---------------------------------------------------------------------------------
 
-class Point10V2 final : public ItemDecoder, private Point10V2State {
+// An item whose point decoding is written once for N chunks (`Item::readLanes<N>`): read() is
+// one lane, readPair() two, interleaved symbol by symbol.
+template <typename Item>
+class LanedItem : public ItemDecoder {
+ public:
+  void read(ArithmeticDecoder& dec, uint8_t* out) override {
+    Item* s[1] = {static_cast<Item*>(this)};
+    ArithmeticDecoder* d[1] = {&dec};
+    uint8_t* o[1] = {out};
+    Item::template readLanes<1>(s, d, o);
+  }
+  void readPair(ItemDecoder& twin, ArithmeticDecoder& a, uint8_t* outA, ArithmeticDecoder& b,
+                uint8_t* outB) override {
+    Item* s[2] = {static_cast<Item*>(this), static_cast<Item*>(&twin)};
+    ArithmeticDecoder* d[2] = {&a, &b};
+    uint8_t* o[2] = {outA, outB};
+    Item::template readLanes<2>(s, d, o);
+  }
+};
+
+class Point10V2 final : public LanedItem<Point10V2>, private Point10V2State {
  public:
   void init(const uint8_t* first) override {
     reset(first);
     last_[12] = last_[13] = 0;  // the reference predicts the first intensity from zero
   }
 
-  void read(ArithmeticDecoder& dec, uint8_t* out) override {
-    Point10V2* s[1] = {this};
-    ArithmeticDecoder* d[1] = {&dec};
-    uint8_t* o[1] = {out};
-    readLanes<1>(s, d, o);
-  }
-  void readPair(ItemDecoder& twin, ArithmeticDecoder& a, uint8_t* outA, ArithmeticDecoder& b,
-                uint8_t* outB) override {
-    Point10V2* s[2] = {this, static_cast<Point10V2*>(&twin)};
-    ArithmeticDecoder* d[2] = {&a, &b};
-    uint8_t* o[2] = {outA, outB};
-    readLanes<2>(s, d, o);
-  }
-
  private:
+  friend class LanedItem<Point10V2>;
   // One point of each of N chunks; every step runs lane by lane (see decompressLanes). Within a
   // lane the order of the fields is the reference's: the changed-field mask, returns, intensity,
   // classification, scan angle, user data, point source, then x, y and z.
@@ -202,25 +209,12 @@ class GpsTime11V2 final : public ItemDecoder, private GpsTime11V2State {
   }
 };
 
-class Rgb12V2 final : public ItemDecoder, private Rgb12V2State {
+class Rgb12V2 final : public LanedItem<Rgb12V2>, private Rgb12V2State {
  public:
   void init(const uint8_t* first) override { reset(first); }
 
-  void read(ArithmeticDecoder& dec, uint8_t* out) override {
-    Rgb12V2* s[1] = {this};
-    ArithmeticDecoder* d[1] = {&dec};
-    uint8_t* o[1] = {out};
-    readLanes<1>(s, d, o);
-  }
-  void readPair(ItemDecoder& twin, ArithmeticDecoder& a, uint8_t* outA, ArithmeticDecoder& b,
-                uint8_t* outB) override {
-    Rgb12V2* s[2] = {this, static_cast<Rgb12V2*>(&twin)};
-    ArithmeticDecoder* d[2] = {&a, &b};
-    uint8_t* o[2] = {outA, outB};
-    readLanes<2>(s, d, o);
-  }
-
  private:
+  friend class LanedItem<Rgb12V2>;
   // The mask of changed bytes, then each byte's difference to its prediction: red low and high,
   // and when green and blue differ from red: green low, blue low, green high, blue high (the
   // reference's order within each lane).
