@@ -60,7 +60,10 @@ struct BitModel {
 // Adaptive model of `symbols` symbols (2 to 2048).
 class SymbolModel {
  public:
-  explicit SymbolModel(uint32_t symbols) : symbols_(symbols), last_(symbols - 1) {
+  // `resetNow` false: the owner resets it before first use (IntegerDecoder's lazy models), which
+  // saves building tables that a chunk never uses.
+  explicit SymbolModel(uint32_t symbols, bool resetNow = true)
+      : symbols_(symbols), last_(symbols - 1) {
     // The decoder table maps the top bits of value/length to the first candidate symbol. Its size
     // is the decoder's choice (it changes no decoded value): the reference uses a quarter of an
     // entry per symbol and only above 16 symbols, leaving a bisection of a few unpredictable
@@ -73,7 +76,7 @@ class SymbolModel {
     storage_.resize(size_t(symbols) + 1 + tableSize_ + 2);
     storage_[symbols] = 0xFFFF;  // the decoder's sentinel (distribution values are < 2^15)
     counts_.resize(symbols);
-    reset();
+    if (resetNow) reset();
   }
   SymbolModel(const SymbolModel&) = delete;
   SymbolModel& operator=(const SymbolModel&) = delete;
@@ -398,12 +401,14 @@ class IntegerDecoder {
       corrMin_ = INT32_MIN;
     }
     bits_.reserve(contexts);
-    for (uint32_t i = 0; i < contexts; ++i) bits_.emplace_back(corrBits_ + 1);
+    // Stamps start unequal to the generation: every model is reset at its first use.
+    for (uint32_t i = 0; i < contexts; ++i) bits_.emplace_back(corrBits_ + 1, false);
     bitsStamp_.assign(contexts, 0);
     correctorStamp_.assign(corrBits_ + 1, 0);
     corrector_.reserve(corrBits_ + 1);
-    corrector_.emplace_back(2);  // placeholder for k = 0, which uses corrector0_
-    for (uint32_t i = 1; i <= corrBits_; ++i) corrector_.emplace_back(1u << std::min(i, bitsHigh_));
+    corrector_.emplace_back(2, false);  // placeholder for k = 0, which uses corrector0_
+    for (uint32_t i = 1; i <= corrBits_; ++i)
+      corrector_.emplace_back(1u << std::min(i, bitsHigh_), false);
   }
 
   // Resets every model. Lazily: a model is reset when first used after this, which decodes the

@@ -33,7 +33,7 @@ class LazyModels {
  public:
   explicit LazyModels(uint32_t symbols) : symbols_(symbols) {}
   SymbolModel& operator[](size_t i) {
-    if (!models_[i]) models_[i] = std::make_unique<SymbolModel>(symbols_);
+    if (!models_[i]) models_[i] = std::make_unique<SymbolModel>(symbols_, false);  // reset below
     if (generation_[i] != current_) {
       models_[i]->reset();
       generation_[i] = current_;

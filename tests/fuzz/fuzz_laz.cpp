@@ -4,11 +4,13 @@
 //   COPC hierarchy and every chunk decoder see damaged input;
 // - a bare chunk (first byte odd): the next byte picks a point format and item versions, the rest
 //   is one chunk handed straight to the chunk decoder, which reaches the item decoders' states
-//   faster than mutations through a file can.
+//   faster than mutations through a file can; its two halves, as two chunks decoded two at a
+//   time, must give what each gives alone (a differential check of the lock-step decoding).
 // Either reads, or throws nestlight::Error / laz::DecodeError; it never reads out of bounds,
 // hangs, aborts or leaks.
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "fuzz_common.h"
@@ -43,6 +45,9 @@ void wholeFile(const uint8_t* data, size_t size) {
   } catch (const nestlight::Error&) {
   }
 }
+
+void pairedAsAlone(const nestlight::laz::LaszipInfo& info, const uint8_t* data, size_t size,
+                   uint32_t countA);
 
 void bareChunk(const uint8_t* data, size_t size) {
   using namespace nestlight::laz;
@@ -81,6 +86,45 @@ void bareChunk(const uint8_t* data, size_t size) {
     dec->decode(data + 2, size - 2, count, out.data());
   } catch (const DecodeError& e) {
     if (e.offset > size) __builtin_trap();  // offsets lie inside the chunk or at its end
+  }
+  pairedAsAlone(info, data + 2, size - 2, count);
+}
+
+// The two halves of the chunk data as two chunks of different counts: decoded two at a time
+// (ChunkDecoder::decodePair, symbols interleaved), each gives exactly what it gives alone: the
+// same records and bytes used, or the same error at the same byte.
+void pairedAsAlone(const nestlight::laz::LaszipInfo& info, const uint8_t* data, size_t size,
+                   uint32_t countA) {
+  using namespace nestlight::laz;
+  const size_t half = size / 2;
+  const ChunkDecoder::Job jobs[2] = {{data, half, countA, nullptr},
+                                     {data + half, size - half, uint32_t(1 + size % 64), nullptr}};
+  auto dec = info.compressor == Compressor::LayeredChunked ? makeLayeredDecoder(info)
+                                                           : makePointwiseDecoder(info);
+  std::vector<uint8_t> alone[2], paired[2];
+  ChunkDecoder::Outcome want[2], got[2];
+  for (int k = 0; k < 2; ++k) {
+    alone[k].assign(size_t(jobs[k].count) * info.recordSize(), 0);
+    paired[k].assign(alone[k].size(), 0);
+    try {
+      want[k].used = dec->decode(jobs[k].data, jobs[k].size, jobs[k].count, alone[k].data());
+    } catch (const DecodeError& e) {
+      want[k].error = e;
+    }
+  }
+  ChunkDecoder::Job a = jobs[0], b = jobs[1];
+  a.out = paired[0].data();
+  b.out = paired[1].data();
+  dec->decodePair(a, b, got[0], got[1]);
+  for (int k = 0; k < 2; ++k) {
+    if (bool(want[k].error) != bool(got[k].error)) __builtin_trap();
+    if (want[k].error) {
+      if (std::string(want[k].error->what()) != got[k].error->what() ||
+          want[k].error->offset != got[k].error->offset)
+        __builtin_trap();
+    } else if (want[k].used != got[k].used || alone[k] != paired[k]) {
+      __builtin_trap();
+    }
   }
 }
 
