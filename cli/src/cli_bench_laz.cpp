@@ -4,7 +4,6 @@
 #include <tbb/global_control.h>
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -56,68 +55,47 @@ Decode decodeRate(const std::string& path, unsigned threads, int runs, double mi
   return d;
 }
 
-// The generated scan again as LAS 1.4 point format 7 (36-byte records), so that the layered
-// compressor of formats 6-10 is measured too: the GPS time of a 100 kHz scanner and two scanner
-// channels in turns of 100,000 points (as two heads of a mobile scanner), the other fields
-// repacked from the format 2 records.
-void writeFormat7(const std::string& from, const std::string& to) {
-  auto src = mapFile(from);
-  const uint8_t* d = src->data();
-  auto u16 = [](const uint8_t* p) { return uint16_t(p[0] | p[1] << 8); };
-  auto u32 = [](const uint8_t* p) {
-    return uint32_t(p[0] | p[1] << 8 | p[2] << 16 | uint32_t(p[3]) << 24);
-  };
-  const uint32_t pointStart = u32(d + 96);
-  const uint16_t length = u16(d + 105);
-  const uint64_t count = u32(d + 107);
-  if (d[104] != 2 || length != 26 || pointStart + count * 26 > src->size())
-    throw Error(from, "", "expected the generated LAS of point format 2");
-  uint8_t h[375] = {};
-  std::memcpy(h, "LASF", 4);
-  h[6] = 16;  // WKT (formats 6+)
-  h[24] = 1;
-  h[25] = 4;
-  std::memcpy(h + 58, "nestlight bench laz", 19);
-  h[94] = 375 & 255, h[95] = 375 >> 8;
-  h[96] = 375 & 255, h[97] = 375 >> 8;
-  h[104] = 7;
-  h[105] = 36;
-  std::memcpy(h + 131, d + 131, 96);  // scale, offset and bounds: the same places in 1.2 and 1.4
-  std::memcpy(h + 247, &count, 8);
-  std::ofstream out(to, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(h), sizeof h);
-  std::vector<uint8_t> buf;
-  for (uint64_t i = 0; i < count; ++i) {
-    const uint8_t* r = d + pointStart + i * 26;
-    uint8_t o[36] = {};
-    std::memcpy(o, r, 14);                                   // x, y, z, intensity
-    o[14] = uint8_t((r[14] & 7) | ((r[14] >> 3) & 7) << 4);  // return number, number of returns
-    o[15] = uint8_t((r[15] >> 5) | ((i / 100000) % 2) << 4 | (r[14] & 0xC0));  // flags, channel
-    o[16] = r[15] & 31;                                                        // class
-    o[17] = r[17];                                                             // user data
-    const int16_t angle = int16_t(std::lround(int8_t(r[16]) / 0.006));
-    std::memcpy(o + 18, &angle, 2);
-    std::memcpy(o + 20, r + 18, 2);  // point source
-    const double t = 1e5 + double(i) * 1e-5;
-    std::memcpy(o + 22, &t, 8);
-    std::memcpy(o + 30, r + 20, 6);  // red, green, blue
-    buf.insert(buf.end(), o, o + 36);
-    if (buf.size() >= (32u << 20) || i + 1 == count) {
-      out.write(reinterpret_cast<const char*>(buf.data()), std::streamsize(buf.size()));
-      buf.clear();
-    }
-  }
-  if (!out) throw Error(to, "", "cannot write");
-}
-
-// The same points compressed, through the LAS writer's LAZ output (format 7: the layered
-// compressor).
-void writeLazCopy(const std::string& from, const std::string& to) {
+// The generated scan again as LAS 1.4 point format 7 and its LAZ, so that the layered compressor
+// of formats 6-10 is measured too. The same points gain the GPS time of a 100 kHz scanner and two
+// scanner channels in turns of 100,000 points (as two heads of a mobile scanner), and a 16-bit
+// scan angle in place of the 8-bit rank; the LAS writer then chooses format 7 for both files
+// (one pass, two writers).
+void writeFormat7(const std::string& from, const std::string& las7, const std::string& laz7) {
   auto r = openReader(from);
-  auto w = createWriter(to, r->header());
-  PointBatch b;
-  while (r->read(b, 1 << 20)) w->write(b);
-  w->close();
+  const PointLayout& in = r->header().layout;
+  SourceHeader h = r->header();
+  h.layout = PointLayout();
+  std::vector<std::pair<size_t, size_t>> copied;  // (offset in, offset out) of kept attributes
+  for (size_t i = 0; i < in.size(); ++i)
+    if (in[i].name != "scan_angle_rank") copied.emplace_back(i, h.layout.add(in[i]));
+  const int rank = in.find("scan_angle_rank");
+  const size_t angle = h.layout.add({"scan_angle", ScalarType::I16, 1, ""});
+  const size_t channel = h.layout.add({"scanner_channel", ScalarType::U8, 1, ""});
+  const size_t time = h.layout.add({"gps_time", ScalarType::F64, 1, ""});
+  auto las = createWriter(las7, h), laz = createWriter(laz7, h);
+  PointBatch b, out;
+  uint64_t index = 0;
+  const size_t sIn = in.stride(), sOut = h.layout.stride();
+  while (r->read(b, 1 << 20)) {
+    const size_t n = b.size();
+    out.xyz = b.xyz;
+    out.attrs.assign(n * sOut, 0);
+    for (size_t p = 0; p < n; ++p, ++index) {
+      const uint8_t* src = b.attrs.data() + p * sIn;
+      uint8_t* dst = out.attrs.data() + p * sOut;
+      for (const auto& [i, o] : copied)
+        std::memcpy(dst + h.layout.offset(o), src + in.offset(i), in[i].byteSize());
+      const double degrees = rank >= 0 ? loadAsDouble(ScalarType::I8, src + in.offset(rank)) : 0;
+      storeFromDouble(ScalarType::I16, degrees / 0.006, dst + h.layout.offset(angle));
+      dst[h.layout.offset(channel)] = uint8_t((index / 100000) % 2);
+      const double t = 1e5 + double(index) * 1e-5;
+      std::memcpy(dst + h.layout.offset(time), &t, sizeof t);
+    }
+    las->write(out);
+    laz->write(out);
+  }
+  las->close();
+  laz->close();
 }
 
 }  // namespace
@@ -160,13 +138,9 @@ void addBenchLaz(CLI::App& app, int& exitCode) {
         std::fprintf(stderr, "bench: generating %s\n", f.c_str());
         writeSynthetic(spec, f);
       }
-    if (n > 0 && !fs::exists(las7)) {
-      std::fprintf(stderr, "bench: generating %s\n", las7.c_str());
-      writeFormat7(las, las7);
-    }
-    if (n > 0 && !fs::exists(laz7)) {
-      std::fprintf(stderr, "bench: generating %s\n", laz7.c_str());
-      writeLazCopy(las7, laz7);
+    if (n > 0 && !(fs::exists(las7) && fs::exists(laz7))) {
+      std::fprintf(stderr, "bench: generating %s and %s\n", las7.c_str(), laz7.c_str());
+      writeFormat7(las, las7, laz7);
     }
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     nlohmann::json results = {

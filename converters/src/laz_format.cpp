@@ -76,6 +76,16 @@ size_t fixedSize(ItemType t) {
 }
 }  // namespace
 
+std::vector<Item> itemsFor(int pf, size_t extraBytes, uint16_t version) {
+  std::vector<ItemType> types;
+  if (!expectedItems(pf, types)) return {};
+  std::vector<Item> items;
+  for (ItemType t : types) items.push_back({t, uint16_t(fixedSize(t)), version});
+  if (extraBytes)
+    items.push_back({pf <= 5 ? ItemType::Byte : ItemType::Byte14, uint16_t(extraBytes), version});
+  return items;
+}
+
 std::string itemName(ItemType t) {
   switch (t) {
     case ItemType::Byte:

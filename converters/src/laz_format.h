@@ -56,6 +56,10 @@ struct Item {
 
 std::string itemName(ItemType t);
 
+// The items LASzip writes for point format `pf` (0-10) with `extraBytes` extra bytes (BYTE or
+// BYTE14 last), all of `version`; none for an unknown format.
+std::vector<Item> itemsFor(int pf, size_t extraBytes, uint16_t version);
+
 // The LASzip VLR's payload.
 struct LaszipInfo {
   Compressor compressor = Compressor::None;

@@ -344,9 +344,9 @@ uint64_t LazPoints::decode(const std::vector<size_t>& which, RecordBuffer& out, 
       failed[k] = e;
     }
   };
-  // Chunks go to the decoders two at a time (see ChunkDecoder::decodePair): 1.3 to 1.5 times
-  // the speed of one at a time on a core. In parallel, only while there are pairs enough to keep
-  // every core busy.
+  // Chunks go to the decoders two at a time (see ChunkDecoder::decodePair): about 1.15 times
+  // the speed of one at a time on a core (docs/LAZ.md). In parallel, only while there are pairs
+  // enough to keep every core busy.
   auto job = [&](size_t k) {
     const Chunk& c = chunks_[which[k]];
     return ChunkDecoder::Job{d + c.offset, c.bytes, c.points,

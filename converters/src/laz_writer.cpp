@@ -318,20 +318,13 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
     info.compressor = Compressor::PointwiseChunked;
     info.versionMajor = 2;
     info.versionMinor = 2;
-    info.items.push_back({ItemType::Point10, 20, 2});
-    if (las::hasGps(pf)) info.items.push_back({ItemType::GpsTime11, 8, 2});
-    if (las::hasRgb(pf)) info.items.push_back({ItemType::Rgb12, 6, 2});
-    if (extra) info.items.push_back({ItemType::Byte, uint16_t(extra), 2});
   } else {
     info.compressor = Compressor::LayeredChunked;
     info.versionMajor = 3;
     info.versionMinor = 4;
     info.versionRevision = 3;
-    info.items.push_back({ItemType::Point14, 30, 3});
-    if (pf == 7) info.items.push_back({ItemType::Rgb14, 6, 3});
-    if (pf == 8) info.items.push_back({ItemType::RgbNir14, 8, 3});
-    if (extra) info.items.push_back({ItemType::Byte14, uint16_t(extra), 3});
   }
+  info.items = itemsFor(pf, extra, pf <= 3 ? 2 : 3);
   NL_CHECK(info.recordSize() == recordLength);
 
   // The LASzip VLR goes after the existing ones.
