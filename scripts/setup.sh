@@ -18,6 +18,7 @@ PACKAGES=(
   libembree-dev                          # the path-traced reference (Embree 3)
   xvfb xauth                             # the windowed viewer's test without a display
   glslang-tools                          # checks the GPU-only shaders that llvmpipe cannot compile
+  python3 binutils xz-utils              # the GPU bundle and run scripts (scripts/gpu-*.sh)
 )
 
 missing=()

@@ -1,13 +1,21 @@
 #!/usr/bin/env bash
 # Sets up, builds and runs every test: unit tests (Release), the same under ASan+UBSan, and each
 # libFuzzer target briefly. Prints ctest's summary; exits non-zero on any failure.
-#   FUZZ_SECONDS=20 SKIP_SANITIZE=1 scripts/test.sh
+#   FUZZ_SECONDS=20 SKIP_SANITIZE=1 SKIP_FUZZ=1 SKIP_GPU_SCRIPTS=1 scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 
 echo "== unit tests (Release)"
 ctest --test-dir build --output-on-failure -j2 --timeout 900
+
+if [ -z "${SKIP_GPU_SCRIPTS:-}" ]; then
+  # The GPU run's one command, every step at tiny sizes on llvmpipe, and the GPU bundle made from
+  # this build, unpacked and run in a clean environment (docs/GPU.md).
+  echo "== GPU run script (--quick) and GPU bundle"
+  scripts/gpu-run.sh --quick --bin build --out build/gpu-quick
+  scripts/gpu-bundle.sh --build-dir build --out build/gpu-bundle/nestlight-gpu-bundle.tar.xz --check
+fi
 
 if [ -z "${SKIP_SANITIZE:-}" ]; then
   echo "== unit tests under ASan+UBSan"

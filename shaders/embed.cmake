@@ -1,7 +1,9 @@
-# Writes OUTPUT: a C++ table of every .glsl file under SHADER_DIR, by relative path.
+# Writes OUTPUT: a C++ table of every shader file under SHADER_DIR, by relative path, and of the
+# program catalogue programs.json.
 file(GLOB_RECURSE files RELATIVE ${SHADER_DIR} ${SHADER_DIR}/*.glsl ${SHADER_DIR}/*.vert ${SHADER_DIR}/*.frag
      ${SHADER_DIR}/*.comp)
 list(SORT files)
+list(APPEND files programs.json)  # the program catalogue (nestlight/gl/program_catalogue.h)
 set(body "")
 foreach(f ${files})
   file(READ ${SHADER_DIR}/${f} text)

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -27,13 +28,28 @@ TempDir::~TempDir() {
   std::filesystem::remove_all(path_, ec);
 }
 
+namespace {
+
+// A build-time path, or the environment's NAME where set: the GPU bundle's test binaries run on
+// another machine, from another folder (scripts/gpu-run.sh sets these).
+std::string configured(const char* name, const char* builtIn) {
+  const char* v = std::getenv(name);
+  return v && *v ? std::string(v) : std::string(builtIn);
+}
+
+}  // namespace
+
 std::filesystem::path sharedData() {
-  std::filesystem::path p = NESTLIGHT_SHARED_DATA;
+  std::filesystem::path p = configured("NESTLIGHT_TEST_SHARED_DATA", NESTLIGHT_SHARED_DATA);
   return std::filesystem::exists(p) ? p : std::filesystem::path();
 }
 
+std::string nestlightBinary() { return configured("NESTLIGHT_TEST_BINARY", NESTLIGHT_BINARY); }
+
+std::filesystem::path sourceDir() { return configured("NESTLIGHT_TEST_SOURCE_DIR", NESTLIGHT_SOURCE_DIR); }
+
 int runCli(const std::string& args, std::string* output) {
-  std::string cmd = std::string(NESTLIGHT_BINARY) + " " + args + " 2>&1";
+  std::string cmd = nestlightBinary() + " " + args + " 2>&1";
   FILE* f = ::popen(cmd.c_str(), "r");
   if (!f) return -1;
   std::string out;

@@ -30,8 +30,12 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-// ../shared/data beside the checkout; empty when absent.
+// ../shared/data beside the checkout (NESTLIGHT_TEST_SHARED_DATA where set); empty when absent.
 std::filesystem::path sharedData();
+// The built `nestlight` (NESTLIGHT_TEST_BINARY where set) and the source tree
+// (NESTLIGHT_TEST_SOURCE_DIR): the GPU bundle's tests run elsewhere than they were built.
+std::string nestlightBinary();
+std::filesystem::path sourceDir();
 
 // Runs the built `nestlight` with `args`; returns the exit code, stdout+stderr in `output`.
 int runCli(const std::string& args, std::string* output = nullptr);

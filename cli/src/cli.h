@@ -48,6 +48,7 @@ void addColourMatch(CLI::App& app, int& exitCode);
 void addBenchHdr(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 void addBenchIbl(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 void addBenchLaz(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
+void addGlInfo(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", "1B" (a billion), plain numbers: point counts are decimal.
 uint64_t parseCount(const std::string& text, const std::string& option = "");

@@ -40,6 +40,10 @@ void addBenchFrame(CLI::App& app, int& exitCode) {
   cmd->add_option("--height", *height, "Frame height")->capture_default_str()->check(CLI::Range(16, 16384));
   cmd->add_option("--runs", *runs, "Timed frames (the median is reported)")->capture_default_str()->check(CLI::Range(1, 1000));
   cmd->add_option("--json", *json, "Where to write the results")->capture_default_str();
+  auto params = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--param", *params,
+                  "A method parameter as the scene's gi.parameters takes it, KEY=VALUE (VALUE as JSON, else a string),\n"
+                  "e.g. --param vpls=1024 --param variant=classic --param estimator=smc; repeatable");
   cmd->callback([=, &exitCode]() {
     const gi::MethodInfo* info = gi::findMethod(*method);
     if (!info) throw Error("--method: unknown method '" + *method + "' (" + gi::methodList() + ")");
@@ -54,6 +58,13 @@ void addBenchFrame(CLI::App& app, int& exitCode) {
     gi::Scene s = gi::loadScene(file);
     s.gi.method = *method;
     s.gi.mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
+    for (const std::string& p : *params) {
+      const size_t eq = p.find('=');
+      if (eq == std::string::npos || eq == 0) throw Error("--param: '" + p + "' is not KEY=VALUE");
+      const std::string value = p.substr(eq + 1);
+      nlohmann::json v = nlohmann::json::parse(value, nullptr, false);
+      s.gi.parameters[p.substr(0, eq)] = v.is_discarded() ? nlohmann::json(value) : v;
+    }
     s.camera.width = *width;
     s.camera.height = *height;
     auto ctx = gl::createHeadlessContext();

@@ -91,10 +91,10 @@ void addDemo(CLI::App& app, int& exitCode) {
       "demo", "Generate a synthetic scan, convert it, verify it, render it headless and say what was built\n"
       "and how fast; then light a generated room scan with an inserted sphere by path tracing; opens\n"
       "the viewer when a display is present");
-  auto points = std::make_shared<uint64_t>(3'000'000);
+  auto pointsText = std::make_shared<std::string>("3M");
   auto dir = std::make_shared<std::string>();
   auto keep = std::make_shared<bool>(false);
-  cmd->add_option("-n,--points", *points, "Points in the synthetic scan")->capture_default_str();
+  cmd->add_option("-n,--points", *pointsText, "Points in the synthetic scan (e.g. 200k, 3M)")->capture_default_str();
   cmd->add_option("--dir", *dir, "Work folder (default: a temporary folder, removed afterwards)");
   cmd->add_flag("--keep", *keep, "Keep the work folder");
   auto image = std::make_shared<std::string>("nestlight-demo.png");
@@ -106,11 +106,12 @@ void addDemo(CLI::App& app, int& exitCode) {
     fs::path work = dir->empty() ? fs::temp_directory_path() / ("nestlight-demo-" + std::to_string(::getpid()))
                                  : fs::path(*dir);
     fs::create_directories(work);
+    const uint64_t points = parseCount(*pointsText, "--points");
     SyntheticSpec spec;
-    spec.points = *points;
+    spec.points = points;
     spec.seed = 2026;
     const std::string las = (work / "demo_scan.las").string();
-    std::printf("nestlight demo: a synthetic scanned scene of %s points\n", humanCount(double(*points)).c_str());
+    std::printf("nestlight demo: a synthetic scanned scene of %s points\n", humanCount(double(points)).c_str());
     auto t = std::chrono::steady_clock::now();
     writeSynthetic(spec, las);
     std::printf("  generated %s (%s) in %.2f s\n", las.c_str(), humanBytes(double(fs::file_size(las))).c_str(),

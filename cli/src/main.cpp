@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
       "  nestlight compare render.exr reference.exr     error metrics against a reference image\n"
       "  nestlight bench gi room/scene.json             speed against error of the GI methods\n"
       "  nestlight bench ibl                            IBL estimators under video light probes\n"
+      "  nestlight gl-info --programs                   the GL driver, and every shader compiled by it\n"
       "  nestlight expand-hdr scan.octree --photo p.exr HDR colour layer from one HDR photograph\n",
       "nestlight"};
   app.require_subcommand(1);
@@ -49,6 +50,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addBenchHdr(app, code);
   nestlight::cli::addBenchIbl(app, code);
   nestlight::cli::addBenchLaz(app, code);
+  nestlight::cli::addGlInfo(app, code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -16,6 +16,7 @@
 #include "chi2.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/octree/error.h"
+#include "test_support.h"
 
 using namespace nestlight::gi;
 using namespace nestlight::gi::test;
@@ -467,7 +468,7 @@ TEST(EnvironmentMap, RealMapsLoadAndSample) {
                        {"stage_env_latlong.exr", 1000, 500, 4000, 4200}};
   int found = 0;
   for (const Real& m : maps) {
-    const std::string path = std::string(NESTLIGHT_SHARED_DATA) + "/hdr/" + m.file;
+    const std::string path = (::nestlight::test::sharedData() / "hdr" / m.file).string();
     if (!std::filesystem::exists(path)) continue;
     ++found;
     EnvironmentMap env = EnvironmentMap::load(path, 30, 0.5f);
@@ -503,5 +504,5 @@ TEST(EnvironmentMap, RealMapsLoadAndSample) {
                   m.file, k, e[k], exact[k], std::abs(e[k] / exact[k] - 1), 5 * sigma);
     }
   }
-  if (found == 0) GTEST_SKIP() << "no real maps in " << NESTLIGHT_SHARED_DATA << "/hdr";
+  if (found == 0) GTEST_SKIP() << "no real maps in " << ::nestlight::test::sharedData().string() << "/hdr";
 }

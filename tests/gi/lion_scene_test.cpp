@@ -18,13 +18,13 @@ TEST(LionScene, BunnyAndGargoyleRenderInBothModes) {
   NL_REQUIRE_SHARED("hdr/royal_esplanade_1k.hdr");
   test::TempDir dir;
   std::string out;
-  ASSERT_EQ(test::runCli("convert --progress quiet " + (test::sharedData() / "scans/lion_takanawa_normals.ply").string() + " -o " +
+  ASSERT_EQ(test::runCli("convert --progress quiet " + (::nestlight::test::sharedData() / "scans/lion_takanawa_normals.ply").string() + " -o " +
                              dir.file("lion.octree"),
                          &out),
             0)
       << out;
   // The example scene, with its relative paths made absolute and the octree replaced.
-  const fs::path example = fs::path(NESTLIGHT_SOURCE_DIR) / "examples/lion/scene.json";
+  const fs::path example = ::nestlight::test::sourceDir() / "examples/lion/scene.json";
   auto scene = nlohmann::json::parse(test::readFile(example.string()));
   scene["octrees"][0]["path"] = dir.file("lion.octree");
   for (auto& m : scene["meshes"]) m["path"] = fs::weakly_canonical(example.parent_path() / m["path"].get<std::string>()).string();

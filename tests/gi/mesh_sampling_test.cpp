@@ -12,6 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/gi/mesh.h"
+#include "test_support.h"
 
 using namespace nestlight::gi;
 
@@ -45,7 +46,7 @@ std::vector<double> nearest(const std::vector<glm::vec3>& p) {
 }
 
 std::string bunnyPath() {
-  const std::string p = std::string(NESTLIGHT_SHARED_DATA) + "/meshes/bunny.ply";
+  const std::string p = (::nestlight::test::sharedData() / "meshes" / "bunny.ply").string();
   return std::filesystem::exists(p) ? p : std::string();
 }
 

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "nestlight/octree/error.h"
+#include "test_support.h"
 
 using namespace nestlight::gi;
 using nestlight::Error;
@@ -471,13 +472,13 @@ TEST(MeshReader, ReadsFromAFileByExtensionAndNamesAMissingOne) {
 }
 
 std::string meshFile(const char* name) {
-  const std::string p = std::string(NESTLIGHT_SHARED_DATA) + "/meshes/" + name;
+  const std::string p = (::nestlight::test::sharedData() / "meshes" / name).string();
   return std::filesystem::exists(p) ? p : std::string();
 }
 
 TEST(MeshReader, RealBunnyAsciiPly) {
   const std::string path = meshFile("bunny.ply");
-  if (path.empty()) GTEST_SKIP() << "no bunny.ply under " << NESTLIGHT_SHARED_DATA << "/meshes";
+  if (path.empty()) GTEST_SKIP() << "no bunny.ply under " << ::nestlight::test::sharedData().string() << "/meshes";
   MeshReadReport r;
   TriangleMesh m = readMesh(path, &r);
   EXPECT_EQ(m.positions.size(), 35947u);
@@ -494,7 +495,7 @@ TEST(MeshReader, RealBunnyAsciiPly) {
 
 TEST(MeshReader, RealGargoyleBinaryPlyWithNormalsAndColours) {
   const std::string path = meshFile("gargoyle.ply");
-  if (path.empty()) GTEST_SKIP() << "no gargoyle.ply under " << NESTLIGHT_SHARED_DATA << "/meshes";
+  if (path.empty()) GTEST_SKIP() << "no gargoyle.ply under " << ::nestlight::test::sharedData().string() << "/meshes";
   MeshReadReport r;
   TriangleMesh m = readMesh(path, &r);
   EXPECT_EQ(m.positions.size(), 25002u);

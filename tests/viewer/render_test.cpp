@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path goldenDir() { return fs::path(NESTLIGHT_SOURCE_DIR) / "tests" / "goldens"; }
+fs::path goldenDir() { return ::nestlight::test::sourceDir() / "tests" / "goldens"; }
 
 void convert(std::vector<std::unique_ptr<PointReader>> readers, const fs::path& out) {
   BuildOptions o;
@@ -33,7 +33,7 @@ void convert(std::vector<std::unique_ptr<PointReader>> readers, const fs::path& 
 
 fs::path convertShared(const std::string& rel, const test::TempDir& tmp) {
   std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openReader((test::sharedData() / rel).string()));
+  r.push_back(openReader((::nestlight::test::sharedData() / rel).string()));
   const fs::path out = tmp.path() / (fs::path(rel).stem().string() + ".octree");
   convert(std::move(r), out);
   return out;
@@ -76,6 +76,10 @@ void expectMatchesGolden(const std::string& file, const std::string& name, float
   ASSERT_TRUE(fs::exists(golden)) << "no golden " << golden << "; run scripts/update_goldens.sh";
   Image got = readImage(file), want = readImage(golden.string());
   ImageDiff d = compareImages(got, want, channelTol);
+  // Always said, pass or fail: scripts/gpu-run.sh reports how far a GPU's image is from llvmpipe's.
+  std::printf("golden %s: %zu of %zu pixels differ by more than %.4f (%.3f%%), max channel error %.4f\n", name.c_str(),
+              size_t(d.differing), size_t(got.width) * size_t(got.height), channelTol, 100.0 * d.fraction,
+              double(d.maxChannel));
   if (d.fraction > maxFraction) {
     fs::copy_file(file, "render-" + name + ".png", fs::copy_options::overwrite_existing);
     writeImage(d.diff, "render-" + name + "-diff.png");

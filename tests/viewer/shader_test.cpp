@@ -3,11 +3,13 @@
 #include <epoxy/gl.h>
 
 #include <cstdlib>
+#include <set>
 
 #include "nestlight/shaders/embedded.h"
 #include "nestlight/viewer/frame_renderer.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
+#include "nestlight/gl/program_catalogue.h"
 #include "test_support.h"
 
 using namespace nestlight;
@@ -80,6 +82,57 @@ TEST(Shaders, EveryProgramCompilesAndLinks) {
   auto ctx = gl::createHeadlessContext();
   EXPECT_NE(ctx->description().find("4.5"), std::string::npos) << ctx->description();
   EXPECT_NO_THROW(FrameRenderer renderer);
+  // The whole catalogue, as `nestlight gl-info --programs` checks it on a GPU: nothing fails;
+  // only programs needing extensions the driver lacks (64-bit atomics on llvmpipe) are skipped.
+  const std::vector<gl::ProgramCheck> checks = gl::checkCatalogue();
+  size_t ok = 0;
+  for (const auto& c : checks) {
+    EXPECT_NE(c.status, gl::ProgramCheck::Status::Failed) << c.name << " " << c.defines << ":\n" << c.log;
+    if (c.status == gl::ProgramCheck::Status::Unsupported)
+      EXPECT_TRUE(c.name == "points.compute_atomic64" || c.name == "points.compute_resolve64") << c.name << ": " << c.log;
+    ok += c.status == gl::ProgramCheck::Status::Ok;
+  }
+  // Each define's values are checked one at a time: more checks than entries.
+  EXPECT_GT(checks.size(), gl::programCatalogue().size());
+  EXPECT_GE(ok, gl::programCatalogue().size() - 2);
+}
+
+// Every stage file is part of some catalogued program, so a new shader cannot escape the driver
+// check; and every catalogued stage exists.
+TEST(Shaders, CatalogueCoversEveryStageFile) {
+  std::set<std::string> listed;
+  for (const auto& p : gl::programCatalogue()) {
+    EXPECT_FALSE(p.name.empty());
+    for (const auto& st : p.stages) listed.insert(st.path);
+    EXPECT_EQ(gl::findProgram(p.stages), &p) << p.name << ": two entries with the same stages";
+  }
+  std::set<std::string> files;
+  for (const auto& f : shaders::embeddedFiles()) {
+    const std::string path(f.path);
+    const std::string ext = path.substr(path.rfind('.'));
+    if (ext == ".vert" || ext == ".frag" || ext == ".comp") files.insert(path);
+  }
+  for (const auto& f : files) EXPECT_TRUE(listed.count(f)) << f << " is in no program of shaders/programs.json";
+  for (const auto& f : listed) EXPECT_TRUE(files.count(f)) << f << " is listed but is no embedded stage file";
+  EXPECT_EQ(gl::findProgram({{GL_COMPUTE_SHADER, "points/raster_colour.comp"}, {GL_COMPUTE_SHADER, "points/raster_depth.comp"}}),
+            nullptr);
+}
+
+// A program that is not in the catalogue (or takes a define it does not list) is refused at once.
+TEST(ShadersDeathTest, UncataloguedProgramIsRefused) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_DEATH(
+      {
+        auto ctx = gl::createHeadlessContext();
+        gl::ShaderProgram p({{GL_COMPUTE_SHADER, "tests/ibl_samplers.comp"}}, {{"NOT_LISTED", "1"}});
+      },
+      "does not list the define NOT_LISTED");
+  EXPECT_DEATH(
+      {
+        auto ctx = gl::createHeadlessContext();
+        gl::ShaderProgram p({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}});
+      },
+      "is not listed in shaders/programs.json");
 }
 
 // Every stage file, including the 64-bit atomic rasteriser that only GPUs compile, passes the

@@ -33,7 +33,7 @@ TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
   const fs::path octree = syntheticOctree(tmp, 200'000);
   const std::string shot = tmp.file("shot.png");
   std::string out;
-  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + ::nestlight::test::nestlightBinary() + " view " +
                           octree.string() + " --width 320 --height 240 --frames 40 --orbit 3 --screenshot " + shot;
   const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
   out = test::readFile(tmp.file("log.txt"));
@@ -65,7 +65,7 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
              "display": {"splatting": "basic", "edl_strength": 0}})";
   }
   const std::string shot = tmp.file("shot.png");
-  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + ::nestlight::test::nestlightBinary() + " view " +
                           tmp.file("scene.json") + " --show points --width 160 --height 120 --frames 20 --screenshot " + shot;
   const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
   const std::string out = test::readFile(tmp.file("log.txt"));
@@ -85,7 +85,7 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
     f << R"({"octrees": ["s.octree"], "camera": {"eye": [150, -60, 80], "target": [250, -160, 150]}})";
   }
   const std::string away = tmp.file("away.png");
-  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + ::nestlight::test::nestlightBinary() + " view " +
                          tmp.file("away.json") + " --show points --width 160 --height 120 --frames 5 --screenshot " + away +
                          " > " + tmp.file("away.txt") + " 2>&1").c_str()),
             0)
@@ -102,7 +102,7 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
   // real time): the scan's recorded colour as radiance on a black background (no environment),
   // and the panel's method line in the log.
   const std::string gi = tmp.file("gi.png");
-  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + std::string(NESTLIGHT_BINARY) + " view " +
+  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + ::nestlight::test::nestlightBinary() + " view " +
                          tmp.file("scene.json") + " --width 160 --height 120 --frames 20 --screenshot " + gi + " > " +
                          tmp.file("gi.txt") + " 2>&1").c_str()),
             0)
@@ -119,7 +119,7 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
     std::ofstream f(tmp.file("bad.json"));
     f << R"({"octrees": ["s.octree"], "display": {"splatting": "soft"}})";
   }
-  const int bad = std::system((std::string(NESTLIGHT_BINARY) + " view " + tmp.file("bad.json") + " > " +
+  const int bad = std::system((::nestlight::test::nestlightBinary() + " view " + tmp.file("bad.json") + " > " +
                                tmp.file("bad.txt") + " 2>&1").c_str());
   EXPECT_NE(bad, 0);
   EXPECT_NE(test::readFile(tmp.file("bad.txt")).find("scene.display.splatting"), std::string::npos)

@@ -1,10 +1,12 @@
 #include "nestlight/gl/program.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cctype>
 #include <cstring>
 #include <sstream>
 
+#include "nestlight/gl/program_catalogue.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/shaders/embedded.h"
 
@@ -109,24 +111,6 @@ void expand(const std::string& path, PreprocessedSource& out, std::vector<std::s
   stack.pop_back();
 }
 
-GLuint compile(GLenum type, const PreprocessedSource& src, const std::string& path) {
-  GLuint s = glCreateShader(type);
-  const char* text = src.text.c_str();
-  glShaderSource(s, 1, &text, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetShaderiv(s, GL_INFO_LOG_LENGTH, &len);
-    std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
-    glGetShaderInfoLog(s, len, nullptr, log.data());
-    glDeleteShader(s);
-    throw Error("shaders/" + path, "", "does not compile:\n" + mapShaderLog(log.c_str(), src.files));
-  }
-  return s;
-}
-
 }  // namespace
 
 PreprocessedSource preprocessShader(const std::string& path,
@@ -181,32 +165,124 @@ std::string mapShaderLog(const std::string& log, const std::vector<std::string>&
   return out;
 }
 
-ShaderProgram::ShaderProgram(const std::vector<Stage>& stages,
-                             const std::vector<std::pair<std::string, std::string>>& defines) {
+namespace {
+
+// Compiles and links `stages`; the program, or 0 with the mapped driver log in `error`. `log`
+// collects what the driver said even on success (NVIDIA reports warnings there).
+GLuint buildProgram(const std::vector<ShaderProgram::Stage>& stages,
+                    const std::vector<std::pair<std::string, std::string>>& defines, std::string& error,
+                    std::string* log) {
   std::vector<GLuint> shaders;
-  try {
-    for (const auto& st : stages) shaders.push_back(compile(st.type, preprocessShader(st.path, defines), st.path));
-  } catch (...) {
-    for (GLuint s : shaders) glDeleteShader(s);
-    throw;
+  auto infoLog = [](GLuint object, bool program) {
+    GLint len = 0;
+    if (program) glGetProgramiv(object, GL_INFO_LOG_LENGTH, &len);
+    else glGetShaderiv(object, GL_INFO_LOG_LENGTH, &len);
+    std::string text(static_cast<size_t>(std::max(len, 1)), '\0');
+    if (program) glGetProgramInfoLog(object, len, nullptr, text.data());
+    else glGetShaderInfoLog(object, len, nullptr, text.data());
+    return std::string(text.c_str());
+  };
+  for (const auto& st : stages) {
+    PreprocessedSource src;
+    try {
+      src = preprocessShader(st.path, defines);
+    } catch (const Error& e) {
+      for (GLuint s : shaders) glDeleteShader(s);
+      error = e.what();
+      return 0;
+    }
+    GLuint s = glCreateShader(st.type);
+    const char* text = src.text.c_str();
+    glShaderSource(s, 1, &text, nullptr);
+    glCompileShader(s);
+    GLint ok = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    const std::string said = mapShaderLog(infoLog(s, false), src.files);
+    if (log && !said.empty()) *log += "shaders/" + st.path + ":\n" + said;
+    if (!ok) {
+      glDeleteShader(s);
+      for (GLuint t : shaders) glDeleteShader(t);
+      error = "shaders/" + st.path + ": does not compile:\n" + said;
+      return 0;
+    }
+    shaders.push_back(s);
   }
-  id_ = glCreateProgram();
-  for (GLuint s : shaders) glAttachShader(id_, s);
-  glLinkProgram(id_);
+  GLuint id = glCreateProgram();
+  for (GLuint s : shaders) glAttachShader(id, s);
+  glLinkProgram(id);
   for (GLuint s : shaders) glDeleteShader(s);
   GLint ok = 0;
-  glGetProgramiv(id_, GL_LINK_STATUS, &ok);
+  glGetProgramiv(id, GL_LINK_STATUS, &ok);
+  const std::string said = infoLog(id, true);
+  if (log && !said.empty()) *log += "link:\n" + said;
   if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(id_, GL_INFO_LOG_LENGTH, &len);
-    std::string log(static_cast<size_t>(std::max(len, 1)), '\0');
-    glGetProgramInfoLog(id_, len, nullptr, log.data());
-    glDeleteProgram(id_);
-    id_ = 0;
+    glDeleteProgram(id);
     std::string names;
     for (const auto& st : stages) names += (names.empty() ? "" : " + ") + st.path;
-    throw Error("shaders/" + stages.front().path, "", "program " + names + " does not link:\n" + log.c_str());
+    error = "shaders/" + stages.front().path + ": program " + names + " does not link:\n" + said;
+    return 0;
   }
+  return id;
+}
+
+}  // namespace
+
+ShaderProgram::ShaderProgram(const std::vector<Stage>& stages,
+                             const std::vector<std::pair<std::string, std::string>>& defines) {
+  // A program missing from shaders/programs.json would escape the driver check that compiles
+  // the catalogue (`nestlight gl-info --programs`) on a GPU before anyone runs it there.
+  const ProgramSpec* spec = findProgram(stages);
+  NL_CHECK_MSG(spec, "shader program " + describeStages(stages) + " is not listed in shaders/programs.json");
+  for (const auto& d : defines)
+    NL_CHECK_MSG(spec->defines.count(d.first),
+                 "shaders/programs.json: program " + spec->name + " does not list the define " + d.first);
+  std::string error;
+  id_ = buildProgram(stages, defines, error, nullptr);
+  if (!id_) throw Error(error);
+}
+
+ProgramCheck checkProgram(const ProgramSpec& spec, const std::vector<std::pair<std::string, std::string>>& defines) {
+  ProgramCheck c;
+  c.name = spec.name;
+  for (const auto& [k, v] : defines) c.defines += (c.defines.empty() ? "" : " ") + k + "=" + v;
+  for (const auto& ext : spec.extensions)
+    if (!epoxy_has_gl_extension(ext.c_str())) {
+      c.status = ProgramCheck::Status::Unsupported;
+      c.log = "the driver does not offer " + ext;
+      return c;
+    }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string error;
+  const GLuint id = buildProgram(spec.stages, defines, error, &c.log);
+  glFinish();
+  c.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (id) {
+    glDeleteProgram(id);
+    c.status = ProgramCheck::Status::Ok;
+  } else {
+    c.status = ProgramCheck::Status::Failed;
+    c.log = error;
+  }
+  return c;
+}
+
+std::vector<ProgramCheck> checkCatalogue() {
+  std::vector<ProgramCheck> out;
+  for (const ProgramSpec& spec : programCatalogue()) {
+    // Every listed value of every define, one at a time (the others at their first value).
+    std::vector<std::vector<std::pair<std::string, std::string>>> variants;
+    std::vector<std::pair<std::string, std::string>> base;
+    for (const auto& [k, values] : spec.defines) base.emplace_back(k, values.front());
+    variants.push_back(base);
+    for (size_t i = 0; i < base.size(); ++i)
+      for (size_t v = 1; v < spec.defines.at(base[i].first).size(); ++v) {
+        auto d = base;
+        d[i].second = spec.defines.at(base[i].first)[v];
+        variants.push_back(d);
+      }
+    for (const auto& d : variants) out.push_back(checkProgram(spec, d));
+  }
+  return out;
 }
 
 ShaderProgram::~ShaderProgram() {
