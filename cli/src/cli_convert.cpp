@@ -122,6 +122,7 @@ void printBuildSummary(const BuildReport& r, const fs::path& out) {
     if (n) std::printf("            rejected %llu: %s\n", (unsigned long long)n, why.c_str());
   for (auto& s : m.sources)
     for (auto& w : s.warnings) std::printf("  warning   %s: %s\n", s.path.c_str(), w.c_str());
+  for (auto& w : r.warnings) std::printf("  note      %s\n", w.c_str());
   std::printf("  octree    %llu nodes, depth %u, %s payload (%.2f bytes/point, %s)\n",
               (unsigned long long)m.nodes, m.depth, humanBytes(double(m.payloadBytes)).c_str(),
               m.points ? double(m.payloadBytes) / m.points : 0.0,

@@ -35,7 +35,9 @@ void addMakeScene(CLI::App& app, int& exitCode) {
   cmd->add_option("--seed", opt->seed, "Seed of the synthetic scan")->capture_default_str();
   cmd->add_option("--width", opt->width, "Image width in the scene's camera")->capture_default_str()->check(CLI::Range(1, 16384));
   cmd->add_option("--height", opt->height, "Image height")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_flag("--overwrite", opt->overwrite, "Rebuild the octree even when one is there");
+  cmd->add_flag("--overwrite", opt->overwrite,
+                "Replace a scene.json, meshes and scan the folder already holds (without it, make-scene refuses a folder\n"
+                "whose scene differs from the one it writes, and rebuilds nothing it can reuse)");
   cmd->add_flag("-q,--quiet", opt->quiet, "No progress output");
   cmd->callback([=, &exitCode]() {
     opt->points = parseCount(*points, "--points");

@@ -42,6 +42,7 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/node_key.h"
 #include "nestlight/octree/octree_writer.h"
+#include "nestlight/octree/staged_directory.h"
 #include "nestlight/octree/spacing.h"
 
 namespace nestlight {
@@ -110,7 +111,14 @@ struct SourceState {
   std::optional<Box3d> declared;  // valid declared bounds, if any
   double tolerance = 0;
   uint64_t read = 0;
+  uint64_t unreadable = 0;       // declared points it could not decode (lenient), in the input
+  uint64_t outsideDeclared = 0;  // points beyond the declared bounds (and tolerance), kept
+  double outsideMax = 0;         // the farthest of them, in units of the input
 };
+
+// A point beyond the cube planned from declared bounds: the conversion starts again with the
+// bounds measured from the points (buildOctree).
+struct OutsideCube {};
 
 bool validBox(const Box3d& b) {
   return !b.empty() && std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
@@ -121,13 +129,18 @@ class Builder {
   using json = nlohmann::json;
 
  public:
-  Builder(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& o)
-      : opt_(o), progress_(o.progress) {
+  Builder(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& o, bool measureBounds)
+      : opt_(o), progress_(o.progress), measureBounds_(measureBounds) {
     for (auto& r : sources) {
       SourceState s;
       s.reader = std::move(r);
       sources_.push_back(std::move(s));
     }
+  }
+  std::vector<std::unique_ptr<PointReader>> takeSources() {
+    std::vector<std::unique_ptr<PointReader>> out;
+    for (auto& s : sources_) out.push_back(std::move(s.reader));
+    return out;
   }
 
   BuildReport run() {
@@ -139,9 +152,15 @@ class Builder {
 
     planLayout();
     planQuantisation(report);
-    writer_ = std::make_unique<OctreeWriter>(opt_.output, layout_, opt_.codec, opt_.overwrite);
-    tmp_ = opt_.output / (".build-" + std::to_string(::getpid()));
-    fs::remove_all(tmp_);  // left by a killed run that had the same process id
+    // Built beside the output and swapped in at the end: a failed, full-disk or killed run leaves
+    // an existing octree (and its layers) as it was.
+    if (fs::exists(opt_.output / "metadata.json") && !opt_.overwrite)
+      throw Error(opt_.output.string(), "", "already holds an octree; pass --overwrite to replace it");
+    StagedDirectory staged(opt_.output, isOctreeFileName);
+    for (const fs::path& p : staged.staleRemoved())
+      report.warnings.push_back("removed " + p.string() + ", left by a conversion that was killed");
+    writer_ = std::make_unique<OctreeWriter>(staged.path(), layout_, opt_.codec, true);
+    tmp_ = staged.path() / "chunks.tmp";
     fs::create_directories(tmp_);
     struct Cleanup {
       fs::path p;
@@ -168,6 +187,9 @@ class Builder {
     finishMetadata();
     t = Clock::now();
     writer_->finish(meta_);
+    writer_.reset();
+    fs::remove_all(tmp_);
+    staged.commit();
     report.phases["write"] = seconds(t);
     report.seconds = seconds(t0);
     report.chunks = chunks_.size();
@@ -274,7 +296,14 @@ class Builder {
         s.declared = *h.declaredBounds;
         double ss = h.scale ? std::max({h.scale->x, h.scale->y, h.scale->z}) : scale;
         s.tolerance = 0.5 * ss;
-        bounds.extend(*s.declared);
+      }
+      // Header bounds are advisory: they spare a reading pass, padded so that points rounded
+      // just past them (bounds computed before quantisation) fit; a point beyond that restarts
+      // the conversion with the bounds measured (OutsideCube).
+      if (s.declared && !measureBounds_) {
+        const double pad = s.tolerance + 2 * scale;
+        bounds.extend(s.declared->min.x - pad, s.declared->min.y - pad, s.declared->min.z - pad);
+        bounds.extend(s.declared->max.x + pad, s.declared->max.y + pad, s.declared->max.z + pad);
       } else {
         scan.push_back(i);
       }
@@ -338,6 +367,7 @@ class Builder {
     std::vector<std::pair<uint32_t, uint32_t>> runs;  // (chunk, count) in record order
     Accounting acc;
     Box3d box;
+    std::pair<uint64_t, double> outside{0, 0.0};  // beyond the declared bounds: count, farthest
   };
 
   // Reads every source, runs `work` on batches in parallel and `collect` in input order.
@@ -398,23 +428,28 @@ class Builder {
     progress_.end();
   }
 
-  // Quantises point k of the item; false (and counted) when rejected.
-  bool quantise(const SourceState& s, const double* p, uint32_t q[3], Accounting& acc) const {
+  // Quantises point k of the item; false (and counted) when rejected. Points beyond their
+  // header's bounds are kept, and counted in `outside` (the distribute pass) for a warning.
+  bool quantise(const SourceState& s, const double* p, uint32_t q[3], Accounting& acc,
+                std::pair<uint64_t, double>* outside = nullptr) const {
     if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) {
       acc.rejected[reject::kNonFinite]++;
       return false;
     }
-    if (s.declared && !s.declared->contains(p[0], p[1], p[2], s.tolerance)) {
-      acc.rejected[reject::kOutsideBounds]++;
-      return false;
+    if (outside && s.declared && !s.declared->contains(p[0], p[1], p[2], s.tolerance)) {
+      double d = 0;
+      for (int a = 0; a < 3; ++a)
+        d = std::max({d, s.declared->min[a] - p[a], p[a] - s.declared->max[a]});
+      outside->first++;
+      outside->second = std::max(outside->second, d);
     }
     const int64_t maxInt = static_cast<int64_t>(meta_.cubeSize) - 1;
     for (int a = 0; a < 3; ++a) {
-      // Values below -0.5 round wrongly here, but they are clamped to 0 anyway (declared-bounds
-      // tolerance); this avoids a libm call per coordinate.
+      // Truncation after +0.5 rounds every value at or above -0.5 (no libm call per coordinate);
+      // anything outside the cube cannot be placed, and the cube is planned again.
       const double u = (p[a] - meta_.offset[a]) * invScale_ + 0.5;
-      int64_t v = u < 0 ? 0 : (u >= double(maxInt) ? maxInt : static_cast<int64_t>(u));
-      q[a] = static_cast<uint32_t>(std::clamp<int64_t>(v, 0, maxInt));
+      if (!(u >= 0 && u < double(maxInt) + 1)) throw OutsideCube{};
+      q[a] = static_cast<uint32_t>(std::min<int64_t>(static_cast<int64_t>(u), maxInt));
     }
     return true;
   }
@@ -584,7 +619,7 @@ class Builder {
             for (size_t k = 0; k < n; ++k) {
               const double* p = &it.batch.xyz[3 * k];
               uint32_t q[3];
-              if (!quantise(s, p, q, it.acc)) continue;
+              if (!quantise(s, p, q, it.acc, &it.outside)) continue;
               it.box.extend(p[0], p[1], p[2]);
               uint8_t* r = &recs[kept * rec];
               std::memcpy(r, q, 12);
@@ -612,6 +647,8 @@ class Builder {
           },
           [&](std::unique_ptr<Item>& it) {
             sources_[it->source].read += it->points;
+            sources_[it->source].outsideDeclared += it->outside.first;
+            sources_[it->source].outsideMax = std::max(sources_[it->source].outsideMax, it->outside.second);
             accounting_.add(it->acc);
             meta_.bounds.extend(it->box);
             for (auto& [c, n] : it->runs) chunks_[c].points += n;
@@ -635,6 +672,7 @@ class Builder {
       if (const uint64_t lost = src.reader->pointsUnreadable()) {
         accounting_.input += lost;
         accounting_.rejected[reject::kUnreadable] += lost;
+        src.unreadable = lost;
       }
     std::vector<int32_t>().swap(cellChunk_);
   }
@@ -1187,8 +1225,17 @@ class Builder {
       r.path = h.path;
       r.format = h.format;
       r.points = s.read;
+      r.unreadable = s.unreadable;
       r.declaredPoints = h.declaredPoints;
       r.warnings = s.reader->warnings();
+      if (s.outsideDeclared) {
+        char w[256];
+        std::snprintf(w, sizeof w,
+                      "%llu points lie outside the bounds the header declares, up to %.6g beyond them; kept "
+                      "(the octree's bounds are the points')",
+                      (unsigned long long)s.outsideDeclared, s.outsideMax);
+        r.warnings.push_back(w);
+      }
       r.details = h.details;
       if (meta_.crs.is_null() && !h.crs.is_null()) meta_.crs = h.crs;
       meta_.sources.push_back(std::move(r));
@@ -1225,13 +1272,23 @@ class Builder {
   std::set<NodeKey> pending_;
   std::map<NodeKey, uint64_t> subtreePoints_;
   std::atomic<uint64_t> stored_{0};
+  bool measureBounds_ = false;  // plan the cube from the points even where headers declare bounds
 };
 
 }  // namespace
 
 BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& options) {
-  Builder b(std::move(sources), options);
-  return b.run();
+  Builder b(std::move(sources), options, false);
+  try {
+    return b.run();
+  } catch (const OutsideCube&) {
+    // A header declared bounds its points overstep by more than rounding: measure them instead.
+  }
+  Builder measured(b.takeSources(), options, true);
+  BuildReport r = measured.run();
+  r.warnings.push_back("points lie far outside the bounds a header declares: the extent was measured from the "
+                       "points, which took one more reading of the input");
+  return r;
 }
 
 }  // namespace nestlight

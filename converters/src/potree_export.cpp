@@ -18,6 +18,7 @@
 #include "las_format.h"
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/staged_directory.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/octree/octree_writer.h"
 
@@ -534,7 +535,12 @@ PotreeExportReport exportPotree(const fs::path& octreeDir, const fs::path& outDi
   }
   // Opened before the output directory is created: a bad octree leaves nothing behind.
   Exporter exporter(octreeDir, options);
-  fs::create_directories(outDir);
+  // Written beside the output and swapped in when complete: a failed export (a full disk) over
+  // an existing dataset leaves that dataset as it was. Other files of the folder are kept.
+  StagedDirectory staged(outDir, [](const std::string& n) {
+    return n == "metadata.json" || n == "hierarchy.bin" || n == "octree.bin" || n == "log.txt" ||
+           (n.size() > 4 && n.compare(n.size() - 4, 4, ".tmp") == 0);
+  });
   std::string name = options.name;
   if (name.empty()) {
     fs::path p = fs::absolute(octreeDir).lexically_normal();
@@ -542,7 +548,9 @@ PotreeExportReport exportPotree(const fs::path& octreeDir, const fs::path& outDi
     name = p.filename().string();
     if (name.empty()) name = "nestlight";
   }
-  return exporter.run(outDir, name);
+  PotreeExportReport report = exporter.run(staged.path(), name);
+  staged.commit();
+  return report;
 }
 
 }  // namespace nestlight

@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <functional>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -126,7 +128,7 @@ const char* testSceneKindName(TestSceneKind kind) {
 }
 
 fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneOptions& o) {
-  fs::create_directories(dir);
+  std::vector<std::function<void()>> meshWrites;  // after the checks below: nothing is touched before
   SyntheticSpec spec;
   spec.points = o.points;
   spec.seed = o.seed;
@@ -144,7 +146,7 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
       spec.shape = SyntheticShape::Room;
       spec.size = 4;
       spec.noise = 0.001;
-      writeIcosphereObj(dir / "sphere.obj", 3);
+      meshWrites.push_back([dir] { writeIcosphereObj(dir / "sphere.obj", 3); });
       scene["materials"] = {{"glossy", {{"type", "ggx"}, {"base_color", {0.9, 0.8, 0.6}}, {"roughness", 0.35}, {"metallic", 0.0}}}};
       scene["meshes"] = json::array({json{{"path", "sphere.obj"},
                                           {"transform", {{"translate", {2.6, 2.6, 0.5}}, {"scale", 0.5}}},
@@ -162,8 +164,8 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
       spec.shape = SyntheticShape::Nave;
       spec.size = 40;  // 40 x 20 x 12 m
       spec.noise = 0.003;
-      writeIcosphereObj(dir / "statue.obj", 3);
-      writeBoxObj(dir / "pedestal.obj");
+      meshWrites.push_back([dir] { writeIcosphereObj(dir / "statue.obj", 3); });
+      meshWrites.push_back([dir] { writeBoxObj(dir / "pedestal.obj"); });
       scene["materials"] = {{"marble", {{"type", "principled"}, {"base_color", {0.85, 0.83, 0.8}}, {"roughness", 0.3},
                                         {"specular", 0.5}, {"clearcoat", 0.3}}},
                             {"stone", {{"type", "lambert"}, {"base_color", {0.5, 0.48, 0.45}}}}};
@@ -180,7 +182,7 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
     case TestSceneKind::Object: {
       spec.shape = SyntheticShape::Surfaces;
       spec.size = 100;
-      writeTorusObj(dir / "torus.obj", 1.0, 0.35, 64, 24);
+      meshWrites.push_back([dir] { writeTorusObj(dir / "torus.obj", 1.0, 0.35, 64, 24); });
       scene["materials"] = {{"gold", {{"type", "ggx"}, {"base_color", {1.0, 0.78, 0.34}}, {"roughness", 0.25}, {"metallic", 1.0}}}};
       scene["meshes"] = json::array({json{{"path", "torus.obj"},
                                           {"transform", {{"translate", {50.0, 45.0, 5.0}}, {"rotate", {60.0, 0.0, 20.0}}, {"scale", 3.0}}},
@@ -196,8 +198,35 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
   }
   scene["output"] = {{"exr", std::string(testSceneKindName(kind)) + ".exr"}, {"png", std::string(testSceneKindName(kind)) + ".png"}};
 
-  fs::path octree = dir / "scan.octree";
-  if (o.overwrite || !fs::exists(octree / "metadata.json")) {
+  // What the scan is made from: an octree in the folder is reused only when it was made from
+  // exactly this (a nave's scan never stands in a cornell scene), and a scene file that differs
+  // from this one (edited, or another scene's) is replaced only with `overwrite`.
+  const json stamp = {{"kind", testSceneKindName(kind)}, {"points", o.points}, {"seed", o.seed}};
+  const std::string text = scene.dump(2) + "\n";
+  const fs::path file = dir / "scene.json", octree = dir / "scan.octree", stampFile = dir / "scene-source.json";
+  auto read = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const bool haveOctree = fs::exists(octree / "metadata.json");
+  json oldStamp;
+  if (fs::exists(stampFile)) oldStamp = json::parse(read(stampFile), nullptr, false);
+  const bool sameScan = haveOctree && oldStamp == stamp;
+  if (!o.overwrite) {
+    if (fs::exists(file) && read(file) != text)
+      throw Error(file.string(), "",
+                  "differs from the " + std::string(testSceneKindName(kind)) +
+                      " scene make-scene writes (edited, or another scene's); pass --overwrite to replace the folder's "
+                      "scene, meshes and scan");
+    if (haveOctree && !sameScan)
+      throw Error(octree.string(), "",
+                  "was not made for this scene (" + (oldStamp.is_object() ? oldStamp.dump() : std::string("unknown source")) +
+                      ", not " + stamp.dump() + "); pass --overwrite to rebuild it");
+  }
+  fs::create_directories(dir);
+  for (const auto& w : meshWrites) w();
+  if (o.overwrite || !sameScan) {
+    fs::remove(stampFile);
     BuildOptions b;
     b.output = octree;
     b.overwrite = true;
@@ -205,10 +234,10 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
     std::vector<std::unique_ptr<PointReader>> sources;
     sources.push_back(openSynthetic(spec));
     buildOctree(std::move(sources), b);
+    std::ofstream(stampFile) << stamp.dump(1) << "\n";
   }
-  fs::path file = dir / "scene.json";
   std::ofstream out(file);
-  out << scene.dump(2) << "\n";
+  out << text;
   if (!out) throw Error(file.string(), "", "cannot write the scene file");
   return file;
 }

@@ -9,6 +9,7 @@
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/octree/staged_directory.h"
 
 namespace nestlight {
 
@@ -139,11 +140,21 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
   for (const auto& n : orphanLayerFiles(dir, m))
     rep.notes.push_back(n + ": a layer file metadata.json does not name (left by an interrupted run; "
                         "the next `expand-hdr` deletes it)");
+  for (const auto& p : staleStagingFolders(dir)) {
+    std::error_code ec;
+    uint64_t bytes = 0;
+    for (const auto& e : fs::recursive_directory_iterator(p, ec))
+      if (e.is_regular_file(ec)) bytes += e.file_size(ec);
+    rep.notes.push_back(p.string() + ": " + std::to_string(bytes) +
+                        " bytes left by a conversion that was killed (the next `convert` to this output "
+                        "removes it; so may you)");
+  }
 
+  // A lenient conversion counts a source's undecodable points as input it rejected.
   uint64_t fromSources = 0;
-  for (auto& s : m.sources) fromSources += s.points;
+  for (auto& s : m.sources) fromSources += s.points + s.unreadable;
   if (!m.sources.empty() && fromSources != a.input)
-    fail("sources report " + std::to_string(fromSources) + " points read, accounting says input " +
+    fail("sources report " + std::to_string(fromSources) + " points read or unreadable, accounting says input " +
          std::to_string(a.input));
   return rep;
 }

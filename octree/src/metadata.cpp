@@ -48,6 +48,7 @@ json Metadata::toJson() const {
     json js = {{"path", s.path}, {"format", s.format}, {"points", s.points},
                {"warnings", s.warnings}};
     if (s.declaredPoints) js["declared_points"] = *s.declaredPoints;
+    if (s.unreadable) js["unreadable"] = s.unreadable;
     if (!s.details.is_null()) js["details"] = s.details;
     srcs.push_back(js);
   }
@@ -164,6 +165,7 @@ Metadata Metadata::fromJson(const json& j, const std::string& file) {
       if (s.contains("points") && s["points"].is_number_unsigned()) r.points = s["points"];
       if (s.contains("declared_points") && s["declared_points"].is_number_unsigned())
         r.declaredPoints = s["declared_points"].get<uint64_t>();
+      if (s.contains("unreadable") && s["unreadable"].is_number_unsigned()) r.unreadable = s["unreadable"];
       if (s.contains("warnings") && s["warnings"].is_array())
         for (const auto& w : s["warnings"])
           if (w.is_string()) r.warnings.push_back(w);

@@ -19,6 +19,12 @@ namespace nestlight {
 namespace fs = std::filesystem;
 
 
+bool isOctreeFileName(const std::string& n) {
+  auto ends = [&](std::string_view s) { return n.size() >= s.size() && n.compare(n.size() - s.size(), s.size(), s) == 0; };
+  return n == "metadata.json" || n == "hierarchy.bin" || n == "octree.bin" || ends(".tmp") || ends(".layer") ||
+         ends(".expand.scratch") || n.rfind(".build-", 0) == 0;
+}
+
 void writeFileAtomic(const fs::path& path, const void* bytes, size_t size) {
   fs::path tmp = path;
   tmp += ".tmp";

@@ -408,3 +408,88 @@ TEST(Builder, ChunkedEqualsInMemoryWhenDedupShrinksASubtree) {
     EXPECT_EQ(na[i].second.checksum, nm[i].second.checksum);
   }
 }
+
+namespace {
+
+// A LAS file of `spec`'s points whose header bounds are the true ones moved inward by `inset`
+// on every side (negative: outward), as files written by other tools have them.
+void writeLasWithBoundsInset(const SyntheticSpec& spec, const std::string& path, double inset) {
+  auto r = openSynthetic(spec);
+  {
+    auto w = createLasWriter(path, r->header());
+    PointBatch b;
+    while (r->read(b, 10000)) w->write(b);
+    w->close();
+  }
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  double v[6];  // max x, min x, max y, min y, max z, min z (LAS 1.2 header bytes 179..226)
+  f.seekg(179);
+  f.read(reinterpret_cast<char*>(v), sizeof v);
+  for (int a = 0; a < 3; ++a) {
+    v[2 * a] -= inset;
+    v[2 * a + 1] += inset;
+  }
+  f.seekp(179);
+  f.write(reinterpret_cast<const char*>(v), sizeof v);
+}
+
+// Every stored point's world position in steps of 1 mm, sorted.
+std::vector<std::array<int64_t, 3>> worldSteps(const fs::path& dir) {
+  OctreeReader r(dir);
+  const Metadata& m = r.metadata();
+  std::vector<std::array<int64_t, 3>> out;
+  for (auto& [k, e] : r.allNodes()) {
+    PointBuffer p = r.readNode(k);
+    for (size_t i = 0; i < p.size(); ++i) {
+      std::array<int64_t, 3> w;
+      for (int a = 0; a < 3; ++a) w[a] = std::llround((m.offset[a] + double(p.pos[3 * i + a]) * m.scale) / 0.001);
+      out.push_back(w);
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+BuildReport buildFile(const std::string& path, const BuildOptions& o) {
+  std::vector<std::unique_ptr<PointReader>> r;
+  r.push_back(openReader(path));
+  return buildOctree(std::move(r), o);
+}
+
+}  // namespace
+
+// Header bounds are advisory: bounds computed before quantisation sit up to half a scale step
+// inside the stored points (a COPC writer's lion_takanawa does), and a header may lie by far
+// more. Every finite point is kept either way, with the same stored positions as a file whose
+// header is right; only points beyond half a step are a warning, with the farthest distance.
+TEST(Builder, HeaderBoundsAreAdvisoryEveryFinitePointIsKept) {
+  TempDir tmp;
+  SyntheticSpec spec;
+  spec.points = 40000;
+  spec.precision = 0.001;
+  writeLasWithBoundsInset(spec, tmp.file("true.las"), 0);
+  writeLasWithBoundsInset(spec, tmp.file("half.las"), 0.0005);
+  writeLasWithBoundsInset(spec, tmp.file("lying.las"), 7.5);
+  buildFile(tmp.file("true.las"), quietOptions(tmp.path() / "true"));
+  const auto want = worldSteps(tmp.path() / "true");
+  ASSERT_EQ(want.size(), 40000u);
+  for (const char* name : {"half", "lying"}) {
+    SCOPED_TRACE(name);
+    BuildReport r = buildFile(tmp.file(std::string(name) + ".las"), quietOptions(tmp.path() / name));
+    const Accounting& a = r.metadata.accounting;
+    EXPECT_EQ(a.input, 40000u);
+    EXPECT_EQ(a.kept, 40000u);
+    EXPECT_EQ(a.rejectedTotal(), 0u);
+    EXPECT_TRUE(verifyOctree(tmp.path() / name).ok());
+    // Stored world positions (in millimetre steps) equal those of the honest file's octree.
+    EXPECT_EQ(worldSteps(tmp.path() / name), want);
+    const auto& warnings = r.metadata.sources.at(0).warnings;
+    if (std::string(name) == "half") {
+      EXPECT_FALSE(test::anyContains(warnings, "outside the bounds")) << "within half a step is rounding";
+    } else {
+      EXPECT_TRUE(test::anyContains(warnings, "points lie outside the bounds the header declares, up to 7.5"))
+          << (warnings.empty() ? "" : warnings.front());
+      EXPECT_TRUE(test::anyContains(r.warnings, "measured from the points"));
+    }
+  }
+}

@@ -11,6 +11,7 @@
 #include <tuple>
 
 #include "nestlight/converters/reader.h"
+#include "nestlight/converters/verify.h"
 #include "test_support.h"
 
 using namespace nestlight;
@@ -748,6 +749,12 @@ TEST(LazConvert, LenientConversionCountsTheDamagedChunkAsRejected) {
   EXPECT_EQ(a.rejected.at(reject::kUnreadable), 50000u);
   EXPECT_TRUE(a.balanced());
   EXPECT_EQ(r.metadata().points + a.duplicatesMerged, 60000u);
+  // The source says what it gave and what it could not: verify's balance holds.
+  ASSERT_EQ(r.metadata().sources.size(), 1u);
+  EXPECT_EQ(r.metadata().sources[0].points, 60000u);
+  EXPECT_EQ(r.metadata().sources[0].unreadable, 50000u);
+  VerifyReport v = verifyOctree(t.path() / "o");
+  EXPECT_TRUE(v.ok()) << (v.failures.empty() ? "" : v.failures.front());
 }
 
 }  // namespace

@@ -48,6 +48,7 @@ struct BuildReport {
   uint64_t peakRssBytes = 0;
   uint64_t chunks = 0;
   nlohmann::json phases;  // seconds per phase
+  std::vector<std::string> warnings;  // about the build itself (sources' warnings are in metadata)
 };
 
 // Builds the octree of every point of `sources`. Throws nestlight::Error on bad input.

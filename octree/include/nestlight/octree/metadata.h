@@ -51,6 +51,7 @@ struct SourceRecord {
   std::string path;
   std::string format;
   uint64_t points = 0;                     // points read from this source
+  uint64_t unreadable = 0;                 // declared points it could not decode (lenient LAZ)
   std::optional<uint64_t> declaredPoints;  // what its header claimed
   std::vector<std::string> warnings;
   nlohmann::json details;

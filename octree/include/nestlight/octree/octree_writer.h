@@ -16,6 +16,11 @@
 
 namespace nestlight {
 
+// Whether an entry of an octree folder is one of the octree's own files (metadata, hierarchy,
+// payload, attribute layers, the temporary files of a build or of HDR expansion): what replacing
+// the octree may discard. Anything else in the folder is the user's.
+bool isOctreeFileName(const std::string& name);
+
 class OctreeWriter {
  public:
   // Creates `dir` (it must not hold an octree unless `overwrite`).
