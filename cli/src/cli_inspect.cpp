@@ -34,8 +34,19 @@ void addInfo(CLI::App& app, int& exitCode) {
     if (!m.bounds.empty())
       std::printf("bounds     [%.4f %.4f %.4f] - [%.4f %.4f %.4f]\n", m.bounds.min.x, m.bounds.min.y,
                   m.bounds.min.z, m.bounds.max.x, m.bounds.max.y, m.bounds.max.z);
-    std::printf("grid       offset [%.4f %.4f %.4f], scale %g, cube %u steps (%.3f units)\n", m.offset.x,
-                m.offset.y, m.offset.z, m.scale, m.cubeSize, m.cubeWorldSize());
+    if (m.scale.x == m.scale.y && m.scale.y == m.scale.z)
+      std::printf("grid       offset [%.4f %.4f %.4f], scale %.17g, cube %u steps (%.3f units)\n", m.offset.x,
+                  m.offset.y, m.offset.z, m.scale.x, m.cubeSize, m.cubeWorldSize());
+    else
+      std::printf("grid       offset [%.4f %.4f %.4f], scale per axis [%.17g %.17g %.17g], cube %u steps (%.3f units "
+                  "on its longest axis)\n",
+                  m.offset.x, m.offset.y, m.offset.z, m.scale.x, m.scale.y, m.scale.z, m.cubeSize, m.cubeWorldSize());
+    if (m.build.is_object() && m.build.contains("notes") && m.build["notes"].is_array())
+      for (const auto& n : m.build["notes"])
+        if (n.is_string()) std::printf("           note: %s\n", n.get<std::string>().c_str());
+    if (m.sourceOffset)
+      std::printf("           the inputs' LAS offset [%.17g %.17g %.17g], written back by export\n", m.sourceOffset->x,
+                  m.sourceOffset->y, m.sourceOffset->z);
     std::printf("tree       %llu nodes, depth %u, root spacing %g\n", (unsigned long long)m.nodes, m.depth,
                 m.spacing);
     if (m.version >= 2) {  // version 1 measured nothing

@@ -24,9 +24,11 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -69,6 +71,13 @@ uint64_t peakRssBytes() {
 }
 
 namespace {
+
+// The shortest text that reads back as `v` (a scale such as 1.1645e-06).
+std::string shortNumber(double v) {
+  char buf[32];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
 
 constexpr size_t kBatchPoints = 1 << 18;
 constexpr uint32_t kGridLevel = 7;  // counting grid: 128^3 cells
@@ -272,19 +281,37 @@ class Builder {
   }
 
   void planQuantisation(BuildReport& report) {
-    // Precision: the finest scale of the inputs, unless given.
-    double scale = opt_.precision;
+    // Precision per axis: the inputs' own scales (the finest of each axis where they differ),
+    // so that LAS integer coordinates come back out exactly; one --precision for all axes when
+    // given.
+    Vec3d scales{opt_.precision, opt_.precision, opt_.precision};
     std::optional<Vec3d> base;
+    std::set<std::array<double, 3>> seen;
     for (SourceState* sp : planningOrder()) {
       const SourceHeader& h = sp->reader->header();
       if (h.offset && !base) base = h.offset;
-      if (opt_.precision <= 0 && h.scale)
+      if (opt_.precision <= 0 && h.scale) {
+        seen.insert({h.scale->x, h.scale->y, h.scale->z});
         for (int a = 0; a < 3; ++a)
-          if ((*h.scale)[a] > 0) scale = scale > 0 ? std::min(scale, (*h.scale)[a]) : (*h.scale)[a];
+          if ((*h.scale)[a] > 0) scales[a] = scales[a] > 0 ? std::min(scales[a], (*h.scale)[a]) : (*h.scale)[a];
+      }
     }
-    if (!(scale > 0)) scale = 0.001;
-    meta_.scale = scale;
-    invScale_ = 1.0 / scale;
+    // Axes no input scales: the finest scale any axis has, else a millimetre.
+    double finest = 0;
+    for (int a = 0; a < 3; ++a)
+      if (scales[a] > 0) finest = finest > 0 ? std::min(finest, scales[a]) : scales[a];
+    for (int a = 0; a < 3; ++a)
+      if (!(scales[a] > 0)) scales[a] = finest > 0 ? finest : 0.001;
+    if (seen.size() > 1)
+      buildNotes_.push_back("the inputs have " + std::to_string(seen.size()) +
+                                " different scales; the octree keeps the finest of each axis (" +
+                                shortNumber(scales.x) + ", " + shortNumber(scales.y) + ", " + shortNumber(scales.z) +
+                                "): coordinates of the other inputs that are not on that grid are rounded to it");
+    report.warnings.insert(report.warnings.end(), buildNotes_.begin(), buildNotes_.end());
+    meta_.scale = scales;
+    meta_.sourceOffset = base;
+    for (int a = 0; a < 3; ++a) invScale_[a] = 1.0 / scales[a];
+    const double scale = meta_.maxScale();
 
     // Bounds: declared ones where a header gives valid bounds, a reading pass for the rest.
     Box3d bounds;
@@ -341,13 +368,15 @@ class Builder {
     Vec3d b = base.value_or(Vec3d{0, 0, 0});
     double extent = 0;
     for (int a = 0; a < 3; ++a) {
-      meta_.offset[a] = b[a] + std::floor((bounds.min[a] - b[a]) / scale) * scale;
-      extent = std::max(extent, std::ceil((bounds.max[a] - meta_.offset[a]) / scale) + 1);
+      const double sa = scales[a];
+      meta_.offset[a] = b[a] + std::floor((bounds.min[a] - b[a]) / sa) * sa;
+      const double steps = std::ceil((bounds.max[a] - meta_.offset[a]) / sa) + 1;
+      if (!(steps < double(uint64_t(1) << 31)))
+        throw Error("", "",
+                    "the scan spans " + std::to_string(steps * sa) + " units along " + std::string(1, "xyz"[a]) +
+                        ", more than 2^31 steps of " + std::to_string(sa) + "; use a coarser --precision");
+      extent = std::max(extent, steps);
     }
-    if (!(extent < double(uint64_t(1) << 31)))
-      throw Error("", "",
-                  "the scan spans " + std::to_string(extent * scale) + " units, more than 2^31 steps of " +
-                      std::to_string(scale) + "; use a coarser --precision");
     uint64_t cube = 1;
     while (cube < extent) cube <<= 1;
     meta_.cubeSize = static_cast<uint32_t>(cube);
@@ -447,7 +476,7 @@ class Builder {
     for (int a = 0; a < 3; ++a) {
       // Truncation after +0.5 rounds every value at or above -0.5 (no libm call per coordinate);
       // anything outside the cube cannot be placed, and the cube is planned again.
-      const double u = (p[a] - meta_.offset[a]) * invScale_ + 0.5;
+      const double u = (p[a] - meta_.offset[a]) * invScale_[a] + 0.5;
       if (!(u >= 0 && u < double(maxInt) + 1)) throw OutsideCube{};
       q[a] = static_cast<uint32_t>(std::min<int64_t>(static_cast<int64_t>(u), maxInt));
     }
@@ -909,7 +938,7 @@ class Builder {
     // The orientation centre: the middle of the scan's tight bounds, in integer units.
     double c[3];
     for (int a = 0; a < 3; ++a)
-      c[a] = ((meta_.bounds.min[a] + meta_.bounds.max[a]) * 0.5 - meta_.offset[a]) / meta_.scale;
+      c[a] = ((meta_.bounds.min[a] + meta_.bounds.max[a]) * 0.5 - meta_.offset[a]) / meta_.scale[a];
     int orient = opt_.normalOrientation == NormalOrientation::Up       ? 2
                  : opt_.normalOrientation == NormalOrientation::Inward ? 1
                                                                        : 0;
@@ -1130,7 +1159,9 @@ class Builder {
       NL_CHECK(rel[0] < size && rel[1] < size && rel[2] < size);
       local.push(rel, pts.attrsOf(i));
     }
-    const double measured = medianNeighbourSpacing(pts.pos.data(), drawnSet.data(), drawnSet.size()) * meta_.scale;
+    // In integer steps; the largest axis step makes it world units (the axes' steps differ by a
+    // few per cent at most where they differ at all).
+    const double measured = medianNeighbourSpacing(pts.pos.data(), drawnSet.data(), drawnSet.size()) * meta_.maxScale();
     writer_->writeNode(key, local, encodeSpacing(measured, meta_.levelSpacing(key.level)));
     stored_ += set.size();
   }
@@ -1248,6 +1279,7 @@ class Builder {
                    {"chunks", chunks_.size()},
                    {"max_chunk_points", maxChunkPoints_ == UINT64_MAX ? json(nullptr) : json(maxChunkPoints_)},
                    {"command_line", opt_.commandLine}};
+    if (!buildNotes_.empty()) meta_.build["notes"] = buildNotes_;
   }
   BuildOptions opt_;
   Progress progress_;
@@ -1259,7 +1291,7 @@ class Builder {
   bool estimate_ = false;
   unsigned threads_ = 1;
   Metadata meta_;
-  double invScale_ = 1000;
+  Vec3d invScale_{1000, 1000, 1000};
   Accounting accounting_;
   std::unique_ptr<OctreeWriter> writer_;
   fs::path tmp_;
@@ -1273,6 +1305,7 @@ class Builder {
   std::map<NodeKey, uint64_t> subtreePoints_;
   std::atomic<uint64_t> stored_{0};
   bool measureBounds_ = false;  // plan the cube from the points even where headers declare bounds
+  std::vector<std::string> buildNotes_;  // facts of the build that `info` shows (metadata build.notes)
 };
 
 }  // namespace

@@ -25,8 +25,9 @@ uint64_t exportOctree(const std::filesystem::path& dir, const std::filesystem::p
     h.layout.add({l.name, ScalarType::F32, 3, "colour layer '" + l.name + "': linear RGB"});
   }
   h.rgbBits = m.rgbSourceBits;
-  h.scale = Vec3d{m.scale, m.scale, m.scale};
-  h.offset = m.offset;
+  // The inputs' own scale and offset: a LAS file's integer coordinates come back unchanged.
+  h.scale = m.scale;
+  h.offset = m.sourceOffset.value_or(m.offset);
   h.crs = m.crs;
   auto writer = createWriter(file.string(), h);
   uint64_t written = 0;
@@ -38,7 +39,7 @@ uint64_t exportOctree(const std::filesystem::path& dir, const std::filesystem::p
     batch.clear();
     batch.xyz.resize(pts.size() * 3);
     for (size_t i = 0; i < pts.size(); ++i)
-      for (int a = 0; a < 3; ++a) batch.xyz[3 * i + a] = m.offset[a] + pts.pos[3 * i + a] * m.scale;
+      for (int a = 0; a < 3; ++a) batch.xyz[3 * i + a] = m.world(a, pts.pos[3 * i + a]);
     if (layers.empty()) {
       batch.attrs = std::move(pts.attrs);
     } else {

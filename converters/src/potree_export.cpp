@@ -453,13 +453,13 @@ PotreeExportReport Exporter::run(const fs::path& outDir, const std::string& name
 
   // metadata.json, last.
   using ojson = nlohmann::ordered_json;
-  const double s = meta_.scale;
+  const Vec3d s = meta_.scale;
   auto rangeOf = [&](size_t first, size_t n, bool position) {
     ojson mn = ojson::array(), mx = ojson::array();
     for (size_t k = first; k < first + n; ++k) {
       double lo = range_.min[k], hi = range_.max[k];
       if (!(lo <= hi)) lo = hi = 0;  // no points
-      if (position) lo = meta_.offset[int(k)] + lo * s, hi = meta_.offset[int(k)] + hi * s;
+      if (position) lo = meta_.world(int(k), lo), hi = meta_.world(int(k), hi);
       mn.push_back(lo);
       mx.push_back(hi);
     }
@@ -503,12 +503,12 @@ PotreeExportReport Exporter::run(const fs::path& outDir, const std::string& name
   j["hierarchy"] = {
       {"firstChunkSize", firstChunkSize_}, {"stepSize", options_.stepSize}, {"depth", meta_.depth}};
   j["offset"] = {meta_.offset.x, meta_.offset.y, meta_.offset.z};
-  j["scale"] = {s, s, s};
+  j["scale"] = {s.x, s.y, s.z};
   j["spacing"] = meta_.spacing > 0 ? meta_.spacing : cube / 128;
   // The octree's cube: the viewer derives every node's box from it by halving.
   j["boundingBox"] = {
       {"min", {meta_.offset.x, meta_.offset.y, meta_.offset.z}},
-      {"max", {meta_.offset.x + cube, meta_.offset.y + cube, meta_.offset.z + cube}}};
+      {"max", {meta_.world(0, meta_.cubeSize), meta_.world(1, meta_.cubeSize), meta_.world(2, meta_.cubeSize)}}};
   j["encoding"] = "DEFAULT";
   j["attributes"] = attributes;
   const std::string text = j.dump(2) + "\n";

@@ -17,10 +17,10 @@ void Accounting::add(const Accounting& o) {
 }
 
 Box3d Metadata::nodeBounds(uint32_t level, uint32_t x, uint32_t y, uint32_t z) const {
-  const double size = static_cast<double>(cubeSize >> level) * scale;
+  const double steps = static_cast<double>(cubeSize >> level);
   Box3d b;
-  b.min = {offset.x + x * size, offset.y + y * size, offset.z + z * size};
-  b.max = {b.min.x + size, b.min.y + size, b.min.z + size};
+  b.min = {offset.x + x * steps * scale.x, offset.y + y * steps * scale.y, offset.z + z * steps * scale.z};
+  b.max = {b.min.x + steps * scale.x, b.min.y + steps * scale.y, b.min.z + steps * scale.z};
   return b;
 }
 
@@ -60,7 +60,8 @@ json Metadata::toJson() const {
       {"nodes", nodes},
       {"bounds", bounds.empty() ? json(nullptr) : box(bounds)},
       {"offset", vec(offset)},
-      {"scale", scale},
+      // One number when the axes share it (as every octree before per-axis scales).
+      {"scale", scale.x == scale.y && scale.y == scale.z ? json(scale.x) : vec(scale)},
       {"cube_size", cubeSize},
       {"depth", depth},
       {"spacing", spacing},
@@ -100,6 +101,7 @@ json Metadata::toJson() const {
                     {"build", l.build}});
     j["layers"] = jl;
   }
+  if (sourceOffset) j["source_offset"] = vec(*sourceOffset);
   return j;
 }
 
@@ -121,8 +123,16 @@ Metadata Metadata::fromJson(const json& j, const std::string& file) {
     m.bounds.max = vec3Of(f.at("bounds").at("max"));
   }
   m.offset = vec3Of(f.at("offset"));
-  m.scale = f.at("scale").number();
-  if (!(m.scale > 0)) f.at("scale").fail("must be positive");
+  if (j.contains("source_offset")) m.sourceOffset = vec3Of(f.at("source_offset"));
+  if (f.at("scale").value().is_array()) {
+    const auto v = f.at("scale").vec3(0, INFINITY);
+    m.scale = {v[0], v[1], v[2]};
+  } else {
+    const double v = f.at("scale").number();
+    m.scale = {v, v, v};
+  }
+  for (int a = 0; a < 3; ++a)
+    if (!(m.scale[a] > 0) || !std::isfinite(m.scale[a])) f.at("scale").fail("must be positive");
   const uint64_t cube = f.at("cube_size").count();
   if (cube == 0 || cube > (uint64_t(1) << 31) || (cube & (cube - 1)))
     f.at("cube_size").fail("must be a power of two no larger than 2^31");

@@ -22,13 +22,13 @@ void MemoryStore::prepare(const NodeKey& key, PointBuffer&& points, PreparedNode
   out.bytes.resize(n * kBytesPerPoint);
   const uint32_t size = meta_.cubeSize >> key.level;
   const uint32_t base[3] = {key.x * size, key.y * size, key.z * size};
-  const float scale = static_cast<float>(meta_.scale);
+  const float scale[3] = {float(meta_.scale.x), float(meta_.scale.y), float(meta_.scale.z)};
   const size_t rgbOffset = rgb_ >= 0 ? meta_.layout.offset(size_t(rgb_)) : 0;
   uint8_t* dst = out.bytes.data();
   for (size_t i = 0; i < n; ++i, dst += kBytesPerPoint) {
     float xyz[3];
     for (int a = 0; a < 3; ++a)
-      xyz[a] = static_cast<float>(points.pos[3 * i + size_t(a)] - base[a]) * scale;
+      xyz[a] = static_cast<float>(points.pos[3 * i + size_t(a)] - base[a]) * scale[a];
     std::memcpy(dst, xyz, 12);
     uint8_t rgba[4] = {255, 255, 255, 255};
     if (rgb_ >= 0) {

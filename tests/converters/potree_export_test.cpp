@@ -276,7 +276,7 @@ Metadata writeHandBuilt(const fs::path& dir, uint32_t maxDepth, uint64_t seed,
   const uint32_t cubeSize = 1u << 16;
   Metadata meta;
   meta.offset = {500000.25, 5000000.5, 100.125};
-  meta.scale = 0.001;
+  meta.scale = {0.001, 0.001, 0.001};
   meta.cubeSize = cubeSize;
   meta.spacing = 0.5;
   meta.layout = l;
@@ -334,9 +334,9 @@ Metadata writeHandBuilt(const fs::path& dir, uint32_t maxDepth, uint64_t seed,
       std::memcpy(rec.data(), rel, 12);
       rec.insert(rec.end(), a.begin(), a.end());
       pts.emplace_back(mortonEncode21(rel[0], rel[1], rel[2]), rec);
-      bounds.extend(meta.offset.x + (uint64_t(k.x) * side + rel[0]) * meta.scale,
-                    meta.offset.y + (uint64_t(k.y) * side + rel[1]) * meta.scale,
-                    meta.offset.z + (uint64_t(k.z) * side + rel[2]) * meta.scale);
+      bounds.extend(meta.world(0, double(uint64_t(k.x) * side + rel[0])),
+                    meta.world(1, double(uint64_t(k.y) * side + rel[1])),
+                    meta.world(2, double(uint64_t(k.z) * side + rel[2])));
     }
     std::stable_sort(pts.begin(), pts.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -386,13 +386,13 @@ void compareWithOctree(const PDataset& d, const fs::path& octreeDir,
   for (int a = 0; a < 3; ++a) {
     if (j["offset"][a].get<double>() != m.offset[a])
       fail("offset differs on axis " + std::to_string(a));
-    if (j["scale"][a].get<double>() != m.scale) fail("scale differs on axis " + std::to_string(a));
+    if (j["scale"][a].get<double>() != m.scale[a]) fail("scale differs on axis " + std::to_string(a));
   }
   // The bounding box is the octree's root cube: min the grid's origin, max = min + cube edge
   // (edges equal up to the rounding of the corner coordinates).
   const auto& bb = j["boundingBox"];
-  const double edge = m.cubeSize * m.scale;
   for (int a = 0; a < 3; ++a) {
+    const double edge = m.cubeSize * m.scale[a];
     const double lo = bb["min"][a].get<double>(), hi = bb["max"][a].get<double>();
     if (lo != m.offset[a]) fail("bounding box min is not the octree's cube corner");
     if (hi != lo + edge) fail("bounding box max is not min + the octree's cube edge");
@@ -436,7 +436,7 @@ void compareWithOctree(const PDataset& d, const fs::path& octreeDir,
           break;
         }
         const double world = q * j["scale"][a].get<double>() + j["offset"][a].get<double>();
-        if (world != pts.pos[3 * i + a] * m.scale + m.offset[a])
+        if (world != pts.pos[3 * i + a] * m.scale[a] + m.offset[a])
           fail(name + ": world position differs");
         if (world < bb["min"][a].get<double>() || world > bb["max"][a].get<double>())
           fail(name + ": point outside the bounding box");

@@ -32,7 +32,7 @@ std::vector<Row> rows(PointReader& r, const Metadata& m, const std::vector<std::
       const double* p = &b.xyz[3 * i];
       if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
       Row row;
-      for (int a = 0; a < 3; ++a) row.push_back(double(std::llround((p[a] - m.offset[a]) / m.scale)));
+      for (int a = 0; a < 3; ++a) row.push_back(double(std::llround((p[a] - m.offset[a]) / m.scale[a])));
       for (int k : idx) {
         if (k < 0) {
           row.push_back(-1e300);  // absent: fails the comparison below

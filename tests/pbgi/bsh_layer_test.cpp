@@ -48,7 +48,7 @@ TEST(BshLayer, EveryNodeOfANationalGridScanAccountsForItsPoints) {
     EXPECT_EQ(bsh[0].links.z, n) << "every point of the node under its root";
     // The node's frame: metres from the node cube's corner; the root sphere holds the cube's
     // points, so its centre is inside the cube (grown by a leaf radius).
-    const double cube = meta.cubeSize * meta.scale / double(1u << key.level);
+    const double cube = meta.cubeWorldSize() / double(1u << key.level);
     const double leaf = meta.levelSpacing(key.level);
     for (int a = 0; a < 3; ++a) {
       EXPECT_GE(bsh[0].sphere[a], -leaf);

@@ -38,7 +38,7 @@ TEST(MemoryStore, PointsAreNodeRelativeFloatsAndRgba8) {
       std::memcpy(xyz, &p.bytes[i * 16], 12);
       std::memcpy(rgba, &p.bytes[i * 16 + 12], 4);
       for (int a = 0; a < 3; ++a) {
-        const double world = m.offset[a] + copy.pos[3 * i + a] * m.scale;
+        const double world = m.world(a, copy.pos[3 * i + a]);
         EXPECT_NEAR(cube.min[a] + xyz[a], world, 1e-3 * 0.5 + 1e-6 * (cube.max[a] - cube.min[a]));
       }
       uint16_t c[3];

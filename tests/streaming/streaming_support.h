@@ -77,10 +77,10 @@ inline std::vector<NodeKey> idealCut(OctreeReader& reader, const streaming::View
   };
   std::priority_queue<Cand, std::vector<Cand>, decltype(lower)> heap(lower);
   auto consider = [&](const NodeKey& k) {
-    const double size = double(m.cubeSize >> k.level) * m.scale;
     Box3d box;
     double c[3], r2 = 0;
     for (int a = 0; a < 3; ++a) {
+      const double size = double(m.cubeSize >> k.level) * m.scale[a];
       const double lo = m.offset[a] + (a == 0 ? k.x : a == 1 ? k.y : k.z) * size;
       const double clo = std::max(lo, m.bounds.min[a]), chi = std::min(lo + size, m.bounds.max[a]);
       box.min[a] = clo;

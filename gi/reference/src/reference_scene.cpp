@@ -194,7 +194,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
     const float nodeSpacing = float(meta.levelSpacing(key.level)) * octree.radiusScale * kDiscCoverage;
     for (size_t i = 0; i < pts.size(); ++i) {
       const uint32_t* p = &pts.pos[3 * i];
-      glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) * meta.scale;
+      glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) * glm::dvec3(meta.scale.x, meta.scale.y, meta.scale.z);
       cloud.discs.emplace_back(glm::vec3(local), 0.0f);
       maxRadius.push_back(nodeSpacing);
       const uint8_t* a = pts.attrsOf(i);

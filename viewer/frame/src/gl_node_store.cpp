@@ -146,8 +146,8 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
   for (size_t i = 0; i < n; ++i) {
     uint8_t* o = &out.bytes[i * kGpuPointBytes];
     const uint32_t* p = &pts.pos[3 * i];
-    const float local[3] = {float((p[0] - base[0]) * meta_.scale), float((p[1] - base[1]) * meta_.scale),
-                            float((p[2] - base[2]) * meta_.scale)};
+    const float local[3] = {float((p[0] - base[0]) * meta_.scale.x), float((p[1] - base[1]) * meta_.scale.y),
+                            float((p[2] - base[2]) * meta_.scale.z)};
     std::memcpy(o, local, 12);
     const uint8_t* a = pts.attrsOf(i);
     float nrm[3] = {0, 0, 0};
@@ -173,7 +173,7 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
         if (classification_ >= 0) colour = classColour(a[cOff]);
         break;
       case ColourMode::Elevation:
-        colour = ramp((meta_.offset.z + p[2] * meta_.scale - zLo) / zRange);
+        colour = ramp((meta_.world(2, p[2]) - zLo) / zRange);
         break;
       case ColourMode::Normal:
         colour = packRgba(nrm[0] * 0.5 + 0.5, nrm[1] * 0.5 + 0.5, nrm[2] * 0.5 + 0.5);

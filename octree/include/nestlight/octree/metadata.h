@@ -1,6 +1,7 @@
 // metadata.json: everything a reader needs before touching the hierarchy. See docs/FORMAT.md.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include <cstdint>
@@ -77,7 +78,12 @@ struct Metadata {
   std::string generator;
   Box3d bounds;            // tight bounds of the stored points (world units)
   Vec3d offset;            // world position of integer coordinate 0 (the root cube's min corner)
-  double scale = 0.001;    // world units per integer step, all axes
+  // World units per integer step of each axis: a LAS file's own per-axis scales survive the
+  // octree and every export (the integer cube is a cube; in world units a box when they differ).
+  Vec3d scale{0.001, 0.001, 0.001};
+  // The LAS offset of the inputs (the first one's): exports write it back, so that a LAS file's
+  // integer coordinates come out as they went in. Absent for inputs without one.
+  std::optional<Vec3d> sourceOffset;
   uint32_t cubeSize = 1;   // root cube edge in integer units, a power of two
   uint32_t depth = 0;      // deepest level that holds points
   double spacing = 0;      // nominal sample spacing of the root (world units); level l: /2^l
@@ -109,7 +115,11 @@ struct Metadata {
     return nullptr;
   }
 
-  double cubeWorldSize() const { return cubeSize * scale; }
+  // The largest axis step, and the root cube's largest world edge (LOD and camera distances).
+  double maxScale() const { return std::max({scale.x, scale.y, scale.z}); }
+  double cubeWorldSize() const { return cubeSize * maxScale(); }
+  // World position of integer coordinate `q` on axis `a`.
+  double world(int a, double q) const { return offset[a] + q * scale[a]; }
   // The nominal sample spacing of a level: the root's `spacing` halved per level.
   double levelSpacing(uint32_t level) const { return std::ldexp(spacing, -static_cast<int>(level)); }
   // World bounds of a node's cube.
