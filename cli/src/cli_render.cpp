@@ -1,5 +1,6 @@
 // `nestlight render`: headless images of an octree (EGL; llvmpipe on machines without a GPU).
 #include <cstdio>
+#include <fstream>
 #include <memory>
 #include <sstream>
 
@@ -36,6 +37,60 @@ std::vector<double> parseNumbers(const std::string& text, size_t n, const std::s
   return v;
 }
 }  // namespace
+
+// The output's folder is made before rendering (as convert and export make theirs), so that a
+// long render never ends in "cannot write".
+void makeOutputFolder(const fs::path& output) {
+  const fs::path parent = output.parent_path();
+  std::error_code ec;
+  if (output.empty() || parent.empty() || fs::exists(parent, ec)) return;
+  if (!fs::create_directories(parent, ec))
+    throw Error(output.string(), "", "cannot create its folder " + parent.string() + ": " + ec.message());
+}
+
+// The options of octree renders, given with a scene file: those the real-time methods take become
+// the scene's gi.parameters; the others, and any for a method that does not stream (the path
+// tracer loads whole levels within each octree's memory_budget), are refused by name rather than
+// ignored.
+void applySceneScanOptions(const CLI::App& cmd, const std::string& file, const viewer::RenderJob& job,
+                           const RenderOptionText& text, gi::SceneRenderOverrides& sc) {
+  auto given = [&](const char* o) { return cmd.count(o) > 0; };
+  std::vector<std::string> notForScenes;
+  for (const char* o : {"--camera", "--view", "--colour", "--layer", "--exposure", "--fixed-point-size", "--edl",
+                        "--upload-budget", "--spacing-pixels", "--loaders", "--path", "--stats", "--wait-complete"})
+    if (given(o)) notForScenes.push_back(o);
+  if (!notForScenes.empty()) {
+    std::string names;
+    for (const auto& o : notForScenes) names += (names.empty() ? "" : ", ") + o;
+    throw Error(names + (notForScenes.size() > 1 ? " do" : " does") +
+                " not apply to a scene file, whose camera, camera path, scans and colours come from the file "
+                "(docs/SCENE.md); they are options of octree renders");
+  }
+  nlohmann::json p;
+  if (given("--point-budget")) p["point_budget"] = double(parseCount(text.pointBudget, "--point-budget"));
+  if (given("--gpu-budget")) p["gpu_budget_mb"] = double((parseBytes(text.gpuBudget) + (1u << 20) - 1) >> 20);
+  if (given("--rasteriser")) p["rasteriser"] = text.rasteriser;
+  if (given("--splatting")) p["splatting"] = text.splatting;
+  if (given("--point-size")) p["splat_scale"] = job.settings.sizeScale;
+  if (given("--timeout")) p["stream_timeout"] = job.timeoutSeconds;
+  if (p.empty()) return;
+  std::string method = sc.method.value_or("");
+  if (method.empty()) {
+    std::ifstream in(file);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    method = j.is_object() && j.contains("gi") && j["gi"].is_object() && j["gi"].contains("method") &&
+                     j["gi"]["method"].is_string()
+                 ? j["gi"]["method"].get<std::string>()
+                 : "reference";
+  }
+  const gi::MethodInfo* info = gi::findMethod(method);
+  if (info && !info->gpu)
+    throw Error(p.begin().key() == "point_budget" ? std::string("--point-budget")
+                                                   : "--" + p.begin().key() + " (and the other streaming options)",
+                "", "applies to the real-time (GL) methods; '" + method +
+                        "' loads whole levels of each octree within its \"memory_budget\" in the scene file");
+  for (const auto& [k, v] : p.items()) sc.parameters[k] = v;
+}
 
 void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<RenderOptionText> text) {
   cmd->add_option("--width", job.width, "Image width in pixels (up to 16384; large images render in tiles)")
@@ -174,12 +229,15 @@ void addRender(CLI::App& app, int& exitCode) {
       if (!mode->empty()) sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
       if (!variant->empty()) sc->parameters["variant"] = *variant;
       if (!estimator->empty()) sc->parameters["estimator"] = *estimator;
+      applySceneScanOptions(*cmd, *octree, *job, *text, *sc);
+      makeOutputFolder(job->output);
       sc->output = job->output;
       gi::renderSceneFile(*octree, *sc);
       exitCode = 0;
       return;
     }
     if (job->output.empty()) throw Error("render: -o/--output is required for an octree");
+    makeOutputFolder(job->output);
     job->octree = *octree;
     applyRenderOptions(*job, *text);
     if (!path->empty()) job->path = gi::loadCameraPath(*path);

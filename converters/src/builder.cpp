@@ -202,7 +202,10 @@ class Builder {
     report.phases["write"] = seconds(t);
     report.seconds = seconds(t0);
     report.chunks = chunks_.size();
-    report.pointsPerSecond = report.seconds > 0 ? meta_.accounting.input / report.seconds : 0;
+    // Points read, not declared: a lenient conversion's unreadable points took no time.
+    uint64_t read = 0;
+    for (const auto& src : sources_) read += src.read;
+    report.pointsPerSecond = report.seconds > 0 ? double(read) / report.seconds : 0;
     report.peakRssBytes = peakRssBytes();
     report.metadata = meta_;
     return report;
@@ -324,13 +327,12 @@ class Builder {
         double ss = h.scale ? std::max({h.scale->x, h.scale->y, h.scale->z}) : scale;
         s.tolerance = 0.5 * ss;
       }
-      // Header bounds are advisory: they spare a reading pass, padded so that points rounded
-      // just past them (bounds computed before quantisation) fit; a point beyond that restarts
-      // the conversion with the bounds measured (OutsideCube).
+      // Header bounds are advisory: they spare a reading pass. The grid's first step lies at or
+      // below their minimum and the cube holds a step beyond their maximum, so points rounded
+      // half a step past them (bounds computed before quantisation) still fit; a point beyond
+      // the cube restarts the conversion with the bounds measured (OutsideCube).
       if (s.declared && !measureBounds_) {
-        const double pad = s.tolerance + 2 * scale;
-        bounds.extend(s.declared->min.x - pad, s.declared->min.y - pad, s.declared->min.z - pad);
-        bounds.extend(s.declared->max.x + pad, s.declared->max.y + pad, s.declared->max.z + pad);
+        bounds.extend(*s.declared);
       } else {
         scan.push_back(i);
       }
@@ -1258,7 +1260,11 @@ class Builder {
       r.points = s.read;
       r.unreadable = s.unreadable;
       r.declaredPoints = h.declaredPoints;
-      r.warnings = s.reader->warnings();
+      // Warnings are the source's own: a reader's "<file>: " in front would print the name twice.
+      for (std::string w : s.reader->warnings()) {
+        if (w.rfind(h.path + ": ", 0) == 0) w.erase(0, h.path.size() + 2);
+        r.warnings.push_back(std::move(w));
+      }
       if (s.outsideDeclared) {
         char w[256];
         std::snprintf(w, sizeof w,

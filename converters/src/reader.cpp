@@ -31,6 +31,13 @@ std::unique_ptr<PointReader> openReader(const std::string& path, const ReadOptio
 
 std::unique_ptr<PointWriter> createWriter(const std::string& path, const SourceHeader& header) {
   const std::string ext = lowerExtension(path);
+  // As convert and the Potree export do: a missing output folder is made, not an error.
+  if (ext == ".las" || ext == ".laz" || ext == ".ply") {
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    std::error_code ec;
+    if (!parent.empty() && !std::filesystem::exists(parent, ec) && !std::filesystem::create_directories(parent, ec))
+      throw Error(path, "", "cannot create its folder " + parent.string() + ": " + ec.message());
+  }
   if (ext == ".las") return createLasWriter(path, header);
   if (ext == ".laz") return createLazWriter(path, header);
   if (ext == ".ply") return createPlyWriter(path, header);

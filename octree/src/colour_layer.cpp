@@ -155,11 +155,18 @@ std::string parseLayerIndex(const uint8_t* data, size_t size, std::vector<LayerI
 
 // ---------------------------------------------------------------------------------------------
 
+void checkLayerName(const std::string& name) {
+  if (name.empty() || name.find_first_of("/.") != std::string::npos)
+    throw Error("layer name '" + name + "': must be non-empty, without '/' or '.'");
+  if (name == "rgb")
+    throw Error("layer name 'rgb': scene files read \"colour\": \"rgb\" as the scan's recorded colour, so a "
+                "layer of that name could never be chosen; use another name (the default is 'hdr')");
+}
+
 ColourLayerWriter::ColourLayerWriter(fs::path dir, std::string name, double scale)
     : dir_(std::move(dir)), name_(std::move(name)), scale_(scale) {
   NL_CHECK(scale_ > 0 && std::isfinite(scale_));
-  if (name_.empty() || name_.find_first_of("/.") != std::string::npos)
-    throw Error(name_, "", "a layer name must be non-empty, without '/' or '.'");
+  checkLayerName(name_);
   if (!fs::exists(dir_ / "metadata.json"))
     throw Error((dir_ / "metadata.json").string(), "", "not an octree folder (no metadata.json)");
   // A name no earlier version used: the current layer stays readable until metadata.json names

@@ -171,3 +171,61 @@ TEST(Cli, DirectoryInputAndUnknownFormat) {
   EXPECT_NE(runCli("convert " + t.file("x.e57") + " -o " + t.file("o2"), &out), 0);
   EXPECT_NE(out.find("x.e57"), std::string::npos) << out;
 }
+
+// A warning names its file once: the source's warnings are printed after its path, so a
+// reader's own "<file>: " in front of one is dropped when it is recorded.
+TEST(Cli, WarningsNameTheFileOnce) {
+  TempDir t;
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 1000 -o " + t.file("s.las"), &out), 0) << out;
+  std::string bytes = readFile(t.file("s.las"));
+  writeFile(t.file("cut.las"), bytes.substr(0, bytes.size() - 100));
+  ASSERT_EQ(runCli("convert --lenient " + t.file("cut.las") + " -o " + t.file("o") + " --progress quiet", &out), 0)
+      << out;
+  const size_t line = out.find("warning");
+  ASSERT_NE(line, std::string::npos) << out;
+  const std::string warning = out.substr(line, out.find('\n', line) - line);
+  const std::string name = t.file("cut.las");
+  ASSERT_NE(warning.find(name), std::string::npos) << warning;
+  EXPECT_EQ(warning.find(name, warning.find(name) + name.size()), std::string::npos) << warning;
+  const std::string recorded = infoJson(t.file("o"))["sources"][0]["warnings"][0];
+  EXPECT_EQ(recorded.find(name), std::string::npos) << recorded;
+}
+
+// Exports make a missing output folder, as convert and the Potree export do (they used to fail
+// naming a .tmp file).
+TEST(Cli, ExportMakesAMissingOutputFolder) {
+  TempDir t;
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 2000 -o " + t.file("s.las"), &out), 0) << out;
+  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress quiet", &out), 0) << out;
+  for (const char* f : {"new/a/all.las", "new/b/all.laz", "new/c/all.ply"}) {
+    ASSERT_EQ(runCli("export " + t.file("o") + " -o " + t.file(f), &out), 0) << f << ": " << out;
+    EXPECT_TRUE(fs::exists(t.file(f))) << f;
+  }
+}
+
+// A scene render takes the streaming options the real-time methods have, refuses those that do
+// not apply to scenes, and refuses streaming options for the path tracer, by name; the output's
+// folder is made before rendering.
+TEST(Cli, SceneRendersApplyOrRefuseScanOptionsByName) {
+  TempDir t;
+  std::string out;
+  ASSERT_EQ(runCli("make-scene cornell -o " + t.file("room") + " -n 20k --width 24 --height 16 -q", &out), 0) << out;
+  const std::string scene = t.file("room/scene.json");
+  EXPECT_NE(runCli("render " + scene + " --point-budget 1M --spp 1 -o " + t.file("r.exr"), &out), 0);
+  EXPECT_NE(out.find("--point-budget"), std::string::npos) << out;
+  EXPECT_NE(out.find("memory_budget"), std::string::npos) << out;
+  EXPECT_NE(runCli("render " + scene + " --method raster --camera 0,0,0,1,1,1 -o " + t.file("r.exr"), &out), 0);
+  EXPECT_NE(out.find("--camera does not apply to a scene file"), std::string::npos) << out;
+  ASSERT_EQ(runCli("render " + scene + " --method raster --point-budget 5000 --splatting basic -o " +
+                       t.file("made/here/r.exr"),
+                   &out),
+            0)
+      << out;
+  EXPECT_TRUE(fs::exists(t.file("made/here/r.exr")));
+  // The budget reached the method: its image header says so.
+  EXPECT_EQ(runCli("render " + scene + " --method raster --point-budget 0 -o " + t.file("r.exr"), &out) == 0, false)
+      << out;
+  EXPECT_NE(out.find("point_budget"), std::string::npos) << out;
+}

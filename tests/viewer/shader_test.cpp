@@ -88,8 +88,9 @@ TEST(Shaders, EveryProgramCompilesAndLinks) {
   size_t ok = 0;
   for (const auto& c : checks) {
     EXPECT_NE(c.status, gl::ProgramCheck::Status::Failed) << c.name << " " << c.defines << ":\n" << c.log;
-    if (c.status == gl::ProgramCheck::Status::Unsupported)
+    if (c.status == gl::ProgramCheck::Status::Unsupported) {
       EXPECT_TRUE(c.name == "points.compute_atomic64" || c.name == "points.compute_resolve64") << c.name << ": " << c.log;
+    }
     ok += c.status == gl::ProgramCheck::Status::Ok;
   }
   // Each define's values are checked one at a time: more checks than entries.

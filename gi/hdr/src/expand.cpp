@@ -292,6 +292,7 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     if (o.progress) o.progress(stage, f);
   };
   ExpandReport rep;
+  if (o.writeLayer) checkLayerName(o.layerName);  // before hours of work, not after
   OctreeReader reader(dir);
   const Metadata& meta = reader.metadata();
   ScanAccess scan(reader);

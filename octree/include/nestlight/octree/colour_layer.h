@@ -49,6 +49,10 @@ std::string decodeColourPayload(const uint8_t* data, size_t size, size_t points,
 // Parses an index; the input is untrusted. Returns an empty string on success, else the reason.
 std::string parseLayerIndex(const uint8_t* data, size_t size, std::vector<LayerIndexEntry>& out);
 
+// Throws nestlight::Error when `name` cannot name a colour layer: empty, with '/' or '.', or
+// "rgb", which scene files read as the scan's recorded colour ("colour": "rgb").
+void checkLayerName(const std::string& name);
+
 class ColourLayerWriter {
  public:
   // Starts a new version of layer `name` in the octree at `dir` (its metadata.json must exist).
