@@ -1,6 +1,8 @@
 #include "nestlight/octree/json_field.h"
 
+#include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 
@@ -103,12 +105,31 @@ std::array<double, 3> JsonField::vec3(double lo, double hi) const {
 }
 
 json readJsonFile(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw Error(file.string(), "", "cannot open");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   try {
-    return json::parse(in);
+    return json::parse(text);
   } catch (const json::parse_error& e) {
     throw Error(file.string(), Error::atByte(e.byte), std::string("invalid JSON: ") + e.what());
+  } catch (const json::out_of_range& e) {
+    // A number beyond a double (1e400): the parser names the literal but neither its place nor
+    // its field, so both are found here.
+    const std::string what = e.what();
+    const size_t q0 = what.find('\''), q1 = q0 == std::string::npos ? q0 : what.find('\'', q0 + 1);
+    const std::string literal = q1 == std::string::npos ? std::string() : what.substr(q0 + 1, q1 - q0 - 1);
+    const size_t at = literal.empty() ? std::string::npos : text.find(literal);
+    if (at == std::string::npos) throw Error(file.string(), "", "invalid JSON: " + what);
+    const uint64_t line = 1 + uint64_t(std::count(text.begin(), text.begin() + long(at), '\n'));
+    std::string field;
+    const size_t colon = text.find_last_not_of(" \t\r\n", at == 0 ? 0 : at - 1);
+    if (colon != std::string::npos && text[colon] == ':') {
+      const size_t close = text.find_last_not_of(" \t\r\n", colon == 0 ? 0 : colon - 1);
+      const size_t open = close == std::string::npos || close == 0 ? std::string::npos : text.rfind('"', close - 1);
+      if (open != std::string::npos && text[close] == '"') field = "field \"" + text.substr(open + 1, close - open - 1) + "\": ";
+    }
+    throw Error(file.string(), Error::atLine(line),
+                field + "the number " + literal + " is beyond the range of a double (about 1.8e308)");
   }
 }
 

@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "nestlight/converters/test_scenes.h"
+#include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"
@@ -482,6 +483,35 @@ TEST(Ibl, BenchIblWritesItsTablesAndPlots) {
   const int bad = test::runCli("bench ibl --estimators mis,foo --frames 2 -o " + t.path().string(), &out);
   EXPECT_NE(bad, 0);
   EXPECT_NE(out.find("foo"), std::string::npos) << out;
+}
+
+// A map with NaN, infinite or negative texels lights the GL methods as the path tracer (those
+// texels black), and they say so as it does, once, instead of silently.
+TEST(Ibl, ABadEnvironmentMapIsAWarningInEveryGlMethod) {
+  test::TempDir t;
+  TestSceneOptions o;
+  o.points = 5000;
+  o.width = 16;
+  o.height = 12;
+  o.quiet = true;
+  const auto file = makeTestScene(TestSceneKind::Cornell, t.path() / "room", o);
+  HdrImage env(8, 4);
+  for (auto& v : env.rgb) v = 0.5f;
+  env.rgb[0] = std::nanf("");
+  env.rgb[4] = -1.0f;
+  env.rgb[8] = INFINITY;
+  writeExr(t.file("sky.exr"), env);
+  json scene = json::parse(std::ifstream(file));
+  scene["environment"] = {{"path", t.file("sky.exr")}};
+  std::ofstream(t.file("room/sky.json")) << scene.dump(1);
+  for (const char* method : {"raster", "vpl"}) {
+    std::string out;
+    ASSERT_EQ(test::runCli(std::string("render ") + t.file("room/sky.json") + " --method " + method + " -o " + t.file("o.exr"), &out),
+              0)
+        << out;
+    EXPECT_NE(out.find("sky.exr: environment: 3 NaN, infinite or negative texels set to 0"), std::string::npos)
+        << method << ": " << out;
+  }
 }
 
 }  // namespace

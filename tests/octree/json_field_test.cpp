@@ -52,4 +52,13 @@ TEST(JsonField, MetadataErrorsNameTheField) {
   EXPECT_NE(messageOf([&] { Metadata::fromJson(noPoints, "metadata.json"); }).find("missing \"points\""), std::string::npos);
 }
 
+// A number beyond a double is an error naming the file, the line and the field (the parser
+// alone names only the literal).
+TEST(JsonField, ANumberBeyondADoubleNamesFileLineAndField) {
+  test::TempDir t;
+  test::writeFile(t.file("scene.json"), "{\n  \"lights\": [\n    {\"type\": \"point\", \"intensity\": 1e400}\n  ]\n}\n");
+  const std::string m = messageOf([&] { readJsonFile(t.file("scene.json")); });
+  EXPECT_NE(m.find(t.file("scene.json") + ": line 3: field \"intensity\": the number 1e400"), std::string::npos) << m;
+}
+
 }  // namespace

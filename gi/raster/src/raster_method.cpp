@@ -541,6 +541,16 @@ class RasterMethod : public Method, public RasterFrame {
   void uploadEnvironment(std::shared_ptr<const EnvironmentMap> map, bool sequence) {
     envMap_ = std::move(map);
     const EnvironmentMap& env = *envMap_;
+    // What the path tracer says of a map, every GL method (they all light through this frame)
+    // says too: texels it cannot use are black, not silently.
+    if ((env.invalidTexels() || (env.black() && env.image().pixels() > 0)) && scene_.environment) {
+      const auto& e = *scene_.environment;
+      std::string what = (e.sequence.empty() ? e.path : e.sequence).string() + ": environment";
+      if (env.invalidTexels()) what += ": " + std::to_string(env.invalidTexels()) + " NaN, infinite or negative texels set to 0";
+      if (env.black()) what += std::string(env.invalidTexels() ? ";" : ":") + " all black, it adds no light";
+      if (what != lastEnvWarning_) std::fprintf(stderr, "nestlight: warning: %s\n", what.c_str());
+      lastEnvWarning_ = what;
+    }
     envGeneration_++;
     hasEnvironment_ = sequence || !env.black();
     envRotation_ = glm::radians(env.rotationDegrees());
@@ -919,6 +929,7 @@ class RasterMethod : public Method, public RasterFrame {
   bool hasEnvironment_ = false;
   std::unique_ptr<EnvironmentSource> envSource_;
   std::shared_ptr<const EnvironmentMap> envMap_ = std::make_shared<const EnvironmentMap>();
+  std::string lastEnvWarning_;  // said once, not every frame of a sequence
   size_t envFrame_ = 0;
   uint64_t envGeneration_ = 0;
   float envRotation_ = 0, envScale_ = 1;
