@@ -12,6 +12,7 @@
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/bench_gi.h"
 #include "nestlight/gi/method.h"
+#include "nestlight/gl/context.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
@@ -528,6 +529,40 @@ TEST(Raster, RunsOnTheOsMesaFallback) {
   double sum = 0;
   for (float v : osmesa.image.rgb) sum += v;
   EXPECT_GT(sum, 0);
+}
+
+// A mesh far from the scan must not clip the scan: the near plane follows the nearest object,
+// not 1e-4 of the farthest (a torus 1000 km away put it 100 m out: a black image, exit 0).
+TEST(Raster, AFarMeshDoesNotClipTheScan) {
+  test::TempDir t;
+  TestSceneOptions o;
+  o.points = 20000;
+  o.width = 48;
+  o.height = 32;
+  o.quiet = true;
+  const auto file = makeTestScene(TestSceneKind::Object, t.path() / "town", o);
+  nlohmann::json scene = nlohmann::json::parse(std::ifstream(file));
+  nlohmann::json far = scene["meshes"][0];
+  far["transform"]["translate"] = {1.0e6 + 50, 45.0, 5.0};
+  scene["meshes"].push_back(far);
+  std::ofstream(t.file("town/far.json")) << scene.dump(1);
+  double mean[2];
+  int k = 0;
+  for (const char* name : {"scene.json", "far.json"}) {
+    Scene s = loadScene(t.path() / "town" / name);
+    s.gi.method = "raster";
+    auto ctx = gl::createHeadlessContext();
+    auto m = createMethod(s, {true, false});
+    const MethodFrame f = m->render(s.camera);
+    double sum = 0;
+    for (float v : f.image.rgb) sum += v;
+    mean[k++] = sum / double(f.image.rgb.size());
+    EXPECT_EQ(f.attributes.at("nestlight:points"), "20000") << name;
+  }
+  // The far torus's directional shadow map spans 1000 km, so the town's shadows coarsen; the
+  // image is the town's all the same, not black.
+  EXPECT_GT(mean[1], 0.5 * mean[0]);
+  EXPECT_LT(mean[1], 2.0 * mean[0]);
 }
 
 }  // namespace

@@ -268,15 +268,21 @@ class RasterMethod : public Method, public RasterFrame {
     const int W = camera.width, H = camera.height;
     const glm::vec3 eye = scene_.local(camera.eye), target = scene_.local(camera.target);
     const glm::vec3 up = glm::vec3(camera.up);
-    // Clip planes around everything there is, so depth precision is spent on the scene.
+    // Clip planes around everything there is, so depth precision is spent on the scene. The near
+    // plane follows the nearest object alone (a 10^4 depth range of its own extent): tied to the
+    // farthest one, a mesh 100 km from the scan pushed it 10 m out and clipped the scan away.
     float nearZ = 1e30f, farZ = 0;
-    for (int c = 0; c < 8; ++c) {
-      const glm::vec3 p((c & 1) ? bounds_.hi.x : bounds_.lo.x, (c & 2) ? bounds_.hi.y : bounds_.lo.y,
-                        (c & 4) ? bounds_.hi.z : bounds_.lo.z);
-      farZ = std::max(farZ, glm::length(p - eye));
+    for (const LocalBox& b : objectBounds_) {
+      float objectFar = 0;
+      for (int c = 0; c < 8; ++c) {
+        const glm::vec3 p((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+        objectFar = std::max(objectFar, glm::length(p - eye));
+      }
+      const float objectNear = glm::length(glm::clamp(eye, b.lo, b.hi) - eye);
+      nearZ = std::min(nearZ, std::max(0.95f * objectNear, 1e-4f * objectFar));
+      farZ = std::max(farZ, objectFar);
     }
-    const glm::vec3 nearest = glm::clamp(eye, bounds_.lo, bounds_.hi);
-    nearZ = std::max(0.95f * glm::length(nearest - eye), 1e-4f * farZ);
+    if (!(nearZ > 0 && nearZ < 1e30f)) nearZ = 1e-4f * std::max(farZ, 1.0f);
     farZ = std::max(farZ * 1.01f, nearZ * 2);
     const double fovY = glm::radians(camera.fovYDegrees);
 
@@ -420,10 +426,15 @@ class RasterMethod : public Method, public RasterFrame {
       sb.points = std::max<uint64_t>(params_.pointBudget / 2, 1);
       sb.gpuBytes = std::max<uint64_t>(params_.gpuBytes / 2, 1 << 20);
       s.shadowStreamer = std::make_unique<streaming::Streamer>(*s.reader, *s.store, sb);
+      LocalBox scan;
       for (int c = 0; c < 8; ++c)
-        bounds_.add(scene_.local({(c & 1) ? meta.bounds.max.x : meta.bounds.min.x,
-                                  (c & 2) ? meta.bounds.max.y : meta.bounds.min.y,
-                                  (c & 4) ? meta.bounds.max.z : meta.bounds.min.z}));
+        scan.add(scene_.local({(c & 1) ? meta.bounds.max.x : meta.bounds.min.x,
+                               (c & 2) ? meta.bounds.max.y : meta.bounds.min.y,
+                               (c & 4) ? meta.bounds.max.z : meta.bounds.min.z}));
+      if (!scan.empty()) {
+        bounds_.add(scan.lo), bounds_.add(scan.hi);
+        objectBounds_.push_back(scan);
+      }
       scans_.push_back(std::move(s));
     }
   }
@@ -436,6 +447,7 @@ class RasterMethod : public Method, public RasterFrame {
       const glm::mat3 normalFrom = glm::transpose(glm::inverse(glm::mat3(localFromObject)));
       std::vector<float> v;
       v.reserve(mesh.positions.size() * 9);
+      LocalBox object;
       for (size_t i = 0; i < mesh.positions.size(); ++i) {
         const glm::vec3 p = glm::vec3(localFromObject * glm::vec4(mesh.positions[i], 1.0f));
         glm::vec3 n(0.0f);
@@ -446,8 +458,9 @@ class RasterMethod : public Method, public RasterFrame {
         }
         const Rgb c = mesh.colors.empty() ? Rgb(1.0f) : mesh.colors[i];
         v.insert(v.end(), {p.x, p.y, p.z, n.x, n.y, n.z, c.r, c.g, c.b});
-        if (std::isfinite(p.x + p.y + p.z)) bounds_.add(p);
+        if (std::isfinite(p.x + p.y + p.z)) bounds_.add(p), object.add(p);
       }
+      if (!object.empty()) objectBounds_.push_back(object);
       GpuMesh g;
       g.vertices = gl::Buffer(v.size() * 4, v.data(), 0);
       g.indices = gl::Buffer(mesh.indices.size() * 4, mesh.indices.data(), 0);
@@ -918,6 +931,7 @@ class RasterMethod : public Method, public RasterFrame {
   RasterParameters params_;
   std::unique_ptr<gl::GlContext> context_;
   LocalBox bounds_;
+  std::vector<LocalBox> objectBounds_;  // each scan's and mesh's: the near plane follows the nearest
   std::vector<GpuScan> scans_;
   std::vector<GpuMesh> meshes_;
   std::vector<TriangleMesh> cpuMeshes_;  // the files' meshes, until the extension's setUp is done

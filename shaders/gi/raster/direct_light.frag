@@ -45,8 +45,10 @@ void main() {
   }
   // The pixel's position in the full image's clip space, then the world.
   vec2 ndc = (pixel / frame.tile.zw) * 2.0 - 1.0;
-  vec4 far = frame.worldFromClip * vec4(ndc, 1.0, 1.0);
-  vec3 viewDir = normalize(far.xyz / far.w - frame.eye.xyz);
+  // The ray through the near plane: with far / near of 10^7 (a mesh 1000 km from the scan) the
+  // far plane's w is lost to float rounding and the sky pixels came out NaN.
+  vec4 onNear = frame.worldFromClip * vec4(ndc, -1.0, 1.0);
+  vec3 viewDir = normalize(onNear.xyz / onNear.w - frame.eye.xyz);
   if (depth >= 1.0) {
     outRadiance = vec4(environment(viewDir), 1.0);
     return;
