@@ -182,7 +182,10 @@ void addConvert(CLI::App& app, int& exitCode) {
                   "Points per node at most (leaves and samples)")
       ->check(CLI::Range(1000u, 1000000u))
       ->capture_default_str();
-  cmd->add_flag("--overwrite", opt->overwrite, "Replace an existing octree in the output folder");
+  cmd->add_flag("--overwrite", opt->overwrite,
+                "Replace an existing octree in the output folder. The new one is built beside it and swapped in\n"
+                "only when complete: a failure, a full disk or a kill leaves the old octree (and its layers) as it was;\n"
+                "other files in the folder are kept");
   cmd->add_flag("--lenient", read->lenient,
                 "Keep the complete records of files whose header disagrees with their data, and "
                 "the intact chunks of a damaged LAZ file (its damaged chunks count as rejected)");

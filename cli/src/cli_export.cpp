@@ -60,7 +60,8 @@ void addExport(CLI::App& app, int& exitCode) {
       ->check(CLI::IsMember({"las", "laz", "ply", "potree"}));
   cmd->add_option("--level", *level, "las/laz/ply: only the nodes of this level (0 = root)");
   cmd->add_flag("--force", *force,
-                "potree: write into a non-empty directory (replaces its Potree files)");
+                "potree: write into a non-empty directory: its Potree files are replaced by a dataset built beside\n"
+                "it and swapped in when complete (a failure leaves the old one), its other files are kept");
   cmd->add_option("--hierarchy-step", potree->stepSize, "potree: levels per hierarchy chunk")
       ->check(CLI::Range(1u, 16u))
       ->capture_default_str();
