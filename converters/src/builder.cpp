@@ -181,9 +181,11 @@ class Builder {
 
     auto t = Clock::now();
     countPass();
+    if (outsideCube_) throw OutsideCube{};
     report.phases["count"] = seconds(t);
     t = Clock::now();
     distributePass();
+    if (outsideCube_) throw OutsideCube{};
     report.phases["distribute"] = seconds(t);
     t = Clock::now();
     splitOversizedChunks();
@@ -479,7 +481,12 @@ class Builder {
       // Truncation after +0.5 rounds every value at or above -0.5 (no libm call per coordinate);
       // anything outside the cube cannot be placed, and the cube is planned again.
       const double u = (p[a] - meta_.offset[a]) * invScale_[a] + 0.5;
-      if (!(u >= 0 && u < double(maxInt) + 1)) throw OutsideCube{};
+      if (!(u >= 0 && u < double(maxInt) + 1)) {
+        // Flagged, not thrown: an exception out of the pipeline's parallel stage would strand
+        // the batches in flight. The pass ends and run() starts over (OutsideCube).
+        outsideCube_.store(true, std::memory_order_relaxed);
+        return false;
+      }
       q[a] = static_cast<uint32_t>(std::min<int64_t>(static_cast<int64_t>(u), maxInt));
     }
     return true;
@@ -1311,6 +1318,7 @@ class Builder {
   std::map<NodeKey, uint64_t> subtreePoints_;
   std::atomic<uint64_t> stored_{0};
   bool measureBounds_ = false;  // plan the cube from the points even where headers declare bounds
+  mutable std::atomic<bool> outsideCube_{false};  // a point beyond the planned cube was met
   std::vector<std::string> buildNotes_;  // facts of the build that `info` shows (metadata build.notes)
 };
 
