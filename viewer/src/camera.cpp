@@ -95,4 +95,37 @@ glm::dmat4 tileFromClip(int width, int height, int x0, int y0, int w, int h) {
   return m;
 }
 
+void CameraController::from(const Camera& c) {
+  target = c.target;
+  const glm::dvec3 d = c.eye - c.target;
+  distance = std::max(glm::length(d), 1e-6);
+  glm::dvec3 u = c.up;
+  const double len = glm::length(u);
+  if (!(len > 0) || !std::isfinite(len)) u = {0, 0, 1};
+  u = glm::normalize(u);
+  // The frame about `up`: for z-up, side = x and front = y, as the viewer always turned.
+  glm::dvec3 x{1, 0, 0};
+  if (std::abs(glm::dot(x, u)) > 0.99) x = {0, 1, 0};
+  up = u;
+  side = glm::normalize(x - glm::dot(x, u) * u);
+  front = glm::cross(up, side);
+  yaw = glm::degrees(std::atan2(glm::dot(d, front), glm::dot(d, side)));
+  pitch = glm::degrees(std::asin(std::clamp(glm::dot(d, up) / distance, -1.0, 1.0)));
+  fov = c.fovYDegrees;
+}
+
+glm::dvec3 CameraController::direction() const {
+  const double y = glm::radians(yaw), p = glm::radians(pitch);
+  return std::cos(p) * std::cos(y) * side + std::cos(p) * std::sin(y) * front + std::sin(p) * up;
+}
+
+Camera CameraController::camera() const {
+  Camera c;
+  c.fovYDegrees = fov;
+  c.target = target;
+  c.eye = target + direction() * distance;
+  c.up = up;
+  return c;
+}
+
 }  // namespace nestlight::viewer

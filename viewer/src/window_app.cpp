@@ -23,39 +23,6 @@
 
 namespace nestlight::viewer {
 
-namespace {
-
-// Orbit: yaw/pitch/distance around a target. Fly: the eye moves, the target follows the look.
-struct CameraController {
-  enum class Mode { Orbit, Fly } mode = Mode::Orbit;
-  glm::dvec3 target{0};
-  double yaw = 0, pitch = 0, distance = 1;  // degrees, degrees, world units
-  double fov = 60;
-  double speed = 1;                         // fly speed, world units per second
-
-  void from(const Camera& c) {
-    target = c.target;
-    const glm::dvec3 d = c.eye - c.target;
-    distance = std::max(glm::length(d), 1e-6);
-    yaw = glm::degrees(std::atan2(d.y, d.x));
-    pitch = glm::degrees(std::asin(std::clamp(d.z / distance, -1.0, 1.0)));
-    fov = c.fovYDegrees;
-  }
-  glm::dvec3 direction() const {  // from target to eye
-    const double y = glm::radians(yaw), p = glm::radians(pitch);
-    return {std::cos(p) * std::cos(y), std::cos(p) * std::sin(y), std::sin(p)};
-  }
-  Camera camera() const {
-    Camera c;
-    c.fovYDegrees = fov;
-    c.target = target;
-    c.eye = target + direction() * distance;
-    return c;
-  }
-};
-
-}  // namespace
-
 int runViewer(const ViewerOptions& opt) {
   OctreeReader reader(opt.octree);  // a bad octree fails before a window opens
   const Metadata& meta = reader.metadata();

@@ -35,6 +35,23 @@ struct Camera {
   streaming::View view(int widthPx, int heightPx) const;
 };
 
+// The viewer's camera control. Orbit: yaw/pitch/distance around a target; fly: the eye moves and
+// the target follows the look. Yaw turns about the camera's `up` (a scene camera's, z for
+// scans), pitch rises towards it, so a scene whose camera is not z-up opens and turns as it says.
+struct CameraController {
+  enum class Mode { Orbit, Fly } mode = Mode::Orbit;
+  glm::dvec3 target{0};
+  double yaw = 0, pitch = 0, distance = 1;  // degrees, degrees, world units
+  double fov = 60;
+  double speed = 1;                         // fly speed, world units per second
+  glm::dvec3 up{0, 0, 1}, side{1, 0, 0}, front{0, 1, 0};  // yaw 0 looks from `side`, yaw 90 from `front`
+
+  // Takes `c`'s target, eye and up (an up of zero length or along the view: z).
+  void from(const Camera& c);
+  glm::dvec3 direction() const;  // from target to eye
+  Camera camera() const;
+};
+
 // Clip-space transform that maps the pixel rectangle [x0, x0 + w) x [y0, y0 + h) of a
 // width x height image (y from the bottom) onto the whole viewport: renders a tile of a large
 // image with the large image's projection.
