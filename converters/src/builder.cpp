@@ -38,7 +38,9 @@
 #include <map>
 #include <numeric>
 #include <set>
+#include <mutex>
 #include <thread>
+#include <unordered_set>
 
 #include "nestlight/converters/normals.h"
 #include "nestlight/octree/error.h"
@@ -412,6 +414,20 @@ class Builder {
     size_t current = 0;
     uint64_t consumedBefore = 0;
     for (auto& s : sources_) s.reader->rewind();
+    // Batches between the stages are owned here until the last stage takes them: when a stage
+    // throws (damaged input, a full disk), the pipeline drops the batches in flight, and they are
+    // freed below rather than leaked.
+    std::mutex liveMutex;
+    std::unordered_set<Item*> live;
+    auto adopt = [&](Item* it) {
+      std::lock_guard<std::mutex> lock(liveMutex);
+      live.insert(it);
+    };
+    auto release = [&](Item* it) {
+      std::lock_guard<std::mutex> lock(liveMutex);
+      live.erase(it);
+    };
+    try {
     tbb::parallel_pipeline(
         threads_ * 2,
         tbb::make_filter<void, Item*>(tbb::filter_mode::serial_in_order,
@@ -432,6 +448,7 @@ class Builder {
                                             progress_.advance(r.bytesConsumed() - consumedBefore,
                                                               item->points);
                                             consumedBefore = r.bytesConsumed();
+                                            adopt(item.get());
                                             return item.release();
                                           }
                                           ++current;
@@ -442,22 +459,22 @@ class Builder {
                                       }) &
             tbb::make_filter<Item*, Item*>(tbb::filter_mode::parallel,
                                            [&](Item* it) {
-                                             try {
-                                               if (it->batch.pending) {
-                                                 it->batch.finish();  // may throw on damage
-                                                 it->points = it->batch.size() * it->weight;
-                                               }
-                                             } catch (...) {
-                                               delete it;
-                                               throw;
+                                             if (it->batch.pending) {
+                                               it->batch.finish();  // may throw on damage
+                                               it->points = it->batch.size() * it->weight;
                                              }
                                              work(*it);
                                              return it;
                                            }) &
             tbb::make_filter<Item*, void>(tbb::filter_mode::serial_in_order, [&](Item* it) {
+              release(it);
               std::unique_ptr<Item> own(it);
               collect(own);
             }));
+    } catch (...) {
+      for (Item* it : live) delete it;
+      throw;
+    }
     progress_.end();
   }
 
