@@ -71,12 +71,20 @@ TEST(Cli, EmptyFileIsAnErrorNamingIt) {
   EXPECT_EQ(runCli("verify " + t.file("o3"), &out), 0) << out;
 }
 
+namespace {
+// t/cut.las: a generated 1000-point LAS file with its last 100 bytes cut off.
+void writeTruncatedLas(const TempDir& t) {
+  std::string out;
+  ASSERT_EQ(runCli("generate -n 1000 -o " + t.file("s.las"), &out), 0) << out;
+  const std::string bytes = readFile(t.file("s.las"));
+  writeFile(t.file("cut.las"), bytes.substr(0, bytes.size() - 100));
+}
+}  // namespace
+
 TEST(Cli, TruncatedLasFailsUnlessLenient) {
   TempDir t;
   std::string out;
-  ASSERT_EQ(runCli("generate -n 1000 -o " + t.file("s.las"), &out), 0) << out;
-  std::string bytes = readFile(t.file("s.las"));
-  writeFile(t.file("cut.las"), bytes.substr(0, bytes.size() - 100));
+  writeTruncatedLas(t);
   EXPECT_NE(runCli("convert " + t.file("cut.las") + " -o " + t.file("o"), &out), 0);
   EXPECT_NE(out.find("cut.las"), std::string::npos) << out;
   EXPECT_NE(out.find("byte"), std::string::npos) << out;  // the position
@@ -178,9 +186,7 @@ TEST(Cli, DirectoryInputAndUnknownFormat) {
 TEST(Cli, WarningsNameTheFileOnce) {
   TempDir t;
   std::string out;
-  ASSERT_EQ(runCli("generate -n 1000 -o " + t.file("s.las"), &out), 0) << out;
-  std::string bytes = readFile(t.file("s.las"));
-  writeFile(t.file("cut.las"), bytes.substr(0, bytes.size() - 100));
+  writeTruncatedLas(t);
   ASSERT_EQ(runCli("convert --lenient " + t.file("cut.las") + " -o " + t.file("o") + " --progress quiet", &out), 0)
       << out;
   const size_t line = out.find("warning");
