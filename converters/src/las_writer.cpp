@@ -5,7 +5,9 @@
 // that reading the file back gives every attribute again.
 //
 // Points are written to `path`.tmp and renamed at close(), after the header's counts and bounds
-// are known: a killed export leaves no file that looks complete (DESIGN.md).
+// are known: a killed export leaves no file that looks complete (DESIGN.md). LAZ output is
+// compressed while the points arrive (laz::ChunkWriter), so an export needs the disk space of
+// its .laz file, never that of the uncompressed LAS.
 #include <array>
 #include <cerrno>
 #include <cmath>
@@ -17,6 +19,7 @@
 #include <string>
 
 #include "las_format.h"
+#include "laz_points.h"
 #include "laz_writer.h"
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/octree/error.h"
@@ -271,7 +274,7 @@ class LasWriter final : public PointWriter {
     file_ = std::fopen(tmp_.c_str(), "w+b");
     if (!file_) throw Error(tmp_, "", std::string("cannot create: ") + std::strerror(errno));
     try {
-      start(file_, tmp_, plan_);
+      chunks_ = start(file_, tmp_, plan_);
     } catch (...) {
       discard();
       throw;
@@ -320,7 +323,10 @@ class LasWriter final : public PointWriter {
       const uint8_t ret = field<uint8_t>(plan_, kFReturnNumber, attrs, 1);
       if (ret >= 1 && ret <= 15) ++byReturn_[ret - 1];
     }
-    writeBytes(file_, tmp_, buffer_.data(), buffer_.size());
+    if (chunks_)
+      chunks_->add(buffer_.data(), n);
+    else
+      writeBytes(file_, tmp_, buffer_.data(), buffer_.size());
     count_ += n;
   }
 
@@ -329,6 +335,10 @@ class LasWriter final : public PointWriter {
     try {
       if (plan_.minor < 4 && count_ > std::numeric_limits<uint32_t>::max())
         rewrite(makePlan(layout_, plan_.pointFormat, 4));
+      if (chunks_) {
+        chunks_->finish();
+        chunks_.reset();
+      }
       const std::vector<uint8_t> h = headerBytes(plan_);
       if (::fseeko(file_, 0, SEEK_SET) != 0) ioError(tmp_, "seek");
       writeBytes(file_, tmp_, h.data(), h.size());
@@ -336,21 +346,6 @@ class LasWriter final : public PointWriter {
       file_ = nullptr;
       if (std::fclose(f) != 0) ioError(tmp_, "close");
       std::error_code ec;
-      if (compress_) {
-        // The records are final only now (a late value may have changed the point format), so
-        // LAZ is compressed from the finished LAS file.
-        const std::string z = path_ + ".laztmp";
-        try {
-          laz::compressLas(tmp_, z, path_);
-        } catch (...) {
-          std::filesystem::remove(z, ec);
-          throw;
-        }
-        std::filesystem::remove(tmp_, ec);
-        std::filesystem::rename(z, path_, ec);
-        if (ec) throw Error(path_, "", "cannot rename " + z + ": " + ec.message());
-        return;
-      }
       std::filesystem::rename(tmp_, path_, ec);
       if (ec) throw Error(path_, "", "cannot rename " + tmp_ + ": " + ec.message());
     } catch (...) {
@@ -378,6 +373,7 @@ class LasWriter final : public PointWriter {
   }
 
   void discard() {
+    chunks_.reset();
     if (file_) std::fclose(file_);
     file_ = nullptr;
     std::error_code ec;
@@ -435,6 +431,12 @@ class LasWriter final : public PointWriter {
         }
       }
       add("LASF_Spec", las::kRecordExtraBytes, "Extra Bytes", desc.data(), desc.size());
+    }
+    if (compress_) {
+      // LASzip's VLR, which LAZ readers look for by its user and record id.
+      const std::vector<uint8_t> v = laz::ChunkWriter(p.pointFormat, p.recordLength, path_).vlr();
+      out.insert(out.end(), v.begin(), v.end());
+      ++*count;
     }
     if (!wkt_.empty()) {
       // The WKT is NUL-terminated (spec 2.5.1).
@@ -495,7 +497,7 @@ class LasWriter final : public PointWriter {
     store<uint16_t>(&h[94], static_cast<uint16_t>(p.headerSize));
     store<uint32_t>(&h[96], static_cast<uint32_t>(p.headerSize + vlrs.size()));
     store<uint32_t>(&h[100], vlrCount);
-    h[104] = static_cast<uint8_t>(p.pointFormat);
+    h[104] = static_cast<uint8_t>(p.pointFormat | (compress_ ? 0x80 : 0));
     store<uint16_t>(&h[105], static_cast<uint16_t>(p.recordLength));
     // LAS 1.4 keeps the 32-bit counts zero for formats 6+ and for counts they cannot hold.
     const bool legacyCounts =
@@ -520,51 +522,87 @@ class LasWriter final : public PointWriter {
     return h;
   }
 
-  // Writes the header and VLRs of `p`; records follow.
-  void start(std::FILE* f, const std::string& name, const Plan& p) {
+  // Writes the header and VLRs of `p`; records follow, or for LAZ the returned chunk writer's
+  // point data.
+  std::unique_ptr<laz::ChunkWriter> start(std::FILE* f, const std::string& name, const Plan& p) {
     if (p.recordLength > std::numeric_limits<uint16_t>::max())
       throw Error(path_, "",
                   "a LAS point record would need " + std::to_string(p.recordLength) +
                       " bytes; LAS allows 65535");
     const std::vector<uint8_t> h = headerBytes(p);
     writeBytes(f, name, h.data(), h.size());
+    if (!compress_) return nullptr;
+    auto chunks = std::make_unique<laz::ChunkWriter>(p.pointFormat, p.recordLength, path_);
+    chunks->begin(f, name, h.size());
+    return chunks;
   }
 
   // Re-encodes the records written so far under a new plan (another point format or LAS
-  // version). Rare: only when a value turns up that the first choice cannot hold.
+  // version). Rare: only when a value turns up that the first choice cannot hold. LAZ output
+  // decodes its chunks written so far.
   void rewrite(const Plan& next) {
     const std::string tmp2 = tmp_ + "2";
     std::FILE* out = std::fopen(tmp2.c_str(), "w+b");
     if (!out) ioError(tmp2, "create");
+    std::unique_ptr<laz::ChunkWriter> nextChunks;
     try {
-      start(out, tmp2, next);
-      const uint64_t firstRecord = headerBytes(plan_).size();
-      if (std::fflush(file_) != 0 ||
-          ::fseeko(file_, static_cast<off_t>(firstRecord), SEEK_SET) != 0)
-        ioError(tmp_, "seek");
-      const size_t chunk = 65536;
-      std::vector<uint8_t> in(chunk * plan_.recordLength), outBuf(chunk * next.recordLength);
-      std::vector<uint8_t> attrs(layout_.stride());
-      for (uint64_t done = 0; done < count_;) {
-        const size_t n = static_cast<size_t>(std::min<uint64_t>(chunk, count_ - done));
-        if (std::fread(in.data(), plan_.recordLength, n, file_) != n) ioError(tmp_, "read back");
+      nextChunks = start(out, tmp2, next);
+      std::vector<uint8_t> outBuf, attrs(layout_.stride());
+      auto reencode = [&](const uint8_t* records, size_t n, uint64_t done) {
+        outBuf.resize(n * next.recordLength);
         for (size_t i = 0; i < n; ++i) {
-          const uint8_t* r = in.data() + i * plan_.recordLength;
+          const uint8_t* r = records + i * plan_.recordLength;
           decodeRecord(plan_, r, attrs.data());
           int32_t q[3];
           std::memcpy(q, r, 12);
           encodeRecord(next, q, attrs.data(), outBuf.data() + i * next.recordLength, path_,
                        done + i);
         }
-        writeBytes(out, tmp2, outBuf.data(), n * next.recordLength);
-        done += n;
+        if (nextChunks)
+          nextChunks->add(outBuf.data(), n);
+        else
+          writeBytes(out, tmp2, outBuf.data(), n * next.recordLength);
+      };
+      const uint64_t firstRecord = headerBytes(plan_).size();
+      if (chunks_) {
+        chunks_->finish();
+        if (std::fflush(file_) != 0) ioError(tmp_, "flush");
+        const laz::LaszipInfo info = chunks_->info();
+        chunks_.reset();
+        auto src = mapFile(tmp_);
+        laz::LazPoints points(src, info, firstRecord, src->size(), count_, false,
+                              [](const std::string&) {});
+        NL_CHECK(points.points() == count_);
+        laz::RecordBuffer records;
+        uint64_t done = 0;
+        for (size_t c = 0; c < points.chunks().size(); ++c) {
+          const uint64_t n = points.decode({c}, records);
+          reencode(records.data(), size_t(n), done);
+          done += n;
+        }
+        NL_CHECK(done == count_);
+      } else {
+        if (std::fflush(file_) != 0 ||
+            ::fseeko(file_, static_cast<off_t>(firstRecord), SEEK_SET) != 0)
+          ioError(tmp_, "seek");
+        const size_t chunk = 65536;
+        std::vector<uint8_t> in(chunk * plan_.recordLength);
+        for (uint64_t done = 0; done < count_;) {
+          const size_t n = static_cast<size_t>(std::min<uint64_t>(chunk, count_ - done));
+          if (std::fread(in.data(), plan_.recordLength, n, file_) != n)
+            ioError(tmp_, "read back");
+          reencode(in.data(), n, done);
+          done += n;
+        }
       }
     } catch (...) {
+      nextChunks.reset();
       std::fclose(out);
       throw;
     }
     std::fclose(file_);
     file_ = out;
+    chunks_ = std::move(nextChunks);
     std::error_code ec;
     std::filesystem::rename(tmp2, tmp_, ec);
     if (ec) throw Error(tmp_, "", "cannot rename " + tmp2 + ": " + ec.message());
@@ -576,6 +614,7 @@ class LasWriter final : public PointWriter {
   bool compress_ = false;
   Plan plan_;
   std::FILE* file_ = nullptr;
+  std::unique_ptr<laz::ChunkWriter> chunks_;  // LAZ: the compressed point data being written
   Vec3d scale_, offset_;
   bool haveOffset_ = false;
   bool gpsStandard_ = false;

@@ -30,7 +30,6 @@
 namespace nestlight::laz {
 namespace {
 
-constexpr uint32_t kChunkPoints = 50000;
 
 class ItemEncoder {
  public:
@@ -285,6 +284,138 @@ class PointwiseEncoder final : public ChunkEncoder {
 
 }  // namespace
 
+static LaszipInfo infoFor(int pf, size_t recordLength, const std::string& nameForErrors) {
+  if (pf < 0 || pf > 8 || pf == 4 || pf == 5)
+    throw Error(nameForErrors, "",
+                "LAZ output covers point formats 0-3 and 6-8 (no waveform packets); these points "
+                "need LAS point format " +
+                    std::to_string(pf) + ": write .las instead");
+  LaszipInfo info;
+  info.chunkSize = kChunkPoints;
+  const size_t extra = recordLength - las::kBaseRecordSize[pf];
+  if (pf <= 3) {
+    info.compressor = Compressor::PointwiseChunked;
+    info.versionMajor = 2;
+    info.versionMinor = 2;
+  } else {
+    info.compressor = Compressor::LayeredChunked;
+    info.versionMajor = 3;
+    info.versionMinor = 4;
+    info.versionRevision = 3;
+  }
+  info.items = itemsFor(pf, extra, pf <= 3 ? 2 : 3);
+  NL_CHECK(info.recordSize() == recordLength);
+  return info;
+}
+
+struct ChunkWriter::Encoders {
+  explicit Encoders(const LaszipInfo& info)
+      : local([&info]() -> std::unique_ptr<ChunkEncoder> {
+          if (info.compressor == Compressor::LayeredChunked) return makeLayeredEncoder(info);
+          return std::make_unique<PointwiseEncoder>(info);
+        }) {}
+  tbb::enumerable_thread_specific<std::unique_ptr<ChunkEncoder>> local;
+};
+
+ChunkWriter::ChunkWriter(int pointFormat, size_t recordLength, std::string nameForErrors)
+    : info_(infoFor(pointFormat, recordLength, nameForErrors)),
+      recordLength_(recordLength),
+      name_(std::move(nameForErrors)),
+      encoders_(std::make_unique<Encoders>(info_)) {}
+
+ChunkWriter::~ChunkWriter() = default;
+
+std::vector<uint8_t> ChunkWriter::vlr() const {
+  std::vector<uint8_t> vlr(las::kVlrHeaderSize + 34 + 6 * info_.items.size(), 0);
+  const std::string user = kLaszipUserId;
+  std::copy(user.begin(), user.end(), vlr.begin() + 2);
+  las::store<uint16_t>(&vlr[18], kLaszipRecordId);
+  las::store<uint16_t>(&vlr[20], uint16_t(vlr.size() - las::kVlrHeaderSize));
+  const std::string text = "Nestlight LASzip encoder";
+  std::copy(text.begin(), text.end(), vlr.begin() + 22);
+  uint8_t* p = &vlr[las::kVlrHeaderSize];
+  las::store<uint16_t>(p + 0, uint16_t(info_.compressor));
+  las::store<uint16_t>(p + 2, 0);  // arithmetic coder
+  p[4] = info_.versionMajor;
+  p[5] = info_.versionMinor;
+  las::store<uint16_t>(p + 6, info_.versionRevision);
+  las::store<uint32_t>(p + 8, 0);
+  las::store<uint32_t>(p + 12, info_.chunkSize);
+  las::store<int64_t>(p + 16, -1);  // no special EVLRs
+  las::store<int64_t>(p + 24, -1);
+  las::store<uint16_t>(p + 32, uint16_t(info_.items.size()));
+  for (size_t i = 0; i < info_.items.size(); ++i) {
+    las::store<uint16_t>(p + 34 + 6 * i, uint16_t(info_.items[i].type));
+    las::store<uint16_t>(p + 36 + 6 * i, info_.items[i].size);
+    las::store<uint16_t>(p + 38 + 6 * i, info_.items[i].version);
+  }
+  return vlr;
+}
+
+void ChunkWriter::put(const void* p, size_t n) {
+  if (n && std::fwrite(p, 1, n, f_) != n)
+    throw Error(file_, "", std::string("cannot write: ") + std::strerror(errno));
+}
+
+void ChunkWriter::begin(std::FILE* f, std::string fileName, uint64_t pointStart) {
+  NL_CHECK(!f_);
+  f_ = f;
+  file_ = std::move(fileName);
+  tableSlot_ = pointStart;
+  if (::fseeko(f_, off_t(pointStart), SEEK_SET) != 0)
+    throw Error(file_, "", std::string("cannot seek: ") + std::strerror(errno));
+  const int64_t placeholder = 0;
+  put(&placeholder, 8);
+  at_ = pointStart + 8;
+}
+
+void ChunkWriter::add(const uint8_t* records, size_t n) {
+  NL_CHECK(f_);
+  pending_.insert(pending_.end(), records, records + n * recordLength_);
+  points_ += n;
+  if (pending_.size() >= kGroupChunks * kChunkPoints * recordLength_) flush(false);
+}
+
+void ChunkWriter::flush(bool all) {
+  const size_t n = pending_.size() / recordLength_;
+  const size_t chunks = all ? (n + kChunkPoints - 1) / kChunkPoints : n / kChunkPoints;
+  if (chunks == 0) return;
+  std::vector<std::vector<uint8_t>> out(chunks);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+    const size_t first = c * kChunkPoints;
+    const size_t m = std::min<size_t>(kChunkPoints, n - first);
+    encoders_->local.local()->encode(pending_.data() + first * recordLength_, m, out[c]);
+  });
+  for (auto& o : out) {
+    put(o.data(), o.size());
+    chunkBytes_.push_back(uint32_t(o.size()));
+    at_ += o.size();
+  }
+  const size_t used = std::min(n, chunks * size_t(kChunkPoints)) * recordLength_;
+  pending_.erase(pending_.begin(), pending_.begin() + ptrdiff_t(used));
+}
+
+void ChunkWriter::finish() {
+  NL_CHECK(f_);
+  flush(true);
+  // The chunk table: version 0, the count, then each chunk's bytes predicted from the previous.
+  std::vector<uint8_t> table(8, 0);
+  las::store<uint32_t>(&table[4], uint32_t(chunkBytes_.size()));
+  {
+    ArithmeticEncoder enc(table);
+    IntegerDecoder ic(32, 2);
+    for (size_t i = 0; i < chunkBytes_.size(); ++i)
+      ic.compress(enc, i ? int32_t(chunkBytes_[i - 1]) : 0, int32_t(chunkBytes_[i]), 1);
+    enc.done();
+  }
+  put(table.data(), table.size());
+  const int64_t tableAt = int64_t(at_);
+  if (::fseeko(f_, off_t(tableSlot_), SEEK_SET) != 0)
+    throw Error(file_, "", std::string("cannot seek: ") + std::strerror(errno));
+  put(&tableAt, 8);
+  f_ = nullptr;
+}
+
 void compressLas(const std::string& lasPath, const std::string& lazPath,
                  const std::string& nameForErrors) {
   auto src = mapFile(lasPath);
@@ -304,55 +435,11 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
     if (las::load<uint32_t>(d + 243) != 0)
       throw Error(nameForErrors, "", "LAZ output of files with EVLRs is not supported");
   }
-  if (pf > 8 || pf == 4 || pf == 5)
-    throw Error(nameForErrors, "",
-                "LAZ output covers point formats 0-3 and 6-8 (no waveform packets); these points "
-                "need LAS point format " +
-                    std::to_string(pf) + ": write .las instead");
+  ChunkWriter chunks(pf, recordLength, nameForErrors);
   NL_CHECK(uint64_t(pointStart) + count * recordLength <= size);
 
-  LaszipInfo info;
-  info.chunkSize = kChunkPoints;
-  const size_t extra = recordLength - las::kBaseRecordSize[pf];
-  if (pf <= 3) {
-    info.compressor = Compressor::PointwiseChunked;
-    info.versionMajor = 2;
-    info.versionMinor = 2;
-  } else {
-    info.compressor = Compressor::LayeredChunked;
-    info.versionMajor = 3;
-    info.versionMinor = 4;
-    info.versionRevision = 3;
-  }
-  info.items = itemsFor(pf, extra, pf <= 3 ? 2 : 3);
-  NL_CHECK(info.recordSize() == recordLength);
-
   // The LASzip VLR goes after the existing ones.
-  std::vector<uint8_t> vlr(las::kVlrHeaderSize + 34 + 6 * info.items.size(), 0);
-  const std::string user = kLaszipUserId;
-  std::copy(user.begin(), user.end(), vlr.begin() + 2);
-  las::store<uint16_t>(&vlr[18], kLaszipRecordId);
-  las::store<uint16_t>(&vlr[20], uint16_t(vlr.size() - las::kVlrHeaderSize));
-  const char* description = "Nestlight LASzip encoder";
-  const std::string text = description;
-  std::copy(text.begin(), text.end(), vlr.begin() + 22);
-  uint8_t* p = &vlr[las::kVlrHeaderSize];
-  las::store<uint16_t>(p + 0, uint16_t(info.compressor));
-  las::store<uint16_t>(p + 2, 0);  // arithmetic coder
-  p[4] = info.versionMajor;
-  p[5] = info.versionMinor;
-  las::store<uint16_t>(p + 6, info.versionRevision);
-  las::store<uint32_t>(p + 8, 0);
-  las::store<uint32_t>(p + 12, info.chunkSize);
-  las::store<int64_t>(p + 16, -1);  // no special EVLRs
-  las::store<int64_t>(p + 24, -1);
-  las::store<uint16_t>(p + 32, uint16_t(info.items.size()));
-  for (size_t i = 0; i < info.items.size(); ++i) {
-    las::store<uint16_t>(p + 34 + 6 * i, uint16_t(info.items[i].type));
-    las::store<uint16_t>(p + 36 + 6 * i, info.items[i].size);
-    las::store<uint16_t>(p + 38 + 6 * i, info.items[i].version);
-  }
-
+  const std::vector<uint8_t> vlr = chunks.vlr();
   std::vector<uint8_t> head(d, d + pointStart);
   head.insert(head.end(), vlr.begin(), vlr.end());
   head[104] = uint8_t(pf | 0x80);
@@ -361,59 +448,21 @@ void compressLas(const std::string& lasPath, const std::string& lazPath,
 
   std::FILE* f = std::fopen(lazPath.c_str(), "wb");
   if (!f) throw Error(lazPath, "", std::string("cannot create: ") + std::strerror(errno));
-  auto put = [&](const void* q, size_t n) {
-    if (n && std::fwrite(q, 1, n, f) != n) {
-      std::fclose(f);
+  try {
+    if (head.size() && std::fwrite(head.data(), 1, head.size(), f) != head.size())
       throw Error(lazPath, "", std::string("cannot write: ") + std::strerror(errno));
+    chunks.begin(f, lazPath, head.size());
+    const uint64_t step = uint64_t(ChunkWriter::kGroupChunks) * kChunkPoints;
+    for (uint64_t first = 0; first < count; first += step) {
+      const uint64_t n = std::min(step, count - first);
+      chunks.add(d + pointStart + first * recordLength, size_t(n));
+      src->releaseBefore(pointStart + (first + n) * recordLength);
     }
-  };
-  put(head.data(), head.size());
-  const int64_t tableAtPlaceholder = 0;
-  put(&tableAtPlaceholder, 8);
-  uint64_t at = head.size() + 8;
-
-  const uint64_t chunks = (count + kChunkPoints - 1) / kChunkPoints;
-  std::vector<uint32_t> chunkBytes;
-  chunkBytes.reserve(chunks);
-  tbb::enumerable_thread_specific<std::unique_ptr<ChunkEncoder>> encoders(
-      [&]() -> std::unique_ptr<ChunkEncoder> {
-        if (info.compressor == Compressor::LayeredChunked) return makeLayeredEncoder(info);
-        return std::make_unique<PointwiseEncoder>(info);
-      });
-  const uint64_t group = 64;  // chunks in memory at once: a few tens of MiB
-  for (uint64_t c0 = 0; c0 < chunks; c0 += group) {
-    const uint64_t c1 = std::min(chunks, c0 + group);
-    std::vector<std::vector<uint8_t>> out(c1 - c0);
-    tbb::parallel_for(c0, c1, [&](uint64_t c) {
-      const uint64_t first = c * kChunkPoints;
-      const size_t n = size_t(std::min<uint64_t>(kChunkPoints, count - first));
-      encoders.local()->encode(d + pointStart + first * recordLength, n, out[c - c0]);
-    });
-    for (auto& o : out) {
-      put(o.data(), o.size());
-      chunkBytes.push_back(uint32_t(o.size()));
-      at += o.size();
-    }
-    src->releaseBefore(pointStart + c1 * kChunkPoints * recordLength);
-  }
-
-  // The chunk table: version 0, the count, then each chunk's bytes predicted from the previous.
-  std::vector<uint8_t> table(8, 0);
-  las::store<uint32_t>(&table[4], uint32_t(chunks));
-  {
-    ArithmeticEncoder enc(table);
-    IntegerDecoder ic(32, 2);
-    for (size_t i = 0; i < chunkBytes.size(); ++i)
-      ic.compress(enc, i ? int32_t(chunkBytes[i - 1]) : 0, int32_t(chunkBytes[i]), 1);
-    enc.done();
-  }
-  put(table.data(), table.size());
-  const int64_t tableAt = int64_t(at);
-  if (::fseeko(f, off_t(head.size()), SEEK_SET) != 0) {
+    chunks.finish();
+  } catch (...) {
     std::fclose(f);
-    throw Error(lazPath, "", "cannot seek");
+    throw;
   }
-  put(&tableAt, 8);
   if (std::fclose(f) != 0)
     throw Error(lazPath, "", std::string("cannot close: ") + std::strerror(errno));
 }

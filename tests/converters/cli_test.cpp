@@ -2,6 +2,8 @@
 // --help, info --json, and the hard input cases end to end.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -210,6 +212,40 @@ TEST(Cli, ExportMakesAMissingOutputFolder) {
     ASSERT_EQ(runCli("export " + t.file("o") + " -o " + t.file(f), &out), 0) << f << ": " << out;
     EXPECT_TRUE(fs::exists(t.file(f))) << f;
   }
+}
+
+// LAZ output needs the disk space of the .laz file alone: points are compressed as they arrive,
+// nothing uncompressed is written first. A file size limit (ulimit -f, in KiB) stands in for a
+// nearly full disk: at 1.2 times the .laz file's size the export succeeds (the uncompressed LAS
+// written first would once have failed); below the .laz file's size it fails naming the file and leaves
+// nothing behind.
+TEST(Cli, LazOutputNeedsOnlyTheSpaceOfTheLazFile) {
+  TempDir t;
+  std::string out;
+  const std::string gen = " generate -n 300000 --seed 5 -o ";
+  ASSERT_EQ(runCli(gen + t.file("free.laz"), &out), 0) << out;
+  ASSERT_EQ(runCli(gen + t.file("free.las"), &out), 0) << out;
+  const auto laz = fs::file_size(t.file("free.laz")), las = fs::file_size(t.file("free.las"));
+  const uint64_t roomy = laz * 6 / 5;
+  ASSERT_GT(las, roomy + roomy / 4) << "the test needs a LAS file well beyond the limit";
+  auto limited = [&](uint64_t kib, const std::string& file) {
+    const std::string cmd = "bash -c \"trap '' XFSZ; ulimit -f " + std::to_string(kib) + "; exec " +
+                            nestlight::test::nestlightBinary() + gen + t.file(file) + "\" 2>&1";
+    FILE* f = ::popen(cmd.c_str(), "r");
+    out.clear();
+    char buf[4096];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
+    const int status = ::pclose(f);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  };
+  ASSERT_EQ(limited(roomy / 1024, "roomy.laz"), 0) << out;
+  EXPECT_EQ(fs::file_size(t.file("roomy.laz")), laz);
+  EXPECT_NE(limited(laz / 2 / 1024, "tight.laz"), 0) << out;
+  EXPECT_NE(out.find("tight.laz"), std::string::npos) << out;
+  EXPECT_NE(out.find("File too large"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(t.file("tight.laz")));
+  EXPECT_FALSE(fs::exists(t.file("tight.laz.tmp")));
 }
 
 // A scene render takes the streaming options the real-time methods have, refuses those that do

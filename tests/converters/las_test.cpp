@@ -808,10 +808,11 @@ TEST(LasWriter, OtherAttributesGoToExtraBytes) {
                            &out.attrs[out.layout.offset(q1)], 4));
 }
 
-TEST(LasWriter, ValuesOnlyFormat6HoldsUpgradeTheFile) {
-  // A layout that fits format 1 until a point with 9 returns arrives in the second batch.
+// A layout that fits format 1 until points with 9 returns arrive in the second batch: the file
+// is upgraded to format 6, LAS 1.4, and every point reads back.
+void checkUpgrade(bool laz, int first, int second) {
   TempDir dir;
-  const std::string path = dir.file("upgrade.las");
+  const std::string path = dir.file(laz ? "upgrade.laz" : "upgrade.las");
   SourceHeader h = simpleHeader({{"return_number", ScalarType::U8, 1, ""},
                                  {"number_of_returns", ScalarType::U8, 1, ""},
                                  {"classification", ScalarType::U8, 1, ""},
@@ -819,10 +820,10 @@ TEST(LasWriter, ValuesOnlyFormat6HoldsUpgradeTheFile) {
                                  {"gps_time", ScalarType::F64, 1, ""}});
   h.scale = Vec3d{0.01, 0.01, 0.01};
   h.crs["wkt"] = "PROJCS[\"x\"]";
-  auto w = createLasWriter(path, h);
-  auto batch = [&](int first, int n, int returns) {
+  auto w = laz ? createLazWriter(path, h) : createLasWriter(path, h);
+  auto batch = [&](int from, int n, int returns) {
     PointBatch b;
-    for (int i = first; i < first + n; ++i) {
+    for (int i = from; i < from + n; ++i) {
       b.xyz.insert(b.xyz.end(), {i * 1.0, i * 2.0, i * 0.5});
       b.attrs.push_back(static_cast<uint8_t>(1 + i % returns));
       b.attrs.push_back(static_cast<uint8_t>(returns));
@@ -834,29 +835,46 @@ TEST(LasWriter, ValuesOnlyFormat6HoldsUpgradeTheFile) {
     }
     return b;
   };
-  w->write(batch(0, 100, 3));
-  w->write(batch(100, 100, 9));
+  w->write(batch(0, first, 3));
+  w->write(batch(first, second, 9));
   w->close();
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp2"));
   auto r = openReader(path);
   EXPECT_EQ(r->header().details["point_format"], 6);
   EXPECT_EQ(r->header().details["version"], "1.4");
+  if (laz) EXPECT_EQ(r->header().details["laszip"]["compressor"], "layered chunked");
   EXPECT_EQ(r->header().details["global_encoding"].get<int>() & 16, 16);  // WKT
   EXPECT_EQ(r->header().crs["wkt"], "PROJCS[\"x\"]");
   const AllPoints out = readAll(*r);
-  ASSERT_EQ(out.size(), 200u);
-  for (int i = 0; i < 200; ++i) {
-    const int returns = i < 100 ? 3 : 9;
-    EXPECT_EQ(out.get("return_number", i), 1 + i % returns);
-    EXPECT_EQ(out.get("number_of_returns", i), returns);
-    EXPECT_EQ(out.get("classification", i), i % 32);
-    EXPECT_EQ(out.get("scan_angle_rank", i), static_cast<int8_t>(-i));
-    EXPECT_EQ(out.get("gps_time", i), 1000 + i * 0.001);
-    EXPECT_EQ(out.xyz[3 * i + 1], std::nearbyint(i * 200.0) * 0.01);
+  const int total = first + second;
+  ASSERT_EQ(out.size(), size_t(total));
+  int wrong = 0;
+  for (int i = 0; i < total && wrong < 5; ++i) {
+    const int returns = i < first ? 3 : 9;
+    const bool ok = out.get("return_number", i) == 1 + i % returns &&
+                    out.get("number_of_returns", i) == returns &&
+                    out.get("classification", i) == i % 32 &&
+                    out.get("scan_angle_rank", i) == static_cast<int8_t>(-i) &&
+                    out.get("gps_time", i) == 1000 + i * 0.001 &&
+                    out.xyz[3 * i + 1] == std::nearbyint(i * 200.0) * 0.01;
+    if (!ok) ADD_FAILURE() << "point " << i << " differs", ++wrong;
   }
-  // Counts by return in the header: returns 1..9.
+  // Counts by return in the header.
+  uint64_t want[9] = {};
+  for (int i = 0; i < total; ++i) ++want[i % (i < first ? 3 : 9)];
   const auto& byReturn = r->header().details["points_by_return"];
-  EXPECT_EQ(byReturn[0], 34 + 11);
-  EXPECT_EQ(byReturn[8], 11);
+  EXPECT_EQ(byReturn[0], want[0]);
+  EXPECT_EQ(byReturn[8], want[8]);
+}
+
+TEST(LasWriter, ValuesOnlyFormat6HoldsUpgradeTheFile) { checkUpgrade(false, 100, 100); }
+
+// LAZ is compressed as points arrive, so the upgrade decodes the chunks already written (more
+// than one group of them here, and a partial chunk still held) and compresses them again.
+TEST(LazWriter, ValuesOnlyFormat6HoldsUpgradeTheCompressedFile) {
+  checkUpgrade(true, 100, 100);
+  checkUpgrade(true, 16 * 50000 + 30000, 70000);
 }
 
 TEST(LasWriter, UnrepresentablePointsAreErrorsAndLeaveNoFile) {
