@@ -101,6 +101,19 @@ class ChunkDecoder {
   // do, a count inside the chunk disagrees, or a field cannot be decoded.
   virtual size_t decode(const uint8_t* data, size_t size, uint32_t count, uint8_t* out) = 0;
 
+  // How many points the chunk in [data, data + size) holds, at most `most`, for chunks whose
+  // count nothing else records (the last chunk of a fixed chunk size, when the header's count
+  // is wrong). Layered chunks store their count. A pointwise chunk is decoded into `scratch`
+  // (`most` records) until its arithmetic stream is used up: the encoder's padding makes the
+  // bytes consumed after the last point equal the stream's length, so `least` is the first count
+  // that consumes the whole stream; points that cost no new bytes may follow it without running
+  // dry, up to `upTo`. {0, 0} when the chunk cannot hold its first point.
+  struct PointCount {
+    uint32_t least = 0, upTo = 0;
+  };
+  virtual PointCount countPoints(const uint8_t* data, size_t size, uint32_t most,
+                                 uint8_t* scratch) = 0;
+
   struct Job {
     const uint8_t* data;
     size_t size;

@@ -36,6 +36,7 @@
 // its raw record whatever its layers hold (the reference would still start the first stream).
 #include "laz_layered.h"
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <memory>
@@ -119,6 +120,13 @@ class LayeredDecoder final : public ChunkDecoder {
       secondary_.push_back(std::move(s));
       offset += it.size;
     }
+  }
+
+  PointCount countPoints(const uint8_t* data, size_t size, uint32_t most, uint8_t*) override {
+    PointCount r;
+    if (most == 0 || size < recordSize_ + 4) return r;
+    r.least = r.upTo = std::min(get<uint32_t>(data + recordSize_), most);
+    return r;
   }
 
   size_t decode(const uint8_t* data, size_t size, uint32_t count, uint8_t* out) override {

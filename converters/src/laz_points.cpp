@@ -107,10 +107,14 @@ void LazPoints::readChunkTable(uint64_t declared) {
     if (!hierarchy_.empty()) {
       warn_(src_->name() + ": " + Error::atByte(tableAt) + ": " + why +
             "; the chunks are read from the COPC hierarchy instead");
+      chunks_.clear();
+      unreadableAtOpen_ = 0;
       useHierarchy(declared);
       return;
     }
     if (!fixed) fail(tableAt, why + "; a file with variable-size chunks cannot be read without it");
+    chunks_.clear();
+    unreadableAtOpen_ = 0;
     // Not an error by itself (LASzip reads such files too): a damaged chunk on the way is.
     warn_(src_->name() + ": " + Error::atByte(tableAt) + ": " + why +
           "; chunks are found one after the other (no parallel decoding)");
@@ -151,10 +155,13 @@ void LazPoints::readChunkTable(uint64_t declared) {
       if (!fixed)
         counts[i] = static_cast<uint32_t>(ic.decompress(dec, i ? int32_t(counts[i - 1]) : 0, 0));
       bytes[i] = static_cast<uint32_t>(ic.decompress(dec, i ? int32_t(bytes[i - 1]) : 0, 1));
-      if (dec.overrun())
-        fail(size, "the LAZ chunk table (from byte " + std::to_string(tableStart_) +
-                       ") ends inside the entry of chunk " + std::to_string(i + 1) + " of " +
-                       std::to_string(n));
+      if (dec.overrun()) {
+        const std::string what = "the LAZ chunk table (from byte " + std::to_string(tableStart_) +
+                                 ") ends inside the entry of chunk " + std::to_string(i + 1) +
+                                 " of " + std::to_string(n);
+        if (lenient_ && (fixed || !hierarchy_.empty())) return sequential(what);
+        fail(size, what);
+      }
     }
   }
   tabled_ = true;
@@ -166,10 +173,11 @@ void LazPoints::readChunkTable(uint64_t declared) {
     c.offset = at;
     c.bytes = bytes[i];
     c.firstPoint = first;
-    c.points =
-        fixed
-            ? uint32_t(std::min<uint64_t>(info_.chunkSize, declared > first ? declared - first : 0))
-            : counts[i];
+    // Fixed-size chunks are full but for the last, whose count the header's implies.
+    c.points = !fixed       ? counts[i]
+               : i + 1 < n ? info_.chunkSize
+                           : uint32_t(std::min<uint64_t>(info_.chunkSize,
+                                                         declared > first ? declared - first : 0));
     if (c.points > kMaxChunkPoints || uint64_t(c.points) * recordSize_ > kMaxChunkRecordBytes)
       fail(c.offset, "chunk " + std::to_string(i + 1) + " of " + std::to_string(n) + " claims " +
                          std::to_string(c.points) +
@@ -181,9 +189,11 @@ void LazPoints::readChunkTable(uint64_t declared) {
           std::to_string(c.bytes) + " bytes at byte " + std::to_string(at) +
           ") runs past the start of the chunk table at byte " + std::to_string(tableStart_);
       if (!lenient_) fail(at, what);
+      // A damaged table, most likely (one wrong byte garbles every entry after it): the chunks
+      // themselves may be intact and can be found without it.
+      if (fixed || !hierarchy_.empty()) return sequential(what + "; the chunk table is damaged");
       uint64_t lost = 0;
       for (uint32_t j = i; j < n; ++j) lost += fixed ? 0 : counts[j];
-      if (fixed) lost = declared > first ? declared - first : 0;
       warn_(src_->name() + ": " + Error::atByte(at) + ": " + what + "; the " +
             std::to_string(lost) +
             " points of it and the following chunks are counted as unreadable");
@@ -195,6 +205,12 @@ void LazPoints::readChunkTable(uint64_t declared) {
     first += c.points;
   }
   points_ = first;
+  if (lenient_ && fixed && n && at != tableStart_ && unreadableAtOpen_ == 0)
+    // LASzip writes the chunks back to back and the table right after them.
+    return sequential("the chunk sizes of the LAZ chunk table add up to " +
+                      std::to_string(at - chunksStart) + " bytes, but the chunks fill the " +
+                      std::to_string(dataBytes) + " bytes up to the table: it is damaged");
+  if (fixed && n && unreadableAtOpen_ == 0) countLastChunk(declared);
   const uint64_t listed = points_ + unreadableAtOpen_;
   if (listed < declared) {
     const std::string what = "the header declares " + std::to_string(declared) +
@@ -206,12 +222,12 @@ void LazPoints::readChunkTable(uint64_t declared) {
     warn_(src_->name() + ": " + what + "; read the " + std::to_string(points_) +
           " they hold and count the other " + std::to_string(declared - points_) +
           " as unreadable");
-  } else if (listed > declared) {
-    // Trust the header for how many points there are, as LASzip does.
-    warn_(src_->name() + ": the LAZ chunks hold " + std::to_string(listed) +
-          " points, more than the " + std::to_string(declared) + " the header declares; read " +
-          std::to_string(declared));
-    trimTo(declared);
+  } else if (listed > declared && declaredShort_ == 0) {
+    // LASzip trusts the header and drops the rest; every point the chunks hold is read here, and
+    // the difference is said.
+    warn_(src_->name() + ": the header declares " + std::to_string(declared) +
+          " points but the LAZ chunk table lists " + std::to_string(listed) + "; read " +
+          std::to_string(listed));
   }
   if (dataEnd_ < tableStart_)
     fail(tableStart_, "the LAZ chunk table at byte " + std::to_string(tableStart_) +
@@ -221,22 +237,35 @@ void LazPoints::readChunkTable(uint64_t declared) {
   if (!hierarchy_.empty()) checkHierarchy();
 }
 
-// Keeps the first `declared` points of the chunks listed (the header is trusted for the count):
-// the chunks kept hold points_ of them, the rest (lost at open) are unreadable.
-void LazPoints::trimTo(uint64_t declared) {
-  if (points_ > declared) {
-    uint64_t keep = declared;
-    size_t k = 0;
-    for (; k < chunks_.size() && keep; ++k) {
-      chunks_[k].points = uint32_t(std::min<uint64_t>(chunks_[k].points, keep));
-      keep -= chunks_[k].points;
-    }
-    chunks_.resize(k);
-    points_ = declared;
-    unreadableAtOpen_ = 0;
-  } else {
-    unreadableAtOpen_ = declared - points_;
-  }
+// With a fixed chunk size, every chunk but the last holds chunkSize points and the header's count
+// says how many the last one holds. The last chunk is counted (layered chunks store their count;
+// pointwise ones are decoded to the end of their bytes): when it holds more than the header says,
+// the header is wrong and every point the chunks hold is read. A header that says more is met by
+// decoding, which runs dry.
+void LazPoints::countLastChunk(uint64_t declared) {
+  Chunk& last = chunks_.back();
+  const uint64_t before = last.firstPoint;
+  const bool layered = info_.compressor == Compressor::LayeredChunked;
+  // One chunk decoded at open: a header that understates by less than a chunk is caught too.
+  RecordBuffer scratch;
+  if (!layered) scratch.resize(size_t(info_.chunkSize) * recordSize_);
+  const ChunkDecoder::PointCount count = decoders_->local()->countPoints(
+      src_->data() + last.offset, last.bytes, info_.chunkSize, scratch.data());
+  if (count.least == 0) return;  // damaged: decoding it will say so
+  const uint64_t held = before + count.least;
+  if (held <= declared) return;
+  std::string how = layered ? "as the last chunk says"
+                            : "the last chunk counted by decoding it to the end of its bytes";
+  if (count.upTo > count.least)
+    how += "; it may hold up to " + std::to_string(count.upTo) +
+           " points of which the last cost no bytes, and only the first " +
+           std::to_string(count.least) + " are read";
+  warn_(src_->name() + ": the header declares " + std::to_string(declared) + " points but the " +
+        std::to_string(chunks_.size()) + " LAZ chunks hold " + std::to_string(held) + " (" + how +
+        "); read " + std::to_string(held));
+  last.points = count.least;
+  points_ = held;
+  declaredShort_ = held - declared;
 }
 
 // COPC lists every chunk in its hierarchy (offset, bytes, points): the same facts as the table.
@@ -281,11 +310,8 @@ void LazPoints::useHierarchy(uint64_t declared) {
     const std::string what = "the header declares " + std::to_string(declared) +
                              " points but the COPC hierarchy lists " + std::to_string(first);
     if (!lenient_ && first < declared) fail(pointStart_, what);
-    warn_(src_->name() + ": " + what);
-    if (first < declared)
-      unreadableAtOpen_ = declared - first;
-    else
-      trimTo(declared);
+    warn_(src_->name() + ": " + what + "; read " + std::to_string(first));
+    if (first < declared) unreadableAtOpen_ = declared - first;
   }
   unreadable_ = unreadableAtOpen_;
   hierarchy_.clear();  // nothing left to cross-check

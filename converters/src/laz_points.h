@@ -78,7 +78,7 @@ class LazPoints {
  private:
   void readChunkTable(uint64_t declaredPoints);
   void checkHierarchy();
-  void trimTo(uint64_t declaredPoints);
+  void countLastChunk(uint64_t declaredPoints);
   void useHierarchy(uint64_t declaredPoints);
   [[noreturn]] void fail(uint64_t at, const std::string& reason) const;
   std::string chunkName(size_t i) const;
@@ -96,6 +96,7 @@ class LazPoints {
   uint64_t points_ = 0;
   std::atomic<uint64_t> unreadable_{0};
   uint64_t unreadableAtOpen_ = 0;
+  uint64_t declaredShort_ = 0;  // points the chunks hold beyond the header's count
   std::mutex warnMutex_;  // warn_ from concurrent decodes
   uint64_t tableStart_ = 0;
   struct Decoders;  // one ChunkDecoder per thread

@@ -334,6 +334,29 @@ class PointwiseDecoder final : public ChunkDecoder {
     return run(1, count, out);
   }
 
+  PointCount countPoints(const uint8_t* data, size_t size, uint32_t most,
+                         uint8_t* scratch) override {
+    PointCount r;
+    if (most == 0 || size < recordSize_) return r;
+    start(data, size, scratch);
+    const size_t stream = size - recordSize_;
+    uint32_t p = 1;
+    for (; p < most && dec_.consumed() < stream && !dec_.overrun(); ++p) {
+      uint8_t* rec = scratch + size_t(p) * recordSize_;
+      for (size_t i = 0; i < items_.size(); ++i) items_[i]->read(dec_, rec + offsets_[i]);
+    }
+    // Ran dry before the stream was used up, or more bytes than `most` points use: damaged.
+    if (dec_.overrun() || dec_.consumed() < stream) return r;
+    r.least = r.upTo = p;
+    for (; p < most; ++p) {
+      uint8_t* rec = scratch + size_t(p) * recordSize_;
+      for (size_t i = 0; i < items_.size(); ++i) items_[i]->read(dec_, rec + offsets_[i]);
+      if (dec_.overrun()) break;
+      r.upTo = p + 1;
+    }
+    return r;
+  }
+
   // Two chunks in lock step while both have points (items interleave their symbols, see
   // ItemDecoder::readPair), then the rest of the longer one alone. A stream that runs dry sends
   // both chunks back to decode() one by one, which reports exactly where.

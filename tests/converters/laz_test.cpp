@@ -437,9 +437,11 @@ TEST(LazDamage, ChunkTablePointingPastTheEndIsAnError) {
   EXPECT_NE(e.reason().find("runs past the start of the chunk table"), std::string::npos)
       << e.what();
   EXPECT_EQ(e.position(), Error::atByte(l.chunkStart(1)));
+  // Read leniently, the table is taken for damaged and the chunks are found one after the other.
   const LenientRead r = readLeniently(bad);
-  EXPECT_EQ(r.points, 50000u);
-  EXPECT_EQ(r.unreadable, 60000u);
+  EXPECT_EQ(r.points, 110000u);
+  EXPECT_EQ(r.unreadable, 0u);
+  EXPECT_TRUE(test::anyContains(r.warnings, "the chunk table is damaged"));
   // And the offset of the table itself pointing past the end: chunks are found one by one.
   std::string far = f;
   store<int64_t>(far, l.pointStart, int64_t(f.size() + 100));
@@ -620,7 +622,8 @@ TEST(Laz, DeferredBatchesFinishConcurrently) {
 
 // Variable-size chunks (COPC): a chunk past the table, read leniently, loses its points and the
 // following ones to the accounting, and a header that declares fewer points than the chunks hold
-// is trusted; either way every declared point is delivered or counted, once.
+// is said to and every point they hold is read; either way every point is delivered or counted,
+// once.
 TEST(LazDamage, VariableChunksAccountForEveryDeclaredPoint) {
   NL_REQUIRE_SHARED("laz/simple.copc.laz");
   const std::string f = test::readFile(laz("simple.copc.laz"));
@@ -668,7 +671,9 @@ TEST(LazDamage, VariableChunksAccountForEveryDeclaredPoint) {
   EXPECT_EQ(r.points + r.unreadable, 1065u);
   // The header declares fewer points than the chunks list, and some are lost: still balanced.
   const LenientRead s = readLeniently(rewrite(b, 1000));
-  EXPECT_EQ(s.points + s.unreadable, 1000u);
+  EXPECT_EQ(s.points + s.unreadable, 1065u);
+  EXPECT_TRUE(test::anyContains(s.warnings, "header declares 1000 points but the LAZ chunk table "
+                                            "lists 1065"));
   // And more than they list: the missing ones are counted too.
   const LenientRead m = readLeniently(rewrite(bytes, 1100));
   EXPECT_EQ(m.points, 1065u);
@@ -1110,6 +1115,123 @@ TEST(LazLayeredWriter, WriterOutputOfLas14PointsReadsBack) {
   EXPECT_TRUE(pa.xyz == pz.xyz);
   ASSERT_EQ(a->header().layout.stride(), z->header().layout.stride());
   EXPECT_TRUE(pa.attrs == pz.attrs);
+}
+
+}  // namespace
+
+// ---- headers that lie and chunk tables that are damaged, on generated files --------------------
+
+namespace {
+
+// `n` generated points written as LAZ by the LAS writer: LASzip 2's pointwise chunks (LAS 1.2,
+// format 1) or, with `layered`, LASzip 3's layered chunks (16-bit scan angles need format 6).
+std::string generatedLaz(const test::TempDir& t, uint32_t n, bool layered) {
+  SourceHeader h;
+  h.format = "test";
+  std::vector<Attribute> a = {{"intensity", ScalarType::U16, 1, ""},
+                              {"gps_time", ScalarType::F64, 1, ""}};
+  if (layered) a.push_back({"scan_angle", ScalarType::I16, 1, ""});
+  h.layout = PointLayout(a);
+  h.scale = Vec3d{0.001, 0.001, 0.001};
+  const std::string path = t.file(layered ? "layered.laz" : "pointwise.laz");
+  auto w = createWriter(path, h);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 50);
+  for (uint32_t first = 0; first < n; first += 7000) {
+    PointBatch b;
+    const uint32_t m = std::min<uint32_t>(7000, n - first);
+    for (uint32_t i = 0; i < m; ++i) {
+      b.xyz.insert(b.xyz.end(), {u(rng), u(rng), u(rng) * 0.1});
+      const uint16_t intensity = uint16_t(rng());
+      const double time = 1e5 + (first + i) * 1e-4;
+      const int16_t angle = int16_t(int(rng() % 6000) - 3000);
+      const size_t at = b.attrs.size();
+      b.attrs.resize(at + h.layout.stride());
+      std::memcpy(&b.attrs[at], &intensity, 2);
+      std::memcpy(&b.attrs[at + 2], &time, 8);
+      if (layered) std::memcpy(&b.attrs[at + 10], &angle, 2);
+    }
+    w->write(b);
+  }
+  w->close();
+  return test::readFile(path);
+}
+
+// The point count fields of a LAS header: the legacy 32-bit one, and LAS 1.4's 64-bit one.
+std::string withDeclared(std::string f, uint64_t declared) {
+  if ((load<uint8_t>(f, 104) & 0x3F) < 6) store<uint32_t>(f, 107, uint32_t(declared));
+  if (load<uint8_t>(f, 25) >= 4) store<uint64_t>(f, 247, declared);
+  return f;
+}
+
+std::vector<uint8_t> recordsOf(const std::string& f, ReadOptions o = {}) {
+  std::vector<uint8_t> out;
+  readLasRecords(
+      memorySource("f.laz", std::vector<uint8_t>(f.begin(), f.end())), o,
+      [&](const uint8_t* p, size_t n, size_t length) { out.insert(out.end(), p, p + n * length); },
+      nullptr, nullptr);
+  return out;
+}
+
+// A header that declares fewer points than the chunks hold (a count field edited, or written
+// before the last points): every point the chunks hold is read, and the difference is said, with
+// or without --lenient. Fixed-size chunks: all but the last are full, and the last one's count is
+// its own (layered) or found by decoding it to the end of its bytes (pointwise).
+TEST(LazHeader, ACountUnderstatedByTheHeaderReadsEveryPointTheChunksHold) {
+  test::TempDir t;
+  for (bool layered : {false, true}) {
+    SCOPED_TRACE(layered ? "layered" : "pointwise");
+    const std::string f = generatedLaz(t, 110000, layered);
+    const std::vector<uint8_t> want = recordsOf(f);
+    ASSERT_EQ(want.size() % 110000, 0u);
+    for (uint64_t declared : {uint64_t(1), uint64_t(50000), uint64_t(100001), uint64_t(109999)}) {
+      SCOPED_TRACE(declared);
+      const std::string lie = withDeclared(f, declared);
+      const LenientRead r = readLeniently(lie);
+      EXPECT_EQ(r.points, 110000u);
+      EXPECT_EQ(r.unreadable, 0u);
+      EXPECT_TRUE(test::anyContains(r.warnings, "header declares " + std::to_string(declared) +
+                                                    " points but the 3 LAZ chunks hold 110000"))
+          << (r.warnings.empty() ? "no warning" : r.warnings[0]);
+      EXPECT_TRUE(recordsOf(lie) == want) << "strict reading gives the same points";
+    }
+    // An honest header: no warning.
+    EXPECT_TRUE(readLeniently(f).warnings.empty());
+  }
+}
+
+// One wrong byte in the chunk table garbles every entry after it, and a table cut short is only
+// partly there: read leniently, the chunks are found one after the other instead (each starts
+// where the previous one's stream ended), and every point is recovered; strict reading fails,
+// naming the table.
+TEST(LazDamage, ADamagedChunkTableIsReadAroundByFindingTheChunks) {
+  test::TempDir t;
+  for (bool layered : {false, true}) {
+    SCOPED_TRACE(layered ? "layered" : "pointwise");
+    const std::string f = generatedLaz(t, 110000, layered);
+    const std::vector<uint8_t> want = recordsOf(f);
+    const uint64_t table = uint64_t(load<int64_t>(f, load<uint32_t>(f, 96)));
+    for (size_t at : {size_t(8), size_t(9), size_t(10), size_t(12)}) {
+      if (table + at >= f.size()) continue;
+      SCOPED_TRACE("byte " + std::to_string(at) + " of the table flipped");
+      std::string bad = f;
+      bad[table + at] = char(~uint8_t(bad[table + at]));
+      const LenientRead r = readLeniently(bad);
+      EXPECT_EQ(r.points, 110000u);
+      EXPECT_EQ(r.unreadable, 0u);
+      ReadOptions o;
+      o.lenient = true;
+      EXPECT_TRUE(recordsOf(bad, o) == want);
+      EXPECT_FALSE(r.warnings.empty());
+      EXPECT_NE(errorReading(bad).what(), std::string());
+    }
+    const std::string cut = f.substr(0, table + 9);
+    const LenientRead c = readLeniently(cut);
+    EXPECT_EQ(c.points, 110000u);
+    EXPECT_TRUE(test::anyContains(c.warnings, "ends inside the entry of chunk"))
+        << (c.warnings.empty() ? "no warning" : c.warnings[0]);
+    EXPECT_NE(errorReading(cut).reason().find("ends inside the entry of chunk"), std::string::npos);
+  }
 }
 
 }  // namespace
