@@ -16,9 +16,15 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
                 const std::function<bool(const char*)>& given) {
   auto loaded = std::make_shared<gi::Scene>(gi::loadScene(file));
   const gi::Scene& scene = *loaded;
-  if (scene.octrees.empty()) throw Error(file.string(), "scene.octrees", "the viewer needs a scan to show");
   opt.scene = loaded;
-  opt.octree = scene.octrees.front().path;
+  // A scene of meshes alone is viewed through its GI method; there is no point view.
+  if (scene.octrees.empty()) {
+    if (given("--show") && opt.startWithPoints)
+      throw Error(file.string(), "scene.octrees", "--show points: the scene has no scan to show as points");
+    opt.octree.clear();
+  } else {
+    opt.octree = scene.octrees.front().path;
+  }
   if (scene.cameraSet && !given("--camera")) {
     viewer::Camera c;
     c.eye = scene.camera.eye;
@@ -45,7 +51,8 @@ void addView(CLI::App& app, int& exitCode) {
       "Open an octree in a window and fly through it; nodes stream in under the budgets. Given a scene file,\n"
       "the scene is lit in real time through the GI frame by its gi.method (raster where the scene names an\n"
       "offline method), with the method's parameters and per-pass GPU timings in the panel; the scene's first\n"
-      "scan is also shown as points with its camera and \"display\" settings.\n"
+      "scan is also shown as points with its camera and \"display\" settings. A scene of meshes alone is shown\n"
+      "through its GI method, framed by the meshes when it has no camera.\n"
       "Orbit: drag (rotate), middle-drag (pan), wheel (zoom). Fly: WASD, Q/E down/up, shift faster.\n"
       "The panel sets rasteriser, splatting, colouring, point size, eye-dome lighting and budgets, and takes "
       "screenshots.");
@@ -73,9 +80,9 @@ void addView(CLI::App& app, int& exitCode) {
     opt->budgets = job->budgets;
     opt->colour = job->colour;
     opt->colourLayer = job->colourLayer;
+    opt->startWithPoints = *show == "points";
     if (std::filesystem::path(*input).extension() == ".json")
       applyScene(*input, *opt, [cmd](const char* name) { return cmd->count(name) > 0; });
-    opt->startWithPoints = *show == "points";
     exitCode = viewer::runViewer(*opt);
   });
 }

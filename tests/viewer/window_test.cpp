@@ -125,3 +125,40 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
   EXPECT_NE(test::readFile(tmp.file("bad.txt")).find("scene.display.splatting"), std::string::npos)
       << test::readFile(tmp.file("bad.txt"));
 }
+
+// A scene of meshes alone (no scan): the viewer opens on its GI method, framed by the meshes when
+// the scene has no camera, and refuses the point view by name.
+TEST(Window, ViewsASceneOfMeshesAlone) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is not installed";
+  test::TempDir tmp;
+  {
+    // A unit cube, 8 vertices and 12 triangles, far from the origin as a survey would place it.
+    std::ofstream f(tmp.file("cube.obj"));
+    for (int i = 0; i < 8; ++i)
+      f << "v " << 1000 + (i & 1) << " " << 2000 + ((i >> 1) & 1) << " " << ((i >> 2) & 1) << "\n";
+    f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  }
+  {
+    std::ofstream f(tmp.file("meshes.json"));
+    f << R"({"meshes": [{"path": "cube.obj"}],
+             "lights": [{"type": "directional", "direction": [-0.3, -0.5, -1], "irradiance": 3}],
+             "gi": {"method": "raster"}})";
+  }
+  const std::string view = ::nestlight::test::nestlightBinary() + " view " + tmp.file("meshes.json");
+  const std::string shot = tmp.file("shot.png");
+  const int rc = std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + view + " --width 160 --height 120 --frames 5 --screenshot " +
+                              shot + " > " + tmp.file("log.txt") + " 2>&1").c_str());
+  const std::string out = test::readFile(tmp.file("log.txt"));
+  ASSERT_EQ(rc, 0) << out;
+  viewer::Image img = viewer::readImage(shot);
+  // The cube, lit by the sun, covers part of the frame; the background (no environment) is black.
+  size_t lit = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) lit += img.at(x, y)[0] + img.at(x, y)[1] + img.at(x, y)[2] > 0.05f;
+  EXPECT_GT(double(lit) / (160.0 * 120.0), 0.05) << out;
+  EXPECT_LT(double(lit) / (160.0 * 120.0), 0.95) << out;
+  const int points = std::system((view + " --show points > " + tmp.file("points.txt") + " 2>&1").c_str());
+  EXPECT_NE(points, 0);
+  EXPECT_NE(test::readFile(tmp.file("points.txt")).find("no scan to show as points"), std::string::npos)
+      << test::readFile(tmp.file("points.txt"));
+}

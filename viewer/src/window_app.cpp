@@ -14,6 +14,7 @@
 #include <ctime>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "nestlight/gi/mesh.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/tone_map.h"
 #include "nestlight/gl/context.h"
@@ -23,27 +24,57 @@
 
 namespace nestlight::viewer {
 
-int runViewer(const ViewerOptions& opt) {
-  OctreeReader reader(opt.octree);  // a bad octree fails before a window opens
-  const Metadata& meta = reader.metadata();
-  auto modes = frame::availableColourModes(meta, opt.colourLayer);
-  frame::ColourMode mode = opt.colour ? *opt.colour : modes.front();
-  if (std::find(modes.begin(), modes.end(), mode) == modes.end())
-    throw Error(opt.octree.string(), "", std::string("the scan has nothing to show for colour mode '") +
-                                             frame::colourModeName(mode) + "'" +
-                                             (mode == frame::ColourMode::Hdr ? " (no colour layer '" + opt.colourLayer + "')" : ""));
-  std::shared_ptr<const ColourLayerReader> hdrLayer;
-  if (meta.layer(opt.colourLayer)) {
-    try {
-      hdrLayer = std::make_shared<const ColourLayerReader>(opt.octree, meta, opt.colourLayer);
-    } catch (const Error& e) {
-      if (mode == frame::ColourMode::Hdr) throw;
-      // A damaged layer the user did not ask for: the scan still opens, without that colouring.
-      std::fprintf(stderr, "view: %s; colouring hdr unavailable\n", e.what());
-      modes.erase(std::find(modes.begin(), modes.end(), frame::ColourMode::Hdr));
+namespace {
+// The world bounds of a scene's meshes: what a scene without a scan is framed by.
+Box3d meshBounds(const gi::Scene& scene) {
+  Box3d box;
+  for (const gi::SceneMesh& m : scene.meshes) {
+    const gi::TriangleMesh mesh = gi::readMesh(m.path.string());
+    for (const glm::vec3& p : mesh.positions) {
+      const glm::dvec4 w = m.worldFromObject * glm::dvec4(glm::dvec3(p), 1.0);
+      if (std::isfinite(w.x) && std::isfinite(w.y) && std::isfinite(w.z)) box.extend(w.x, w.y, w.z);
     }
   }
-  gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + opt.octree.filename().string());
+  return box;
+}
+}  // namespace
+
+int runViewer(const ViewerOptions& opt) {
+  // A scene may hold meshes alone: then there is no scan to stream, and the GI frame is the view.
+  std::unique_ptr<OctreeReader> reader;
+  if (!opt.octree.empty())
+    reader = std::make_unique<OctreeReader>(opt.octree);  // a bad octree fails before a window opens
+  else if (!opt.scene || opt.scene->meshes.empty())
+    throw Error(opt.scene ? opt.scene->file.string() : "", "", "nothing to view: no scan and no mesh");
+  const Metadata* meta = reader ? &reader->metadata() : nullptr;
+  std::vector<frame::ColourMode> modes;
+  frame::ColourMode mode{};
+  std::shared_ptr<const ColourLayerReader> hdrLayer;
+  if (meta) {
+    modes = frame::availableColourModes(*meta, opt.colourLayer);
+    mode = opt.colour ? *opt.colour : modes.front();
+    if (std::find(modes.begin(), modes.end(), mode) == modes.end())
+      throw Error(opt.octree.string(), "", std::string("the scan has nothing to show for colour mode '") +
+                                               frame::colourModeName(mode) + "'" +
+                                               (mode == frame::ColourMode::Hdr ? " (no colour layer '" + opt.colourLayer + "')" : ""));
+    if (meta->layer(opt.colourLayer)) {
+      try {
+        hdrLayer = std::make_shared<const ColourLayerReader>(opt.octree, *meta, opt.colourLayer);
+      } catch (const Error& e) {
+        if (mode == frame::ColourMode::Hdr) throw;
+        // A damaged layer the user did not ask for: the scan still opens, without that colouring.
+        std::fprintf(stderr, "view: %s; colouring hdr unavailable\n", e.what());
+        modes.erase(std::find(modes.begin(), modes.end(), frame::ColourMode::Hdr));
+      }
+    }
+  }
+  const Box3d bounds = meta ? meta->bounds : meshBounds(*opt.scene);
+  if (bounds.empty()) throw Error(opt.scene->file.string(), "scene.meshes", "the meshes have no finite vertex");
+  const double extent = meta ? meta->cubeWorldSize()
+                             : std::max({bounds.max.x - bounds.min.x, bounds.max.y - bounds.min.y,
+                                         bounds.max.z - bounds.min.z});
+  const std::string title = reader ? opt.octree.filename().string() : opt.scene->file.filename().string();
+  gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + title);
   std::printf("view: %s\n", ctx.description().c_str());
 
   IMGUI_CHECKVERSION();
@@ -70,22 +101,26 @@ int runViewer(const ViewerOptions& opt) {
       }
       method = gi::createMethod(s, {false, true});
       methodFbo = gl::Framebuffer::create();
-      showMethod = !opt.startWithPoints;
+      showMethod = !opt.startWithPoints || !reader;
       std::printf("view: %s through the GI frame%s\n", method->name().c_str(),
                   methodNote.empty() ? "" : (" (" + methodNote + ")").c_str());
     }
-    auto store = std::make_unique<frame::GlNodeStore>(meta, mode, hdrLayer);
+    std::unique_ptr<frame::GlNodeStore> store;
+    std::unique_ptr<streaming::Streamer> streamer;
     FrameRenderer renderer;
     RenderSettings settings = opt.settings;
     streaming::Budgets budgets = opt.budgets;
-    auto streamer = std::make_unique<streaming::Streamer>(reader, *store, budgets);
+    if (reader) {
+      store = std::make_unique<frame::GlNodeStore>(*meta, mode, hdrLayer);
+      streamer = std::make_unique<streaming::Streamer>(*reader, *store, budgets);
+    }
     CameraController cc;
     int winW = opt.width, winH = opt.height;
     glfwGetFramebufferSize(ctx.window(), &winW, &winH);
     cc.from(opt.camera ? *opt.camera
-                       : Camera::framing(meta.bounds, opt.fovYDegrees, double(std::max(winW, 1)) / std::max(winH, 1),
+                       : Camera::framing(bounds, opt.fovYDegrees, double(std::max(winW, 1)) / std::max(winH, 1),
                                          opt.azimuth, opt.elevation));
-    cc.speed = std::max(meta.cubeWorldSize() * 0.1, 1e-3);
+    cc.speed = std::max(extent * 0.1, 1e-3);
     std::string status;
     int frame = 0;
     auto last = std::chrono::steady_clock::now();
@@ -140,14 +175,15 @@ int runViewer(const ViewerOptions& opt) {
       glfwGetFramebufferSize(w, &fbw, &fbh);
       if (fbw <= 0 || fbh <= 0) continue;  // minimised
       Camera cam = cc.camera();
-      cam.fitClipPlanes(meta.bounds);
+      cam.fitClipPlanes(bounds);
       // Near the scan, near/far from the box alone would clip what is in front of the eye.
       cam.nearPlane = std::max(std::min(cam.nearPlane, cc.distance * 0.01), cam.farPlane * 1e-5);
       gi::SceneCamera sceneCam;
       sceneCam.eye = cam.eye, sceneCam.target = cam.target, sceneCam.up = cam.up;
       sceneCam.fovYDegrees = cam.fovYDegrees, sceneCam.width = fbw, sceneCam.height = fbh;
       sceneCam.time = std::chrono::duration<double>(now - opened).count();
-      const streaming::FrameStats& st = streamer->update(cam.view(fbw, fbh));
+      streaming::FrameStats st{};
+      if (streamer) st = streamer->update(cam.view(fbw, fbh));
       DrawTimings timings;
       if (showMethod) {
         const GLuint tex = method->renderInteractive(sceneCam, exposure, &methodStats);
@@ -165,30 +201,33 @@ int runViewer(const ViewerOptions& opt) {
       ImGui::NewFrame();
       ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
       ImGui::Begin("nestlight");
-      ImGui::Text("%s", opt.octree.filename().string().c_str());
-      if (method) {
+      ImGui::Text("%s", title.c_str());
+      if (method && !reader) {
+        ImGui::Text("%s (GI frame; the scene has no scan)", method->name().c_str());
+      } else if (method) {
         int view = showMethod ? 0 : 1;
         const std::string views = method->name() + " (GI frame)" + '\0' + "points" + '\0';
         if (ImGui::Combo("view", &view, views.c_str())) showMethod = view == 0;
-        if (!methodNote.empty()) ImGui::TextUnformatted(methodNote.c_str());
-        if (showMethod) {
-          ImGui::SliderFloat("exposure (EV)", &exposure, -10.f, 10.f);
-          if (ImGui::TreeNode("parameters")) {
-            for (const auto& [k, v] : method->parameters()) ImGui::Text("%s = %s", k.c_str(), v.c_str());
-            ImGui::TreePop();
-          }
-          double total = 0;
-          for (const auto& [name, ms] : methodStats.passMs) {
-            ImGui::Text("%-16s %7.2f ms", name.c_str(), ms);
-            total += ms;
-          }
-          ImGui::Text("%-16s %7.2f ms (frame %.1f ms)", "GPU total", total, methodStats.seconds * 1e3);
+      }
+      if (method && !methodNote.empty()) ImGui::TextUnformatted(methodNote.c_str());
+      if (method && (showMethod || !reader)) {
+        ImGui::SliderFloat("exposure (EV)", &exposure, -10.f, 10.f);
+        if (ImGui::TreeNode("parameters")) {
+          for (const auto& [k, v] : method->parameters()) ImGui::Text("%s = %s", k.c_str(), v.c_str());
+          ImGui::TreePop();
         }
+        double total = 0;
+        for (const auto& [name, ms] : methodStats.passMs) {
+          ImGui::Text("%-16s %7.2f ms", name.c_str(), ms);
+          total += ms;
+        }
+        ImGui::Text("%-16s %7.2f ms (frame %.1f ms)", "GPU total", total, methodStats.seconds * 1e3);
         ImGui::Separator();
       }
       int camMode = cc.mode == CameraController::Mode::Orbit ? 0 : 1;
       if (ImGui::Combo("camera", &camMode, "orbit (drag, wheel)\0fly (WASD QE, drag)\0"))
         cc.mode = camMode == 0 ? CameraController::Mode::Orbit : CameraController::Mode::Fly;
+      if (reader) {
       int raster = settings.rasteriser == Rasteriser::Points ? 0 : 1;
       if (ImGui::Combo("rasteriser", &raster, "GL_POINTS\0compute\0")) {
         settings.rasteriser = raster == 0 ? Rasteriser::Points : Rasteriser::Compute;
@@ -202,7 +241,7 @@ int runViewer(const ViewerOptions& opt) {
         // Colours are baked on upload: start the residency again with the new mode.
         streamer.reset();
         store->setColourMode(mode);
-        streamer = std::make_unique<streaming::Streamer>(reader, *store, budgets);
+        streamer = std::make_unique<streaming::Streamer>(*reader, *store, budgets);
       }
       if (settings.rasteriser == Rasteriser::Points) {
         int splat = settings.splatting == Splatting::Hqs ? 0 : 1;
@@ -231,6 +270,7 @@ int runViewer(const ViewerOptions& opt) {
       ImGui::Text("queue %u, loading %u, uploads %u, evictions %u", st.queueLength, st.inFlight, st.uploads,
                   st.evictions);
       ImGui::Text("ms: cut %.2f upload %.2f draw %.1f", st.msCutSelection, st.msUpload, timings.msDraw);
+      }
       bool shot = ImGui::Button("screenshot");
       if (!status.empty()) ImGui::TextUnformatted(status.c_str());
       ImGui::End();
