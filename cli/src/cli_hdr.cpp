@@ -1,4 +1,5 @@
 // `nestlight expand-hdr`: HDR expansion of a scan's colour from one HDR photograph.
+#include <cmath>
 #include <cstdio>
 #include <mutex>
 
@@ -25,7 +26,14 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       "never\n"
       "changed); `verify` checks it, `info` shows it, `render --colour hdr` and scene files use "
       "it.\n"
-      "The photograph needs no registration. Memory is bounded whatever the scan's size.\n"
+      "The photograph needs no registration, but registered (--photo-view) its exposure comes "
+      "from\n"
+      "the pixels the scan covers, unregistered from the matches under t_h. The exposure is "
+      "checked\n"
+      "(spread of the log ratios between scan and photograph, a plausible range, the share of\n"
+      "over-exposed points matched); when a check fails no layer is written and the error says\n"
+      "what to pass (--photo-view, --exposure, --force). Values are bounded by the photograph's\n"
+      "largest times the exposure. Memory is bounded whatever the scan's size.\n"
       "Example: nestlight expand-hdr scan.octree --photo window.exr --auto-views 2");
   auto dir = std::make_shared<std::string>();
   auto photo = std::make_shared<std::string>();
@@ -76,6 +84,25 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       ->check(CLI::Range(2, 64));
   cmd->add_option("--chunk-points", o->chunkPoints, "Points per in-fill chunk (bounds memory)")
       ->capture_default_str();
+  auto forcedExposure = std::make_shared<double>(0.0);
+  auto* exposureOpt = cmd->add_option("--exposure", *forcedExposure,
+                                      "Force the photograph's exposure, in stops (log2 of the "
+                                      "factor that takes the photograph's values to "
+                                      "the scan's, 1 being the scan's clipping): no estimate; the "
+                                      "checks are recorded but do not stop");
+  cmd->add_flag(
+      "--force", o->force,
+      "Write the layer even when the exposure or match checks fail (they become warnings, "
+      "recorded in the layer's build notes)");
+  cmd->add_option(
+         "--max-spread", o->maxSpreadStops,
+         "Largest robust spread (stops) of the log ratios between scan and photograph accepted")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 20.0));
+  cmd->add_option("--min-matched", o->minMatchedShare,
+                  "Smallest share of the over-exposed points that must take a matched value")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--layer", o->layerName, "Name of the colour layer to write")
       ->capture_default_str();
   cmd->add_option("--scratch", o->scratchDir,
@@ -91,11 +118,21 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
         throw Error(*photoViewFile, "", "--photo-view: expected one view, found " + std::to_string(v.size()));
       o->photoView = v.front();
     }
+    if (exposureOpt->count() > 0) {
+      if (!std::isfinite(*forcedExposure) || std::fabs(*forcedExposure) > 64)
+        throw Error("", "--exposure",
+                    "expected stops between -64 and 64 (log2 of the exposure), got " +
+                        std::to_string(*forcedExposure));
+      o->log2Exposure = *forcedExposure;
+    }
     o->mode = *mode == "rgb" ? gi::hdr::ExpansionMode::Rgb : gi::hdr::ExpansionMode::Luminance;
     o->debugDir = *debug;
-    o->commandLine = {
-        {"photo", *photo}, {"mode", *mode}, {"views", viewsFile->empty() ? "auto" : *viewsFile},
-        {"photo_view", *photoViewFile}};
+    o->commandLine = {{"photo", *photo},
+                      {"mode", *mode},
+                      {"views", viewsFile->empty() ? "auto" : *viewsFile},
+                      {"photo_view", *photoViewFile},
+                      {"force", o->force}};
+    if (o->log2Exposure) o->commandLine["exposure"] = *o->log2Exposure;
     auto mutex = std::make_shared<std::mutex>();
     auto last = std::make_shared<std::pair<std::string, int>>("", -1);
     if (!*quiet)
@@ -108,12 +145,22 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       };
     const gi::HdrImage image = gi::readHdrImage(*photo);
     const gi::hdr::ExpandReport r = gi::hdr::expandHdr(*dir, image, *o);
+    for (const auto& w : r.warnings)
+      std::fprintf(stderr, "expand-hdr: warning (--force): %s\n", w.c_str());
     if (*json) {
       std::printf("%s\n", r.toJson().dump(2).c_str());
     } else {
       std::printf("expand-hdr: %s, mode %s\n", dir->c_str(), *mode == "rgb" ? "rgb" : "luminance");
-      std::printf("  exposure      2^%.3f (Wasserstein distance %.4f)\n", r.log2Exposure,
-                  r.exposureDistance);
+      const auto& c = r.checks;
+      std::printf("  exposure      2^%.3f from %s", r.log2Exposure, c.method.c_str());
+      if (c.method == "matches") std::printf(" (histogram search 2^%.3f)", c.histogramLog2);
+      std::printf(
+          "\n  checks        %llu pixel pairs, log-ratio spread %.3f stops (at most %.2f), slope "
+          "%.2f,\n"
+          "                plausible 2^%.2f to 2^%.2f, %.1f%% of over-exposed points matched%s\n",
+          (unsigned long long)c.pairs, c.spreadStops, o->maxSpreadStops, c.slope, c.rangeLo,
+          c.rangeHi, 100 * std::max(0.0, c.matchedShare),
+          c.failed.empty() ? "" : " (FAILED, written with --force)");
       std::printf("  views         %zu (%llu of %llu covered pixels matched under t_h)\n",
                   r.views.size(), (unsigned long long)r.matchedPixels,
                   (unsigned long long)r.coveredPixels);
@@ -130,7 +177,10 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
           (unsigned long long)r.infilled, (unsigned long long)r.chunks,
           (unsigned long long)r.chunkMaxPoints, (unsigned long long)r.islands,
           (unsigned long long)r.islandPoints);
-      std::printf("  largest value %.4g (1 = the scan's clipping)\n", r.maxValue);
+      std::printf(
+          "  largest value %.4g (1 = the scan's clipping; bound %.4g, %llu channel values clamped "
+          "to it)\n",
+          r.maxValue, c.bound, (unsigned long long)r.boundedValues);
       std::printf("  seconds      ");
       for (auto& [k, v] : r.seconds.items()) std::printf(" %s %.2f", k.c_str(), v.get<double>());
       std::printf("\n  peak memory   %s\n", humanBytes(double(r.peakRssBytes)).c_str());

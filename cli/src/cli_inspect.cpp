@@ -83,7 +83,7 @@ void addInfo(CLI::App& app, int& exitCode) {
       std::printf("\n");
       if (l.build.is_object())
         for (const char* key : {"command", "mode", "photo", "exposure_log2", "expanded_points", "infilled_points",
-                                "island_points", "max_luminance"})
+                                "island_points", "max_luminance", "max_value", "bounded_values", "exposure", "warnings"})
           if (l.build.contains(key)) std::printf("           %s: %s\n", key, l.build[key].dump().c_str());
     }
     if (m.normalsEstimated) std::printf("normals    estimated (%s)\n", m.normalEstimation.dump().c_str());

@@ -268,7 +268,16 @@ TEST(Expand, APhotographOfSomethingElseMatchesLittleAndStillGivesAValidLayer) {
     photo.rgb[3 * i] = b * u(rng) * 0.1f, photo.rgb[3 * i + 1] = b,
                   photo.rgb[3 * i + 2] = b * u(rng);
   }
-  const ExpandReport r = expandHdr(dir, photo, smallOptions());
+  // Refused: the few matches give too few pixel pairs to rest an exposure on.
+  const Error e = test::errorOf([&] { expandHdr(dir, photo, smallOptions()); });
+  EXPECT_NE(std::string(e.what()).find("pixel pairs"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
+  EXPECT_EQ(OctreeReader(dir).metadata().layer("hdr"), nullptr);
+  // Forced, the layer is written and valid.
+  ExpandOptions o = smallOptions();
+  o.force = true;
+  const ExpandReport r = expandHdr(dir, photo, o);
+  EXPECT_FALSE(r.warnings.empty());
   EXPECT_LT(r.matchedPixels, r.coveredPixels / 10);
   EXPECT_EQ(r.overexposed, r.projected + r.infilled + r.islandPoints);
   EXPECT_TRUE(verifyOctree(dir).ok());  // every value finite and non-negative
@@ -296,16 +305,21 @@ TEST(Expand, ABlackPhotographOrAScanWithoutColourIsAnError) {
 }
 
 // A saturated photograph (one value everywhere, as a camera that clipped throughout) carries no
-// detail to match: whatever the exposure search makes of it, no clipped point may take a value
-// from it that the LDR colour does not support. Every over-exposed point ends in-filled (or an
-// island), the layer is whole and valid, and nothing exceeds the LDR range by more than the
-// in-fill's rounding.
+// detail to match: it is refused, and forced, whatever the exposure search makes of it, no clipped
+// point may take a value from it that the LDR colour does not support. Every over-exposed point
+// ends in-filled (or an island), the layer is whole and valid, and nothing exceeds the LDR range by
+// more than the in-fill's rounding.
 TEST(Expand, ASaturatedPhotographExpandsNothingAndStillGivesAValidLayer) {
   test::TempDir tmp;
   const fs::path dir = copyOctree(protocolDir() / "scan.octree", tmp.path() / "scan.octree");
   HdrImage photo(64, 48);
   for (float& v : photo.rgb) v = 1000.0f;
-  const ExpandReport r = expandHdr(dir, photo, smallOptions());
+  // Refused (no pixel pair to rest an exposure on); forced, written and harmless.
+  const Error e = test::errorOf([&] { expandHdr(dir, photo, smallOptions()); });
+  EXPECT_NE(std::string(e.what()).find("pixel pairs"), std::string::npos) << e.what();
+  ExpandOptions o = smallOptions();
+  o.force = true;
+  const ExpandReport r = expandHdr(dir, photo, o);
   EXPECT_GT(r.overexposed, 0u);
   EXPECT_EQ(r.overexposed, r.projected + r.infilled + r.islandPoints);
   EXPECT_EQ(r.projected, 0u) << "a flat photograph has nothing to match";

@@ -57,10 +57,22 @@ json ExpandReport::toJson() const {
           {"matched_pixels", matchedPixels},
           {"covered_pixels", coveredPixels},
           {"blind_pixels", blindPixels},
+          {"background_pixels", backgroundPixels},
           {"max_value", maxValue},
+          {"bounded_values", boundedValues},
+          {"exposure", checks.toJson()},
+          {"warnings", warnings},
           {"clamped_values", clampedValues},
           {"seconds", seconds},
           {"peak_rss_bytes", peakRssBytes}};
+}
+
+json ExposureChecks::toJson() const {
+  return {
+      {"method", method},       {"histogram_log2", histogramLog2},   {"spread_stops", spreadStops},
+      {"slope", slope},         {"highlight_slope", highlightSlope}, {"pairs", pairs},
+      {"rematches", rematches}, {"range_log2", {rangeLo, rangeHi}},  {"photo_max", photoMax},
+      {"bound", bound},         {"matched_share", matchedShare},     {"failed", failed}};
 }
 
 glm::vec3 landisExpand(const glm::vec3& ldr, double threshold, double maxLuminance,
@@ -345,26 +357,56 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     scanHistogram.mass[size_t(b)] = counts[size_t(b)] / double(rep.points);
   rep.seconds["statistics"] = seconds(t);
 
-  // The exposure of the photograph that looks most like the scan (eq. 1, 2).
+  // The photograph's range, and the exposure the paper's histogram search (eq. 1, 2) finds: the
+  // starting point when nothing registers the photograph, and on record otherwise.
   t = Clock::now();
   // Pixels of exactly zero carry no measurement (a rendered photograph's background, a masked
   // area): counted, they would pull the histogram, and so the exposure, towards black.
   std::vector<float> photoY;
   photoY.reserve(photo.pixels());
-  for (size_t i = 0; i < photo.pixels(); ++i)
-    if (const float y =
-            luminance(Rgb(photo.rgb[3 * i], photo.rgb[3 * i + 1], photo.rgb[3 * i + 2]));
-        y != 0.0f)
-      photoY.push_back(y);
-  const ExposureSearch ex = findBestExposure(photoY, scanHistogram);
-  if (!ex.usable)
+  double photoMax = 0;
+  for (size_t i = 0; i < photo.pixels(); ++i) {
+    const Rgb c(photo.rgb[3 * i], photo.rgb[3 * i + 1], photo.rgb[3 * i + 2]);
+    for (int k = 0; k < 3; ++k)
+      if (std::isfinite(c[k])) photoMax = std::max(photoMax, double(c[k]));
+    if (const float y = luminance(c); y != 0.0f) photoY.push_back(y);
+  }
+  std::vector<float> positiveY;
+  for (float y : photoY)
+    if (std::isfinite(y) && y > 0) positiveY.push_back(y);
+  if (positiveY.empty())
     throw Error(
         "", "",
         "the photograph has no positive finite luminance (black or broken): nothing to match");
-  rep.exposureUsable = ex.usable;
-  rep.log2Exposure = ex.log2Exposure;
-  rep.exposureDistance = ex.distance;
-  const float exposure = float(std::exp2(ex.log2Exposure));
+  ExposureChecks& checks = rep.checks;
+  checks.photoMax = photoMax;
+  {
+    // The exposed photograph must bring its brightest luminance beyond the scan's clipping (by
+    // minHeadroom), or it says nothing about the clipped points, and must leave its darkest
+    // percentile under 1, or it is clipped almost everywhere and nothing matches.
+    const size_t p1 = positiveY.size() / 100;
+    std::nth_element(positiveY.begin(), positiveY.begin() + std::ptrdiff_t(p1), positiveY.end());
+    const double dark = positiveY[p1];
+    const double bright = *std::max_element(positiveY.begin(), positiveY.end());
+    checks.rangeLo = std::log2(o.minHeadroom / bright);
+    checks.rangeHi = std::max(checks.rangeLo, std::log2(1.0 / dark));
+  }
+  rep.exposureUsable = true;
+  if (o.log2Exposure) {
+    checks.method = "forced";
+    rep.log2Exposure = *o.log2Exposure;
+  } else if (o.photoView) {
+    checks.method = "photo-view";  // estimated from the photograph's own view, after the renderings
+  } else {
+    checks.method = "matches";
+    const ExposureSearch ex = findBestExposure(photoY, scanHistogram);
+    if (!ex.usable)
+      throw Error(
+          "", "",
+          "the photograph has no positive finite luminance (black or broken): nothing to match");
+    rep.log2Exposure = checks.histogramLog2 = ex.log2Exposure;
+    rep.exposureDistance = ex.distance;
+  }
   rep.seconds["exposure"] = seconds(t);
 
   // The views: given, or cube maps looking at the over-exposed points.
@@ -401,63 +443,243 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   std::vector<Rendering> renderings = renderViews(scan, rep.views, Payload::Display8, splat);
   rep.seconds["render"] = seconds(t);
 
+  // Checks of the exposure's pairs (the matched share is checked after back-projection). A forced
+  // exposure is measured all the same, for the record, but the caller vouches for it.
+  const double photoClip = 0.99 * double(*std::max_element(positiveY.begin(), positiveY.end()));
+  auto recordPairs = [&](const PairEstimate& pe) {
+    checks.spreadStops = pe.spreadStops;
+    checks.slope = pe.slope;
+    checks.highlightSlope = pe.highlightSlope;
+    checks.pairs = pe.pairs;
+  };
+  auto exposureFailures = [&]() {
+    std::vector<std::string> f;
+    char buf[400];
+    if (checks.pairs < o.minPairs) {
+      std::snprintf(
+          buf, sizeof buf,
+          "only %llu pixel pairs that the renderings explain and the scan recorded unclipped "
+          "(at least %llu): the exposure rests on nothing",
+          (unsigned long long)checks.pairs, (unsigned long long)o.minPairs);
+      f.push_back(buf);
+    } else if (checks.spreadStops > o.maxSpreadStops) {
+      std::snprintf(
+          buf, sizeof buf,
+          "the log ratios between the scan's colour and the photograph spread over %.2f stops "
+          "(at most %.2f; %llu pixel pairs, slope %.2f where a pure exposure change gives 1): "
+          "the photograph's tone is not an exposure change of the scan's colour, or the pairs "
+          "are of different things",
+          checks.spreadStops, o.maxSpreadStops, (unsigned long long)checks.pairs, checks.slope);
+      f.push_back(buf);
+    }
+    if (checks.pairs >= o.minPairs && checks.highlightSlope > o.maxHighlightSlope) {
+      std::snprintf(
+          buf, sizeof buf,
+          "towards the clipping the photograph's tone grows %.2f times as fast as the scan's in "
+          "log "
+          "terms (at most %.2f; 1 is an exposure change): the values beyond the clipping would "
+          "overshoot the truth",
+          checks.highlightSlope, o.maxHighlightSlope);
+      f.push_back(buf);
+    }
+    if (rep.log2Exposure < checks.rangeLo || rep.log2Exposure > checks.rangeHi) {
+      std::snprintf(
+          buf, sizeof buf,
+          "the exposure 2^%.2f is outside the plausible range 2^%.2f to 2^%.2f (from where the "
+          "photograph's brightest value reaches %.2f times the scan's clipping to where its "
+          "darkest "
+          "percentile clips)",
+          rep.log2Exposure, checks.rangeLo, checks.rangeHi, o.minHeadroom);
+      f.push_back(buf);
+    }
+    return f;
+  };
+  auto stopOnFailures = [&](const std::vector<std::string>& failed) {
+    if (failed.empty()) return;
+    checks.failed.insert(checks.failed.end(), failed.begin(), failed.end());
+    if (o.force) {
+      for (const auto& f : failed) rep.warnings.push_back(f);
+      return;
+    }
+    std::string msg = "the HDR layer would not be trusted, so none was written: ";
+    for (size_t i = 0; i < failed.size(); ++i) msg += (i ? "; " : "") + failed[i];
+    char buf[160];
+    std::snprintf(buf, sizeof buf, " (exposure 2^%.2f, found from %s).", rep.log2Exposure,
+                  checks.method.c_str());
+    msg += buf;
+    msg += o.photoView ? ""
+                       : " Pass the photograph's camera (--photo-view cams.json) so that only the "
+                         "pixels the scan covers count.";
+    msg +=
+        " Pass the exposure if you know it (--exposure STOPS, log2 of the factor from the "
+        "photograph's values to the "
+        "scan's, 1 being the scan's clipping), or --force to write the layer anyway.";
+    throw Error(msg);
+  };
+  auto linearLuminance = [](const Rgb& display) {
+    return luminance(Rgb(linearFromDisplay(display.r), linearFromDisplay(display.g),
+                         linearFromDisplay(display.b)));
+  };
+  // Registered: pairs where the scan renders in the photograph's own view (its coverage), never
+  // the background the scan lacks.
+  auto photoViewPairs = [&]() {
+    const HdrImage ldr = renderings[0].image();
+    std::vector<float> scanY, photoYs;
+    for (size_t i = 0; i < ldr.pixels(); ++i) {
+      if (!renderings[0].covered(i)) continue;
+      scanY.push_back(
+          linearLuminance(ldr.get(int(i % size_t(ldr.width)), int(i / size_t(ldr.width)))));
+      photoYs.push_back(
+          luminance(Rgb(small.rgb[3 * i], small.rgb[3 * i + 1], small.rgb[3 * i + 2])));
+    }
+    return estimateExposureFromPairs(scanY, photoYs, 0.02, o.overexposed, photoClip);
+  };
+  if (o.photoView && !o.log2Exposure) {
+    t = Clock::now();
+    const PairEstimate pe = photoViewPairs();
+    recordPairs(pe);
+    if (pe.usable) rep.log2Exposure = pe.log2Exposure;
+    stopOnFailures(exposureFailures());
+    rep.seconds["exposure"] = rep.seconds["exposure"].get<double>() + seconds(t);
+  }
+
   // PatchMatch of each rendering against the exposed photograph (display values, as the scan's
   // camera recorded them), then the HDR mapping: the photograph's values at the matches.
   t = Clock::now();
-  HdrImage exposedDisplay(small.width, small.height);
-  for (size_t i = 0; i < small.rgb.size(); ++i)
-    exposedDisplay.rgb[i] = displayFromLinear(std::clamp(exposure * small.rgb[i], 0.0f, 1.0f));
   struct Expanded {
     HdrImage hdr;            // exposure * photo at the match (linear, LDR units)
     std::vector<float> ssd;  // +inf: no point, or match rejected
   };
   std::vector<Expanded> expanded(renderings.size());
-  for (size_t vi = 0; vi < renderings.size(); ++vi) {
-    const HdrImage ldr = renderings[vi].image();
-    const std::vector<uint8_t> mask = renderings[vi].coverage();
-    PatchMatchOptions pm;
-    pm.patchRadius = o.patchRadius;
-    pm.iterations = o.patchIterations;
-    pm.seed = 1 + vi;
-    pm.identityStart = o.photoView && vi == 0;
-    if (pm.identityStart) {
-      // Registered: rendered at the photograph's size from its camera, so no rotation or scale,
-      // and matches only move locally (misregistration, the renderings' splats).
-      pm.rotation = false;
-      pm.minScale = pm.maxScale = 1.0f;
-      pm.searchRadius = float(o.photoSearchRadius);  // 0: anywhere
-    }
-    const PatchMatchField field = generalizedPatchMatch(ldr, exposedDisplay, pm, &mask);
-    Expanded& e = expanded[vi];
-    e.hdr = fetch(field, small);
-    for (float& v : e.hdr.rgb) v = std::isfinite(v) ? std::max(0.0f, v * exposure) : 0.0f;
-    e.ssd = field.ssd;
-    const std::vector<uint8_t> blind =
-        pm.identityStart || !o.rejectBlindPatches ? std::vector<uint8_t>() : blindPatches(ldr, mask, o.patchRadius, o.overexposed);
-    for (size_t i = 0; i < e.ssd.size(); ++i) {
-      if (!mask[i]) {
-        e.ssd[i] = INFINITY;
-        continue;
+  HdrImage exposedDisplay(small.width, small.height);
+  // Pairs at the matches that pass t_h (and are not blind): the unregistered exposure's evidence.
+  std::vector<float> matchScanY, matchPhotoY;
+  // Registered: where the scan renders in the photograph's own view. Elsewhere the photograph
+  // shows what the scan lacks (sky, a lamp beyond it), which no point can take its value from.
+  const std::vector<uint8_t> photoCoverage =
+      o.photoView ? renderings[0].coverage() : std::vector<uint8_t>();
+  auto explainedTarget = [&](glm::vec2 p) {
+    // The fetch is bilinear: every pixel of its 2 x 2 footprint must be the scan's.
+    const int x0 = std::clamp(int(std::floor(p.x)), 0, small.width - 1),
+              y0 = std::clamp(int(std::floor(p.y)), 0, small.height - 1);
+    const int x1 = std::min(x0 + 1, small.width - 1), y1 = std::min(y0 + 1, small.height - 1);
+    auto at = [&](int x, int y) {
+      return photoCoverage[size_t(y) * size_t(small.width) + size_t(x)] != 0;
+    };
+    return at(x0, y0) && at(x1, y0) && at(x0, y1) && at(x1, y1);
+  };
+  auto match = [&](float exposure) {
+    rep.coveredPixels = rep.matchedPixels = rep.blindPixels = rep.backgroundPixels = 0;
+    matchScanY.clear();
+    matchPhotoY.clear();
+    for (size_t i = 0; i < small.rgb.size(); ++i)
+      exposedDisplay.rgb[i] = displayFromLinear(std::clamp(exposure * small.rgb[i], 0.0f, 1.0f));
+    for (size_t vi = 0; vi < renderings.size(); ++vi) {
+      const HdrImage ldr = renderings[vi].image();
+      const std::vector<uint8_t> mask = renderings[vi].coverage();
+      PatchMatchOptions pm;
+      pm.patchRadius = o.patchRadius;
+      pm.iterations = o.patchIterations;
+      pm.seed = 1 + vi;
+      pm.identityStart = o.photoView && vi == 0;
+      if (pm.identityStart) {
+        // Registered: rendered at the photograph's size from its camera, so no rotation or scale,
+        // and matches only move locally (misregistration, the renderings' splats).
+        pm.rotation = false;
+        pm.minScale = pm.maxScale = 1.0f;
+        pm.searchRadius = float(o.photoSearchRadius);  // 0: anywhere
       }
-      if (!blind.empty() && blind[i]) {
-        rep.blindPixels++;
-        e.ssd[i] = INFINITY;
-        continue;
+      const PatchMatchField field = generalizedPatchMatch(ldr, exposedDisplay, pm, &mask);
+      Expanded& e = expanded[vi];
+      e.hdr = fetch(field, small);
+      for (float& v : e.hdr.rgb) v = std::isfinite(v) ? std::max(0.0f, v * exposure) : 0.0f;
+      e.ssd = field.ssd;
+      const std::vector<uint8_t> blind =
+          pm.identityStart || !o.rejectBlindPatches
+              ? std::vector<uint8_t>()
+              : blindPatches(ldr, mask, o.patchRadius, o.overexposed);
+      for (size_t i = 0; i < e.ssd.size(); ++i) {
+        if (!mask[i]) {
+          e.ssd[i] = INFINITY;
+          continue;
+        }
+        if (!blind.empty() && blind[i]) {
+          rep.blindPixels++;
+          e.ssd[i] = INFINITY;
+          continue;
+        }
+        if (!photoCoverage.empty() && e.ssd[i] <= o.maxSsd && !explainedTarget(field.position[i])) {
+          rep.backgroundPixels++;
+          e.ssd[i] = INFINITY;
+          continue;
+        }
+        rep.coveredPixels++;
+        if (e.ssd[i] <= o.maxSsd) {
+          rep.matchedPixels++;
+          if (!o.photoView) {
+            const int x = int(i % size_t(ldr.width)), y = int(i / size_t(ldr.width));
+            matchScanY.push_back(linearLuminance(ldr.get(x, y)));
+            matchPhotoY.push_back(luminance(e.hdr.get(x, y)) / exposure);
+          }
+        } else {
+          e.ssd[i] = INFINITY;
+        }
       }
-      rep.coveredPixels++;
-      if (e.ssd[i] <= o.maxSsd)
-        rep.matchedPixels++;
-      else
-        e.ssd[i] = INFINITY;
+      if (!o.debugDir.empty()) {
+        fs::create_directories(o.debugDir);
+        const std::string stem = (o.debugDir / rep.views[vi].name).string();
+        writeExr(stem + "-ldr.exr", ldr);
+        writeExr(stem + "-hdr.exr", e.hdr);
+      }
+      progress("patchmatch", double(vi + 1) / double(renderings.size()));
     }
-    if (!o.debugDir.empty()) {
-      fs::create_directories(o.debugDir);
-      const std::string stem = (o.debugDir / rep.views[vi].name).string();
-      writeExr(stem + "-ldr.exr", ldr);
-      writeExr(stem + "-hdr.exr", e.hdr);
+  };
+  match(float(std::exp2(rep.log2Exposure)));
+  if (!o.photoView && !o.log2Exposure) {
+    // Unregistered: the exposure from the matches that pass t_h. When it moves the histogram's
+    // answer by more than half a stop, the matching is repeated once at the new exposure (the
+    // matches were made against a photograph exposed wrongly, so they are fewer and poorer).
+    PairEstimate pe =
+        estimateExposureFromPairs(matchScanY, matchPhotoY, 0.02, o.overexposed, photoClip);
+    if (pe.usable && pe.pairs >= o.minPairs &&
+        std::fabs(pe.log2Exposure - rep.log2Exposure) > 0.5) {
+      rep.log2Exposure = pe.log2Exposure;
+      checks.rematches++;
+      match(float(std::exp2(rep.log2Exposure)));
+      pe = estimateExposureFromPairs(matchScanY, matchPhotoY, 0.02, o.overexposed, photoClip);
     }
-    progress("patchmatch", double(vi + 1) / double(renderings.size()));
+    recordPairs(pe);
+    if (pe.usable && pe.pairs >= o.minPairs) {
+      // The values fetched at the matches scale with the exposure: rescale rather than match again.
+      const float k = float(std::exp2(pe.log2Exposure - rep.log2Exposure));
+      for (auto& e : expanded)
+        for (float& v : e.hdr.rgb) v *= k;
+      rep.log2Exposure = pe.log2Exposure;
+    }
+    stopOnFailures(exposureFailures());
+  } else if (o.log2Exposure) {
+    // Forced: measured for the record at the registered view's coverage or at the matches.
+    if (o.photoView) {
+      recordPairs(photoViewPairs());
+    } else {
+      recordPairs(
+          estimateExposureFromPairs(matchScanY, matchPhotoY, 0.02, o.overexposed, photoClip));
+    }
   }
+  const float exposure = float(std::exp2(rep.log2Exposure));
+  // The bound of the layer's values: the photograph's largest value times the exposure; where it
+  // is registered, its largest where the scan renders (what lies beyond, a lamp the scan lacks,
+  // is no point's value).
+  double explainedMax = photoMax;
+  if (!photoCoverage.empty()) {
+    explainedMax = 0;
+    for (size_t i = 0; i < small.pixels(); ++i)
+      if (photoCoverage[i])
+        for (int k = 0; k < 3; ++k)
+          if (const float v = small.rgb[3 * i + size_t(k)]; std::isfinite(v))
+            explainedMax = std::max(explainedMax, double(v));
+  }
+  checks.bound = std::max(1.0, double(exposure) * explainedMax);
   if (!o.debugDir.empty()) {
     writeExr((o.debugDir / "photo-exposed.exr").string(), exposedDisplay);
     writeViews(o.debugDir / "views.json", rep.views);
@@ -545,6 +767,21 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     progress("back-projection", double(++nodesDone) / double(nodes.size()));
   });
   rep.projected = projected, rep.unseen = unseen, rep.rejectedMatches = rejected;
+  if (rep.overexposed > 0) {
+    // Few matched points and many to in-fill: the in-fill would carry a handful of values (right
+    // or wrong) over the whole clipped range.
+    checks.matchedShare = double(rep.projected) / double(rep.overexposed);
+    if (checks.matchedShare < o.minMatchedShare) {
+      char buf[400];
+      std::snprintf(
+          buf, sizeof buf,
+          "only %.1f%% of the over-exposed points (%llu of %llu) took a value from the photograph "
+          "(at least %.1f%%): the rest would be in-filled from them",
+          100 * checks.matchedShare, (unsigned long long)rep.projected,
+          (unsigned long long)rep.overexposed, 100 * o.minMatchedShare);
+      stopOnFailures({buf});
+    }
+  }
   renderings.clear();
   expanded.clear();
   rep.seconds["back_projection"] = seconds(t);
@@ -685,11 +922,21 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   t = Clock::now();
   if (o.writeLayer) {
     std::atomic<uint64_t> maxBits{0};
+    // Nothing written exceeds what the photograph recorded (times the exposure): the in-fill's
+    // gradients can carry a few matched values far beyond it.
+    const float bound = float(checks.bound);
+    std::atomic<uint64_t> bounded{0};
     tbb::parallel_for(size_t(0), nodes.size(), [&](size_t ni) {
       std::vector<ScratchRecord> recs;
       scratch.read(base[ni], nodes[ni].second.numPoints, recs);
       float m = 0;
-      for (const auto& r : recs) m = std::max({m, r.rgb[0], r.rgb[1], r.rgb[2]});
+      uint64_t nb = 0;
+      for (const auto& r : recs)
+        for (int c = 0; c < 3; ++c) {
+          nb += r.rgb[c] > bound;
+          m = std::max(m, std::min(r.rgb[c], bound));
+        }
+      bounded += nb;
       uint32_t bits;
       std::memcpy(&bits, &m, 4);
       uint64_t cur = maxBits.load();
@@ -700,6 +947,7 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     float maxValue;
     std::memcpy(&maxValue, &bits, 4);
     rep.maxValue = maxValue;
+    rep.boundedValues = bounded;
     // Half floats end at 65504: a scale keeps larger values (dynamic ranges beyond 1e5 of 1).
     const double scale = std::max(1.0, double(maxValue) / 60000.0);
     ColourLayerWriter writer(dir, o.layerName, scale);
@@ -709,7 +957,7 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
       scratch.read(base[ni], nodes[ni].second.numPoints, recs);
       std::vector<float> rgb(recs.size() * 3);
       for (size_t i = 0; i < recs.size(); ++i)
-        for (int c = 0; c < 3; ++c) rgb[3 * i + size_t(c)] = recs[i].rgb[c];
+        for (int c = 0; c < 3; ++c) rgb[3 * i + size_t(c)] = std::min(recs[i].rgb[c], bound);
       writer.writeNode(nodes[ni].first, rgb.data(), recs.size());
       progress("write layer", double(++nodesDone) / double(nodes.size()));
     });

@@ -87,4 +87,47 @@ ExposureSearch findBestExposure(const std::vector<float>& hdrLuminance, const Hi
   return r;
 }
 
+PairEstimate estimateExposureFromPairs(const std::vector<float>& scanY,
+                                       const std::vector<float>& photoY, double minScan,
+                                       double maxScan, double photoClip) {
+  PairEstimate r;
+  r.offered = std::min(scanY.size(), photoY.size());
+  std::vector<double> ratio, ls, lp;
+  ratio.reserve(r.offered);
+  for (size_t i = 0; i < r.offered; ++i) {
+    const double s = scanY[i], p = photoY[i];
+    if (!(s >= minScan && s <= maxScan) || !(p > 0) || !std::isfinite(p) || !(p < photoClip))
+      continue;
+    ls.push_back(std::log2(s));
+    lp.push_back(std::log2(p));
+    ratio.push_back(ls.back() - lp.back());
+  }
+  r.pairs = ratio.size();
+  if (ratio.empty()) return r;
+  r.usable = true;
+  auto median = [](std::vector<double> v) {
+    const size_t m = v.size() / 2;
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(m), v.end());
+    return v[m];
+  };
+  r.log2Exposure = median(ratio);
+  std::vector<double> dev(ratio.size());
+  for (size_t i = 0; i < ratio.size(); ++i) dev[i] = std::fabs(ratio[i] - r.log2Exposure);
+  r.spreadStops = 1.4826 * median(dev);
+  auto slope = [&](double above) {
+    double n = 0, ms = 0, mp = 0;
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (ls[i] >= above) ms += ls[i], mp += lp[i], n++;
+    if (n < 2) return 1.0;
+    ms /= n, mp /= n;
+    double sxy = 0, sxx = 0;
+    for (size_t i = 0; i < ls.size(); ++i)
+      if (ls[i] >= above) sxy += (ls[i] - ms) * (lp[i] - mp), sxx += (ls[i] - ms) * (ls[i] - ms);
+    return sxx > 0 ? sxy / sxx : 1.0;
+  };
+  r.slope = slope(-std::numeric_limits<double>::infinity());
+  r.highlightSlope = slope(median(ls));
+  return r;
+}
+
 }  // namespace nestlight::gi::hdr

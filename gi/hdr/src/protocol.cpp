@@ -65,8 +65,8 @@ double unit(uint64_t h) {
 
 class ProtocolReader : public PointReader {
  public:
-  ProtocolReader(uint64_t points, uint64_t seed, double exposure)
-      : points_(points), seed_(seed), exposure_(exposure) {
+  ProtocolReader(uint64_t points, uint64_t seed, double exposure, double maxHeight)
+      : points_(points), seed_(seed), exposure_(exposure), maxHeight_(maxHeight) {
     header_.path = "hdr-protocol-room";
     header_.format = "synthetic";
     header_.declaredPoints = points;
@@ -91,13 +91,20 @@ class ProtocolReader : public PointReader {
     batch.attrs.resize(n * 18);
     for (size_t k = 0; k < n; ++k) {
       const uint64_t i = next_ + k;
-      const uint64_t h = mix(seed_ * 0x9E3779B97F4A7C15ull + i);
-      const double pick = unit(h);
-      const size_t fi = size_t(std::lower_bound(cdf_.begin(), cdf_.end(), pick) - cdf_.begin());
-      const Face& f = kFaces[std::min(fi, kFaceCount - 1)];
-      // Millimetre grid: the stored positions are these exactly.
-      glm::dvec3 p = f.origin + unit(mix(h + 1)) * f.u + unit(mix(h + 2)) * f.v;
-      for (int a = 0; a < 3; ++a) p[a] = std::round(p[a] * 1000.0) / 1000.0;
+      uint64_t h = mix(seed_ * 0x9E3779B97F4A7C15ull + i);
+      const Face* fp;
+      glm::dvec3 p;
+      // A point above maxHeight is drawn again (from the next hash), so the count stays.
+      for (;; h = mix(h + 3)) {
+        const double pick = unit(h);
+        const size_t fi = size_t(std::lower_bound(cdf_.begin(), cdf_.end(), pick) - cdf_.begin());
+        fp = &kFaces[std::min(fi, kFaceCount - 1)];
+        // Millimetre grid: the stored positions are these exactly.
+        p = fp->origin + unit(mix(h + 1)) * fp->u + unit(mix(h + 2)) * fp->v;
+        for (int a = 0; a < 3; ++a) p[a] = std::round(p[a] * 1000.0) / 1000.0;
+        if (p.z <= maxHeight_) break;
+      }
+      const Face& f = *fp;
       for (int a = 0; a < 3; ++a) batch.xyz[3 * k + size_t(a)] = p[a];
       const glm::vec3 l = protocolRadiance(p, f.normal) * float(exposure_);
       uint16_t rgb[3];
@@ -116,7 +123,7 @@ class ProtocolReader : public PointReader {
  private:
   SourceHeader header_;
   uint64_t points_, seed_, next_ = 0;
-  double exposure_;
+  double exposure_, maxHeight_;
   std::vector<double> cdf_;
 };
 
@@ -162,6 +169,9 @@ View protocolPhotoView(int width, int height) {
 }
 
 fs::path makeHdrProtocol(const fs::path& dir, const ProtocolOptions& o) {
+  if (!(o.maxHeight >= 0))  // the floor (height 0) always has room
+    throw Error("", "protocol",
+                "the largest height must be 0 or more, got " + std::to_string(o.maxHeight));
   fs::create_directories(dir);
   const fs::path octree = dir / "scan.octree";
   BuildOptions bo;
@@ -174,7 +184,7 @@ fs::path makeHdrProtocol(const fs::path& dir, const ProtocolOptions& o) {
                     {"seed", o.seed},
                     {"exposure", o.exposure}};
   std::vector<std::unique_ptr<PointReader>> sources;
-  sources.push_back(std::make_unique<ProtocolReader>(o.points, o.seed, o.exposure));
+  sources.push_back(std::make_unique<ProtocolReader>(o.points, o.seed, o.exposure, o.maxHeight));
   buildOctree(std::move(sources), bo);
 
   // The truth layer, from the stored points (their positions and normals are exact).

@@ -63,6 +63,30 @@ struct ExpandOptions {
   // (4.6 M in-filled) 1.5 M gave a peak of 1.4 GiB, 500 k gives 394 MiB and runs faster (smaller
   // systems converge in fewer CG iterations).
   uint64_t chunkPoints = 500'000;
+  // The photograph's exposure (log2), forced: no estimate; the checks are still measured and
+  // recorded but do not stop the expansion (the caller vouches for it).
+  std::optional<double> log2Exposure;
+  // The checks of the exposure and of the matches (ExposureChecks). When one fails the expansion
+  // stops with an error saying which and what to pass, unless `force` (the layer is written and
+  // the failures become warnings).
+  bool force = false;
+  // Spread (robust standard deviation, stops) of the log ratios between the scan and the
+  // photograph over the pairs the renderings explain. The protocol's pure exposure change
+  // measures about 0.1 (8-bit renderings, splat edges); a gamma of 1.4 on the photograph's tone
+  // about 0.6 and sends the clipped points stops beyond the truth (tests/hdr/expand_test.cpp).
+  double maxSpreadStops = 0.4;
+  // Largest highlight slope (PairEstimate::highlightSlope) accepted: 1 is an exposure change; a
+  // photograph whose highlights grow faster than the scan's overshoots beyond the clipping. The
+  // margin covers the 8-bit renderings' quantisation (measured 1.0 to 1.05 on pure exposures).
+  double maxHighlightSlope = 1.15;
+  // The exposed photograph's largest value must reach this many times the scan's clipping: below
+  // it the photograph holds nothing the scan did not record (a histogram match that paired the
+  // scan's clipping with a bright background lands at 1).
+  double minHeadroom = 1.41421356;  // half a stop
+  uint64_t minPairs = 100;          // pairs the exposure must rest on
+  // Share of the over-exposed points that the renderings see and that took a matched value: below
+  // it the in-fill extrapolates the whole clipped range from a handful of matches.
+  double minMatchedShare = 0.05;
   std::filesystem::path scratchDir;  // per-point scratch file; empty: the octree folder
   std::string layerName = "hdr";
   bool writeLayer = true;
@@ -72,9 +96,34 @@ struct ExpandOptions {
   std::function<void(const std::string& stage, double fraction)> progress;
 };
 
+// How the exposure was found and the checks that decide whether the layer is trusted.
+struct ExposureChecks {
+  // "photo-view": pairs of the photograph's own view where the scan covers it; "matches": pairs
+  // at PatchMatch's matches under t_h; "forced": --exposure.
+  std::string method;
+  double histogramLog2 = 0;  // the histogram search's answer (eq. 1-2), for the record
+  double spreadStops = 0, slope = 1, highlightSlope = 1;
+  uint64_t pairs = 0;
+  int rematches = 0;  // PatchMatch runs repeated at a corrected exposure
+  // Plausible range of log2 e: the exposed photograph must reach the scan's clipping (t_l) with
+  // its brightest value and keep its darkest percentile under it (else it is all clipped).
+  double rangeLo = 0, rangeHi = 0;
+  double photoMax = 0;  // the photograph's largest finite channel
+  // The layer's values are clamped to max(1, e * the photograph's largest value; registered,
+  // its largest where the scan renders)
+  double bound = 0;
+  double matchedShare =
+      -1;  // of the over-exposed points, the share that took a match (-1: not reached)
+  std::vector<std::string> failed;  // the checks that failed, each a sentence with its numbers
+  nlohmann::json toJson() const;
+};
+
 struct ExpandReport {
   double log2Exposure = 0, exposureDistance = 0;
   bool exposureUsable = false;
+  ExposureChecks checks;
+  uint64_t boundedValues = 0;         // channels clamped to checks.bound
+  std::vector<std::string> warnings;  // failed checks written anyway (force)
   std::vector<View> views;
   uint64_t points = 0, nodes = 0;
   uint64_t overexposed = 0;                // LDR luminance above t_l
@@ -87,6 +136,9 @@ struct ExpandReport {
   uint64_t cgIterationsMax = 0;
   uint64_t matchedPixels = 0, coveredPixels = 0;
   uint64_t blindPixels = 0;  // matches rejected because their whole patch was over-exposed
+  // Registered: matches rejected because they landed where the scan does not render in the
+  // photograph's own view (background the scan lacks)
+  uint64_t backgroundPixels = 0;
   double maxValue = 0;  // largest channel written
   uint64_t clampedValues = 0;
   nlohmann::json seconds;  // per stage

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <glm/glm.hpp>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "nestlight/gi/hdr/views.h"
@@ -26,6 +27,9 @@ struct ProtocolOptions {
   uint64_t seed = 1;
   double exposure = 0.5;  // the scan camera's exposure (eq. 2); the truth times this clips at 1
   int photoWidth = 480, photoHeight = 360;
+  // Points above this height (m) are left out: a scan that lacks part of what a photograph of
+  // the whole room sees (above 2.9, the ceiling and its lamp). Infinite: the whole room.
+  double maxHeight = std::numeric_limits<double>::infinity();
   bool overwrite = false;
   bool quiet = true;
 };
