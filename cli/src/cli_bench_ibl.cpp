@@ -13,22 +13,23 @@ void addBenchIbl(CLI::App& app, int& exitCode) {
   auto* cmd = bench->add_subcommand(
       "ibl",
       "Equal-time comparison of the ibl method's estimators under video light probes (Kronander et al.\n"
-      "2014, Fig. 3, measured): a glossy sphere on a floor under a generated moving sun, and under the\n"
-      "shared stage map (and, with --scenes outdoor, the esplanade map) turning 4 degrees a frame. Every\n"
-      "frame's ground truth is the reference's direct light through pixel centres (cached); each estimator\n"
-      "renders the sequence at each sample count. Reports per frame the relative L2 error (also net of the\n"
-      "reference's own noise), variance (two seeds) and flicker, frame times at --size and --timing-size,\n"
-      "and per estimator the time to 5% and 2% error. Writes bench_ibl.csv, bench_ibl.json and SVG plots.\n"
+      "2014, Fig. 3, measured): a glossy sphere on a floor under a generated moving sun, the same sun on\n"
+      "scanned receivers (the object scene's town in the albedo mode), and the shared stage map (and, with\n"
+      "--scenes outdoor, the esplanade map) turning 4 degrees a frame. Every frame's ground truth is the\n"
+      "reference's direct light through pixel centres (cached); each estimator renders the sequence at\n"
+      "each sample count. Reports per frame the relative L2 error (also net of the reference's own\n"
+      "noise), variance (two seeds) and flicker, frame times at --size and --timing-size, and per\n"
+      "estimator the time to 5% and 2% error. Writes bench_ibl.csv, bench_ibl.json and SVG plots.\n"
       "Example: nestlight bench ibl -o bench-ibl --frames 8 --samples 4,16,64,256");
   auto o = std::make_shared<gi::BenchIblOptions>();
-  auto scenes = std::make_shared<std::string>("moving-sun,shared");
+  auto scenes = std::make_shared<std::string>("moving-sun,scanned,shared");
   auto estimators = std::make_shared<std::string>("mis,bis,smc,env");
   auto samples = std::make_shared<std::string>("4,16,64");
   auto out = std::make_shared<std::string>("bench-ibl");
   auto shared = std::make_shared<std::string>();
   auto noVariance = std::make_shared<bool>(false);
   cmd->add_option("-o,--out", *out, "Output folder")->capture_default_str();
-  cmd->add_option("--scenes", *scenes, "moving-sun, shared (the stage map), outdoor (the esplanade map); comma-separated")->capture_default_str();
+  cmd->add_option("--scenes", *scenes, "moving-sun, scanned (the sun on a scan), shared (the stage map), outdoor (the esplanade map); comma-separated")->capture_default_str();
   cmd->add_option("--estimators", *estimators, "mis, bis, smc, env (environment sampling alone), brdf")->capture_default_str();
   cmd->add_option("--samples", *samples, "Samples per pixel, comma-separated (the ibl method's quality levels)")
       ->capture_default_str();

@@ -77,9 +77,9 @@ double medianOf(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-// Pixels whose centre ray and all 8 neighbours' meet the same surface (a mesh's material): the
-// shading error without the silhouettes, where a GL method's pixel-centre sample and the
-// reference's pixel average differ whatever the estimator.
+// Pixels whose centre ray and all 8 neighbours' meet the same surface (a mesh's material, or the
+// scan): the shading error without the silhouettes, where a GL method's pixel-centre sample and
+// the reference's pixel average differ whatever the estimator.
 std::vector<uint8_t> interiorMask(const Scene& s, const ReferenceScene& rs, int W, int H) {
   SceneCamera cam = s.camera;
   cam.width = W, cam.height = H;
@@ -89,13 +89,13 @@ std::vector<uint8_t> interiorMask(const Scene& s, const ReferenceScene& rs, int 
       glm::vec3 o, d;
       cameraRay(cam, s.origin, x + 0.5f, y + 0.5f, &o, &d);
       SurfaceHit hit;
-      if (rs.intersect(o, d, 1e30f, &hit)) id[size_t(y) * W + x] = int(hit.material);
+      if (rs.intersect(o, d, 1e30f, &hit)) id[size_t(y) * W + x] = hit.kind == SurfaceHit::Kind::Disc ? -2 : int(hit.material);
     }
   std::vector<uint8_t> mask(id.size(), 0);
   for (int y = 1; y + 1 < H; ++y)
     for (int x = 1; x + 1 < W; ++x) {
       const int c = id[size_t(y) * W + x];
-      bool same = c >= 0;
+      bool same = c != -1;
       for (int dy = -1; dy <= 1 && same; ++dy)
         for (int dx = -1; dx <= 1 && same; ++dx) same = id[size_t(y + dy) * W + x + dx] == c;
       mask[size_t(y) * W + x] = same;
@@ -166,7 +166,7 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
     const fs::path dir = o.out / sceneName;
     fs::create_directories(dir);
     // The probe sequence.
-    if (sceneName == "moving-sun") {
+    if (sceneName == "moving-sun" || sceneName == "scanned") {
       for (int f = 0; f < o.frames; ++f) {
         char name[64];
         std::snprintf(name, sizeof name, "probe_%04d.exr", f);
@@ -185,23 +185,42 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
         writeExr((dir / name).string(), turned(base, int(std::lround(base.width * 4.0 * f / 360))));
       }
     } else {
-      throw Error("--scenes", "", "unknown scene '" + sceneName + "' (moving-sun, shared, outdoor)");
+      throw Error("--scenes", "", "unknown scene '" + sceneName + "' (moving-sun, scanned, shared, outdoor)");
     }
-    writeSphereObj(dir / "sphere.obj");
-    writeBoxObj(dir / "box.obj");
-    const json sceneJson = {
-        {"version", 1},
-        {"materials",
-         {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}},
-          {"glossy", {{"type", "ggx"}, {"base_color", {0.95, 0.8, 0.5}}, {"roughness", o.roughness}, {"metallic", 1.0}}}}},
-        {"meshes", json::array({json{{"path", "box.obj"},
-                                     {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
-                                     {"material", "floor"}},
-                                json{{"path", "sphere.obj"}, {"transform", {{"translate", {0.0, 0.0, 1.0}}}}, {"material", "glossy"}}})},
-        {"environment", {{"sequence", "probe_%04d.exr"}, {"fps", 1}}},
-        {"camera", {{"eye", {0.0, -4.2, 2.4}}, {"target", {0.0, 0.0, 0.8}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 42.0},
-                    {"width", o.size}, {"height", o.size}}},
-        {"gi", {{"method", "direct"}, {"mode", "radiance_cache"}, {"seed", 1}}}};
+    json sceneJson;
+    if (sceneName == "scanned") {
+      // Scanned receivers: the object scene's town (make-scene object: ground, walls, columns and
+      // a sphere scanned with 2 mm of noise, a gold torus) in the albedo mode, where every scan
+      // point is lit, under the moving sun. The scan is made once in town/ and reused.
+      TestSceneOptions to;
+      to.points = 200000;
+      to.width = to.height = o.size;
+      to.quiet = true;
+      sceneJson = json::parse(std::ifstream(makeTestScene(TestSceneKind::Object, dir / "town", to)));
+      for (auto& t : sceneJson["octrees"]) t["path"] = "town/" + t["path"].get<std::string>();
+      for (auto& m : sceneJson["meshes"]) m["path"] = "town/" + m["path"].get<std::string>();
+      sceneJson.erase("lights");
+      sceneJson.erase("output");
+      sceneJson["camera"]["width"] = sceneJson["camera"]["height"] = o.size;
+      sceneJson["environment"] = {{"sequence", "probe_%04d.exr"}, {"fps", 1}};
+      sceneJson["gi"] = {{"method", "direct"}, {"mode", "albedo"}, {"seed", 1}};
+    } else {
+      writeSphereObj(dir / "sphere.obj");
+      writeBoxObj(dir / "box.obj");
+      sceneJson = {
+          {"version", 1},
+          {"materials",
+           {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}},
+            {"glossy", {{"type", "ggx"}, {"base_color", {0.95, 0.8, 0.5}}, {"roughness", o.roughness}, {"metallic", 1.0}}}}},
+          {"meshes", json::array({json{{"path", "box.obj"},
+                                       {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+                                       {"material", "floor"}},
+                                  json{{"path", "sphere.obj"}, {"transform", {{"translate", {0.0, 0.0, 1.0}}}}, {"material", "glossy"}}})},
+          {"environment", {{"sequence", "probe_%04d.exr"}, {"fps", 1}}},
+          {"camera", {{"eye", {0.0, -4.2, 2.4}}, {"target", {0.0, 0.0, 0.8}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 42.0},
+                      {"width", o.size}, {"height", o.size}}},
+          {"gi", {{"method", "direct"}, {"mode", "radiance_cache"}, {"seed", 1}}}};
+    }
     std::ofstream(dir / "scene.json") << sceneJson.dump(2);
     Scene scene = loadScene(dir / "scene.json");
     // Cached references are named by what they depend on: the scene (materials, camera, size)

@@ -41,7 +41,7 @@
 #define IBL_BVH_LEAF 0x80000000u    // IblBvhNode.lo.w bits of a leaf: first triangle | IBL_BVH_LEAF
 #define IBL_BVH_STACK 64
 #define IBL_PASS_SAMPLES 64      // MIS and the baselines: samples per pixel and dispatch, at most
-#define IBL_PASS_PROPOSALS 4096  // BIS: proposals per pixel and dispatch, at most
+#define IBL_PASS_PROPOSALS 1024  // BIS: proposals per pixel and dispatch, at most (half search the map)
 
 // 32 bytes: a binary BVH node.
 NL_STRUCT(IblBvhNode) {

@@ -145,19 +145,46 @@ vec3 estimateMis(int totalRho, int totalL) {
   return sum;
 }
 
-// ---- BIS (eq. 3, 4): M BSDF proposals weighted by target / q, N resampled systematically ----
-// The proposals are drawn twice from the same random stream (a sum, then the picks), so nothing
-// per proposal is stored. Returns Z-hat; `picked` receives the N directions.
+// ---- BIS (eq. 3, 4): M proposals weighted by target / q, N resampled systematically ----
+// The paper proposes from the BSDF alone; its weights gamma / q = L_Y rho_Y cos / q_rho then grow
+// without bound on a small bright texel (a sun a BSDF sample finds once in a thousand: the pixel
+// whose proposals find it gets Z-hat a thousand times its share, the rest nothing). Here proposals
+// alternate between the BSDF and the environment (M_rho = ceil(M / 2), M_L = floor(M / 2)) and are
+// weighed by the balance heuristic's mixture density, q = (M_rho q_rho + M_L q_L) / M (Veach and
+// Guibas 1995; Hesterberg's defensive mixture): Z-hat stays unbiased for every M, with no clamp,
+// and every weight is at most min((M / M_L) P rho_Y cos, (M / M_rho) L_Y rho_Y cos / q_rho) (P: the
+// map's power), the better of the two samplers' own bounds. Proposals are drawn twice from the
+// same random stream (a sum, then the picks), so nothing per proposal is stored. Returns Z-hat;
+// `bisPicks` receives the N directions.
 vec3 bisPicks[IBL_PICKS_MAX];
+uint bisEnvSteps;  // loop iterations of one environment proposal's two binary searches (each pass)
+// Proposal j of M: its direction and its target over the mixture density (0: none).
+float bisProposal(int j, int M, out vec3 d) {
+  vec2 u = rnd2();
+  float uLobe = rnd();  // drawn for every proposal: both passes over them keep one stream
+  bool env = (j & 1) == 1 && !envBlack();
+  int mL = envBlack() ? 0 : M / 2, mRho = M - mL;
+  vec3 wiL;
+  if (env) {
+    loopSteps += bisEnvSteps;
+    if (!envSample(u, d)) return 0.0;
+    wiL = toLocal(d);
+  } else {
+    if (!sampleBsdf(S.mat, S.woL, u, uLobe, wiL)) return 0.0;
+    d = S.F * wiL;
+  }
+  if (!(wiL.z > kMinCos)) return 0.0;
+  float q = (float(mRho) * pdfBsdf(S.mat, S.woL, wiL) + float(mL) * envPdf(d)) / float(M);
+  return q > 0.0 ? target(d) / q : 0.0;
+}
 float bisSample(int M, int N) {
+  bisEnvSteps = uint(findMSB(envWidth()) + findMSB(envHeight()) + 2);
   uint start = rngState;
   float total = 0.0;
+  vec3 d;
   for (int j = 0; j < M; ++j) {
     loopSteps += 2u;  // this pass and the next
-    vec3 wiL;
-    if (!sampleBsdf(S.mat, S.woL, rnd2(), rnd(), wiL)) continue;
-    float q = pdfBsdf(S.mat, S.woL, wiL);
-    if (q > 0.0) total += target(S.F * wiL) / q;
+    total += bisProposal(j, M, d);
   }
   float u0 = rnd();
   uint after = rngState;
@@ -169,12 +196,10 @@ float bisSample(int M, int N) {
   float run = 0.0;
   int k = 0;
   for (int j = 0; j < M && k < N; ++j) {
-    vec3 wiL;
-    if (!sampleBsdf(S.mat, S.woL, rnd2(), rnd(), wiL)) continue;
-    float q = pdfBsdf(S.mat, S.woL, wiL);
-    if (!(q > 0.0)) continue;
-    run += target(S.F * wiL) / q;
-    while (k < N && (float(k) + u0) / float(N) * total < run) bisPicks[k++] = S.F * wiL;
+    float w = bisProposal(j, M, d);
+    if (!(w > 0.0)) continue;
+    run += w;
+    while (k < N && (float(k) + u0) / float(N) * total < run) bisPicks[k++] = d;
   }
   for (; k < N; ++k) bisPicks[k] = bisPicks[max(k - 1, 0)];  // rounding at the very end
   rngState = after;
@@ -402,8 +427,11 @@ void main() {
   vec3 emission;
   vec4 base = texelFetch(uBaseColour, px, 0);
   S.mat = gbufferMaterial(base.rgb, m, emission);
-  // Rays leave from above the surface: a scan point from 1.5 splat radii (its neighbours' discs
-  // lie around it), a mesh by a hair relative to the distance (its own triangle).
+  // Rays leave from above the surface. A scan point from 1.5 splat radii: scan noise puts its
+  // neighbours' discs millimetres above its plane, and the reference leaves a disc by that
+  // surface's thickness (its neighbours' reach above the plane, capped at the disc's radius), which
+  // this bounds without the per-point thickness the G-buffer does not carry (pbgi's receivers
+  // leave alike). A mesh by a hair relative to the distance (its own triangle).
   S.x = x + S.n * max(1e-4 * max(length(x - frame.eye.xyz), 1e-3), base.a > 0.0 ? 1.5 * base.a : 0.0);
   vec3 L = vec3(0.0);
   if (!envBlack() || uEstimator == IBL_SMC) {

@@ -20,10 +20,11 @@ namespace nestlight::gi {
 
 struct BenchIblOptions {
   std::filesystem::path out = "bench-ibl";
-  // "moving-sun" (generated), "shared" (../shared/data/hdr/stage_env_latlong.exr, a film stage's
+  // "moving-sun" (generated), "scanned" (the moving sun on scanned receivers: the object scene's
+  // town in the albedo mode), "shared" (../shared/data/hdr/stage_env_latlong.exr, a film stage's
   // small bright lamps) and "outdoor" (royal_esplanade_1k.hdr, a sunny square), each turned 4
   // degrees a frame; a shared map's scene is skipped with a message without the shared data.
-  std::vector<std::string> scenes = {"moving-sun", "shared"};
+  std::vector<std::string> scenes = {"moving-sun", "scanned", "shared"};
   std::vector<std::string> estimators = {"mis", "bis", "smc", "env"};
   std::vector<int> samples = {4, 16, 64};  // the ibl method's quality levels (samples per pixel)
   int frames = 8;
