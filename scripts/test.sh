@@ -4,21 +4,25 @@
 #   FUZZ_SECONDS=20 SKIP_SANITIZE=1 SKIP_FUZZ=1 SKIP_GPU_SCRIPTS=1 scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+start=$SECONDS
+# Each step says when it starts (minutes into the run), so a slow step shows in the CI log.
+step() { echo "== $1 [$(( (SECONDS - start) / 60 )) min]"; }
+step "set-up and Release build"
 scripts/setup.sh
 
-echo "== unit tests (Release)"
+step "unit tests (Release)"
 ctest --test-dir build --output-on-failure -j2 --timeout 900
 
 if [ -z "${SKIP_GPU_SCRIPTS:-}" ]; then
   # The GPU run's one command, every step at tiny sizes on llvmpipe, and the GPU bundle made from
   # this build, unpacked and run in a clean environment (docs/GPU.md).
-  echo "== GPU run script (--quick) and GPU bundle"
+  step "GPU run script (--quick) and GPU bundle"
   scripts/gpu-run.sh --quick --bin build --out build/gpu-quick
   scripts/gpu-bundle.sh --build-dir build --out build/gpu-bundle/nestlight-gpu-bundle.tar.xz --check
 fi
 
 if [ -z "${SKIP_SANITIZE:-}" ]; then
-  echo "== unit tests under ASan+UBSan"
+  step "ASan+UBSan build and unit tests"
   BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo CMAKE_ARGS="-DNESTLIGHT_SANITIZE=ON" \
     scripts/setup.sh
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
@@ -26,7 +30,7 @@ if [ -z "${SKIP_SANITIZE:-}" ]; then
 fi
 
 if [ -z "${SKIP_FUZZ:-}" ]; then
-  echo "== fuzz targets (${FUZZ_SECONDS:-15} s each)"
+  step "fuzz build and targets (${FUZZ_SECONDS:-15} s each)"
   fuzzers=$(cd tests/fuzz && ls fuzz_*.cpp | sed 's/\.cpp$//' | tr '\n' ' ')
   BUILD_DIR=build-fuzz TARGETS="$fuzzers" \
     CMAKE_ARGS="-DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 -DNESTLIGHT_FUZZ=ON" \
@@ -41,4 +45,4 @@ if [ -z "${SKIP_FUZZ:-}" ]; then
     rm -rf "$corpus"
   done
 fi
-echo "== all tests passed"
+step "all tests passed"

@@ -247,10 +247,13 @@ void LazPoints::countLastChunk(uint64_t declared) {
   const uint64_t before = last.firstPoint;
   const bool layered = info_.compressor == Compressor::LayeredChunked;
   // One chunk decoded at open: a header that understates by less than a chunk is caught too.
+  // The chunk size is a claim too: bounded as every chunk's count is.
+  const uint32_t most = uint32_t(std::min<uint64_t>(
+      {info_.chunkSize, kMaxChunkPoints, kMaxChunkRecordBytes / std::max<size_t>(recordSize_, 1)}));
   RecordBuffer scratch;
-  if (!layered) scratch.resize(size_t(info_.chunkSize) * recordSize_);
+  if (!layered) scratch.resize(size_t(most) * recordSize_);
   const ChunkDecoder::PointCount count = decoders_->local()->countPoints(
-      src_->data() + last.offset, last.bytes, info_.chunkSize, scratch.data());
+      src_->data() + last.offset, last.bytes, most, scratch.data());
   if (count.least == 0) return;  // damaged: decoding it will say so
   const uint64_t held = before + count.least;
   if (held <= declared) return;

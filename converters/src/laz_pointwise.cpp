@@ -11,6 +11,7 @@
 // item decoders keep the reference's state and context rules exactly (they must reproduce its
 // model updates); where the reference recurses or computes with signed overflow on a damaged
 // stream, these loop with a bound and wrap unsigned.
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <memory>
@@ -348,7 +349,8 @@ class PointwiseDecoder final : public ChunkDecoder {
     // Ran dry before the stream was used up, or more bytes than `most` points use: damaged.
     if (dec_.overrun() || dec_.consumed() < stream) return r;
     r.least = r.upTo = p;
-    for (; p < most; ++p) {
+    // Points past the stream's end that need no new byte are few: a thousand is plenty to say so.
+    for (const uint32_t stop = std::min<uint64_t>(most, uint64_t(p) + 1000); p < stop; ++p) {
       uint8_t* rec = scratch + size_t(p) * recordSize_;
       for (size_t i = 0; i < items_.size(); ++i) items_[i]->read(dec_, rec + offsets_[i]);
       if (dec_.overrun()) break;
