@@ -188,7 +188,9 @@ void addConvert(CLI::App& app, int& exitCode) {
                 "other files in the folder are kept");
   cmd->add_flag("--lenient", read->lenient,
                 "Keep the complete records of files whose header disagrees with their data, and "
-                "the intact chunks of a damaged LAZ file (its damaged chunks count as rejected)");
+                "the intact chunks of a damaged LAZ file (its damaged chunks count as rejected; a damaged "
+                "chunk table is read around by finding the chunks one after the other). A LAZ header that "
+                "declares fewer points than the chunks hold is a warning either way, and every point is read");
   cmd->add_option("--columns", read->columns, "Text inputs: column names, e.g. x,y,z,r,g,b");
   cmd->add_flag("--in-memory", opt->inMemory,
                 "Index everything as one chunk (reference build; needs RAM)");
