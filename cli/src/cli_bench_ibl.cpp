@@ -18,8 +18,10 @@ void addBenchIbl(CLI::App& app, int& exitCode) {
       "--scenes outdoor, the esplanade map) turning 4 degrees a frame. Every frame's ground truth is the\n"
       "reference's direct light through pixel centres (cached); each estimator renders the sequence at\n"
       "each sample count. Reports per frame the relative L2 error (also net of the reference's own\n"
-      "noise), variance (two seeds) and flicker, frame times at --size and --timing-size, and per\n"
-      "estimator the time to 5% and 2% error. Writes bench_ibl.csv, bench_ibl.json and SVG plots.\n"
+      "noise, and of 4 x 4 block means with the ratio of the image means: on a scan the per-pixel error\n"
+      "has the splats' colour blending as a floor), variance (two seeds) and flicker, frame times at\n"
+      "--size and --timing-size, and per estimator the time to 5% and 2% error. Writes bench_ibl.csv,\n"
+      "bench_ibl.json and SVG plots.\n"
       "Example: nestlight bench ibl -o bench-ibl --frames 8 --samples 4,16,64,256");
   auto o = std::make_shared<gi::BenchIblOptions>();
   auto scenes = std::make_shared<std::string>("moving-sun,scanned,shared");

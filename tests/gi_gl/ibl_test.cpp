@@ -459,7 +459,7 @@ TEST(Ibl, ADamagedProbeFrameIsNamedOrThePreviousKept) {
 }
 
 // `nestlight bench ibl` end to end at a toy size: a row per estimator, sample count and frame,
-// and the summary's times to 5% and 2%.
+// and the summary's times to 5% and 2%; the scanned scene at a toy size.
 TEST(Ibl, BenchIblWritesItsTablesAndPlots) {
   test::TempDir t;
   std::string out;
@@ -480,6 +480,17 @@ TEST(Ibl, BenchIblWritesItsTablesAndPlots) {
   }
   EXPECT_TRUE(std::filesystem::exists(t.path() / "moving-sun_speed.svg"));
   EXPECT_TRUE(std::filesystem::exists(t.path() / "moving-sun_frames.svg"));
+  // Scanned receivers (the object scene's town in the albedo mode): errors on 4 x 4 block means
+  // and the image mean's ratio too, as there the per-pixel error has the splats' colours as a floor.
+  // A wiring check: at 16 x 16 pixels and 16 samples (the reference's too) the town's mean is 0.94
+  // of the reference's, noisy; a block or ratio computed over the wrong pixels lands far off.
+  const int scanned = test::runCli("bench ibl --scenes scanned --estimators mis --frames 2 --size 16 --timing-size 0 "
+                                   "--samples 16 --reference-spp 16 --no-variance -o " + (t.path() / "scan").string(), &out);
+  ASSERT_EQ(scanned, 0) << out;
+  const json js2 = json::parse(std::ifstream(t.path() / "scan" / "bench_ibl.json"));
+  const json& level = js2.at("scenes").at(0).at("estimators").at(0).at("levels").at(0);
+  EXPECT_NEAR(level.at("median_mean_ratio").get<double>(), 1.0, 0.25) << level.dump();
+  EXPECT_TRUE(level.contains("median_relative_l2_4x4")) << level.dump();
   const int bad = test::runCli("bench ibl --estimators mis,foo --frames 2 -o " + t.path().string(), &out);
   EXPECT_NE(bad, 0);
   EXPECT_NE(out.find("foo"), std::string::npos) << out;

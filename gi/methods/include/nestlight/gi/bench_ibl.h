@@ -4,9 +4,10 @@
 // turning as a probe sequence), every frame's ground truth is the reference's direct light
 // (gi/reference, Embree); each estimator of the `ibl` method (MIS, BIS, SMC, and environment-map
 // sampling alone as the baseline) renders the sequence at several sample counts, and the harness
-// reports per frame the relative L2 error, the variance (two seeds), the flicker (the frame-to-
-// frame change of the error image) and the frame time; per estimator the time to 5% and 2%
-// error. Writes CSV, JSON and SVG plots.
+// reports per frame the relative L2 error (of pixels, and of 4 x 4 block means with the ratio of
+// the image means), the variance (two seeds), the flicker (the frame-to-frame change of the error
+// image) and the frame time; per estimator the time to 5% and 2% error. Writes CSV, JSON and SVG
+// plots.
 #pragma once
 
 #include <cstdio>
