@@ -30,10 +30,12 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       "from\n"
       "the pixels the scan covers, unregistered from the matches under t_h. The exposure is "
       "checked\n"
-      "(spread of the log ratios between scan and photograph, a plausible range, the share of\n"
-      "over-exposed points matched); when a check fails no layer is written and the error says\n"
-      "what to pass (--photo-view, --exposure, --force). Values are bounded by the photograph's\n"
-      "largest times the exposure. Memory is bounded whatever the scan's size.\n"
+      "(spread and highlight slope of the log ratios between scan and photograph, a plausible\n"
+      "range, the share of over-exposed points matched); when a check fails no layer is written\n"
+      "and the error says what to pass (--photo-view, --exposure, --force). Values are bounded by\n"
+      "the photograph's largest times the exposure; registered, matches that land on background\n"
+      "the scan lacks are rejected. `info` shows the exposure and the checks. Memory is bounded\n"
+      "whatever the scan's size.\n"
       "Example: nestlight expand-hdr scan.octree --photo window.exr --auto-views 2");
   auto dir = std::make_shared<std::string>();
   auto photo = std::make_shared<std::string>();
@@ -89,7 +91,8 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
                                       "Force the photograph's exposure, in stops (log2 of the "
                                       "factor that takes the photograph's values to "
                                       "the scan's, 1 being the scan's clipping): no estimate; the "
-                                      "checks are recorded but do not stop");
+                                      "exposure's checks are recorded but do not stop (the "
+                                      "matched share still does)");
   cmd->add_flag(
       "--force", o->force,
       "Write the layer even when the exposure or match checks fail (they become warnings, "

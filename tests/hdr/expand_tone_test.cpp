@@ -105,8 +105,9 @@ double relativeL2(const fs::path& octree, const std::string& layer) {
 struct Tone {
   const char* name;
   std::function<float(float)> curve;  // per channel, of the true radiance (absolute units)
-  // What the expansion must do, registered and not: improve on the LDR colour, or refuse.
-  bool registeredImproves, unregisteredImproves;
+  // What the expansion must do, registered and not: improve on the LDR colour (nullptr), or be
+  // refused by the check whose words are given.
+  const char *registeredRefusal, *unregisteredRefusal;
 };
 
 // The scan recorded the truth times 0.5; the photographs below are the truth through each curve.
@@ -124,18 +125,20 @@ struct Tone {
 // exposed photograph then ends at the clipping: every curve is refused by the plausible range.
 // (Unregistered expansions that help are expand_test.cpp's: the whole room, no background.)
 // The thresholds are ExpandOptions' defaults, not tuned to these cases.
+constexpr const char* kRange = "plausible range";
+constexpr const char* kSlope = "times as fast";
 const std::vector<Tone>& tones() {
   static const std::vector<Tone> t = {
-      {"exposure", [](float x) { return 4.0f * x; }, true, false},
-      {"gamma 0.8", [](float x) { return std::pow(x, 0.8f); }, true, false},
-      {"gamma 1.4", [](float x) { return std::pow(x, 1.4f); }, false, false},
+      {"exposure", [](float x) { return 4.0f * x; }, nullptr, kRange},
+      {"gamma 0.8", [](float x) { return std::pow(x, 0.8f); }, nullptr, kRange},
+      {"gamma 1.4", [](float x) { return std::pow(x, 1.4f); }, kSlope, kRange},
       {"filmic",
        [](float x) {
          const float v = 0.25f * x;
          return 100.0f * (v * (2.51f * v + 0.03f)) / (v * (2.43f * v + 0.59f) + 0.14f);
        },
-       false, false},
-      {"camera log", [](float x) { return std::log2(1.0f + 16.0f * x); }, false, false},
+       kSlope, kRange},
+      {"camera log", [](float x) { return std::log2(1.0f + 16.0f * x); }, kRange, kRange},
   };
   return t;
 }
@@ -154,7 +157,7 @@ fs::path freshCopy(const test::TempDir& tmp, const std::string& name) {
 
 // Runs one expansion and checks the outcome the tone expects. Returns the expansion's relative
 // L2 (or -1 when refused).
-double expectOutcome(const Tone& tone, bool registered, bool improves) {
+double expectOutcome(const Tone& tone, bool registered, const char* refusal) {
   SCOPED_TRACE(std::string(tone.name) + (registered ? ", registered" : ", unregistered"));
   test::TempDir tmp;
   const fs::path dir = freshCopy(tmp, "scan.octree");
@@ -165,7 +168,7 @@ double expectOutcome(const Tone& tone, bool registered, bool improves) {
   ExpandOptions o = smallOptions();
   if (registered) o.photoView = protocolPhotoView(photo.width, photo.height);
   const double ldr = relativeL2(dir, "ldr");
-  if (improves) {
+  if (!refusal) {
     const ExpandReport r = expandHdr(dir, photo, o);
     const double ours = relativeL2(dir, "hdr");
     std::printf(
@@ -197,13 +200,8 @@ double expectOutcome(const Tone& tone, bool registered, bool improves) {
   const std::string what = e.what();
   std::printf("%-10s %-12s refused: %s\n", tone.name, registered ? "registered" : "unregistered",
               what.c_str());
-  // The error says why (a check, with its numbers) and what to pass.
-  const bool namesCheck = what.find("spread over") != std::string::npos ||
-                          what.find("plausible range") != std::string::npos ||
-                          what.find("of the over-exposed points") != std::string::npos ||
-                          what.find("pixel pairs that") != std::string::npos ||
-                          what.find("times as fast") != std::string::npos;
-  EXPECT_TRUE(namesCheck) << what;
+  // The error says why (the check expected, with its numbers) and what to pass.
+  EXPECT_NE(what.find(refusal), std::string::npos) << what;
   EXPECT_NE(what.find("--exposure"), std::string::npos) << what;
   EXPECT_NE(what.find("--force"), std::string::npos) << what;
   if (!registered) EXPECT_NE(what.find("--photo-view"), std::string::npos) << what;
@@ -216,12 +214,12 @@ class ToneCurves : public ::testing::TestWithParam<size_t> {};
 
 TEST_P(ToneCurves, RegisteredExpandsCloserThanLdrOrRefuses) {
   const Tone& t = tones()[GetParam()];
-  expectOutcome(t, true, t.registeredImproves);
+  expectOutcome(t, true, t.registeredRefusal);
 }
 
 TEST_P(ToneCurves, UnregisteredExpandsCloserThanLdrOrRefuses) {
   const Tone& t = tones()[GetParam()];
-  expectOutcome(t, false, t.unregisteredImproves);
+  expectOutcome(t, false, t.unregisteredRefusal);
 }
 
 INSTANTIATE_TEST_SUITE_P(Expand, ToneCurves, ::testing::Range(size_t(0), size_t(5)),

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -101,7 +102,8 @@ struct ExposureChecks {
   // "photo-view": pairs of the photograph's own view where the scan covers it; "matches": pairs
   // at PatchMatch's matches under t_h; "forced": --exposure.
   std::string method;
-  double histogramLog2 = 0;  // the histogram search's answer (eq. 1-2), for the record
+  // The histogram search's answer (eq. 1-2), unregistered only (NaN, null in JSON: not run)
+  double histogramLog2 = std::numeric_limits<double>::quiet_NaN();
   double spreadStops = 0, slope = 1, highlightSlope = 1;
   uint64_t pairs = 0;
   int rematches = 0;  // PatchMatch runs repeated at a corrected exposure
