@@ -165,7 +165,7 @@ TEST(Expand, RestoresClippedColourBetterThanLdrAndGlobalInverseToneMapping) {
   EXPECT_EQ(v.layers, 2u);
   EXPECT_TRUE(v.notes.empty());  // the scratch file is gone
   const LayerError ldr = compareWithTruth(dir, "ldr");
-  const LayerError landis = compareWithTruth(dir, "landis", 0.9, double(r.maxValue));
+  const LayerError landis = compareWithTruth(dir, "landis", 0.9, r.checks.bound);
   const LayerError ours = compareWithTruth(dir, "hdr");
   std::printf(
       "clipped points, RMS / stops: LDR %.3f / %.3f, LANDIS-PC %.3f / %.3f, PMATCH-RGB %.3f / "
@@ -173,11 +173,14 @@ TEST(Expand, RestoresClippedColourBetterThanLdrAndGlobalInverseToneMapping) {
       ldr.rmsClipped, ldr.stopsClipped, landis.rmsClipped, landis.stopsClipped, ours.rmsClipped,
       ours.stopsClipped);
   // Unregistered (cube maps only): in stops, every clipped point counts alike: the expansion
-  // brings them closer to the truth than the LDR colour (measured 2.19 -> 1.74 stops at this
+  // brings them closer to the truth than the LDR colour (measured 2.19 -> 1.11 stops at this
   // size), and far closer than the global operator, which sends every clipped point to the
-  // photograph's maximum. RMS is ruled by the lamp's core (1000 times the clipping): matches
-  // whose patch is clipped all over are rejected (ExpandOptions::rejectBlindPatches), so the lamp
-  // is in-filled from its rim and the RMS stays at about LDR's (72.9 against 79.7 measured).
+  // photograph's maximum (times e: the bound, not the layer's largest value, which the stray
+  // match rejection lowers). RMS is ruled by the lamp's core (1000 times the clipping): matches
+  // whose patch is clipped all over are rejected (ExpandOptions::rejectBlindPatches) and so are
+  // rim matches far above the matches around them (ExpandOptions::maxLocalRatio), so the lamp
+  // is in-filled and the RMS stays at about LDR's (78.5 against 79.7 measured; 72.9 before the
+  // stray rejection, which a lamp the scan lacks needs: expand_tone_test.cpp).
   EXPECT_LT(ours.stopsClipped, 0.9 * ldr.stopsClipped);
   EXPECT_LT(ours.stopsClipped, 0.5 * landis.stopsClipped);
   EXPECT_LT(ours.rmsClipped, ldr.rmsClipped);

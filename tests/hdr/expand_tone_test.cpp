@@ -300,6 +300,46 @@ TEST(ExpandExposure, ForceWritesWithWarningsAndBoundedValues) {
   EXPECT_LE(double(r.maxValue), r.checks.bound * (1 + 1e-3));
 }
 
+// Unregistered, a pure exposure change (times 4) with the lamp the scan lacks in the frame: the
+// exposure comes out right and its checks pass, yet cube-map matches of clipped points to the
+// lamp's glow made the written layer 2.66 against the LDR colour's 0.71 (values up to 370 times
+// the clipping, the truth's largest being 5.7). With stray matches rejected
+// (ExpandOptions::maxLocalRatio) it measures 0.31; it must stay closer to the truth than the LDR
+// colour by the tones' margin, or be refused by a named check.
+TEST(ExpandExposure, UnregisteredLampExpandsCloserThanLdrOrRefuses) {
+  test::TempDir tmp;
+  const fs::path dir = freshCopy(tmp, "scan.octree");
+  const HdrImage photo = toned(tones()[0], false);
+  const ExpandOptions o = smallOptions();
+  const double ldr = relativeL2(dir, "ldr");
+  try {
+    const ExpandReport r = expandHdr(dir, photo, o);
+    const double ours = relativeL2(dir, "hdr");
+    std::printf(
+        "unregistered lamp: exposure 2^%.2f spread %.3f slope %.2f/%.2f matched %.1f%% projected "
+        "%llu of %llu: relative L2 %.4f, LDR %.4f; largest %.4g (bound %.4g)\n",
+        r.log2Exposure, r.checks.spreadStops, r.checks.slope, r.checks.highlightSlope,
+        100 * r.checks.matchedShare, (unsigned long long)r.projected,
+        (unsigned long long)r.overexposed, ours, ldr, r.maxValue, r.checks.bound);
+    std::printf("stray matches rejected: %llu pixels\n", (unsigned long long)r.strayPixels);
+    EXPECT_TRUE(r.checks.failed.empty());
+    EXPECT_LE(r.maxValue, r.checks.bound);
+    EXPECT_LT(ours, 0.9 * ldr);
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    std::printf("unregistered lamp refused: %s\n", what.c_str());
+    // Refused by a named check: the plausible range, the highlight slope, the spread or the
+    // matched share.
+    EXPECT_TRUE(what.find(kRange) != std::string::npos || what.find(kSlope) != std::string::npos ||
+                what.find("spread over") != std::string::npos ||
+                what.find("of the over-exposed points") != std::string::npos)
+        << what;
+    EXPECT_NE(what.find("--photo-view"), std::string::npos) << what;
+    EXPECT_NE(what.find("--force"), std::string::npos) << what;
+    EXPECT_EQ(OctreeReader(dir).metadata().layer("hdr"), nullptr);
+  }
+}
+
 // A forced exposure is used as given: no estimate, the checks measured but not stopping.
 TEST(ExpandExposure, AForcedExposureIsUsedAsGiven) {
   test::TempDir tmp;

@@ -52,6 +52,11 @@ struct ExpandOptions {
   // are in-filled from the region's rim instead. The photograph's own view is exempt (its
   // matches start registered). false: the paper's back-projection.
   bool rejectBlindPatches = true;
+  // Unregistered: a clipped pixel's matched value above this many times the median of the matched
+  // values within localRadius pixels (and above the clipping) is rejected and in-filled instead;
+  // 0 keeps every match.
+  double maxLocalRatio = 8.0;
+  int localRadius = 4;
   int autoViews = 1;         // cube maps placed automatically when `views` is empty
   int faceSize = 384;        // cube-map face size of automatic views (pixels)
   double overexposed = 0.9;  // t_l: LDR luminance (linear) above which a point is expanded
@@ -141,6 +146,9 @@ struct ExpandReport {
   // Registered: matches rejected because they landed where the scan does not render in the
   // photograph's own view (background the scan lacks)
   uint64_t backgroundPixels = 0;
+  // Unregistered: matches rejected because their value was more than maxLocalRatio times the
+  // median of the matched values around them (a light the scan lacks)
+  uint64_t strayPixels = 0;
   double maxValue = 0;  // largest channel written
   uint64_t clampedValues = 0;
   nlohmann::json seconds;  // per stage
