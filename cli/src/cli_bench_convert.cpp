@@ -66,21 +66,25 @@ ChildRun runChild(const std::vector<std::string>& args, const std::string& watch
   int status = 0;
   struct rusage ru {};
   ChildRun r;
-  // The converter's temporary files live in WATCH/.build-PID: sample their size while it runs.
+  // The converter builds WATCH beside it, in .WATCH.build-PID (octree/staged_directory.h), with its
+  // temporary files in chunks.tmp there: sample their size while it runs.
   std::atomic<bool> done{false};
   std::thread watcher;
   if (!watch.empty())
     watcher = std::thread([&] {
-      const fs::path tmp = fs::path(watch) / (".build-" + std::to_string(pid));
+      const fs::path w(watch);
+      const fs::path tmp = w.parent_path() /
+                           ("." + w.filename().string() + ".build-" + std::to_string(pid)) / "chunks.tmp";
       while (!done.load()) {
         r.peakTempBytes = std::max(r.peakTempBytes, folderBytes(tmp));
         std::this_thread::sleep_for(std::chrono::milliseconds(250));
       }
     });
   ::wait4(pid, &status, 0, &ru);
+  // Timed before the watcher is joined: its sleep would add up to a quarter of a second.
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   done = true;
   if (watcher.joinable()) watcher.join();
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   r.peakRss = static_cast<uint64_t>(ru.ru_maxrss) * 1024;
   r.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
   return r;
