@@ -434,7 +434,7 @@ class LasWriter final : public PointWriter {
     }
     if (compress_) {
       // LASzip's VLR, which LAZ readers look for by its user and record id.
-      const std::vector<uint8_t> v = laz::ChunkWriter(p.pointFormat, p.recordLength, path_).vlr();
+      const std::vector<uint8_t> v = laz::ChunkWriter::vlrFor(p.pointFormat, p.recordLength, path_);
       out.insert(out.end(), v.begin(), v.end());
       ++*count;
     }

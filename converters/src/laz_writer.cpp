@@ -325,8 +325,13 @@ ChunkWriter::ChunkWriter(int pointFormat, size_t recordLength, std::string nameF
 
 ChunkWriter::~ChunkWriter() = default;
 
-std::vector<uint8_t> ChunkWriter::vlr() const {
-  std::vector<uint8_t> vlr(las::kVlrHeaderSize + 34 + 6 * info_.items.size(), 0);
+std::vector<uint8_t> ChunkWriter::vlrFor(int pointFormat, size_t recordLength,
+                                         const std::string& nameForErrors) {
+  return vlrFor(infoFor(pointFormat, recordLength, nameForErrors));
+}
+
+std::vector<uint8_t> ChunkWriter::vlrFor(const LaszipInfo& info) {
+  std::vector<uint8_t> vlr(las::kVlrHeaderSize + 34 + 6 * info.items.size(), 0);
   const std::string user = kLaszipUserId;
   std::copy(user.begin(), user.end(), vlr.begin() + 2);
   las::store<uint16_t>(&vlr[18], kLaszipRecordId);
@@ -334,20 +339,20 @@ std::vector<uint8_t> ChunkWriter::vlr() const {
   const std::string text = "Nestlight LASzip encoder";
   std::copy(text.begin(), text.end(), vlr.begin() + 22);
   uint8_t* p = &vlr[las::kVlrHeaderSize];
-  las::store<uint16_t>(p + 0, uint16_t(info_.compressor));
+  las::store<uint16_t>(p + 0, uint16_t(info.compressor));
   las::store<uint16_t>(p + 2, 0);  // arithmetic coder
-  p[4] = info_.versionMajor;
-  p[5] = info_.versionMinor;
-  las::store<uint16_t>(p + 6, info_.versionRevision);
+  p[4] = info.versionMajor;
+  p[5] = info.versionMinor;
+  las::store<uint16_t>(p + 6, info.versionRevision);
   las::store<uint32_t>(p + 8, 0);
-  las::store<uint32_t>(p + 12, info_.chunkSize);
+  las::store<uint32_t>(p + 12, info.chunkSize);
   las::store<int64_t>(p + 16, -1);  // no special EVLRs
   las::store<int64_t>(p + 24, -1);
-  las::store<uint16_t>(p + 32, uint16_t(info_.items.size()));
-  for (size_t i = 0; i < info_.items.size(); ++i) {
-    las::store<uint16_t>(p + 34 + 6 * i, uint16_t(info_.items[i].type));
-    las::store<uint16_t>(p + 36 + 6 * i, info_.items[i].size);
-    las::store<uint16_t>(p + 38 + 6 * i, info_.items[i].version);
+  las::store<uint16_t>(p + 32, uint16_t(info.items.size()));
+  for (size_t i = 0; i < info.items.size(); ++i) {
+    las::store<uint16_t>(p + 34 + 6 * i, uint16_t(info.items[i].type));
+    las::store<uint16_t>(p + 36 + 6 * i, info.items[i].size);
+    las::store<uint16_t>(p + 38 + 6 * i, info.items[i].version);
   }
   return vlr;
 }

@@ -29,7 +29,11 @@ class ChunkWriter {
 
   const LaszipInfo& info() const { return info_; }
   // The LASzip VLR (header and payload), to be the file's last VLR.
-  std::vector<uint8_t> vlr() const;
+  std::vector<uint8_t> vlr() const { return vlrFor(info_); }
+  // The same without a writer (no encoders made): what a LAS header being planned needs.
+  static std::vector<uint8_t> vlrFor(int pointFormat, size_t recordLength,
+                                     const std::string& nameForErrors);
+  static std::vector<uint8_t> vlrFor(const LaszipInfo& info);
   // The point data starts at byte `pointStart` of `f` (the header's offset to point data): the
   // chunk table's offset goes there, the chunks after it.
   void begin(std::FILE* f, std::string fileName, uint64_t pointStart);
