@@ -1,4 +1,5 @@
 // `nestlight expand-hdr`: HDR expansion of a scan's colour from one HDR photograph.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -11,6 +12,30 @@
 namespace nestlight::cli {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// A pixel counts where the mask's largest channel is above half: a black-and-white mask from any
+// paint program, 8 or 16 bits, or a float EXR.
+std::vector<uint8_t> readPhotoMask(const std::string& path, const gi::HdrImage& photo) {
+  const std::string ext = fs::path(path).extension().string();
+  const gi::HdrImage m = (ext == ".png" || ext == ".PNG") ? gi::readPng(path) : gi::readHdrImage(path);
+  if (m.width != photo.width || m.height != photo.height)
+    throw Error(path, "", "the mask is " + std::to_string(m.width) + " x " + std::to_string(m.height) +
+                              " pixels, the photograph " + std::to_string(photo.width) + " x " +
+                              std::to_string(photo.height) + ": draw the mask at the photograph's size");
+  std::vector<uint8_t> mask(m.pixels());
+  size_t in = 0;
+  for (size_t i = 0; i < m.pixels(); ++i) {
+    const float v = std::max({m.rgb[3 * i], m.rgb[3 * i + 1], m.rgb[3 * i + 2]});
+    mask[i] = v > 0.5f;  // NaN: out
+    in += mask[i];
+  }
+  if (in == 0) throw Error(path, "", "the mask is black everywhere: no pixel of the photograph would count");
+  return mask;
+}
+
+}  // namespace
 
 void addExpandHdr(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
@@ -32,9 +57,10 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       "checked\n"
       "(spread and highlight slope of the log ratios between scan and photograph, a plausible\n"
       "range, the share of over-exposed points matched); when a check fails no layer is written\n"
-      "and the error says what to pass (--photo-view, --exposure, --force). Values are bounded by\n"
-      "the photograph's largest times the exposure; registered, matches that land on background\n"
-      "the scan lacks are rejected. `info` shows the exposure and the checks. Memory is bounded\n"
+      "and the error says what to pass (--photo-view, --photo-mask, --exposure, --force).\n"
+      "Values are bounded by the photograph's largest times the exposure; registered, matches\n"
+      "that land on background the scan lacks are rejected; a mask (--photo-mask) leaves out\n"
+      "what it covers. `info` shows the exposure and the checks. Memory is bounded\n"
       "whatever the scan's size.\n"
       "Example: nestlight expand-hdr scan.octree --photo window.exr --auto-views 2");
   auto dir = std::make_shared<std::string>();
@@ -61,6 +87,14 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
                   "The photograph's camera, when registered with the scan (a cams.json with one view): the "
                   "scan is also rendered from it (at the photograph's size), matched from the identity, and the points it matched take "
                   "their colour from it alone; the other views (--views or --auto-views) reach the rest");
+  auto photoMaskFile = std::make_shared<std::string>();
+  cmd->add_option("--photo-mask", *photoMaskFile,
+                  "A mask drawn on the photograph, at its size (.png, .exr or .hdr): white (above half) "
+                  "where it shows the scanned scene, black where it shows what the scan lacks (sky, "
+                  "lamps or buildings beyond the scan, people). Masked-out pixels count for nothing: "
+                  "not in the exposure's estimate or checks, not in the bound, and no match lands on "
+                  "them. Registered or not")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--photo-search", o->photoSearchRadius,
                   "How far (pixels) matches of the --photo-view rendering may move from the identity; 0: anywhere")
       ->capture_default_str()
@@ -121,6 +155,8 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
         throw Error(*photoViewFile, "", "--photo-view: expected one view, found " + std::to_string(v.size()));
       o->photoView = v.front();
     }
+    const gi::HdrImage image = gi::readHdrImage(*photo);
+    if (!photoMaskFile->empty()) o->photoMask = readPhotoMask(*photoMaskFile, image);
     if (exposureOpt->count() > 0) {
       if (!std::isfinite(*forcedExposure) || std::fabs(*forcedExposure) > 64)
         throw Error("", "--exposure",
@@ -134,6 +170,7 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
                       {"mode", *mode},
                       {"views", viewsFile->empty() ? "auto" : *viewsFile},
                       {"photo_view", *photoViewFile},
+                      {"photo_mask", *photoMaskFile},
                       {"force", o->force}};
     if (o->log2Exposure) o->commandLine["exposure"] = *o->log2Exposure;
     auto mutex = std::make_shared<std::mutex>();
@@ -146,7 +183,6 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
         *last = {stage, pct};
         std::fprintf(stderr, "expand-hdr: %-16s %3d%%\n", stage.c_str(), pct);
       };
-    const gi::HdrImage image = gi::readHdrImage(*photo);
     const gi::hdr::ExpandReport r = gi::hdr::expandHdr(*dir, image, *o);
     for (const auto& w : r.warnings)
       std::fprintf(stderr, "expand-hdr: warning (--force): %s\n", w.c_str());

@@ -87,6 +87,10 @@ glm::vec3 landisExpand(const glm::vec3& ldr, double threshold, double maxLuminan
 
 namespace {
 
+// The exposed photograph's value at masked-out pixels (display values are in [0, 1]): one such
+// sample in a patch costs 99^2, far beyond any t_h.
+constexpr float kMaskedOut = 100.0f;
+
 // 1 where every covered pixel of the (2r+1)^2 patch around a covered pixel is over-exposed
 // (linear LDR luminance above t_l): a summed-area table of the pixels that are not.
 std::vector<uint8_t> blindPatches(const HdrImage& ldr, const std::vector<uint8_t>& covered, int r, double overexposed) {
@@ -322,6 +326,12 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   rep.nodes = nodes.size();
   if (rep.points == 0) throw Error(dir.string(), "", "the scan holds no points");
   if (photo.pixels() == 0) throw Error("", "", "the photograph has no pixels");
+  if (!o.photoMask.empty() && o.photoMask.size() != photo.pixels())
+    throw Error("", "photo mask",
+                "has " + std::to_string(o.photoMask.size()) + " pixels, the photograph " +
+                    std::to_string(photo.width) + " x " + std::to_string(photo.height) +
+                    ": a mask is drawn on the photograph itself, at its size");
+  auto maskedIn = [&](size_t i) { return o.photoMask.empty() || o.photoMask[i] != 0; };
 
   // Pass A: the scan's luminance histogram (eq. 1) and a sample of its over-exposed points.
   auto t = Clock::now();
@@ -367,6 +377,9 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   photoY.reserve(photo.pixels());
   double photoMax = 0;
   for (size_t i = 0; i < photo.pixels(); ++i) {
+    // Masked out: what the photograph shows there is not the scanned scene (sky, a lamp beyond
+    // the scan, people), so it is no evidence of the exposure and bounds no value.
+    if (!maskedIn(i)) continue;
     const Rgb c(photo.rgb[3 * i], photo.rgb[3 * i + 1], photo.rgb[3 * i + 2]);
     for (int k = 0; k < 3; ++k)
       if (std::isfinite(c[k])) photoMax = std::max(photoMax, double(c[k]));
@@ -376,9 +389,12 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   for (float y : photoY)
     if (std::isfinite(y) && y > 0) positiveY.push_back(y);
   if (positiveY.empty())
-    throw Error(
-        "", "",
-        "the photograph has no positive finite luminance (black or broken): nothing to match");
+    throw Error("", "",
+                o.photoMask.empty()
+                    ? "the photograph has no positive finite luminance (black or broken): "
+                      "nothing to match"
+                    : "the photograph has no positive finite luminance where its mask lets it "
+                      "count: nothing to match");
   ExposureChecks& checks = rep.checks;
   checks.photoMax = photoMax;
   {
@@ -421,6 +437,16 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
                               : o.views;
   // The photograph as PatchMatch sees it (box-filtered down to maxPhotoSize).
   const HdrImage small = shrink(photo, o.maxPhotoSize);
+  // The mask at PatchMatch's size: a pixel counts only if every photograph pixel it averages does.
+  std::vector<uint8_t> smallMask;
+  if (!o.photoMask.empty()) {
+    HdrImage m(photo.width, photo.height);
+    for (size_t i = 0; i < photo.pixels(); ++i)
+      if (o.photoMask[i]) m.rgb[3 * i] = m.rgb[3 * i + 1] = m.rgb[3 * i + 2] = 1.0f;
+    const HdrImage shrunk = shrink(m, o.maxPhotoSize);
+    smallMask.resize(shrunk.pixels());
+    for (size_t i = 0; i < shrunk.pixels(); ++i) smallMask[i] = shrunk.rgb[3 * i] >= 0.999f;
+  }
   if (o.photoView) {
     // Rendered at the matched photograph's size, so that its pixels are the photograph's and the
     // identity start is the identity.
@@ -511,6 +537,10 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     msg += o.photoView ? ""
                        : " Pass the photograph's camera (--photo-view cams.json) so that only the "
                          "pixels the scan covers count.";
+    msg += o.photoMask.empty()
+               ? " Pass a mask (--photo-mask mask.png, white where the photograph shows the "
+                 "scanned scene) to leave out what the scan lacks."
+               : "";
     msg +=
         " Pass the exposure if you know it (--exposure STOPS, log2 of the factor from the "
         "photograph's values to the "
@@ -527,7 +557,7 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     const HdrImage ldr = renderings[0].image();
     std::vector<float> scanY, photoYs;
     for (size_t i = 0; i < ldr.pixels(); ++i) {
-      if (!renderings[0].covered(i)) continue;
+      if (!renderings[0].covered(i) || (!smallMask.empty() && !smallMask[i])) continue;
       scanY.push_back(
           linearLuminance(ldr.get(int(i % size_t(ldr.width)), int(i / size_t(ldr.width)))));
       photoYs.push_back(
@@ -555,10 +585,18 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
   HdrImage exposedDisplay(small.width, small.height);
   // Pairs at the matches that pass t_h (and are not blind): the unregistered exposure's evidence.
   std::vector<float> matchScanY, matchPhotoY;
-  // Registered: where the scan renders in the photograph's own view. Elsewhere the photograph
-  // shows what the scan lacks (sky, a lamp beyond it), which no point can take its value from.
-  const std::vector<uint8_t> photoCoverage =
+  // The photograph's pixels a point may take its value from: registered, where the scan renders in
+  // the photograph's own view; with a mask, where the mask lets it count; both, both. Elsewhere
+  // the photograph shows what the scan lacks (sky, a lamp beyond it). Empty: every pixel.
+  std::vector<uint8_t> photoCoverage =
       o.photoView ? renderings[0].coverage() : std::vector<uint8_t>();
+  if (!smallMask.empty()) {
+    if (photoCoverage.empty()) {
+      photoCoverage = smallMask;
+    } else {
+      for (size_t i = 0; i < photoCoverage.size(); ++i) photoCoverage[i] &= smallMask[i];
+    }
+  }
   auto explainedTarget = [&](glm::vec2 p) {
     // The fetch is bilinear: every pixel of its 2 x 2 footprint must be the scan's.
     const int x0 = std::clamp(int(std::floor(p.x)), 0, small.width - 1),
@@ -575,6 +613,11 @@ ExpandReport expandHdr(const fs::path& dir, const HdrImage& photo, const ExpandO
     matchPhotoY.clear();
     for (size_t i = 0; i < small.rgb.size(); ++i)
       exposedDisplay.rgb[i] = displayFromLinear(std::clamp(exposure * small.rgb[i], 0.0f, 1.0f));
+    // Masked-out pixels far outside the display range: a patch touching one costs more than any
+    // threshold, so PatchMatch looks for the region's match elsewhere instead of finding it there
+    // and having it rejected afterwards.
+    for (size_t i = 0; i < smallMask.size(); ++i)
+      if (!smallMask[i]) exposedDisplay.rgb[3 * i] = exposedDisplay.rgb[3 * i + 1] = exposedDisplay.rgb[3 * i + 2] = kMaskedOut;
     for (size_t vi = 0; vi < renderings.size(); ++vi) {
       const HdrImage ldr = renderings[vi].image();
       const std::vector<uint8_t> mask = renderings[vi].coverage();

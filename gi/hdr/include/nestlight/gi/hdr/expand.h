@@ -45,6 +45,11 @@ struct ExpandOptions {
   // there; other views only reach what it did not match). It is rendered at the size PatchMatch
   // sees the photograph at and must have the photograph's aspect.
   std::optional<View> photoView;
+  // The photograph's pixels that show the scanned scene (non-zero) and those that do not (sky,
+  // lamps or buildings beyond the scan, people, the tripod): one entry per photograph pixel, row
+  // by row; empty: all of them. Masked-out pixels count for nothing: not in the exposure's
+  // histogram or pairs, not in its plausible range or the bound, and no match may land on them.
+  std::vector<uint8_t> photoMask;
   int photoSearchRadius = 0;  // pixels: how far the photo view's matches may move from the identity (0: anywhere)
   // Deviation from the paper, measured (docs/HDR.md): a match whose source patch is over-exposed
   // in every pixel says nothing (inside a clipped region every white patch of the photograph
