@@ -190,7 +190,7 @@ TEST(Laz, CopcHierarchyAgreesWithTheTableAndStandsInForIt) {
 
 // ---- the coder --------------------------------------------------------------------------------
 
-#include "laz_arithmetic.h"
+#include "laz/arithmetic.h"
 
 namespace {
 
@@ -768,8 +768,8 @@ TEST(LazConvert, LenientConversionCountsTheDamagedChunkAsRejected) {
 
 #include <random>
 
-#include "laz_format.h"
-#include "laz_writer.h"
+#include "laz/format.h"
+#include "laz/writer.h"
 
 namespace {
 

@@ -16,16 +16,16 @@
 #include <string>
 #include <vector>
 
-#include "laz_arithmetic.h"
-#include "laz_common.h"
-#include "laz_format.h"
-#include "laz_items.h"
+#include "laz/arithmetic.h"
+#include "laz/common.h"
+#include "laz/format.h"
+#include "laz/items.h"
 
 namespace laz = nestlight::laz;
 
 namespace {
 
-using laz::get;  // little-endian field access (laz_common.h)
+using laz::get;  // little-endian field access (laz/common.h)
 using laz::put;
 
 // ---- the encoders (LASzip's version 1 writer) -------------------------------------------------

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "fuzz_common.h"
-#include "laz_format.h"
+#include "laz/format.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
 

@@ -21,8 +21,8 @@
 #include <set>
 #include <string>
 
-#include "las_format.h"
-#include "laz_points.h"
+#include "readers/las_format.h"
+#include "laz/points.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
 

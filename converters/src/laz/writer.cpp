@@ -8,7 +8,7 @@
 // the decoders of laz_pointwise.cpp and make the same choices as the LASzip 2 reference encoder
 // (laswriteitemcompressed_v2), so that the files it writes decode with any LASzip reader. Written
 // by hand because Debian packages neither LASzip nor LAZperf.
-#include "laz_writer.h"
+#include "laz/writer.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -20,10 +20,10 @@
 #include <cstring>
 #include <filesystem>
 
-#include "las_format.h"
-#include "laz_arithmetic.h"
-#include "laz_format.h"
-#include "laz_items.h"
+#include "readers/las_format.h"
+#include "laz/arithmetic.h"
+#include "laz/format.h"
+#include "laz/items.h"
 #include "nestlight/converters/byte_source.h"
 #include "nestlight/octree/error.h"
 

@@ -14,8 +14,8 @@
 #include <memory>
 #include <vector>
 
-#include "laz_arithmetic.h"
-#include "laz_common.h"
+#include "laz/arithmetic.h"
+#include "laz/common.h"
 
 namespace nestlight::laz::layered {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "laz_format.h"
+#include "laz/format.h"
 
 namespace nestlight::laz {
 

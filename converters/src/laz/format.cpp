@@ -1,11 +1,11 @@
 // The LASzip VLR (LASzip reference implementation, laszip.cpp: the "laszip encoded" record
 // 22204): compressor u16, coder u16, version u8 u8 u16, options u32, chunk size u32, number and
 // offset of special EVLRs i64 i64, item count u16, then per item type u16, size u16, version u16.
-#include "laz_format.h"
+#include "laz/format.h"
 
 #include <cstring>
 
-#include "laz_common.h"
+#include "laz/common.h"
 
 namespace nestlight::laz {
 

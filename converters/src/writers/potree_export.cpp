@@ -15,7 +15,7 @@
 #include <set>
 #include <thread>
 
-#include "las_format.h"
+#include "readers/las_format.h"
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/staged_directory.h"

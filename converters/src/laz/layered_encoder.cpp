@@ -18,10 +18,10 @@
 #include <memory>
 #include <vector>
 
-#include "laz_arithmetic.h"
-#include "laz_common.h"
-#include "laz_format.h"
-#include "laz_layered.h"
+#include "laz/arithmetic.h"
+#include "laz/common.h"
+#include "laz/format.h"
+#include "laz/layered.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::laz {

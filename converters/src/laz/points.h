@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "laz_format.h"
+#include "laz/format.h"
 #include "nestlight/converters/byte_source.h"
 
 namespace nestlight::laz {

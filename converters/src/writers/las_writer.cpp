@@ -18,9 +18,9 @@
 #include <limits>
 #include <string>
 
-#include "las_format.h"
-#include "laz_points.h"
-#include "laz_writer.h"
+#include "readers/las_format.h"
+#include "laz/points.h"
+#include "laz/writer.h"
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/octree/error.h"
 

@@ -9,7 +9,7 @@
 //
 // Every number in the table is a claim: chunks must lie inside the point data, their counts must
 // add up to the header's, and a chunk may not ask for more memory than a bounded batch.
-#include "laz_points.h"
+#include "laz/points.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -19,8 +19,8 @@
 #include <cstring>
 #include <optional>
 
-#include "laz_arithmetic.h"
-#include "laz_common.h"
+#include "laz/arithmetic.h"
+#include "laz/common.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::laz {

@@ -9,9 +9,9 @@
 #include <memory>
 #include <vector>
 
-#include "laz_arithmetic.h"
-#include "laz_common.h"
-#include "laz_format.h"
+#include "laz/arithmetic.h"
+#include "laz/common.h"
+#include "laz/format.h"
 
 namespace nestlight::laz {
 

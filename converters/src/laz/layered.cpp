@@ -34,7 +34,7 @@
 // are allocated once per decoder and reset when a context first uses them after its
 // initialisation (what the reference resets at the initialisation); a chunk of one point is
 // its raw record whatever its layers hold (the reference would still start the first stream).
-#include "laz_layered.h"
+#include "laz/layered.h"
 
 #include <algorithm>
 #include <array>
@@ -43,9 +43,9 @@
 #include <string>
 #include <vector>
 
-#include "laz_arithmetic.h"
-#include "laz_common.h"
-#include "laz_format.h"
+#include "laz/arithmetic.h"
+#include "laz/common.h"
+#include "laz/format.h"
 
 namespace nestlight::laz {
 namespace {

@@ -16,9 +16,9 @@
 #include <cstring>
 #include <memory>
 
-#include "laz_arithmetic.h"
-#include "laz_format.h"
-#include "laz_items.h"
+#include "laz/arithmetic.h"
+#include "laz/format.h"
+#include "laz/items.h"
 
 namespace nestlight::laz {
 namespace {

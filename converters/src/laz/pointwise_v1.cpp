@@ -22,9 +22,9 @@
 #include <memory>
 #include <vector>
 
-#include "laz_arithmetic.h"
-#include "laz_format.h"
-#include "laz_items.h"
+#include "laz/arithmetic.h"
+#include "laz/format.h"
+#include "laz/items.h"
 
 namespace nestlight::laz {
 namespace {
