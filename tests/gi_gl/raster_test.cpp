@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
@@ -14,6 +17,7 @@
 #include "nestlight/gi/method.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gi/methods.h"
+#include "nestlight/gi/raster/shadow_fit.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/srgb.h"
@@ -559,10 +563,114 @@ TEST(Raster, AFarMeshDoesNotClipTheScan) {
     mean[k++] = sum / double(f.image.rgb.size());
     EXPECT_EQ(f.attributes.at("nestlight:points"), "20000") << name;
   }
-  // The far torus's directional shadow map spans 1000 km, so the town's shadows coarsen; the
-  // image is the town's all the same, not black.
+  // The image is the town's all the same, not black (its directional shadows stay as sharp too:
+  // Raster.AFarMeshLeavesDirectionalShadowsAsTheyWere).
   EXPECT_GT(mean[1], 0.5 * mean[0]);
   EXPECT_LT(mean[1], 2.0 * mean[0]);
+}
+
+// A plate 1 m above the floor under a sun travelling along (-1, 0, -1): its shadow spans
+// x in [-1.7, -0.5], |y| < 0.5 on the floor, and the camera above the centre sees its part beyond
+// the plate (x < -0.63). Rendered alone and with a 20 m box 1000 km away, out of view: the
+// directional shadow map covers what the camera sees (and the casters over it), so the far box
+// changes nothing. Spanning the scene's bounds, the map's texels were 2 km wide with the far box
+// and the umbra vanished (the lookup's normal offset alone, half a texel, lifted the floor above
+// the plate).
+TEST(Raster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
+  test::TempDir t;
+  json j = floorSceneJson(t, 64);
+  j["meshes"].push_back(json{{"path", "box.obj"},
+                             {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+                             {"material", "floor"}});
+  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
+  const float E = 2.0f;
+  j["lights"] = json::array({json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 512}}}};
+  std::ofstream(t.file("near.json")) << j.dump(1);
+  j["meshes"].push_back(json{{"path", "box.obj"},
+                             {"transform", {{"translate", {1.0e6, 0.0, 0.0}}, {"scale", 20.0}}},
+                             {"material", "floor"}});
+  std::ofstream(t.file("far.json")) << j.dump(1);
+  const float lit = 0.5f / kPi * E * std::sqrt(0.5f);  // (rho / pi) E cos 45
+  MethodFrame f[2];
+  std::vector<int> dark[2];
+  for (int k = 0; k < 2; ++k) {
+    Scene s = loadScene(t.file(k ? "far.json" : "near.json"));
+    f[k] = renderRaster(s);
+    if (const char* keep = std::getenv("NESTLIGHT_TEST_KEEP"))
+      writeToneMappedPng(std::string(keep) + (k ? "/sun_far.png" : "/sun_near.png"), f[k].image, 0);
+    int umbra = 0, clear = 0;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        glm::vec3 p;
+        if (!floorPoint(s, x, y, &p) || (std::abs(p.x) < 0.7f && std::abs(p.y) < 0.7f)) {
+          dark[k].push_back(-1);  // not the floor, or under the plate as the camera sees it
+          continue;
+        }
+        const float got = f[k].image.get(x, y).r;
+        dark[k].push_back(got < 0.5f * lit);
+        if (p.x > -1.6f && p.x < -0.75f && std::abs(p.y) < 0.4f) {
+          ++umbra;
+          EXPECT_LT(got, 0.05f * lit) << (k ? "far" : "near") << ": umbra at " << p.x << "," << p.y;
+        } else if (p.x > 0.75f || p.x < -1.85f || std::abs(p.y) > 0.65f) {
+          ++clear;
+          EXPECT_NEAR(got, lit, 1e-3f * lit) << (k ? "far" : "near") << ": lit at " << p.x << "," << p.y;
+        }
+      }
+    EXPECT_GT(umbra, 40);
+    EXPECT_GT(clear, 2500);
+  }
+  EXPECT_EQ(f[0].attributes.at("nestlight:shadow_texel:0"), f[1].attributes.at("nestlight:shadow_texel:0"));
+  // Both frames fit the same map, so the shadow is the same; what differs is the camera's far
+  // plane (1000 km with the far box) and with it the depth the G-buffer reconstructs positions
+  // from (about 1e-7 m here), which could flip a pixel exactly on a PCF edge: at most 1% of the
+  // floor's pixels may change side, where the bounds-wide map lost every umbra pixel.
+  int floorPixels = 0, changed = 0;
+  for (size_t i = 0; i < dark[0].size(); ++i) {
+    if (dark[0][i] < 0) continue;
+    ++floorPixels;
+    changed += dark[0][i] != dark[1][i];
+  }
+  std::printf("sun: shadow texel %s m; %d of %d floor pixels changed side with the far box\n",
+              f[0].attributes.at("nestlight:shadow_texel:0").c_str(), changed, floorPixels);
+  EXPECT_LE(changed, floorPixels / 100) << "pixels whose shadow changed with the far box";
+}
+
+// The fit on the CPU: the texel grid stays put in the world while the camera moves (the map's
+// origin moves in whole texels, its size in quarter octaves), a far box out of view changes
+// nothing, and a camera that sees nothing gets the whole scene.
+TEST(Raster, DirectionalShadowFitKeepsItsTexelGrid) {
+  const std::vector<ShadowBox> near = {{{-10, -10, -0.1f}, {10, 10, 0}}, {{-0.5f, -0.5f, 1}, {0.5f, 0.5f, 1.2f}}};
+  std::vector<ShadowBox> far = near;
+  far.push_back({{1e6f, 0, 0}, {1e6f + 20, 20, 20}});
+  const glm::vec3 dir(-0.4f, -0.3f, -0.87f);
+  const DirectionalShadowFit whole = fitDirectionalShadow(dir, near, nullptr, 512);
+  EXPECT_FALSE(whole.fitted);
+  float texel = 0;
+  double phase = -1;
+  for (int i = 0; i < 40; ++i) {
+    ShadowFitCamera cam;
+    const glm::vec3 eye(0.037f * float(i), 0.011f * float(i), 6.0f);
+    cam.viewFromWorld = glm::lookAt(eye, eye - glm::vec3(0, 0.001f, 6), glm::vec3(0, 1, 0));
+    cam.tanHalfFovY = std::tan(glm::radians(30.0f));
+    cam.nearZ = 4, cam.farZ = 20;
+    const DirectionalShadowFit a = fitDirectionalShadow(dir, near, &cam, 512);
+    cam.farZ = 1.1e6f;  // the far box moves the far plane too
+    const DirectionalShadowFit b = fitDirectionalShadow(dir, far, &cam, 512);
+    ASSERT_TRUE(a.fitted);
+    EXPECT_EQ(a.clipFromWorld, b.clipFromWorld) << i;
+    EXPECT_LT(a.texel, 0.5f * whole.texel) << "the view's part of the floor, not all of it";
+    if (i == 0) texel = a.texel;
+    EXPECT_EQ(a.texel, texel) << i;
+    // A fixed world point sits at the same place within its texel in every fit.
+    const glm::vec4 c = a.clipFromWorld * glm::vec4(0.3f, -0.2f, 0.0f, 1.0f);
+    const double u = (double(c.x) + 1) * 256, frac = u - std::floor(u);
+    if (phase < 0) phase = frac;
+    EXPECT_NEAR(std::min(std::abs(frac - phase), 1 - std::abs(frac - phase)), 0.0, 2e-3) << i;
+  }
+  ShadowFitCamera away;
+  away.viewFromWorld = glm::lookAt(glm::vec3(0, 0, 100), glm::vec3(0, 0, 200), glm::vec3(0, 1, 0));
+  EXPECT_FALSE(fitDirectionalShadow(dir, near, &away, 512).fitted);
 }
 
 }  // namespace

@@ -26,6 +26,7 @@
 #include "nestlight/gi/environment_source.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/raster/shadow_fit.h"
 #include "nestlight/gi/scan_colour.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
@@ -317,6 +318,8 @@ class RasterMethod : public Method, public RasterFrame {
     u.viewFromWorld = glm::lookAt(eye, target, up);
     u.clipFromView = glm::perspective(float(fovY), float(W) / float(H), nearZ, farZ);
     u.eye = glm::vec4(eye, float(H) / (2.0f * std::tan(float(fovY) / 2)));
+    if (fitShadowsToCamera_)
+      fitShadowsToCamera({u.viewFromWorld, std::tan(float(fovY) / 2), float(W) / float(H), nearZ, farZ});
     u.counts = glm::ivec4(int(lightRecords_.size()), scene_.gi.mode == RadianceMode::Albedo ? 1 : 0, frameNumber_++, 0);
     beforeFrameSeconds_ = 0;
     if (extension_) {
@@ -373,6 +376,10 @@ class RasterMethod : public Method, public RasterFrame {
                     {"nestlight:points", std::to_string(drawPoints)},
                     {"nestlight:seconds", std::to_string(f.seconds)}};
     if (envSource_ && envSource_->isSequence()) f.attributes["nestlight:environment_frame"] = std::to_string(envFrame_);
+    // Directional maps' texels follow the camera (world units).
+    for (size_t i = 0; i < lightRecords_.size(); ++i)
+      if (int(lightRecords_[i].position.w) == NL_LIGHT_DIRECTIONAL)
+        f.attributes["nestlight:shadow_texel:" + std::to_string(i)] = std::to_string(lightRecords_[i].shadow.y);
     std::string passes;
     for (const auto& [name, ms] : f.passMs) {
       passes += (passes.empty() ? "" : ", ") + name + " " + std::to_string(ms).substr(0, 6) + " ms";
@@ -483,6 +490,8 @@ class RasterMethod : public Method, public RasterFrame {
   // One record per light; shadow-map layers: spot and directional one, point six (cube faces in
   // the order shadowLayer() in shaders/gi/common/lights.glsl picks them).
   void setUpLights() {
+    fitShadowsToCamera_ = !extension_ || extension_->shadowsForTheCameraOnly();
+    for (const LocalBox& b : objectBounds_) shadowBoxes_.push_back({b.lo, b.hi});
     if (scene_.lights.size() > NL_MAX_LIGHTS)
       throw Error(scene_.file.string(), "lights", "the raster method takes at most " + std::to_string(NL_MAX_LIGHTS) +
                                                       " lights; the scene has " + std::to_string(scene_.lights.size()));
@@ -502,7 +511,14 @@ class RasterMethod : public Method, public RasterFrame {
       const float farL = glm::length(pos - centre) + R * 1.01f;
       const float nearL = std::max(farL * 1e-4f, 1e-4f);
       r.shadow = glm::vec4(float(shadowViews_.size()), 0.0f, nearL, farL);
-      if (type == NL_LIGHT_DIRECTIONAL) {
+      if (type == NL_LIGHT_DIRECTIONAL && fitShadowsToCamera_) {
+        // The whole scene until the first frame's camera refits it.
+        const DirectionalShadowFit fit = fitDirectionalShadow(dir, shadowBoxes_, nullptr, S);
+        shadowViews_.push_back(fit.clipFromWorld);
+        shadowViewFromWorld_.push_back(fit.viewFromWorld);
+        r.shadow.y = fit.texel;
+        r.shadow.z = fit.nearZ, r.shadow.w = fit.farZ;
+      } else if (type == NL_LIGHT_DIRECTIONAL) {
         const glm::mat4 view = glm::lookAt(centre - dir * (R * 1.05f), centre, upFor(dir));
         shadowViews_.push_back(glm::ortho(-R, R, -R, R, 0.0f, 2.1f * R) * view);
         shadowViewFromWorld_.push_back(view);
@@ -528,10 +544,31 @@ class RasterMethod : public Method, public RasterFrame {
       lightRecords_.push_back(r);
     }
     lightsBuffer_ = gl::Buffer(std::max<size_t>(lightRecords_.size(), 1) * sizeof(frame::LightRecord),
-                               lightRecords_.empty() ? nullptr : lightRecords_.data(), 0);
+                               lightRecords_.empty() ? nullptr : lightRecords_.data());
     std::vector<glm::mat4> views = shadowViews_;
     if (views.empty()) views.emplace_back(1.0f);
-    shadowViewsBuffer_ = gl::Buffer(views.size() * sizeof(glm::mat4), views.data(), 0);
+    shadowViewsBuffer_ = gl::Buffer(views.size() * sizeof(glm::mat4), views.data());
+  }
+
+  // Directional lights' maps cover what this camera sees (shadow_fit.h); the shadow pass of the
+  // frame that follows draws them, and lookups read the texel size and views from the buffers.
+  void fitShadowsToCamera(const ShadowFitCamera& camera) {
+    bool changed = false;
+    for (frame::LightRecord& r : lightRecords_) {
+      if (int(r.position.w) != NL_LIGHT_DIRECTIONAL) continue;
+      const size_t layer = size_t(r.shadow.x);
+      const DirectionalShadowFit fit =
+          fitDirectionalShadow(glm::vec3(r.direction), shadowBoxes_, &camera, params_.shadowMapSize);
+      if (fit.clipFromWorld == shadowViews_[layer] && fit.texel == r.shadow.y) continue;
+      shadowViews_[layer] = fit.clipFromWorld;
+      shadowViewFromWorld_[layer] = fit.viewFromWorld;
+      r.shadow.y = fit.texel;
+      r.shadow.z = fit.nearZ, r.shadow.w = fit.farZ;
+      changed = true;
+    }
+    if (!changed) return;
+    lightsBuffer_.upload(lightRecords_.data(), lightRecords_.size() * sizeof(frame::LightRecord));
+    shadowViewsBuffer_.upload(shadowViews_.data(), shadowViews_.size() * sizeof(glm::mat4));
   }
 
   void setUpEnvironment() {
@@ -932,6 +969,10 @@ class RasterMethod : public Method, public RasterFrame {
   std::unique_ptr<gl::GlContext> context_;
   LocalBox bounds_;
   std::vector<LocalBox> objectBounds_;  // each scan's and mesh's: the near plane follows the nearest
+  std::vector<ShadowBox> shadowBoxes_;  // the same, as directional shadow maps fit them
+  // Directional shadow maps cover the camera's view (raster alone, or an extension that reads
+  // them only for the camera's pixels), else the whole scene.
+  bool fitShadowsToCamera_ = true;
   std::vector<GpuScan> scans_;
   std::vector<GpuMesh> meshes_;
   std::vector<TriangleMesh> cpuMeshes_;  // the files' meshes, until the extension's setUp is done

@@ -53,7 +53,8 @@ class RasterFrame {
   virtual glm::vec3 boundsLo() const = 0;
   virtual glm::vec3 boundsHi() const = 0;
   // The lights, and per shadow-map layer its clip-from-world and view-from-world (spot: one
-  // perspective layer, point: six cube faces, directional: one orthographic layer).
+  // perspective layer, point: six cube faces, directional: one orthographic layer, over the
+  // scene's bounds unless RasterExtension::shadowsForTheCameraOnly: then refitted every frame).
   virtual const std::vector<frame::LightRecord>& lights() const = 0;
   virtual const std::vector<glm::mat4>& lightClipFromWorld() const = 0;
   virtual const std::vector<glm::mat4>& lightViewFromWorld() const = 0;
@@ -123,6 +124,12 @@ class RasterExtension {
   // times).
   virtual bool afterFrame(double seconds, bool still) { (void)seconds, (void)still; return false; }
   virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
+  // True when the extension reads the shadow maps only at the camera's pixels (as raster's direct
+  // light does): directional lights' maps are then fitted to the camera's view each frame
+  // (shadow_fit.h), sharp however far the scene's objects lie apart. False keeps them over the
+  // whole scene's bounds, fixed, for extensions that light what the camera does not see (VPLs'
+  // light views, PBGI's lit hierarchies).
+  virtual bool shadowsForTheCameraOnly() const { return false; }
 };
 
 // `raster` with `extension`'s passes (nullptr: raster alone); the method takes its name.

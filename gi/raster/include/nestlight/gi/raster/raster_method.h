@@ -2,9 +2,10 @@
 // budgets and are drawn as splats sized by their measured spacing, meshes as triangles, both into
 // the linear HDR G-buffer; every light renders a shadow map of the meshes and of the lights' cut
 // (the whole scan at about a shadow map's resolution, streamed beside the camera's)
-// (spot: one perspective view; point: six; directional: one orthographic view over the scene's
-// bounds) once per frame; a deferred pass shades each pixel with gi/core's BSDFs. The frame every
-// GI method builds on, and the real-time counterpart of the reference's `direct`.
+// (spot: one perspective view; point: six; directional: one orthographic view over what the
+// camera sees and what casts into it, shadow_fit.h) once per frame; a deferred pass shades each
+// pixel with gi/core's BSDFs. The frame every GI method builds on, and the real-time counterpart
+// of the reference's `direct`.
 #pragma once
 
 #include <memory>
