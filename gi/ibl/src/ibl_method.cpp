@@ -17,6 +17,7 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/ibl/environment_table.h"
 #include "nestlight/gi/ibl/triangle_bvh.h"
+#include "nestlight/gi/sampling.h"
 #include "nestlight/gi/pbgi/bsh_layer.h"
 #include "nestlight/gi/pbgi/cut_hierarchies.h"
 #include "nestlight/gi/raster/raster_frame.h"
@@ -40,6 +41,47 @@ int estimatorCode(IblParameters::Estimator e) {
     case IblParameters::Estimator::Brdf: return IBL_BRDF;
   }
   return IBL_MIS;
+}
+
+// SMC's bridges between two frames' maps. A frame's update weighs each carried sample by
+// gamma_t / gamma_t-1 = L_t / L_t-1 (the BSDF cancels), whose relative variance over the samples is
+// the chi-square divergence of the two maps' light, chi2 = sum p_t^2 / p_t-1 - 1 (p: a texel's
+// luminance times solid angle over the power). Under a moving sun that is e^(d^2/s^2) - 1 for a
+// shift of d at width s: about 14 for the bench's sun moving 1.6 of its widths a frame, so the
+// samples that would find the sun's new position carry weights far above the rest, and the
+// estimate of Z_t / Z_t-1 is heavy-tailed (usually far too small, rarely far too large: Z lags the
+// light, and the reinitialisation on a jump cuts the rare large ones off, so it also drifts
+// down). K geometric bridges divide the log of the ratio by K, its variance by K^2, and each
+// brings one Metropolis-Hastings move that carries the samples along: K is chosen so that every
+// bridge's weights have chi2 at most kBridgeChi2 (an effective sample size of 95%) under that
+// model, K = sqrt(ln(1 + chi2) / ln(1 + kBridgeChi2)), at least `smc_intermediate` and at most
+// kBridgesMax. The count depends on the maps alone, never on the samples, so the update stays
+// unbiased. A texel lit now and black before (p_t-1 = 0) has no finite chi2: the most bridges.
+constexpr double kBridgeChi2 = 0.05;
+constexpr int kBridgesMax = 16;
+int smcBridges(const EnvironmentMap& previous, const EnvironmentMap& current, int least) {
+  const HdrImage &a = previous.image(), &b = current.image();
+  if (&previous == &current) return least;
+  if (a.width != b.width || a.height != b.height || a.pixels() == 0) return std::max(least, kBridgesMax);
+  std::vector<double> pa(a.pixels()), pb(b.pixels());
+  double sa = 0, sb = 0;
+  for (int y = 0; y < a.height; ++y) {
+    const double band = std::cos(double(kPi) * y / a.height) - std::cos(double(kPi) * (y + 1) / a.height);
+    for (int x = 0; x < a.width; ++x) {
+      const size_t i = size_t(y) * size_t(a.width) + size_t(x);
+      sa += pa[i] = std::max(0.0, double(luminance(a.get(x, y)))) * band;
+      sb += pb[i] = std::max(0.0, double(luminance(b.get(x, y)))) * band;
+    }
+  }
+  if (!(sa > 0) || !(sb > 0)) return least;  // a black frame: the samples start afresh
+  double chi2 = -1;
+  for (size_t i = 0; i < pa.size(); ++i) {
+    if (pb[i] <= 0) continue;
+    if (pa[i] <= 0) return std::max(least, kBridgesMax);
+    chi2 += (pb[i] / sb) * (pb[i] / sb) / (pa[i] / sa);
+  }
+  const int k = int(std::ceil(std::sqrt(std::log1p(std::max(chi2, 0.0)) / std::log1p(kBridgeChi2))));
+  return std::clamp(k, least, std::max(least, kBridgesMax));
 }
 
 class IblExtension : public RasterExtension {
@@ -139,6 +181,10 @@ class IblExtension : public RasterExtension {
       uploadPrevious(*previous);
       prevTextureMap_ = previous;
     }
+    if (params_.estimator == IblParameters::Estimator::Smc && (current != bridgesMap_ || previous != bridgesPrev_)) {
+      bridges_ = smcBridges(*previous, *current, params_.smcIntermediate);
+      bridgesMap_ = current, bridgesPrev_ = previous;
+    }
     prevEnvScale_ = previous->scale();
     lastMap_ = current;
     std::array<uint32_t, IBL_STAT_COUNT> zeros{};
@@ -178,9 +224,10 @@ class IblExtension : public RasterExtension {
       mf.attributes["nestlight:ibl_smc_resampled"] = std::to_string(s[IBL_STAT_RESAMPLED]);
       mf.attributes["nestlight:ibl_smc_moves"] = std::to_string(s[IBL_STAT_MOVES]);
       mf.attributes["nestlight:ibl_smc_accepted"] = std::to_string(s[IBL_STAT_ACCEPTED]);
+      mf.attributes["nestlight:ibl_smc_bridges"] = std::to_string(bridges_);
       std::snprintf(line, sizeof line,
-                    "; smc: %u carried, %u reinitialised on a jump, %u started afresh, %u resampled, %u of %u moves accepted",
-                    s[IBL_STAT_REPROJECTED], s[IBL_STAT_REINIT_JUMP], s[IBL_STAT_REINIT_NEW], s[IBL_STAT_RESAMPLED],
+                    "; smc: %d bridges, %u carried, %u reinitialised on a jump, %u started afresh, %u resampled, %u of %u moves accepted",
+                    bridges_, s[IBL_STAT_REPROJECTED], s[IBL_STAT_REINIT_JUMP], s[IBL_STAT_REINIT_NEW], s[IBL_STAT_RESAMPLED],
                     s[IBL_STAT_ACCEPTED], s[IBL_STAT_MOVES]);
       mf.summary += line;
       if (params_.smcStatistics) {
@@ -247,7 +294,7 @@ class IblExtension : public RasterExtension {
     glUniform1i(program_.uniform("uEnvSamples"), params_.envSamples);
     glUniform1i(program_.uniform("uBisM"), params_.bisProposals);
     glUniform1i(program_.uniform("uBisN"), params_.bisSamples);
-    glUniform1i(program_.uniform("uIntermediate"), params_.smcIntermediate);
+    glUniform1i(program_.uniform("uIntermediate"), bridges_);
     glUniform1f(program_.uniform("uLocalProbability"), params_.smcLocalProbability);
     glUniform1f(program_.uniform("uLocalCos"), std::cos(glm::radians(params_.smcLocalDegrees)));
     glUniform1f(program_.uniform("uReinitRatio"), params_.smcReinitRatio);
@@ -367,7 +414,8 @@ class IblExtension : public RasterExtension {
   gl::ShaderProgram program_;
   gl::Buffer envTable_, bvh_, triangles_, stats_, stateIn_, stateOut_;
   gl::Texture prevTexture_;
-  std::shared_ptr<const EnvironmentMap> tableMap_, lastMap_, prevTextureMap_;
+  std::shared_ptr<const EnvironmentMap> tableMap_, lastMap_, prevTextureMap_, bridgesMap_, bridgesPrev_;
+  int bridges_ = 3;  // SMC: bridges from the last frame's map to this one's (smcBridges)
   float prevEnvScale_ = 1;
   double tableMs_ = 0, bvhMs_ = 0;
   uint64_t tableBuilds_ = 0, bvhNodes_ = 0, bvhTriangles_ = 0;
