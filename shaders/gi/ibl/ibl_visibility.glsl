@@ -59,13 +59,22 @@ bool meshesOcclude(vec3 o, vec3 d, float tMax) {
 
 // And against the resident cut of the scan: its points as discs (the leaves of the per-node
 // bounding-sphere hierarchies of the pbgi method, gi/pbgi/cut_hierarchies.h, joined by their top
-// tree): spheres bound the rays' search, a leaf is a disc of its radius about its normal (a
-// pruned cluster: one disc as wide as the points it stands for; without a normal, a disc facing
-// the ray).
+// tree): spheres and slabs bound the rays' search, a leaf is a disc of its radius about its
+// normal (without a normal, a disc facing the ray).
 #include "../pbgi/bsh_interface.glsl"
 #include "../pbgi/pbgi_nodes.glsl"
 #include "../../common/octahedral.glsl"
 uniform int uTopCount;  // 0: nothing resident
+
+// A node as fetchNode reads it, but with colour as stored: in ibl's hierarchies an inner node's
+// colour holds its slab (gi/ibl/src/ibl_method.cpp, SlabBshLayer), not a colour to scale.
+BshNode iblFetchNode(uvec2 e) {
+  if (e.y == 0u) return top[e.x];
+  PbgiNode cn = cutNodes[e.y - 1u];
+  BshNode A = nodes[cn.range.x + e.x];
+  A.sphere.xyz += cn.origin.xyz;
+  return A;
+}
 
 bool scanOccludes(vec3 o, vec3 d, float tMax) {
   if (uTopCount == 0) return false;
@@ -75,11 +84,22 @@ bool scanOccludes(vec3 o, vec3 d, float tMax) {
   while (top > 0) {
     uvec2 e = stack[--top];
     loopSteps++;
-    BshNode A = fetchNode(e);
+    BshNode A = iblFetchNode(e);
     vec3 oc = A.sphere.xyz - o;
     float tc = dot(oc, d), r = A.sphere.w;
     float dist2 = max(dot(oc, oc) - tc * tc, 0.0);
     if (dist2 > r * r || tc + r <= 0.0 || tc - r >= tMax) continue;
+    if (A.links.x != BSH_LEAF && e.y != 0u && A.colour.z > 0.0) {
+      // The ray's heights along the node's axis over its chord through the sphere are linear in
+      // t: where they miss the slab every disc below lies, nothing below is met (a ray leaving its
+      // own flat surface, or passing over a distant one).
+      vec3 n = decodeNormal(A.links.w);
+      float halfChord = sqrt(max(r * r - dist2, 0.0));
+      float t0 = max(tc - halfChord, 0.0), t1 = min(tc + halfChord, tMax);
+      float h0 = dot(-oc, n), dn = dot(d, n);
+      float ha = h0 + t0 * dn, hb = h0 + t1 * dn;
+      if (max(ha, hb) < A.colour.x || min(ha, hb) > A.colour.y) continue;
+    }
     if (A.links.x == BSH_LEAF) {
       if (e.y == 0u) {  // a top-tree leaf: enter that node's own hierarchy
         stack[top++] = uvec2(0u, A.links.y + 1u);
