@@ -287,13 +287,19 @@ TEST(Ibl, SmcTracksTheNormalisingConstantAndReinitialisesOnAJump) {
     const long jumps = std::stol(r.attributes.at("nestlight:ibl_smc_reinit_jump"));
     const long fresh = std::stol(r.attributes.at("nestlight:ibl_smc_reinit_new"));
     const long carried = std::stol(r.attributes.at("nestlight:ibl_smc_reprojected"));
-    std::printf("frame %d: Z mean %.4f, true %.4f (%.3f); %ld receivers, %ld carried, %ld jumps, %ld fresh\n", f, zMean,
-                want, zMean / want, receivers, carried, jumps, fresh);
+    const int bridges = std::stoi(r.attributes.at("nestlight:ibl_smc_bridges"));
+    std::printf("frame %d: Z mean %.4f, true %.4f (%.3f); %ld receivers, %ld carried, %ld jumps, %ld fresh; %d bridges\n",
+                f, zMean, want, zMean / want, receivers, carried, jumps, fresh, bridges);
     ASSERT_GT(receivers, 300);
     if (f == 0) {
       EXPECT_EQ(fresh, receivers);
     } else {
       EXPECT_EQ(carried, receivers) << f;
+    }
+    if (f < frames - 1) {
+      // A soft sun turning a tenth of its width's square a frame (chi2 about 0.3) needs no more
+      // bridges than the paper's 3 (docs/IBL.md, "How many bridges").
+      EXPECT_EQ(bridges, 3) << "frame " << f;
     }
     if (f > 0 && f < frames - 1) {
       EXPECT_EQ(jumps, 0) << "frame " << f << ": no jump while the sun turns";
