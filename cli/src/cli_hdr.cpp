@@ -15,6 +15,31 @@ namespace fs = std::filesystem;
 
 namespace {
 
+constexpr const char* kExpandHdrHelp =
+    "Expand a scan's clipped LDR colour to HDR from one HDR photograph of part of the scene\n"
+    "(Sabbadin et al. 2019): renders the scan from views that see its over-exposed points, "
+    "finds\n"
+    "the photograph's exposure, matches each rendering to the photograph with generalised\n"
+    "PatchMatch (rotation and scale), back-projects the photograph's HDR values onto the points\n"
+    "whose LDR luminance exceeds 0.9, and in-fills the rest in the gradient domain. The result "
+    "is\n"
+    "the octree's 'hdr' colour layer, written atomically beside the scan's colour (which is "
+    "never\n"
+    "changed); `verify` checks it, `info` shows it, `render --colour hdr` and scene files use "
+    "it.\n"
+    "The photograph needs no registration, but registered (--photo-view) its exposure comes "
+    "from\n"
+    "the pixels the scan covers, unregistered from the matches under t_h. The exposure is "
+    "checked\n"
+    "(spread and highlight slope of the log ratios between scan and photograph, a plausible\n"
+    "range, the share of over-exposed points matched); when a check fails no layer is written\n"
+    "and the error says what to pass (--photo-view, --photo-mask, --exposure, --force).\n"
+    "Values are bounded by the photograph's largest times the exposure; registered, matches\n"
+    "that land on background the scan lacks are rejected; a mask (--photo-mask) leaves out\n"
+    "what it covers. `info` shows the exposure and the checks. Memory is bounded\n"
+    "whatever the scan's size.\n"
+    "Example: nestlight expand-hdr scan.octree --photo window.exr --auto-views 2";
+
 // A pixel counts where the mask's largest channel is above half: a black-and-white mask from any
 // paint program, 8 or 16 bits, or a float EXR.
 std::vector<uint8_t> readPhotoMask(const std::string& path, const gi::HdrImage& photo) {
@@ -35,34 +60,51 @@ std::vector<uint8_t> readPhotoMask(const std::string& path, const gi::HdrImage& 
   return mask;
 }
 
+// The report as a user reads it: the exposure and its checks first, then where the points went.
+void printReport(const gi::hdr::ExpandReport& r, const std::string& dir, const std::string& mode,
+                 const gi::hdr::ExpandOptions& o) {
+    std::printf("expand-hdr: %s, mode %s\n", dir.c_str(), mode == "rgb" ? "rgb" : "luminance");
+    const auto& c = r.checks;
+    std::printf("  exposure      2^%.3f from %s", r.log2Exposure, c.method.c_str());
+    if (c.method == "matches") std::printf(" (histogram search 2^%.3f)", c.histogramLog2);
+    std::printf(
+        "\n  checks        %llu pixel pairs, log-ratio spread %.3f stops (at most %.2f), slope "
+        "%.2f,\n"
+        "                plausible 2^%.2f to 2^%.2f, %.1f%% of over-exposed points matched%s\n",
+        (unsigned long long)c.pairs, c.spreadStops, o.maxSpreadStops, c.slope, c.rangeLo,
+        c.rangeHi, 100 * std::max(0.0, c.matchedShare),
+        c.failed.empty() ? "" : " (FAILED, written with --force)");
+    std::printf("  views         %zu (%llu of %llu covered pixels matched under t_h)\n",
+                r.views.size(), (unsigned long long)r.matchedPixels,
+                (unsigned long long)r.coveredPixels);
+    std::printf(
+        "  points        %llu, over-exposed %llu: expanded %llu, unseen %llu, matches rejected "
+        "%llu\n",
+        (unsigned long long)r.points, (unsigned long long)r.overexposed,
+        (unsigned long long)r.projected, (unsigned long long)r.unseen,
+        (unsigned long long)r.rejectedMatches);
+    std::printf(
+        "  in-fill       %llu points in %llu chunk(s) (largest %llu points), %llu island(s) of "
+        "%llu points "
+        "kept LDR\n",
+        (unsigned long long)r.infilled, (unsigned long long)r.chunks,
+        (unsigned long long)r.chunkMaxPoints, (unsigned long long)r.islands,
+        (unsigned long long)r.islandPoints);
+    std::printf(
+        "  largest value %.4g (1 = the scan's clipping; bound %.4g, %llu channel values clamped "
+        "to it)\n",
+        r.maxValue, c.bound, (unsigned long long)r.boundedValues);
+    std::printf("  seconds      ");
+    for (auto& [k, v] : r.seconds.items()) std::printf(" %s %.2f", k.c_str(), v.get<double>());
+    std::printf("\n  peak memory   %s\n", humanBytes(double(r.peakRssBytes)).c_str());
+}
+
 }  // namespace
 
 void addExpandHdr(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
       "expand-hdr",
-      "Expand a scan's clipped LDR colour to HDR from one HDR photograph of part of the scene\n"
-      "(Sabbadin et al. 2019): renders the scan from views that see its over-exposed points, "
-      "finds\n"
-      "the photograph's exposure, matches each rendering to the photograph with generalised\n"
-      "PatchMatch (rotation and scale), back-projects the photograph's HDR values onto the points\n"
-      "whose LDR luminance exceeds 0.9, and in-fills the rest in the gradient domain. The result "
-      "is\n"
-      "the octree's 'hdr' colour layer, written atomically beside the scan's colour (which is "
-      "never\n"
-      "changed); `verify` checks it, `info` shows it, `render --colour hdr` and scene files use "
-      "it.\n"
-      "The photograph needs no registration, but registered (--photo-view) its exposure comes "
-      "from\n"
-      "the pixels the scan covers, unregistered from the matches under t_h. The exposure is "
-      "checked\n"
-      "(spread and highlight slope of the log ratios between scan and photograph, a plausible\n"
-      "range, the share of over-exposed points matched); when a check fails no layer is written\n"
-      "and the error says what to pass (--photo-view, --photo-mask, --exposure, --force).\n"
-      "Values are bounded by the photograph's largest times the exposure; registered, matches\n"
-      "that land on background the scan lacks are rejected; a mask (--photo-mask) leaves out\n"
-      "what it covers. `info` shows the exposure and the checks. Memory is bounded\n"
-      "whatever the scan's size.\n"
-      "Example: nestlight expand-hdr scan.octree --photo window.exr --auto-views 2");
+      kExpandHdrHelp);
   auto dir = std::make_shared<std::string>();
   auto photo = std::make_shared<std::string>();
   auto viewsFile = std::make_shared<std::string>();
@@ -189,40 +231,7 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
     if (*json) {
       std::printf("%s\n", r.toJson().dump(2).c_str());
     } else {
-      std::printf("expand-hdr: %s, mode %s\n", dir->c_str(), *mode == "rgb" ? "rgb" : "luminance");
-      const auto& c = r.checks;
-      std::printf("  exposure      2^%.3f from %s", r.log2Exposure, c.method.c_str());
-      if (c.method == "matches") std::printf(" (histogram search 2^%.3f)", c.histogramLog2);
-      std::printf(
-          "\n  checks        %llu pixel pairs, log-ratio spread %.3f stops (at most %.2f), slope "
-          "%.2f,\n"
-          "                plausible 2^%.2f to 2^%.2f, %.1f%% of over-exposed points matched%s\n",
-          (unsigned long long)c.pairs, c.spreadStops, o->maxSpreadStops, c.slope, c.rangeLo,
-          c.rangeHi, 100 * std::max(0.0, c.matchedShare),
-          c.failed.empty() ? "" : " (FAILED, written with --force)");
-      std::printf("  views         %zu (%llu of %llu covered pixels matched under t_h)\n",
-                  r.views.size(), (unsigned long long)r.matchedPixels,
-                  (unsigned long long)r.coveredPixels);
-      std::printf(
-          "  points        %llu, over-exposed %llu: expanded %llu, unseen %llu, matches rejected "
-          "%llu\n",
-          (unsigned long long)r.points, (unsigned long long)r.overexposed,
-          (unsigned long long)r.projected, (unsigned long long)r.unseen,
-          (unsigned long long)r.rejectedMatches);
-      std::printf(
-          "  in-fill       %llu points in %llu chunk(s) (largest %llu points), %llu island(s) of "
-          "%llu points "
-          "kept LDR\n",
-          (unsigned long long)r.infilled, (unsigned long long)r.chunks,
-          (unsigned long long)r.chunkMaxPoints, (unsigned long long)r.islands,
-          (unsigned long long)r.islandPoints);
-      std::printf(
-          "  largest value %.4g (1 = the scan's clipping; bound %.4g, %llu channel values clamped "
-          "to it)\n",
-          r.maxValue, c.bound, (unsigned long long)r.boundedValues);
-      std::printf("  seconds      ");
-      for (auto& [k, v] : r.seconds.items()) std::printf(" %s %.2f", k.c_str(), v.get<double>());
-      std::printf("\n  peak memory   %s\n", humanBytes(double(r.peakRssBytes)).c_str());
+      printReport(r, *dir, *mode, *o);
     }
     exitCode = 0;
   });
