@@ -227,6 +227,9 @@ class LasReader final : public PointReader {
   }
 
   void parse();
+  void describeHeader(int major, int minor, uint16_t headerSize, uint16_t globalEncoding,
+                      bool has14);
+  void countRecords(uint64_t declared, uint64_t dataEnd);
   void readVlrs(uint64_t start, uint32_t count, uint64_t limit);
   void readEvlrs(uint64_t start, uint32_t count);
   void handleRecord(const std::string& user, uint16_t id, const uint8_t* data, uint64_t length,
@@ -358,6 +361,51 @@ void LasReader::parse() {
   }
   header_.declaredPoints = declared;
 
+  describeHeader(major, minor, headerSize, globalEncoding, has14);
+  header_.details["vlrs"] = nlohmann::json::array();
+
+  readVlrs(headerSize, vlrCount, pointStart_);
+
+  // Where the point records end: at the first EVLR (1.4) or the internal waveform data (1.3),
+  // when those lie after the point data start, else at the end of the file.
+  uint64_t dataEnd = size;
+  if (has14 && evlrCount > 0) {
+    if (evlrStart < pointStart_ || evlrStart > size) {
+      const std::string what = "start of first EVLR " + std::to_string(evlrStart) +
+                               (evlrStart < pointStart_ ? " lies before the point data"
+                                                        : " is beyond the end of the file (" +
+                                                              std::to_string(size) + " bytes)");
+      if (!options_.lenient) fail(235, what);
+      warn(what + "; EVLRs ignored");
+    } else {
+      dataEnd = evlrStart;
+      header_.details["evlrs"] = nlohmann::json::array();
+      readEvlrs(evlrStart, evlrCount);
+    }
+  }
+  if (has13 && (globalEncoding & las::kEncodingWaveformInternal) && waveformStart >= pointStart_ &&
+      waveformStart < dataEnd)
+    dataEnd = waveformStart;
+
+  if (compressed_) {
+    setupLaz(declared, dataEnd);
+  } else {
+    countRecords(declared, dataEnd);
+  }
+
+  buildLayout();
+  if (!geotiff_.is_null()) {
+    if (geotiff_.contains("keys"))
+      header_.crs["geotiff"] = std::move(geotiff_);
+    else
+      warn("GeoTIFF parameters without a GeoKeyDirectory (record 34735) ignored");
+  }
+}
+
+// The header's descriptive fields, for `info` (none of them changes how points are read).
+void LasReader::describeHeader(int major, int minor, uint16_t headerSize, uint16_t globalEncoding,
+                               bool has14) {
+  const uint8_t* d = src_->data();
   nlohmann::json& det = header_.details;
   det["version"] = std::to_string(major) + "." + std::to_string(minor);
   det["point_format"] = pointFormat_;
@@ -383,68 +431,37 @@ void LasReader::parse() {
   else
     for (int r = 0; r < 5; ++r) byReturn.push_back(load<uint32_t>(d + 111 + 4 * r));
   det["points_by_return"] = std::move(byReturn);
-  det["vlrs"] = nlohmann::json::array();
+}
 
-  readVlrs(headerSize, vlrCount, pointStart_);
-
-  // Where the point records end: at the first EVLR (1.4) or the internal waveform data (1.3),
-  // when those lie after the point data start, else at the end of the file.
-  uint64_t dataEnd = size;
-  if (has14 && evlrCount > 0) {
-    if (evlrStart < pointStart_ || evlrStart > size) {
-      const std::string what = "start of first EVLR " + std::to_string(evlrStart) +
-                               (evlrStart < pointStart_ ? " lies before the point data"
-                                                        : " is beyond the end of the file (" +
-                                                              std::to_string(size) + " bytes)");
-      if (!options_.lenient) fail(235, what);
-      warn(what + "; EVLRs ignored");
-    } else {
-      dataEnd = evlrStart;
-      det["evlrs"] = nlohmann::json::array();
-      readEvlrs(evlrStart, evlrCount);
-    }
-  }
-  if (has13 && (globalEncoding & las::kEncodingWaveformInternal) && waveformStart >= pointStart_ &&
-      waveformStart < dataEnd)
-    dataEnd = waveformStart;
-
-  if (compressed_) {
-    setupLaz(declared, dataEnd);
+// An uncompressed file's records: the declared count, or the complete records the file holds
+// when it holds fewer (an error unless lenient); bytes after them that no EVLR explains are a
+// warning, since they often mean a header that undercounts.
+void LasReader::countRecords(uint64_t declared, uint64_t dataEnd) {
+  const uint64_t complete = (dataEnd - pointStart_) / recordLength_;
+  if (declared > complete) {
+    const uint64_t at = pointStart_ + complete * recordLength_;
+    const std::string what = "header declares " + std::to_string(declared) +
+                             " points but the file holds only " + std::to_string(complete) +
+                             " complete records of " + std::to_string(recordLength_) +
+                             " bytes (point data from byte " + std::to_string(pointStart_) +
+                             " to byte " + std::to_string(dataEnd) + ")";
+    if (!options_.lenient) fail(at, what + "; the file is truncated or its header is wrong");
+    warn(src_->name() + ": " + Error::atByte(at) + ": " + what + "; read the " +
+         std::to_string(complete) + " complete records");
+    count_ = complete;
   } else {
-    const uint64_t complete = (dataEnd - pointStart_) / recordLength_;
-    if (declared > complete) {
-      const uint64_t at = pointStart_ + complete * recordLength_;
-      const std::string what = "header declares " + std::to_string(declared) +
-                               " points but the file holds only " + std::to_string(complete) +
-                               " complete records of " + std::to_string(recordLength_) +
-                               " bytes (point data from byte " + std::to_string(pointStart_) +
-                               " to byte " + std::to_string(dataEnd) + ")";
-      if (!options_.lenient) fail(at, what + "; the file is truncated or its header is wrong");
-      warn(src_->name() + ": " + Error::atByte(at) + ": " + what + "; read the " +
-           std::to_string(complete) + " complete records");
-      count_ = complete;
-    } else {
-      count_ = declared;
-      const uint64_t end = pointStart_ + declared * recordLength_;
-      if (end < dataEnd) {
-        const uint64_t trailing = dataEnd - end;
-        std::string what = std::to_string(trailing) + " bytes after the " +
-                           std::to_string(declared) + " declared points (from byte " +
-                           std::to_string(end) + ") are not EVLRs";
-        if (trailing >= recordLength_)
-          what += "; they would hold " + std::to_string(trailing / recordLength_) +
-                  " more records: does the header claim fewer points than the file holds?";
-        warn(what);
-      }
+    count_ = declared;
+    const uint64_t end = pointStart_ + declared * recordLength_;
+    if (end < dataEnd) {
+      const uint64_t trailing = dataEnd - end;
+      std::string what = std::to_string(trailing) + " bytes after the " +
+                         std::to_string(declared) + " declared points (from byte " +
+                         std::to_string(end) + ") are not EVLRs";
+      if (trailing >= recordLength_)
+        what += "; they would hold " + std::to_string(trailing / recordLength_) +
+                " more records: does the header claim fewer points than the file holds?";
+      warn(what);
     }
-  }
-
-  buildLayout();
-  if (!geotiff_.is_null()) {
-    if (geotiff_.contains("keys"))
-      header_.crs["geotiff"] = std::move(geotiff_);
-    else
-      warn("GeoTIFF parameters without a GeoKeyDirectory (record 34735) ignored");
   }
 }
 
