@@ -197,6 +197,125 @@ glm::mat4 Scene::localFromObject(const SceneMesh& m) const {
   return glm::mat4(localFromWorld * m.worldFromObject);
 }
 
+namespace {
+
+SceneOctree parseOctree(Field o, const std::filesystem::path& file) {
+  SceneOctree t;
+  if (o.value().is_string()) {
+    t.path = resolvePath(o, file);
+  } else {
+    o.expectObject({"path", "max_level", "memory_budget", "radius_scale", "colour_scale", "colour"});
+    if (!o.has("path")) o.fail("missing \"path\"");
+    t.path = resolvePath(o.at("path"), file);
+    if (o.has("max_level")) t.maxLevel = int(o.at("max_level").integer(0, 30));
+    if (o.has("memory_budget")) t.memoryBudget = o.at("memory_budget").bytes();
+    if (o.has("radius_scale")) t.radiusScale = float(o.at("radius_scale").number(0, 100));
+    if (o.has("colour_scale")) t.colourScale = float(o.at("colour_scale").number(0, 1e9));
+    if (o.has("colour")) {
+      Field c = o.at("colour");
+      if (!c.value().is_string() || c.value().get<std::string>().empty())
+        c.fail("expected \"rgb\" or the name of a colour layer of the octree (\"hdr\")");
+      t.colour = c.value().get<std::string>();
+      // A layer the octree lacks fails here, naming the field, not later in a method.
+      std::error_code ec;
+      if (t.colour != "rgb" && std::filesystem::exists(t.path / "metadata.json", ec)) {
+        const OctreeReader reader(t.path);
+        const LayerRecord* layer = reader.metadata().layer(t.colour);
+        if (!layer)
+          c.fail("the octree has no colour layer '" + t.colour + "' (nestlight expand-hdr makes \"hdr\")");
+        if (layer->kind != "colour") c.fail("layer '" + t.colour + "' holds '" + layer->kind + "', not colour");
+      }
+    }
+  }
+  return t;
+}
+
+// A mesh; a material given inline (or none: the default) is appended to `materials`.
+SceneMesh parseMesh(Field o, size_t i, const std::filesystem::path& file,
+                    const std::map<std::string, uint32_t>& materialIndex, std::vector<Material>& materials) {
+  o.expectObject({"path", "transform", "material", "surfels"});
+  SceneMesh mesh;
+  if (!o.has("path")) o.fail("missing \"path\" (a .ply or .obj file)");
+  mesh.path = resolvePath(o.at("path"), file);
+  if (o.has("transform")) mesh.worldFromObject = parseTransform(o.at("transform"));
+  if (o.has("material")) {
+    Field mf = o.at("material");
+    if (mf.value().is_string()) {
+      auto it = materialIndex.find(mf.string());
+      if (it == materialIndex.end()) mf.fail("no material named '" + mf.string() + "' in \"materials\"");
+      mesh.material = it->second;
+    } else {
+      mesh.material = uint32_t(materials.size());
+      materials.push_back(parseMaterial(mf, "meshes[" + std::to_string(i) + "]"));
+    }
+  } else {
+    mesh.material = uint32_t(materials.size());
+    materials.push_back(Material{});
+  }
+  if (o.has("surfels")) {
+    Field sf = o.at("surfels");
+    sf.expectObject({"method", "count"});
+    if (sf.has("method"))
+      mesh.surfelMethod = sf.at("method").choice({"area", "poisson"}) == "poisson" ? SurfelSampling::PoissonDisk
+                                                                                  : SurfelSampling::AreaUniform;
+    if (sf.has("count")) mesh.surfelCount = size_t(sf.at("count").integer(1, 100'000'000));
+  }
+  return mesh;
+}
+
+SceneEnvironment parseEnvironment(Field e, const std::filesystem::path& file) {
+  e.expectObject({"path", "constant", "sequence", "fps", "on_bad_frame", "rotation", "scale"});
+  SceneEnvironment env;
+  if (int(e.has("path")) + int(e.has("constant")) + int(e.has("sequence")) != 1)
+    e.fail("give exactly one of \"path\" (EXR or HDR lat-long), \"constant\" and \"sequence\" (a frame "
+           "pattern such as probe_%04d.exr, or a folder)");
+  if (e.has("path")) env.path = resolvePath(e.at("path"), file);
+  if (e.has("sequence")) {
+    env.sequence = resolvePath(e.at("sequence"), file);
+    if (e.has("fps")) env.fps = e.at("fps").number(1e-6, 1e6);
+    if (e.has("on_bad_frame")) {
+      Field b = e.at("on_bad_frame");
+      const std::string v = b.value().is_string() ? b.value().get<std::string>() : "";
+      if (v != "error" && v != "previous") b.fail("expected \"error\" or \"previous\"");
+      env.keepPreviousOnBadFrame = v == "previous";
+    }
+    // The frames are listed now, so a sequence that names none fails with its field.
+    try {
+      EnvironmentSequence probe(sequenceSpec(env));
+    } catch (const Error& x) {
+      e.at("sequence").fail(x.what());
+    }
+  } else if (e.has("fps") || e.has("on_bad_frame")) {
+    e.fail("\"fps\" and \"on_bad_frame\" belong to a \"sequence\"");
+  }
+  if (e.has("constant")) env.constant = e.at("constant").colour(0, 1e30);
+  if (e.has("rotation")) env.rotationDegrees = float(e.at("rotation").number(-36000, 36000));
+  if (e.has("scale")) env.scale = float(e.at("scale").number(0, 1e30));
+  return env;
+}
+
+GiSettings parseGi(Field g) {
+  GiSettings gi;
+  g.expectObject({"method", "mode", "max_bounces", "samples_per_pixel", "target_relative_error", "time_limit",
+                  "seed", "parameters"});
+  if (g.has("method")) gi.method = g.at("method").choice(methodNames());
+  if (g.has("mode"))
+    gi.mode = g.at("mode").choice({"radiance_cache", "albedo"}) == "albedo" ? RadianceMode::Albedo
+                                                                             : RadianceMode::RadianceCache;
+  if (g.has("max_bounces")) gi.maxBounces = int(g.at("max_bounces").integer(0, 64));
+  if (g.has("samples_per_pixel")) gi.samplesPerPixel = int(g.at("samples_per_pixel").integer(1, 1 << 24));
+  if (g.has("target_relative_error")) gi.targetRelativeError = g.at("target_relative_error").number(0, 1);
+  if (g.has("time_limit")) gi.timeLimitSeconds = g.at("time_limit").number(0, 1e7);
+  if (g.has("seed")) gi.seed = uint64_t(g.at("seed").integer(0, INT64_MAX));
+  if (g.has("parameters")) {
+    if (!g.at("parameters").value().is_object()) g.at("parameters").fail("expected an object");
+    gi.parameters = g.at("parameters").value();
+  }
+  return gi;
+}
+
+}  // namespace
+
 Scene parseScene(const json& j, const std::filesystem::path& file) {
   const std::string fileName = file.string();
   Field root(j, "scene", fileName);
@@ -213,35 +332,7 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
   if (root.has("octrees")) {
     Field a = root.at("octrees");
     for (size_t i = 0; i < a.arraySize(); ++i) {
-      Field o = a.at(i);
-      SceneOctree t;
-      if (o.value().is_string()) {
-        t.path = resolvePath(o, file);
-      } else {
-        o.expectObject({"path", "max_level", "memory_budget", "radius_scale", "colour_scale", "colour"});
-        if (!o.has("path")) o.fail("missing \"path\"");
-        t.path = resolvePath(o.at("path"), file);
-        if (o.has("max_level")) t.maxLevel = int(o.at("max_level").integer(0, 30));
-        if (o.has("memory_budget")) t.memoryBudget = o.at("memory_budget").bytes();
-        if (o.has("radius_scale")) t.radiusScale = float(o.at("radius_scale").number(0, 100));
-        if (o.has("colour_scale")) t.colourScale = float(o.at("colour_scale").number(0, 1e9));
-        if (o.has("colour")) {
-          Field c = o.at("colour");
-          if (!c.value().is_string() || c.value().get<std::string>().empty())
-            c.fail("expected \"rgb\" or the name of a colour layer of the octree (\"hdr\")");
-          t.colour = c.value().get<std::string>();
-          // A layer the octree lacks fails here, naming the field, not later in a method.
-          std::error_code ec;
-          if (t.colour != "rgb" && std::filesystem::exists(t.path / "metadata.json", ec)) {
-            const OctreeReader reader(t.path);
-            const LayerRecord* layer = reader.metadata().layer(t.colour);
-            if (!layer)
-              c.fail("the octree has no colour layer '" + t.colour + "' (nestlight expand-hdr makes \"hdr\")");
-            if (layer->kind != "colour") c.fail("layer '" + t.colour + "' holds '" + layer->kind + "', not colour");
-          }
-        }
-      }
-      s.octrees.push_back(std::move(t));
+      s.octrees.push_back(parseOctree(a.at(i), file));
     }
   }
   std::map<std::string, uint32_t> materialIndex;
@@ -256,35 +347,7 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
   if (root.has("meshes")) {
     Field a = root.at("meshes");
     for (size_t i = 0; i < a.arraySize(); ++i) {
-      Field o = a.at(i);
-      o.expectObject({"path", "transform", "material", "surfels"});
-      SceneMesh mesh;
-      if (!o.has("path")) o.fail("missing \"path\" (a .ply or .obj file)");
-      mesh.path = resolvePath(o.at("path"), file);
-      if (o.has("transform")) mesh.worldFromObject = parseTransform(o.at("transform"));
-      if (o.has("material")) {
-        Field mf = o.at("material");
-        if (mf.value().is_string()) {
-          auto it = materialIndex.find(mf.string());
-          if (it == materialIndex.end()) mf.fail("no material named '" + mf.string() + "' in \"materials\"");
-          mesh.material = it->second;
-        } else {
-          mesh.material = uint32_t(s.materials.size());
-          s.materials.push_back(parseMaterial(mf, "meshes[" + std::to_string(i) + "]"));
-        }
-      } else {
-        mesh.material = uint32_t(s.materials.size());
-        s.materials.push_back(Material{});
-      }
-      if (o.has("surfels")) {
-        Field sf = o.at("surfels");
-        sf.expectObject({"method", "count"});
-        if (sf.has("method"))
-          mesh.surfelMethod = sf.at("method").choice({"area", "poisson"}) == "poisson" ? SurfelSampling::PoissonDisk
-                                                                                      : SurfelSampling::AreaUniform;
-        if (sf.has("count")) mesh.surfelCount = size_t(sf.at("count").integer(1, 100'000'000));
-      }
-      s.meshes.push_back(mesh);
+      s.meshes.push_back(parseMesh(a.at(i), i, file, materialIndex, s.materials));
     }
   }
   if (root.has("lights")) {
@@ -292,35 +355,7 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
     for (size_t i = 0; i < a.arraySize(); ++i) s.lights.push_back(parseLight(a.at(i)));
   }
   if (root.has("environment")) {
-    Field e = root.at("environment");
-    e.expectObject({"path", "constant", "sequence", "fps", "on_bad_frame", "rotation", "scale"});
-    SceneEnvironment env;
-    if (int(e.has("path")) + int(e.has("constant")) + int(e.has("sequence")) != 1)
-      e.fail("give exactly one of \"path\" (EXR or HDR lat-long), \"constant\" and \"sequence\" (a frame "
-             "pattern such as probe_%04d.exr, or a folder)");
-    if (e.has("path")) env.path = resolvePath(e.at("path"), file);
-    if (e.has("sequence")) {
-      env.sequence = resolvePath(e.at("sequence"), file);
-      if (e.has("fps")) env.fps = e.at("fps").number(1e-6, 1e6);
-      if (e.has("on_bad_frame")) {
-        Field b = e.at("on_bad_frame");
-        const std::string v = b.value().is_string() ? b.value().get<std::string>() : "";
-        if (v != "error" && v != "previous") b.fail("expected \"error\" or \"previous\"");
-        env.keepPreviousOnBadFrame = v == "previous";
-      }
-      // The frames are listed now, so a sequence that names none fails with its field.
-      try {
-        EnvironmentSequence probe(sequenceSpec(env));
-      } catch (const Error& x) {
-        e.at("sequence").fail(x.what());
-      }
-    } else if (e.has("fps") || e.has("on_bad_frame")) {
-      e.fail("\"fps\" and \"on_bad_frame\" belong to a \"sequence\"");
-    }
-    if (e.has("constant")) env.constant = e.at("constant").colour(0, 1e30);
-    if (e.has("rotation")) env.rotationDegrees = float(e.at("rotation").number(-36000, 36000));
-    if (e.has("scale")) env.scale = float(e.at("scale").number(0, 1e30));
-    s.environment = env;
+    s.environment = parseEnvironment(root.at("environment"), file);
   }
   if (root.has("camera")) {
     s.camera = parseCamera(root.at("camera"));
@@ -334,22 +369,7 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
         keys.at(i).fail("eye equals target, or the view is parallel to \"up\"");
   }
   if (root.has("gi")) {
-    Field g = root.at("gi");
-    g.expectObject({"method", "mode", "max_bounces", "samples_per_pixel", "target_relative_error", "time_limit",
-                    "seed", "parameters"});
-    if (g.has("method")) s.gi.method = g.at("method").choice(methodNames());
-    if (g.has("mode"))
-      s.gi.mode = g.at("mode").choice({"radiance_cache", "albedo"}) == "albedo" ? RadianceMode::Albedo
-                                                                               : RadianceMode::RadianceCache;
-    if (g.has("max_bounces")) s.gi.maxBounces = int(g.at("max_bounces").integer(0, 64));
-    if (g.has("samples_per_pixel")) s.gi.samplesPerPixel = int(g.at("samples_per_pixel").integer(1, 1 << 24));
-    if (g.has("target_relative_error")) s.gi.targetRelativeError = g.at("target_relative_error").number(0, 1);
-    if (g.has("time_limit")) s.gi.timeLimitSeconds = g.at("time_limit").number(0, 1e7);
-    if (g.has("seed")) s.gi.seed = uint64_t(g.at("seed").integer(0, INT64_MAX));
-    if (g.has("parameters")) {
-      if (!g.at("parameters").value().is_object()) g.at("parameters").fail("expected an object");
-      s.gi.parameters = g.at("parameters").value();
-    }
+    s.gi = parseGi(root.at("gi"));
   }
   if (root.has("display")) {
     Field d = root.at("display");
