@@ -98,7 +98,9 @@ bool scanOccludes(vec3 o, vec3 d, float tMax) {
       float t0 = max(tc - halfChord, 0.0), t1 = min(tc + halfChord, tMax);
       float h0 = dot(-oc, n), dn = dot(d, n);
       float ha = h0 + t0 * dn, hb = h0 + t1 * dn;
-      if (max(ha, hb) < A.colour.x || min(ha, hb) > A.colour.y) continue;
+      // The slab was measured in the node's frame; here centres carry the scene frame's rounding.
+      float pad = 2.4e-7 * max(max(abs(A.sphere.x), abs(A.sphere.y)), abs(A.sphere.z));
+      if (max(ha, hb) < A.colour.x - pad || min(ha, hb) > A.colour.y + pad) continue;
     }
     if (A.links.x == BSH_LEAF) {
       if (e.y == 0u) {  // a top-tree leaf: enter that node's own hierarchy
