@@ -263,35 +263,35 @@ void solve(const SpMat& a, const Eigen::MatrixXd& b, Eigen::MatrixXd& x,
   solveChannels(a, jacobi, b, x, options, stats);
 }
 
-}  // namespace
-
-InfillStats poissonInfill(std::span<const glm::vec3> positions, std::span<const glm::vec3> ldr,
-                          std::span<glm::vec3> hdr, std::span<const InfillRole> role,
-                          const InfillOptions& options, std::vector<InfillOutcome>* outcome) {
-  const size_t total = positions.size();
-  if (ldr.size() != total || hdr.size() != total || role.size() != total)
-    throw std::invalid_argument("poissonInfill: spans of different lengths");
-  if (total >= size_t(kNone)) throw std::invalid_argument("poissonInfill: too many points");
-  if (options.k < 1 || !(options.tolerance >= 0) || options.maxIterations < 1)
-    throw std::invalid_argument("poissonInfill: options out of range");
-
-  InfillStats stats;
-  if (outcome) {
-    outcome->assign(total, InfillOutcome::NotTarget);
-    for (size_t i = 0; i < total; ++i)
-      if (role[i] == InfillRole::Target) (*outcome)[i] = InfillOutcome::Solved;
-  }
-  const auto fallback = [&](size_t i) {
-    hdr[i] = isFinite(ldr[i]) ? options.islandScale * ldr[i] : glm::vec3(0.0f);
+// A target that cannot be solved for gets islandScale * L (0 when L is not finite).
+struct Fallback {
+  std::span<const glm::vec3> ldr;
+  std::span<glm::vec3> hdr;
+  float islandScale;
+  std::vector<InfillOutcome>* outcome;
+  void operator()(size_t i) const {
+    hdr[i] = isFinite(ldr[i]) ? islandScale * ldr[i] : glm::vec3(0.0f);
     if (outcome) (*outcome)[i] = InfillOutcome::Island;
-  };
+  }
+};
 
-  // Included points, numbered compactly in Morton order: neighbours then sit close in memory,
-  // both for the tree's queries and for the matrix's rows, whatever order the caller's points
-  // come in (a shuffled cloud otherwise takes twice as long to query and to solve).
-  std::vector<uint32_t> original;
-  std::vector<uint32_t> targetRow;  // per included point: its row, or kNone when valid
+// The points that take part, numbered compactly; targets also numbered as rows.
+struct Included {
+  std::vector<uint32_t> original;     // per included point: the caller's index
+  std::vector<uint32_t> targetRow;    // per included point: its row, or kNone when valid
+  std::vector<uint32_t> targetPoint;  // per row: the included point
   Cloud cloud;
+};
+
+// Included points, numbered compactly in Morton order: neighbours then sit close in memory,
+// both for the tree's queries and for the matrix's rows, whatever order the caller's points
+// come in (a shuffled cloud otherwise takes twice as long to query and to solve).
+Included includePoints(std::span<const glm::vec3> positions, std::span<const glm::vec3> ldr,
+                       std::span<const glm::vec3> hdr, std::span<const InfillRole> role,
+                       const Fallback& fallback, InfillStats& stats) {
+  const size_t total = positions.size();
+  Included in;
+  std::vector<uint32_t>& original = in.original;
   original.reserve(total);
   glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
   for (size_t i = 0; i < total; ++i) {
@@ -328,39 +328,36 @@ InfillStats poissonInfill(std::span<const glm::vec3> positions, std::span<const 
     for (uint32_t& o : order) o = original[o];
     original.swap(order);
   }
-  cloud.xyz.resize(3 * original.size());
+  in.cloud.xyz.resize(3 * original.size());
   for (size_t p = 0; p < original.size(); ++p)
-    for (int a = 0; a < 3; ++a) cloud.xyz[3 * p + size_t(a)] = positions[original[p]][a];
+    for (int a = 0; a < 3; ++a) in.cloud.xyz[3 * p + size_t(a)] = positions[original[p]][a];
   const size_t n = original.size();
-  targetRow.assign(n, kNone);
-  std::vector<uint32_t> targetPoint;  // per row: the included point
+  in.targetRow.assign(n, kNone);
   for (size_t p = 0; p < n; ++p) {
     if (role[original[p]] != InfillRole::Target) continue;
-    targetRow[p] = uint32_t(targetPoint.size());
-    targetPoint.push_back(uint32_t(p));
+    in.targetRow[p] = uint32_t(in.targetPoint.size());
+    in.targetPoint.push_back(uint32_t(p));
   }
-  const size_t targets = targetPoint.size();
-  if (targets == 0) return stats;
-  if (n == 1) {  // a lone target: no graph at all, an island of one
-    stats.islands = stats.islandPoints = 1;
-    fallback(original[0]);
-    return stats;
-  }
+  return in;
+}
 
-  TargetGraph graph;
-  {
-    const Tree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-    graph = targetGraph(tree, cloud, targetRow, targets, options.k);
-  }
-  std::vector<float>().swap(cloud.xyz);
+// The system's unknowns: per target row its unknown (kNone for an island's), and per unknown
+// its row. Connected groups of targets; a group with no valid neighbour anywhere is an island,
+// left out of the solve because it would make the matrix singular.
+struct Unknowns {
+  std::vector<uint32_t> unknown;
+  std::vector<uint32_t> unknownRow;
+};
 
-  // Connected groups of targets; a group with no valid neighbour anywhere is an island.
+Unknowns findIslands(const TargetGraph& graph, const Included& in, const Fallback& fallback,
+                     InfillStats& stats) {
+  const size_t targets = in.targetPoint.size();
   std::vector<uint32_t> parent(targets);
   std::iota(parent.begin(), parent.end(), 0u);
   std::vector<uint8_t> touchesValid(targets, 0);
   for (size_t t = 0; t < targets; ++t) {
     for (uint64_t j = graph.start[t]; j < graph.start[t + 1]; ++j) {
-      const uint32_t u = targetRow[graph.neighbours[j]];
+      const uint32_t u = in.targetRow[graph.neighbours[j]];
       if (u == kNone) {
         touchesValid[t] = 1;
       } else {
@@ -373,83 +370,92 @@ InfillStats poissonInfill(std::span<const glm::vec3> positions, std::span<const 
     const uint32_t r = findRoot(parent, uint32_t(t));
     touchesValid[r] |= touchesValid[t];
   }
-  std::vector<uint32_t> unknown(targets, kNone);  // per row: its unknown in the system
-  std::vector<uint32_t> unknownRow;
+  Unknowns u;
+  u.unknown.assign(targets, kNone);
   for (size_t t = 0; t < targets; ++t) {
     const uint32_t r = findRoot(parent, uint32_t(t));
     if (touchesValid[r]) {
-      unknown[t] = uint32_t(unknownRow.size());
-      unknownRow.push_back(uint32_t(t));
+      u.unknown[t] = uint32_t(u.unknownRow.size());
+      u.unknownRow.push_back(uint32_t(t));
     } else {
       stats.islands += r == t;  // roots are the smallest row of their group
       stats.islandPoints++;
-      fallback(original[targetPoint[t]]);
+      fallback(in.original[in.targetPoint[t]]);
     }
   }
-  std::vector<uint32_t>().swap(parent);
-  std::vector<uint8_t>().swap(touchesValid);
-  const size_t m = unknownRow.size();
-  stats.solved = m;
-  if (m == 0) return stats;
+  return u;
+}
 
-  // The matrix, built compressed: column j holds -1 at every target neighbour and the degree on
-  // the diagonal. Rows follow the included points' order, so each column comes out sorted.
+// The matrix, built compressed: column j holds -1 at every target neighbour and the degree on
+// the diagonal. Rows follow the included points' order, so each column comes out sorted.
+SpMat assembleMatrix(const TargetGraph& graph, const Included& in, const Unknowns& un) {
+  const size_t m = un.unknownRow.size();
   uint64_t nonZeros = 0;
-  for (uint32_t t : unknownRow) {
+  for (uint32_t t : un.unknownRow) {
     nonZeros++;
     for (uint64_t j = graph.start[t]; j < graph.start[t + 1]; ++j)
-      nonZeros += targetRow[graph.neighbours[j]] != kNone;
+      nonZeros += in.targetRow[graph.neighbours[j]] != kNone;
   }
   if (nonZeros > uint64_t(std::numeric_limits<int>::max()))
     throw std::invalid_argument("poissonInfill: system too large");
   SpMat a(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
   a.resizeNonZeros(Eigen::Index(nonZeros));
-  {
-    int* outer = a.outerIndexPtr();
-    int* inner = a.innerIndexPtr();
-    double* value = a.valuePtr();
-    int at = 0;
-    for (size_t col = 0; col < m; ++col) {
-      outer[col] = at;
-      const uint32_t t = unknownRow[col];
-      bool diagonal = false;
-      const auto putDiagonal = [&] {
-        inner[at] = int(col);
-        value[at++] = double(graph.start[t + 1] - graph.start[t]);
-        diagonal = true;
-      };
-      for (uint64_t j = graph.start[t]; j < graph.start[t + 1]; ++j) {
-        const uint32_t u = targetRow[graph.neighbours[j]];
-        if (u == kNone) continue;
-        const int row = int(unknown[u]);
-        if (!diagonal && row > int(col)) putDiagonal();
-        inner[at] = row;
-        value[at++] = -1.0;
-      }
-      if (!diagonal) putDiagonal();
+  int* outer = a.outerIndexPtr();
+  int* inner = a.innerIndexPtr();
+  double* value = a.valuePtr();
+  int at = 0;
+  for (size_t col = 0; col < m; ++col) {
+    outer[col] = at;
+    const uint32_t t = un.unknownRow[col];
+    bool diagonal = false;
+    const auto putDiagonal = [&] {
+      inner[at] = int(col);
+      value[at++] = double(graph.start[t + 1] - graph.start[t]);
+      diagonal = true;
+    };
+    for (uint64_t j = graph.start[t]; j < graph.start[t + 1]; ++j) {
+      const uint32_t u = in.targetRow[graph.neighbours[j]];
+      if (u == kNone) continue;
+      const int row = int(un.unknown[u]);
+      if (!diagonal && row > int(col)) putDiagonal();
+      inner[at] = row;
+      value[at++] = -1.0;
     }
-    outer[m] = at;
+    if (!diagonal) putDiagonal();
   }
+  outer[m] = at;
+  return a;
+}
 
-  // Right-hand sides and the first guess. The guess is L plus the mean offset H - L of the valid
-  // neighbours, the solution when H differs from L by a constant (the system only sees
-  // gradients); it changes where CG starts, not where it stops.
-  const bool rgb = options.mode == InfillMode::Rgb;
-  const int channels = rgb ? 3 : 1;
-  const auto channel = [&](const glm::vec3& c, int ch) {
+// One channel of a colour as the system sees it: the channel itself, or the luminance.
+struct Channels {
+  bool rgb;
+  int count() const { return rgb ? 3 : 1; }
+  double operator()(const glm::vec3& c, int ch) const {
     return rgb ? double(c[ch]) : infillLuminance(c);
-  };
-  Eigen::MatrixXd b(Eigen::Index(m), channels), x(Eigen::Index(m), channels);
+  }
+};
+
+// Right-hand sides and the first guess. The guess is L plus the mean offset H - L of the valid
+// neighbours, the solution when H differs from L by a constant (the system only sees
+// gradients); it changes where CG starts, not where it stops.
+void assembleRhs(const TargetGraph& graph, const Included& in, const Unknowns& un,
+                 std::span<const glm::vec3> ldr, std::span<const glm::vec3> hdr,
+                 const Channels& channel, Eigen::MatrixXd& b, Eigen::MatrixXd& x) {
+  const size_t m = un.unknownRow.size();
+  const int channels = channel.count();
+  b.resize(Eigen::Index(m), channels);
+  x.resize(Eigen::Index(m), channels);
   std::array<double, 3> offsetSum{0, 0, 0};
   uint64_t offsetCount = 0;
   for (size_t col = 0; col < m; ++col) {
-    const uint32_t t = unknownRow[col];
-    const size_t p = original[targetPoint[t]];
+    const uint32_t t = un.unknownRow[col];
+    const size_t p = in.original[in.targetPoint[t]];
     const double degree = double(graph.start[t + 1] - graph.start[t]);
     for (int ch = 0; ch < channels; ++ch) b(Eigen::Index(col), ch) = degree * channel(ldr[p], ch);
     for (uint64_t j = graph.start[t]; j < graph.start[t + 1]; ++j) {
-      const uint32_t q = original[graph.neighbours[j]];
-      const bool valid = targetRow[graph.neighbours[j]] == kNone;
+      const uint32_t q = in.original[graph.neighbours[j]];
+      const bool valid = in.targetRow[graph.neighbours[j]] == kNone;
       for (int ch = 0; ch < channels; ++ch) {
         b(Eigen::Index(col), ch) -= channel(ldr[q], ch);
         if (!valid) continue;
@@ -460,18 +466,18 @@ InfillStats poissonInfill(std::span<const glm::vec3> positions, std::span<const 
     }
   }
   for (size_t col = 0; col < m; ++col) {
-    const size_t p = original[targetPoint[unknownRow[col]]];
+    const size_t p = in.original[in.targetPoint[un.unknownRow[col]]];
     for (int ch = 0; ch < channels; ++ch)
       x(Eigen::Index(col), ch) = channel(ldr[p], ch) + offsetSum[size_t(ch)] / double(offsetCount);
   }
-  std::vector<uint64_t>().swap(graph.start);
-  std::vector<uint32_t>().swap(graph.neighbours);
+}
 
-  solve(a, b, x, options, stats);
-
-  // Back to colours, with the guards: finite, non-negative.
-  for (size_t col = 0; col < m; ++col) {
-    const size_t p = original[targetPoint[unknownRow[col]]];
+// Back to colours, with the guards: finite, non-negative.
+void writeBack(const Eigen::MatrixXd& x, const Included& in, const Unknowns& un, bool rgb,
+               std::span<const glm::vec3> ldr, std::span<glm::vec3> hdr, const Fallback& fallback,
+               InfillStats& stats) {
+  for (size_t col = 0; col < un.unknownRow.size(); ++col) {
+    const size_t p = in.original[in.targetPoint[un.unknownRow[col]]];
     glm::dvec3 h;
     if (rgb) {
       h = glm::dvec3(x(Eigen::Index(col), 0), x(Eigen::Index(col), 1), x(Eigen::Index(col), 2));
@@ -492,6 +498,57 @@ InfillStats poissonInfill(std::span<const glm::vec3> positions, std::span<const 
     }
     hdr[p] = out;
   }
+}
+
+}  // namespace
+
+InfillStats poissonInfill(std::span<const glm::vec3> positions, std::span<const glm::vec3> ldr,
+                          std::span<glm::vec3> hdr, std::span<const InfillRole> role,
+                          const InfillOptions& options, std::vector<InfillOutcome>* outcome) {
+  const size_t total = positions.size();
+  if (ldr.size() != total || hdr.size() != total || role.size() != total)
+    throw std::invalid_argument("poissonInfill: spans of different lengths");
+  if (total >= size_t(kNone)) throw std::invalid_argument("poissonInfill: too many points");
+  if (options.k < 1 || !(options.tolerance >= 0) || options.maxIterations < 1)
+    throw std::invalid_argument("poissonInfill: options out of range");
+
+  InfillStats stats;
+  if (outcome) {
+    outcome->assign(total, InfillOutcome::NotTarget);
+    for (size_t i = 0; i < total; ++i)
+      if (role[i] == InfillRole::Target) (*outcome)[i] = InfillOutcome::Solved;
+  }
+  const Fallback fallback{ldr, hdr, options.islandScale, outcome};
+
+  Included in = includePoints(positions, ldr, hdr, role, fallback, stats);
+  const size_t targets = in.targetPoint.size();
+  if (targets == 0) return stats;
+  if (in.original.size() == 1) {  // a lone target: no graph at all, an island of one
+    stats.islands = stats.islandPoints = 1;
+    fallback(in.original[0]);
+    return stats;
+  }
+
+  TargetGraph graph;
+  {
+    const Tree tree(3, in.cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    graph = targetGraph(tree, in.cloud, in.targetRow, targets, options.k);
+  }
+  std::vector<float>().swap(in.cloud.xyz);
+
+  const Unknowns un = findIslands(graph, in, fallback, stats);
+  stats.solved = un.unknownRow.size();
+  if (un.unknownRow.empty()) return stats;
+
+  const SpMat a = assembleMatrix(graph, in, un);
+  const Channels channel{options.mode == InfillMode::Rgb};
+  Eigen::MatrixXd b, x;
+  assembleRhs(graph, in, un, ldr, hdr, channel, b, x);
+  std::vector<uint64_t>().swap(graph.start);
+  std::vector<uint32_t>().swap(graph.neighbours);
+
+  solve(a, b, x, options, stats);
+  writeBack(x, in, un, channel.rgb, ldr, hdr, fallback, stats);
   return stats;
 }
 
