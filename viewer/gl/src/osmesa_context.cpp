@@ -3,8 +3,11 @@
 // through EGL or GLX, so once the context is current every function pointer of epoxy's table
 // (all of them, listed at build time by viewer/gl/gl_functions.cmake, so a call from any library
 // works) that OSMesa provides is pointed at OSMesa's own.
+// epoxy must come before any GL header, which sorting would put first.
+// clang-format off
 #include <epoxy/gl.h>
 #include <GL/osmesa.h>
+// clang-format on
 
 #include <dlfcn.h>
 
