@@ -7,7 +7,7 @@
 //      the HDR mapping: the photograph's HDR values at the matches, times that exposure;
 //   4. back-projection onto the points whose LDR luminance exceeds t_l = 0.9: over the views that
 //      see a point, the median weighted by match quality (SSD; matches above t_h = 1 rejected),
-//      where the paper takes the weighted mean (expand.cpp says why);
+//      where the paper takes the weighted mean (expand/back_projection.cpp says why);
 //   5. gradient-domain in-fill (eq. 3) of the over-exposed points left without a valid value,
 //      over the k = 16 nearest-neighbour graph (poisson_infill.h), chunk by chunk;
 //   6. the result written as the octree's "hdr" colour layer (colour_layer.h), atomically.
