@@ -154,6 +154,9 @@ class RasterMethod : public Method, public RasterFrame {
   frame::FrameGraph& graph() override { return graph_; }
   glm::vec3 boundsLo() const override { return bounds_.lo; }
   glm::vec3 boundsHi() const override { return bounds_.hi; }
+  glm::vec3 lightViewBoundsLo() const override { return litBounds_.lo; }
+  glm::vec3 lightViewBoundsHi() const override { return litBounds_.hi; }
+  uint64_t lightViewsGeneration() const override { return lightViewsGeneration_; }
   const std::vector<frame::LightRecord>& lights() const override { return lightRecords_; }
   const std::vector<glm::mat4>& lightClipFromWorld() const override { return shadowViews_; }
   const std::vector<glm::mat4>& lightViewFromWorld() const override { return shadowViewFromWorld_; }
@@ -318,8 +321,11 @@ class RasterMethod : public Method, public RasterFrame {
     u.viewFromWorld = glm::lookAt(eye, target, up);
     u.clipFromView = glm::perspective(float(fovY), float(W) / float(H), nearZ, farZ);
     u.eye = glm::vec4(eye, float(H) / (2.0f * std::tan(float(fovY) / 2)));
+    const ShadowFitCamera fitCamera{u.viewFromWorld, std::tan(float(fovY) / 2), float(W) / float(H), nearZ, farZ};
     if (fitShadowsToCamera_)
-      fitShadowsToCamera({u.viewFromWorld, std::tan(float(fovY) / 2), float(W) / float(H), nearZ, farZ});
+      fitShadowsToCamera(fitCamera);
+    else if (clusters_.boxes.size() > 1)
+      fitLightViewsToClusters(fitCamera);
     u.counts = glm::ivec4(int(lightRecords_.size()), scene_.gi.mode == RadianceMode::Albedo ? 1 : 0, frameNumber_++, 0);
     beforeFrameSeconds_ = 0;
     if (extension_) {
@@ -492,6 +498,10 @@ class RasterMethod : public Method, public RasterFrame {
   void setUpLights() {
     fitShadowsToCamera_ = !extension_ || extension_->shadowsForTheCameraOnly();
     for (const LocalBox& b : objectBounds_) shadowBoxes_.push_back({b.lo, b.hi});
+    // Every cluster until the first frame's camera picks those it sees.
+    if (!fitShadowsToCamera_) clusters_ = clusterObjects(shadowBoxes_);
+    litClusters_.assign(clusters_.boxes.size(), true);
+    litBounds_ = bounds_;
     if (scene_.lights.size() > NL_MAX_LIGHTS)
       throw Error(scene_.file.string(), "lights", "the raster method takes at most " + std::to_string(NL_MAX_LIGHTS) +
                                                       " lights; the scene has " + std::to_string(scene_.lights.size()));
@@ -519,11 +529,11 @@ class RasterMethod : public Method, public RasterFrame {
         r.shadow.y = fit.texel;
         r.shadow.z = fit.nearZ, r.shadow.w = fit.farZ;
       } else if (type == NL_LIGHT_DIRECTIONAL) {
-        const glm::mat4 view = glm::lookAt(centre - dir * (R * 1.05f), centre, upFor(dir));
-        shadowViews_.push_back(glm::ortho(-R, R, -R, R, 0.0f, 2.1f * R) * view);
-        shadowViewFromWorld_.push_back(view);
-        r.shadow.y = 2 * R / float(S);
-        r.shadow.z = 0, r.shadow.w = 2.1f * R;
+        const DirectionalShadowFit fit = fitDirectionalToBox(dir, {bounds_.lo, bounds_.hi}, shadowBoxes_, S);
+        shadowViews_.push_back(fit.clipFromWorld);
+        shadowViewFromWorld_.push_back(fit.viewFromWorld);
+        r.shadow.y = fit.texel;
+        r.shadow.z = fit.nearZ, r.shadow.w = fit.farZ;
       } else if (type == NL_LIGHT_SPOT) {
         // The outer cone plus a texel of margin, at most 170 degrees (beyond that a point light's
         // six views would serve better; the falloff still cuts the light at the cone).
@@ -569,6 +579,36 @@ class RasterMethod : public Method, public RasterFrame {
     if (!changed) return;
     lightsBuffer_.upload(lightRecords_.data(), lightRecords_.size() * sizeof(frame::LightRecord));
     shadowViewsBuffer_.upload(shadowViews_.data(), shadowViews_.size() * sizeof(glm::mat4));
+    ++lightViewsGeneration_;
+  }
+
+  // Extensions light beyond the camera's view, so their directional views span whole clusters:
+  // those the camera sees (a cluster it does not see lights them negligibly, shadow_fit.h's
+  // clusterObjects). Refitted only when that set changes, so the views (and what extensions
+  // derive from them) stay put while the camera moves within a cluster; a camera that sees none
+  // keeps the last set.
+  void fitLightViewsToClusters(const ShadowFitCamera& camera) {
+    std::vector<bool> seen(clusters_.boxes.size(), false);
+    for (size_t i = 0; i < shadowBoxes_.size(); ++i)
+      if (!seen[size_t(clusters_.of[i])] && meetsFrustum(shadowBoxes_[i], camera)) seen[size_t(clusters_.of[i])] = true;
+    if (seen == litClusters_ || std::find(seen.begin(), seen.end(), true) == seen.end()) return;
+    litClusters_ = seen;
+    litBounds_ = LocalBox{};
+    for (size_t k = 0; k < seen.size(); ++k)
+      if (seen[k]) litBounds_.add(clusters_.boxes[k].lo), litBounds_.add(clusters_.boxes[k].hi);
+    for (frame::LightRecord& r : lightRecords_) {
+      if (int(r.position.w) != NL_LIGHT_DIRECTIONAL) continue;
+      const size_t layer = size_t(r.shadow.x);
+      const DirectionalShadowFit fit = fitDirectionalToBox(glm::vec3(r.direction), {litBounds_.lo, litBounds_.hi},
+                                                           shadowBoxes_, params_.shadowMapSize);
+      shadowViews_[layer] = fit.clipFromWorld;
+      shadowViewFromWorld_[layer] = fit.viewFromWorld;
+      r.shadow.y = fit.texel;
+      r.shadow.z = fit.nearZ, r.shadow.w = fit.farZ;
+    }
+    lightsBuffer_.upload(lightRecords_.data(), lightRecords_.size() * sizeof(frame::LightRecord));
+    shadowViewsBuffer_.upload(shadowViews_.data(), shadowViews_.size() * sizeof(glm::mat4));
+    ++lightViewsGeneration_;
   }
 
   void setUpEnvironment() {
@@ -973,6 +1013,12 @@ class RasterMethod : public Method, public RasterFrame {
   // Directional shadow maps cover the camera's view (raster alone, or an extension that reads
   // them only for the camera's pixels), else the whole scene.
   bool fitShadowsToCamera_ = true;
+  // Otherwise, the objects' clusters (empty when fitted to the camera) and those the directional
+  // views span now, with their bounds; the count changes with any light view.
+  ObjectClusters clusters_;
+  std::vector<bool> litClusters_;
+  LocalBox litBounds_;
+  uint64_t lightViewsGeneration_ = 0;
   std::vector<GpuScan> scans_;
   std::vector<GpuMesh> meshes_;
   std::vector<TriangleMesh> cpuMeshes_;  // the files' meshes, until the extension's setUp is done

@@ -1,6 +1,8 @@
 // Directional shadow maps fitted to the camera's receivers (nestlight/gi/raster/shadow_fit.h),
 // stabilised as cascaded shadow maps are (Valient 2008, "Stable Rendering of Cascaded Shadow
-// Maps"): a fixed light rotation, the origin snapped to texels, the size quantised.
+// Maps"): a fixed light rotation, the origin snapped to texels, the size quantised. The scene's
+// objects grouped by single linkage (Sibson 1973, "SLINK: An optimally efficient algorithm for
+// the single-link cluster method") for the light views of methods that light beyond the view.
 #include "nestlight/gi/raster/shadow_fit.h"
 
 #include <algorithm>
@@ -136,6 +138,65 @@ DirectionalShadowFit fitDirectionalShadow(const glm::vec3& direction,
   fit.farZ = -zLo + margin;
   fit.clipFromWorld =
       glm::ortho(float(lo.x), float(hi.x), float(lo.y), float(hi.y), fit.nearZ, fit.farZ) * L;
+  return fit;
+}
+
+bool meetsFrustum(const ShadowBox& box, const ShadowFitCamera& camera) {
+  return !visiblePart(box, camera, glm::mat4(1.0f)).empty();
+}
+
+ObjectClusters clusterObjects(const std::vector<ShadowBox>& objects, float reach) {
+  // Union-find over every pair: scenes hold scans and meshes by the tens, not thousands.
+  std::vector<int> parent(objects.size());
+  for (size_t i = 0; i < parent.size(); ++i) parent[i] = int(i);
+  auto root = [&](int i) {
+    while (parent[size_t(i)] != i) i = parent[size_t(i)] = parent[size_t(parent[size_t(i)])];
+    return i;
+  };
+  for (size_t a = 0; a < objects.size(); ++a)
+    for (size_t b = a + 1; b < objects.size(); ++b) {
+      const ShadowBox &A = objects[a], &B = objects[b];
+      const glm::vec3 gap = glm::max(glm::max(A.lo - B.hi, B.lo - A.hi), glm::vec3(0.0f));
+      const float size = std::max(glm::length(A.hi - A.lo), glm::length(B.hi - B.lo));
+      if (glm::length(gap) <= reach * size) parent[size_t(root(int(a)))] = root(int(b));
+    }
+  ObjectClusters c;
+  std::vector<int> index(objects.size(), -1);
+  for (size_t i = 0; i < objects.size(); ++i) {
+    int& k = index[size_t(root(int(i)))];
+    if (k < 0) {
+      k = int(c.boxes.size());
+      c.boxes.push_back({glm::vec3(INFINITY), glm::vec3(-INFINITY)});
+    }
+    c.of.push_back(k);
+    c.boxes[size_t(k)].lo = glm::min(c.boxes[size_t(k)].lo, objects[i].lo);
+    c.boxes[size_t(k)].hi = glm::max(c.boxes[size_t(k)].hi, objects[i].hi);
+  }
+  return c;
+}
+
+DirectionalShadowFit fitDirectionalToBox(const glm::vec3& direction, const ShadowBox& lit,
+                                         const std::vector<ShadowBox>& objects, int mapSize) {
+  // The expressions of the scene-wide view this replaces, term for term: a scene of one cluster
+  // keeps its shadow map bit for bit.
+  const glm::vec3 centre = 0.5f * (lit.lo + lit.hi);
+  const float R = std::max(0.5f * glm::length(lit.hi - lit.lo), 1e-3f);
+  const glm::vec3 up = std::abs(direction.z) < 0.9f ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
+  DirectionalShadowFit fit;
+  fit.viewFromWorld = glm::lookAt(centre - direction * (R * 1.05f), centre, up);
+  fit.nearZ = 0.0f;
+  fit.farZ = 2.1f * R;
+  // Casters beyond `lit` towards the light, over its footprint: the near plane moves back to
+  // them. Those beyond the far plane lie behind every receiver and cast nothing on it.
+  float nearest = 0.0f;
+  for (const ShadowBox& b : objects) {
+    const Bounds v = transformed(fit.viewFromWorld, b.lo, b.hi);
+    if (v.empty() || v.lo.x > R || v.hi.x < -R || v.lo.y > R || v.hi.y < -R) continue;
+    nearest = std::min(nearest, -v.hi.z);  // the view looks down -z
+  }
+  if (nearest < 0.0f) fit.nearZ = nearest - 0.01f * (fit.farZ - nearest);
+  fit.texel = 2 * R / float(std::max(mapSize, 1));
+  fit.clipFromWorld = glm::ortho(-R, R, -R, R, fit.nearZ, fit.farZ) * fit.viewFromWorld;
   return fit;
 }
 

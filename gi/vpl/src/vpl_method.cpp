@@ -157,8 +157,6 @@ class VplExtension : public RasterExtension {
                   "the ISM atlas (vpls x VPL generations x ism_size^2 x 4 bytes = " +
                       std::to_string(atlasBytes >> 20) +
                       " MiB) exceeds one 128 MiB buffer range: lower vpls, bounces or ism_size");
-    radius_ = 0.5f * glm::length(f.boundsHi() - f.boundsLo());
-    clampDistance_ = std::max(params_.clampFraction * radius_, 1e-6f);
     layers_ = int(f.lightClipFromWorld().size());
     setUpLightViews(f);
     setUpSurfels(f);
@@ -176,6 +174,7 @@ class VplExtension : public RasterExtension {
       const GLuint zero = 0;
       glClearNamedBufferData(agreement_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     }
+    if (f.lightViewsGeneration() != lightViewsGeneration_) setUpLightViews(f);
     if (f.cutGeneration() != poolGeneration_) {
       buildPool(f);
       poolGeneration_ = f.cutGeneration();
@@ -237,7 +236,14 @@ class VplExtension : public RasterExtension {
   }
 
  private:
+  // The lights' views' inverses, and the clamp's distance, relative to the clusters they span
+  // (RasterFrame::lightViewBoundsLo): a mesh 1000 km away, in a cluster of its own, would
+  // otherwise clamp every VPL's light. Again whenever the frame refits the views.
   void setUpLightViews(RasterFrame& f) {
+    lightViewsGeneration_ = f.lightViewsGeneration();
+    radius_ = 0.5f * glm::length(f.lightViewBoundsHi() - f.lightViewBoundsLo());
+    clampDistance_ = std::max(params_.clampFraction * radius_, 1e-6f);
+    layerOwner_.clear();
     const auto& clips = f.lightClipFromWorld();
     const int S = f.rasterParameters().shadowMapSize;
     std::vector<LightView> views;
@@ -909,6 +915,7 @@ class VplExtension : public RasterExtension {
   size_t poolNodeCount_ = 0;
   uint64_t poolPoints_ = 0;
   uint64_t poolGeneration_ = ~uint64_t(0);
+  uint64_t lightViewsGeneration_ = 0;
   gl::ShaderProgram emitImportance_, emit_;  // radiance-cache mode
   gl::Buffer emitPyramid_;
   int emitSide_ = 1;

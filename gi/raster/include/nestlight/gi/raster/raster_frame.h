@@ -53,11 +53,19 @@ class RasterFrame {
   virtual glm::vec3 boundsLo() const = 0;
   virtual glm::vec3 boundsHi() const = 0;
   // The lights, and per shadow-map layer its clip-from-world and view-from-world (spot: one
-  // perspective layer, point: six cube faces, directional: one orthographic layer, over the
-  // scene's bounds unless RasterExtension::shadowsForTheCameraOnly: then refitted every frame).
+  // perspective layer, point: six cube faces, directional: one orthographic layer over the
+  // clusters of objects the camera sees, shadow_fit.h's clusterObjects, refitted when that set
+  // changes; unless RasterExtension::shadowsForTheCameraOnly: then over what the camera sees,
+  // refitted every frame).
   virtual const std::vector<frame::LightRecord>& lights() const = 0;
   virtual const std::vector<glm::mat4>& lightClipFromWorld() const = 0;
   virtual const std::vector<glm::mat4>& lightViewFromWorld() const = 0;
+  // The bounds of the clusters the directional views span now (the scene's bounds while it is
+  // one cluster), and a count that changes whenever any light view or record does: what an
+  // extension derives from them (inverses, distances relative to the scene's size) is stale then.
+  virtual glm::vec3 lightViewBoundsLo() const = 0;
+  virtual glm::vec3 lightViewBoundsHi() const = 0;
+  virtual uint64_t lightViewsGeneration() const = 0;
   // Binds the lights (NL_SSBO_LIGHTS), light views (NL_SSBO_SHADOW_VIEWS) and materials
   // (NL_SSBO_MATERIALS).
   virtual void bindSceneBuffers() const = 0;
@@ -126,9 +134,10 @@ class RasterExtension {
   virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
   // True when the extension reads the shadow maps only at the camera's pixels (as raster's direct
   // light does): directional lights' maps are then fitted to the camera's view each frame
-  // (shadow_fit.h), sharp however far the scene's objects lie apart. False keeps them over the
-  // whole scene's bounds, fixed, for extensions that light what the camera does not see (VPLs'
-  // light views, PBGI's lit hierarchies).
+  // (shadow_fit.h), sharp however far the scene's objects lie apart. False keeps each over the
+  // whole clusters of objects the camera sees, fixed while that set does not change, for
+  // extensions that light what the camera does not see (VPLs' light views, PBGI's lit
+  // hierarchies): points outside a map (other clusters) are lit, unshadowed.
   virtual bool shadowsForTheCameraOnly() const { return false; }
 };
 

@@ -37,4 +37,29 @@ DirectionalShadowFit fitDirectionalShadow(const glm::vec3& direction,
                                           const std::vector<ShadowBox>& objects,
                                           const ShadowFitCamera* camera, int mapSize);
 
+// Whether any of `box` may lie in the camera's frustum (conservative: a box across a frustum's
+// edge may pass).
+bool meetsFrustum(const ShadowBox& box, const ShadowFitCamera& camera);
+
+// The scene's objects in clusters that light one another: two objects join when the gap between
+// their boxes is at most `reach` times the larger box's diagonal, and clusters are the connected
+// groups (single linkage). Across a gap of 10 diagonals a box subtends under pi / 400 sr, so it
+// adds under 1/400 of the irradiance a surrounding surface of its radiance would: a cluster that
+// far lights another negligibly (and less with distance, by the inverse square law).
+struct ObjectClusters {
+  std::vector<int> of;           // each object's cluster
+  std::vector<ShadowBox> boxes;  // each cluster's bounds
+};
+constexpr float kClusterReach = 10;
+ObjectClusters clusterObjects(const std::vector<ShadowBox>& objects, float reach = kClusterReach);
+
+// A directional light's fixed view over `lit` (the clusters a method lights, which may lie
+// beyond the camera's view): an orthographic view of `lit`'s bounding sphere, its depth range
+// taken towards the light to every box of `objects` whose footprint in the light's view overlaps
+// the sphere's (a cluster between the light and `lit` still casts into it). `direction`: where
+// the light travels, normalised. With `lit` the scene's bounds and nothing beyond them it is the
+// view a scene-wide map always had.
+DirectionalShadowFit fitDirectionalToBox(const glm::vec3& direction, const ShadowBox& lit,
+                                         const std::vector<ShadowBox>& objects, int mapSize);
+
 }  // namespace nestlight::gi
