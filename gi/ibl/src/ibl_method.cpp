@@ -149,6 +149,9 @@ class IblExtension : public RasterExtension {
   explicit IblExtension(const Scene& scene) : params_(iblParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
 
   std::string name() const override { return "ibl"; }
+  // The environment's visibility is traced, not read from shadow maps: the scene's lights are
+  // raster's direct light, read at the camera's pixels only.
+  bool shadowsForTheCameraOnly() const override { return true; }
   std::vector<std::string> parameterKeys() const override { return iblParameterKeys(); }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
