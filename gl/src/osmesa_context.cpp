@@ -1,7 +1,7 @@
 // The OSMesa fallback: an OpenGL 4.5 core context rendered by Mesa into client memory, for
 // systems whose libEGL lacks the surfaceless platform. libepoxy resolves GL functions only
 // through EGL or GLX, so once the context is current every function pointer of epoxy's table
-// (all of them, listed at build time by viewer/gl/gl_functions.cmake, so a call from any library
+// (all of them, listed at build time by gl/gl_functions.cmake, so a call from any library
 // works) that OSMesa provides is pointed at OSMesa's own.
 // epoxy must come before any GL header, which sorting would put first.
 // clang-format off
