@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   clang-14 libclang-rt-14-dev            # libFuzzer targets
+  clang-format-14                        # the format check (scripts/format.sh)
   libpcl-dev                             # PCD reading (behind one small target)
   libtbb-dev libzstd-dev libxxhash-dev libdraco-dev libeigen3-dev libnanoflann-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev

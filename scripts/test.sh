@@ -10,6 +10,10 @@ step() { echo "== $1 [$(( (SECONDS - start) / 60 )) min]"; }
 step "set-up and Release build"
 scripts/setup.sh
 
+step "format (.clang-format) and include floors (docs/ARCHITECTURE.md)"
+scripts/format.sh --check
+python3 scripts/check_layers.py
+
 step "unit tests (Release)"
 ctest --test-dir build --output-on-failure -j2 --timeout 900
 

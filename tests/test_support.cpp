@@ -1,17 +1,17 @@
 #include "test_support.h"
 
-#include "nestlight/converters/builder.h"
-#include "nestlight/octree/colour_layer.h"
-#include "nestlight/octree/octree_reader.h"
-
 #include <unistd.h>
 
 #include <array>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
+
+#include "nestlight/converters/builder.h"
+#include "nestlight/octree/colour_layer.h"
+#include "nestlight/octree/octree_reader.h"
 
 namespace nestlight::test {
 
@@ -44,9 +44,13 @@ std::filesystem::path sharedData() {
   return std::filesystem::exists(p) ? p : std::filesystem::path();
 }
 
-std::string nestlightBinary() { return configured("NESTLIGHT_TEST_BINARY", NESTLIGHT_BINARY); }
+std::string nestlightBinary() {
+  return configured("NESTLIGHT_TEST_BINARY", NESTLIGHT_BINARY);
+}
 
-std::filesystem::path sourceDir() { return configured("NESTLIGHT_TEST_SOURCE_DIR", NESTLIGHT_SOURCE_DIR); }
+std::filesystem::path sourceDir() {
+  return configured("NESTLIGHT_TEST_SOURCE_DIR", NESTLIGHT_SOURCE_DIR);
+}
 
 int runCli(const std::string& args, std::string* output) {
   std::string cmd = nestlightBinary() + " " + args + " 2>&1";
@@ -104,7 +108,8 @@ void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::
 }
 
 void writeColourLayer(const std::filesystem::path& dir, const std::string& name,
-                      const std::function<std::array<float, 3>(const NodeKey&, size_t)>& colour, double scale) {
+                      const std::function<std::array<float, 3>(const NodeKey&, size_t)>& colour,
+                      double scale) {
   OctreeReader r(dir);
   ColourLayerWriter w(dir, name, scale);
   for (const auto& [key, e] : r.allNodes()) {

@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
 #include <array>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -52,7 +52,8 @@ void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::
 // Writes colour layer `name` into the octree at `dir`: `colour(key, i)` for point i of each node
 // (linear RGB), stored divided by `scale` (nestlight/octree/colour_layer.h).
 void writeColourLayer(const std::filesystem::path& dir, const std::string& name,
-                      const std::function<std::array<float, 3>(const NodeKey&, size_t)>& colour, double scale = 1.0);
+                      const std::function<std::array<float, 3>(const NodeKey&, size_t)>& colour,
+                      double scale = 1.0);
 
 // Every point a reader gave, its batches concatenated.
 struct Points {
@@ -100,8 +101,8 @@ bool anyContains(const std::vector<std::string>& v, const std::string& s);
 }  // namespace nestlight::test
 
 // Skips the test with a message when a file of ../shared/data is missing.
-#define NL_REQUIRE_SHARED(rel)                                                         \
-  do {                                                                                 \
-    if (!std::filesystem::exists(::nestlight::test::sharedData() / (rel)))             \
+#define NL_REQUIRE_SHARED(rel)                                                             \
+  do {                                                                                     \
+    if (!std::filesystem::exists(::nestlight::test::sharedData() / (rel)))                 \
       GTEST_SKIP() << "../shared/data/" << (rel) << " is absent; skipping real-data test"; \
   } while (0)

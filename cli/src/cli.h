@@ -22,7 +22,8 @@ struct RenderOptionText {
   std::string pointBudget = "5M", gpuBudget = "512M", uploadBudget = "32M";
   CLI::Option* edl = nullptr;  // --colour hdr turns eye-dome lighting off unless --edl is given
 };
-void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<RenderOptionText> text);
+void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
+                      std::shared_ptr<RenderOptionText> text);
 void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text);
 
 // Each adds its sub-command; the callback stores the exit code in `exitCode`.
@@ -45,9 +46,9 @@ void addSurfels(CLI::App& app, int& exitCode);
 void addCompare(CLI::App& app, int& exitCode);
 void addExpandHdr(CLI::App& app, int& exitCode);
 void addColourMatch(CLI::App& app, int& exitCode);
-void addBenchHdr(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
-void addBenchIbl(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
-void addBenchLaz(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
+void addBenchHdr(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
+void addBenchIbl(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
+void addBenchLaz(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 void addGlInfo(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", "1B" (a billion), plain numbers: point counts are decimal.

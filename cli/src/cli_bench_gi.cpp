@@ -29,16 +29,21 @@ void addBenchGi(CLI::App& app, int& exitCode) {
   for (const auto& m : gi::registeredMethods()) {
     std::string levels;
     for (int q : m.defaultQualities) levels += (levels.empty() ? "" : ",") + std::to_string(q);
-    methods += "\n  " + m.name + ": " + m.summary + "; quality = " + m.qualityName + " (default " + levels + ")";
+    methods += "\n  " + m.name + ": " + m.summary + "; quality = " + m.qualityName + " (default " +
+               levels + ")";
   }
   auto* cmd = bench->add_subcommand(
       "gi",
-      "Speed against error of the GI methods on a scene: the path-traced reference is rendered once to\n"
-      "--reference-error (cached in the output folder), then each method at each of its quality levels is\n"
+      "Speed against error of the GI methods on a scene: the path-traced reference is rendered "
+      "once to\n"
+      "--reference-error (cached in the output folder), then each method at each of its quality "
+      "levels is\n"
       "timed (median of --runs, loading excluded) and compared with it. Methods:" +
           methods +
-          "\nExample: nestlight make-scene cornell -o cornell && nestlight bench gi cornell/scene.json\n"
-          "         nestlight bench gi cornell/scene.json --methods raster --quality raster=512,2048");
+          "\nExample: nestlight make-scene cornell -o cornell && nestlight bench gi "
+          "cornell/scene.json\n"
+          "         nestlight bench gi cornell/scene.json --methods raster --quality "
+          "raster=512,2048");
   auto o = std::make_shared<gi::BenchGiOptions>();
   auto scene = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
@@ -47,24 +52,41 @@ void addBenchGi(CLI::App& app, int& exitCode) {
   auto quality = std::make_shared<std::vector<std::string>>();
   cmd->add_option("scene", *scene, "Scene file (.json)")->required();
   cmd->add_option("-o,--out", *out, "Output folder (default: bench-gi beside the scene)");
-  cmd->add_option("--runs", o->runs, "Timed runs per setting; the median is reported")->capture_default_str()->check(CLI::Range(1, 100));
-  cmd->add_option("--reference-error", o->referenceError, "Relative error the cached reference is rendered to")
-      ->capture_default_str()->check(CLI::Range(1e-6, 0.5));
-  cmd->add_option("--reference-time-limit", o->referenceTimeLimit, "Seconds the reference may take at most")
-      ->capture_default_str()->check(CLI::Range(1.0, 1e7));
+  cmd->add_option("--runs", o->runs, "Timed runs per setting; the median is reported")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
+  cmd->add_option("--reference-error", o->referenceError,
+                  "Relative error the cached reference is rendered to")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-6, 0.5));
+  cmd->add_option("--reference-time-limit", o->referenceTimeLimit,
+                  "Seconds the reference may take at most")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e7));
   cmd->add_option("--reference-spp", o->referenceSpp, "Samples per pixel of the reference at most")
-      ->capture_default_str()->check(CLI::Range(2, 1 << 24));
-  cmd->add_option("--methods", *methodText, "Methods to measure, comma-separated (default: all: " + gi::methodList() + ")");
-  cmd->add_option("--quality", *quality, "Quality levels of one method, METHOD=LIST (e.g. raster=512,1024); repeatable");
-  cmd->add_option("--spp", *spp, "Quality levels of every method whose quality is samples per pixel (e.g. 1,4,16)");
-  cmd->add_option("--width", o->width, "Override the scene camera's width")->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", o->height, "Override the scene camera's height")->check(CLI::Range(1, 16384));
-  cmd->add_flag("--force-reference", o->forceReference, "Render the reference again even when a cached one matches");
-  cmd->add_option("--mode", o->mode, "Override the scene's gi.mode: albedo (scan points reflect their colour) or radiance_cache (they emit it)")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 1 << 24));
+  cmd->add_option("--methods", *methodText,
+                  "Methods to measure, comma-separated (default: all: " + gi::methodList() + ")");
+  cmd->add_option("--quality", *quality,
+                  "Quality levels of one method, METHOD=LIST (e.g. raster=512,1024); repeatable");
+  cmd->add_option(
+      "--spp", *spp,
+      "Quality levels of every method whose quality is samples per pixel (e.g. 1,4,16)");
+  cmd->add_option("--width", o->width, "Override the scene camera's width")
+      ->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", o->height, "Override the scene camera's height")
+      ->check(CLI::Range(1, 16384));
+  cmd->add_flag("--force-reference", o->forceReference,
+                "Render the reference again even when a cached one matches");
+  cmd->add_option("--mode", o->mode,
+                  "Override the scene's gi.mode: albedo (scan points reflect their colour) or "
+                  "radiance_cache (they emit it)")
       ->check(CLI::IsMember({"albedo", "radiance_cache"}));
   auto noVariants = std::make_shared<bool>(false);
   cmd->add_flag("--no-variants", *noVariants,
-                "Only each method as the scene sets it (default: also its variants: vpl at 1 to 3 bounces and with exact "
+                "Only each method as the scene sets it (default: also its variants: vpl at 1 to 3 "
+                "bounces and with exact "
                 "visibility, the ablation that separates the ISMs' error from the VPLs')");
   cmd->callback([=, &exitCode]() {
     gi::BenchGiOptions opt = *o;
@@ -82,8 +104,10 @@ void addBenchGi(CLI::App& app, int& exitCode) {
     }
     for (const auto& q : *quality) {
       const auto eq = q.find('=');
-      if (eq == std::string::npos || eq == 0) throw Error("--quality: expected METHOD=LIST, got '" + q + "'");
-      opt.qualities[q.substr(0, eq)] = parseIntList(q.substr(eq + 1), "--quality " + q.substr(0, eq));
+      if (eq == std::string::npos || eq == 0)
+        throw Error("--quality: expected METHOD=LIST, got '" + q + "'");
+      opt.qualities[q.substr(0, eq)] =
+          parseIntList(q.substr(eq + 1), "--quality " + q.substr(0, eq));
     }
     gi::runBenchGi(opt, stdout);
     exitCode = 0;

@@ -20,9 +20,9 @@
 #include "nestlight/gi/hdr/expand.h"
 #include "nestlight/gi/hdr/protocol.h"
 #include "nestlight/gi/hdr/relit.h"
+#include "nestlight/gi/hdr/renderings.h"
 #include "nestlight/gi/hdr/self_photo.h"
 #include "nestlight/gi/methods.h"
-#include "nestlight/gi/hdr/renderings.h"
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
@@ -84,25 +84,33 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
       ->check(CLI::Range(1, 50));
   cmd->add_option("--auto-views", *autoViews, "Cube maps per expansion")->capture_default_str();
   cmd->add_option("--face-size", *faceSize, "Cube-map face size")->capture_default_str();
-  cmd->add_option("--modes", *modes, "rgb, luminance, both, or none (with --layers)")->capture_default_str();
+  cmd->add_option("--modes", *modes, "rgb, luminance, both, or none (with --layers)")
+      ->capture_default_str();
   auto layers = std::make_shared<std::string>();
   auto unregistered = std::make_shared<bool>(false);
-  cmd->add_flag("--unregistered", *unregistered,
-                "Expand without the photograph's camera (auto views only), as for a photograph that is "
-                "not registered with the scan");
-  cmd->add_option("--layers", *layers,
-                  "Also judge these colour layers of the protocol octrees (comma-separated; e.g. made by "
-                  "expand-hdr with other options), with the cloud and relit errors");
+  cmd->add_flag(
+      "--unregistered", *unregistered,
+      "Expand without the photograph's camera (auto views only), as for a photograph that is "
+      "not registered with the scan");
+  cmd->add_option(
+      "--layers", *layers,
+      "Also judge these colour layers of the protocol octrees (comma-separated; e.g. made by "
+      "expand-hdr with other options), with the cloud and relit errors");
   cmd->add_option("--dir", *work, "Folder for the protocol scenes (reused when present)")
       ->capture_default_str();
   cmd->add_option("--json", *out, "Where to write the results")->capture_default_str();
   auto relit = std::make_shared<gi::hdr::RelitOptions>();
-  cmd->add_option("--relit", relit->method,
-                  "GI method of the relit renders (two boxes in the room lit by each colour source; "
-                  "none: skip them)")
+  cmd->add_option(
+         "--relit", relit->method,
+         "GI method of the relit renders (two boxes in the room lit by each colour source; "
+         "none: skip them)")
       ->capture_default_str();
-  cmd->add_option("--relit-width", relit->width, "Relit render width")->capture_default_str()->check(CLI::Range(8, 4096));
-  cmd->add_option("--relit-height", relit->height, "Relit render height")->capture_default_str()->check(CLI::Range(8, 4096));
+  cmd->add_option("--relit-width", relit->width, "Relit render width")
+      ->capture_default_str()
+      ->check(CLI::Range(8, 4096));
+  cmd->add_option("--relit-height", relit->height, "Relit render height")
+      ->capture_default_str()
+      ->check(CLI::Range(8, 4096));
   auto scanDemo = std::make_shared<std::string>();
   auto threshold = std::make_shared<double>(0.9);
   cmd->add_option(
@@ -192,20 +200,26 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
                                       0.0722f * photo.rgb[3 * i + 2]));
       // Without an expansion run here, the exposure the protocol clipped with (the search finds
       // it within a quarter stop).
-      double log2Exposure = std::log2(json::parse(std::ifstream(dir / "protocol.json")).value("exposure", 1.0));
+      double log2Exposure =
+          std::log2(json::parse(std::ifstream(dir / "protocol.json")).value("exposure", 1.0));
       for (const auto& mode : modeList) {
         const std::string layer = mode == "rgb" ? "pmatch_rgb" : "pmatch_lum";
         std::map<std::string, std::vector<double>> stages;
         double peak = 0;
         json last;
         for (int r = 0; r < *runs; ++r) {
-          std::vector<std::string> args = {"expand-hdr", octree.string(), "--photo", (dir / "photo.exr").string(),
-                                           "--mode", mode, "--auto-views", std::to_string(*autoViews), "--face-size",
-                                           std::to_string(*faceSize), "--layer", layer, "--json", "-q"};
+          std::vector<std::string> args = {"expand-hdr",   octree.string(),
+                                           "--photo",      (dir / "photo.exr").string(),
+                                           "--mode",       mode,
+                                           "--auto-views", std::to_string(*autoViews),
+                                           "--face-size",  std::to_string(*faceSize),
+                                           "--layer",      layer,
+                                           "--json",       "-q"};
           if (!*unregistered) {
             // The protocol's photograph is registered: its camera is in protocol.json.
             const json p = json::parse(std::ifstream(dir / "protocol.json"));
-            std::ofstream(dir / "photo-view.json") << json{{"views", json::array({p.at("photo_view")})}}.dump(2);
+            std::ofstream(dir / "photo-view.json")
+                << json{{"views", json::array({p.at("photo_view")})}}.dump(2);
             args.insert(args.end(), {"--photo-view", (dir / "photo-view.json").string()});
           }
           const std::string text = runSelf(args, dir / ("expand-" + layer + ".log"));
@@ -234,14 +248,16 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
       }
       std::vector<std::pair<std::string, std::string>> judged;  // layer, name in the table
       for (const auto& mode : modeList)
-        judged.emplace_back(mode == "rgb" ? "pmatch_rgb" : "pmatch_lum", mode == "rgb" ? "PMATCHRGB" : "PMATCHLUM");
+        judged.emplace_back(mode == "rgb" ? "pmatch_rgb" : "pmatch_lum",
+                            mode == "rgb" ? "PMATCHRGB" : "PMATCHLUM");
       for (size_t at = 0; !layers->empty() && at <= layers->size();) {
         const size_t comma = std::min(layers->find(',', at), layers->size());
         const std::string layer = layers->substr(at, comma - at);
         at = comma + 1;
         const gi::hdr::LayerError err = gi::hdr::compareWithTruth(octree, layer);
-        std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8.3f %9.3f\n", humanCount(double(points)).c_str(),
-                    layer.c_str(), "", "", "", "", "", "", "", "", err.rmsClipped, err.stopsClipped);
+        std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8.3f %9.3f\n",
+                    humanCount(double(points)).c_str(), layer.c_str(), "", "", "", "", "", "", "",
+                    "", err.rmsClipped, err.stopsClipped);
         size["methods"][layer] = {{"error", err.toJson()}};
         judged.emplace_back(layer, layer);
       }
@@ -266,13 +282,17 @@ void addBenchHdr(CLI::App& app, int& exitCode) {
         const gi::MethodFrame truth = render("truth", &mask);
         judged.emplace_back("ldr", "LDR");
         judged.emplace_back("landis", "LANDISPC");
-        std::printf("relit renders (%s, %dx%d, %.2f s a frame), %llu object pixels, against the truth's:",
-                    relit->method.c_str(), relit->width, relit->height, truth.seconds,
-                    (unsigned long long)std::count(mask.begin(), mask.end(), uint8_t(1)));
+        std::printf(
+            "relit renders (%s, %dx%d, %.2f s a frame), %llu object pixels, against the truth's:",
+            relit->method.c_str(), relit->width, relit->height, truth.seconds,
+            (unsigned long long)std::count(mask.begin(), mask.end(), uint8_t(1)));
         for (const auto& [layer, name] : judged) {
-          const gi::hdr::RelitError e = gi::hdr::compareRelit(render(layer, nullptr).image, truth.image, mask);
+          const gi::hdr::RelitError e =
+              gi::hdr::compareRelit(render(layer, nullptr).image, truth.image, mask);
           std::printf("  %s RMS %.4f (%.1f%%)", name.c_str(), e.rms, 100 * e.relativeRms);
-          size["methods"][name]["relit"] = {{"rms", e.rms}, {"relative_rms", e.relativeRms}, {"pixels", e.pixels},
+          size["methods"][name]["relit"] = {{"rms", e.rms},
+                                            {"relative_rms", e.relativeRms},
+                                            {"pixels", e.pixels},
                                             {"method", relit->method}};
         }
         std::printf("\n");

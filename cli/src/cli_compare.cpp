@@ -110,9 +110,10 @@ void addCompare(CLI::App& app, int& exitCode) {
   cmd->add_option("--exposure", o->exposure,
                   "Exposure in stops applied before the tone map (default 0)");
   cmd->add_flag("--json", o->json, "Print JSON instead of a table");
-  cmd->add_option("--box", o->box,
-                  "Compare the means of K x K pixel blocks of both images (separates shading error from "
-                  "pixel-scale sampling: centre samples against area averages, noisy colours, edges)")
+  cmd->add_option(
+         "--box", o->box,
+         "Compare the means of K x K pixel blocks of both images (separates shading error from "
+         "pixel-scale sampling: centre samples against area averages, noisy colours, edges)")
       ->check(CLI::Range(1, 1024));
   cmd->footer(kMetricsHelp);
   cmd->callback([o, &exitCode]() {
@@ -165,7 +166,8 @@ void addCompare(CLI::App& app, int& exitCode) {
       printTable(o->test, o->reference, c);
       double st = 0, sr = 0;
       for (size_t i = 0; i < test.rgb.size(); ++i)
-        if (std::isfinite(test.rgb[i]) && std::isfinite(reference.rgb[i])) st += test.rgb[i], sr += reference.rgb[i];
+        if (std::isfinite(test.rgb[i]) && std::isfinite(reference.rgb[i]))
+          st += test.rgb[i], sr += reference.rgb[i];
       std::printf("mean radiance, test / reference: %.4f\n", sr > 0 ? st / sr : 0.0);
       if (!o->errorImage.empty())
         std::printf("error image %s: %s\n", o->errorImage.c_str(),

@@ -183,14 +183,18 @@ void addConvert(CLI::App& app, int& exitCode) {
       ->check(CLI::Range(1000u, 1000000u))
       ->capture_default_str();
   cmd->add_flag("--overwrite", opt->overwrite,
-                "Replace an existing octree in the output folder. The new one is built beside it and swapped in\n"
-                "only when complete: a failure, a full disk or a kill leaves the old octree (and its layers) as it was;\n"
+                "Replace an existing octree in the output folder. The new one is built beside it "
+                "and swapped in\n"
+                "only when complete: a failure, a full disk or a kill leaves the old octree (and "
+                "its layers) as it was;\n"
                 "other files in the folder are kept");
-  cmd->add_flag("--lenient", read->lenient,
-                "Keep the complete records of files whose header disagrees with their data, and "
-                "the intact chunks of a damaged LAZ file (its damaged chunks count as rejected; a damaged "
-                "chunk table is read around by finding the chunks one after the other). A LAZ header that "
-                "declares fewer points than the chunks hold is a warning either way, and every point is read");
+  cmd->add_flag(
+      "--lenient", read->lenient,
+      "Keep the complete records of files whose header disagrees with their data, and "
+      "the intact chunks of a damaged LAZ file (its damaged chunks count as rejected; a damaged "
+      "chunk table is read around by finding the chunks one after the other). A LAZ header that "
+      "declares fewer points than the chunks hold is a warning either way, and every point is "
+      "read");
   cmd->add_option("--columns", read->columns, "Text inputs: column names, e.g. x,y,z,r,g,b");
   cmd->add_flag("--in-memory", opt->inMemory,
                 "Index everything as one chunk (reference build; needs RAM)");

@@ -39,7 +39,8 @@ void addExport(CLI::App& app, int& exitCode) {
       "Write an octree's points to LAS, LAZ or PLY (all, or one level), or as a Potree 2.0 "
       "dataset");
   cmd->footer(
-      "Formats: las, laz (LASzip; point formats 0-3 and 6-8; docs/LAZ.md) and ply write one file of\n"
+      "Formats: las, laz (LASzip; point formats 0-3 and 6-8; docs/LAZ.md) and ply write one file "
+      "of\n"
       "points (all nodes, or --level N). potree writes a directory that the Potree web viewer\n"
       "(1.8 and later) opens: metadata.json, hierarchy.bin and octree.bin, with the octree's own\n"
       "nodes and sampling (no reconversion) and positions exact in its integer grid. Without\n"
@@ -59,9 +60,11 @@ void addExport(CLI::App& app, int& exitCode) {
   cmd->add_option("--format", *format, "las, laz, ply or potree (default: from -o)")
       ->check(CLI::IsMember({"las", "laz", "ply", "potree"}));
   cmd->add_option("--level", *level, "las/laz/ply: only the nodes of this level (0 = root)");
-  cmd->add_flag("--force", *force,
-                "potree: write into a non-empty directory: its Potree files are replaced by a dataset built beside\n"
-                "it and swapped in when complete (a failure leaves the old one), its other files are kept");
+  cmd->add_flag(
+      "--force", *force,
+      "potree: write into a non-empty directory: its Potree files are replaced by a dataset built "
+      "beside\n"
+      "it and swapped in when complete (a failure leaves the old one), its other files are kept");
   cmd->add_option("--hierarchy-step", potree->stepSize, "potree: levels per hierarchy chunk")
       ->check(CLI::Range(1u, 16u))
       ->capture_default_str();

@@ -44,11 +44,13 @@ constexpr const char* kExpandHdrHelp =
 // paint program, 8 or 16 bits, or a float EXR.
 std::vector<uint8_t> readPhotoMask(const std::string& path, const gi::HdrImage& photo) {
   const std::string ext = fs::path(path).extension().string();
-  const gi::HdrImage m = (ext == ".png" || ext == ".PNG") ? gi::readPng(path) : gi::readHdrImage(path);
+  const gi::HdrImage m =
+      (ext == ".png" || ext == ".PNG") ? gi::readPng(path) : gi::readHdrImage(path);
   if (m.width != photo.width || m.height != photo.height)
-    throw Error(path, "", "the mask is " + std::to_string(m.width) + " x " + std::to_string(m.height) +
-                              " pixels, the photograph " + std::to_string(photo.width) + " x " +
-                              std::to_string(photo.height) + ": draw the mask at the photograph's size");
+    throw Error(path, "",
+                "the mask is " + std::to_string(m.width) + " x " + std::to_string(m.height) +
+                    " pixels, the photograph " + std::to_string(photo.width) + " x " +
+                    std::to_string(photo.height) + ": draw the mask at the photograph's size");
   std::vector<uint8_t> mask(m.pixels());
   size_t in = 0;
   for (size_t i = 0; i < m.pixels(); ++i) {
@@ -56,55 +58,54 @@ std::vector<uint8_t> readPhotoMask(const std::string& path, const gi::HdrImage& 
     mask[i] = v > 0.5f;  // NaN: out
     in += mask[i];
   }
-  if (in == 0) throw Error(path, "", "the mask is black everywhere: no pixel of the photograph would count");
+  if (in == 0)
+    throw Error(path, "", "the mask is black everywhere: no pixel of the photograph would count");
   return mask;
 }
 
 // The report as a user reads it: the exposure and its checks first, then where the points went.
 void printReport(const gi::hdr::ExpandReport& r, const std::string& dir, const std::string& mode,
                  const gi::hdr::ExpandOptions& o) {
-    std::printf("expand-hdr: %s, mode %s\n", dir.c_str(), mode == "rgb" ? "rgb" : "luminance");
-    const auto& c = r.checks;
-    std::printf("  exposure      2^%.3f from %s", r.log2Exposure, c.method.c_str());
-    if (c.method == "matches") std::printf(" (histogram search 2^%.3f)", c.histogramLog2);
-    std::printf(
-        "\n  checks        %llu pixel pairs, log-ratio spread %.3f stops (at most %.2f), slope "
-        "%.2f,\n"
-        "                plausible 2^%.2f to 2^%.2f, %.1f%% of over-exposed points matched%s\n",
-        (unsigned long long)c.pairs, c.spreadStops, o.maxSpreadStops, c.slope, c.rangeLo,
-        c.rangeHi, 100 * std::max(0.0, c.matchedShare),
-        c.failed.empty() ? "" : " (FAILED, written with --force)");
-    std::printf("  views         %zu (%llu of %llu covered pixels matched under t_h)\n",
-                r.views.size(), (unsigned long long)r.matchedPixels,
-                (unsigned long long)r.coveredPixels);
-    std::printf(
-        "  points        %llu, over-exposed %llu: expanded %llu, unseen %llu, matches rejected "
-        "%llu\n",
-        (unsigned long long)r.points, (unsigned long long)r.overexposed,
-        (unsigned long long)r.projected, (unsigned long long)r.unseen,
-        (unsigned long long)r.rejectedMatches);
-    std::printf(
-        "  in-fill       %llu points in %llu chunk(s) (largest %llu points), %llu island(s) of "
-        "%llu points "
-        "kept LDR\n",
-        (unsigned long long)r.infilled, (unsigned long long)r.chunks,
-        (unsigned long long)r.chunkMaxPoints, (unsigned long long)r.islands,
-        (unsigned long long)r.islandPoints);
-    std::printf(
-        "  largest value %.4g (1 = the scan's clipping; bound %.4g, %llu channel values clamped "
-        "to it)\n",
-        r.maxValue, c.bound, (unsigned long long)r.boundedValues);
-    std::printf("  seconds      ");
-    for (auto& [k, v] : r.seconds.items()) std::printf(" %s %.2f", k.c_str(), v.get<double>());
-    std::printf("\n  peak memory   %s\n", humanBytes(double(r.peakRssBytes)).c_str());
+  std::printf("expand-hdr: %s, mode %s\n", dir.c_str(), mode == "rgb" ? "rgb" : "luminance");
+  const auto& c = r.checks;
+  std::printf("  exposure      2^%.3f from %s", r.log2Exposure, c.method.c_str());
+  if (c.method == "matches") std::printf(" (histogram search 2^%.3f)", c.histogramLog2);
+  std::printf(
+      "\n  checks        %llu pixel pairs, log-ratio spread %.3f stops (at most %.2f), slope "
+      "%.2f,\n"
+      "                plausible 2^%.2f to 2^%.2f, %.1f%% of over-exposed points matched%s\n",
+      (unsigned long long)c.pairs, c.spreadStops, o.maxSpreadStops, c.slope, c.rangeLo, c.rangeHi,
+      100 * std::max(0.0, c.matchedShare),
+      c.failed.empty() ? "" : " (FAILED, written with --force)");
+  std::printf("  views         %zu (%llu of %llu covered pixels matched under t_h)\n",
+              r.views.size(), (unsigned long long)r.matchedPixels,
+              (unsigned long long)r.coveredPixels);
+  std::printf(
+      "  points        %llu, over-exposed %llu: expanded %llu, unseen %llu, matches rejected "
+      "%llu\n",
+      (unsigned long long)r.points, (unsigned long long)r.overexposed,
+      (unsigned long long)r.projected, (unsigned long long)r.unseen,
+      (unsigned long long)r.rejectedMatches);
+  std::printf(
+      "  in-fill       %llu points in %llu chunk(s) (largest %llu points), %llu island(s) of "
+      "%llu points "
+      "kept LDR\n",
+      (unsigned long long)r.infilled, (unsigned long long)r.chunks,
+      (unsigned long long)r.chunkMaxPoints, (unsigned long long)r.islands,
+      (unsigned long long)r.islandPoints);
+  std::printf(
+      "  largest value %.4g (1 = the scan's clipping; bound %.4g, %llu channel values clamped "
+      "to it)\n",
+      r.maxValue, c.bound, (unsigned long long)r.boundedValues);
+  std::printf("  seconds      ");
+  for (auto& [k, v] : r.seconds.items()) std::printf(" %s %.2f", k.c_str(), v.get<double>());
+  std::printf("\n  peak memory   %s\n", humanBytes(double(r.peakRssBytes)).c_str());
 }
 
 }  // namespace
 
 void addExpandHdr(CLI::App& app, int& exitCode) {
-  auto* cmd = app.add_subcommand(
-      "expand-hdr",
-      kExpandHdrHelp);
+  auto* cmd = app.add_subcommand("expand-hdr", kExpandHdrHelp);
   auto dir = std::make_shared<std::string>();
   auto photo = std::make_shared<std::string>();
   auto viewsFile = std::make_shared<std::string>();
@@ -125,20 +126,24 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
       ->check(CLI::Range(1, 64))
       ->excludes(views);
   auto photoViewFile = std::make_shared<std::string>();
-  cmd->add_option("--photo-view", *photoViewFile,
-                  "The photograph's camera, when registered with the scan (a cams.json with one view): the "
-                  "scan is also rendered from it (at the photograph's size), matched from the identity, and the points it matched take "
-                  "their colour from it alone; the other views (--views or --auto-views) reach the rest");
+  cmd->add_option(
+      "--photo-view", *photoViewFile,
+      "The photograph's camera, when registered with the scan (a cams.json with one view): the "
+      "scan is also rendered from it (at the photograph's size), matched from the identity, and "
+      "the points it matched take "
+      "their colour from it alone; the other views (--views or --auto-views) reach the rest");
   auto photoMaskFile = std::make_shared<std::string>();
-  cmd->add_option("--photo-mask", *photoMaskFile,
-                  "A mask drawn on the photograph, at its size (.png, .exr or .hdr): white (above half) "
-                  "where it shows the scanned scene, black where it shows what the scan lacks (sky, "
-                  "lamps or buildings beyond the scan, people). Masked-out pixels count for nothing: "
-                  "not in the exposure's estimate or checks, not in the bound, and no match lands on "
-                  "them. Registered or not")
+  cmd->add_option(
+         "--photo-mask", *photoMaskFile,
+         "A mask drawn on the photograph, at its size (.png, .exr or .hdr): white (above half) "
+         "where it shows the scanned scene, black where it shows what the scan lacks (sky, "
+         "lamps or buildings beyond the scan, people). Masked-out pixels count for nothing: "
+         "not in the exposure's estimate or checks, not in the bound, and no match lands on "
+         "them. Registered or not")
       ->check(CLI::ExistingFile);
   cmd->add_option("--photo-search", o->photoSearchRadius,
-                  "How far (pixels) matches of the --photo-view rendering may move from the identity; 0: anywhere")
+                  "How far (pixels) matches of the --photo-view rendering may move from the "
+                  "identity; 0: anywhere")
       ->capture_default_str()
       ->check(CLI::Range(0, 4096));
   cmd->add_option("--face-size", o->faceSize, "Face size of automatic cube maps (pixels)")
@@ -194,7 +199,8 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
     if (!photoViewFile->empty()) {
       const auto v = gi::hdr::readViews(*photoViewFile);
       if (v.size() != 1)
-        throw Error(*photoViewFile, "", "--photo-view: expected one view, found " + std::to_string(v.size()));
+        throw Error(*photoViewFile, "",
+                    "--photo-view: expected one view, found " + std::to_string(v.size()));
       o->photoView = v.front();
     }
     const gi::HdrImage image = gi::readHdrImage(*photo);

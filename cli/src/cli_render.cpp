@@ -33,7 +33,8 @@ std::vector<double> parseNumberList(const std::string& text, const std::string& 
 namespace {
 std::vector<double> parseNumbers(const std::string& text, size_t n, const std::string& option) {
   std::vector<double> v = parseNumberList(text, option);
-  if (v.size() != n) throw Error(option + ": expected " + std::to_string(n) + " comma-separated numbers");
+  if (v.size() != n)
+    throw Error(option + ": expected " + std::to_string(n) + " comma-separated numbers");
   return v;
 }
 }  // namespace
@@ -45,30 +46,36 @@ void makeOutputFolder(const fs::path& output) {
   std::error_code ec;
   if (output.empty() || parent.empty() || fs::exists(parent, ec)) return;
   if (!fs::create_directories(parent, ec))
-    throw Error(output.string(), "", "cannot create its folder " + parent.string() + ": " + ec.message());
+    throw Error(output.string(), "",
+                "cannot create its folder " + parent.string() + ": " + ec.message());
 }
 
 // The options of octree renders, given with a scene file: those the real-time methods take become
 // the scene's gi.parameters; the others, and any for a method that does not stream (the path
 // tracer loads whole levels within each octree's memory_budget), are refused by name rather than
 // ignored.
-void applySceneScanOptions(const CLI::App& cmd, const std::string& file, const viewer::RenderJob& job,
-                           const RenderOptionText& text, gi::SceneRenderOverrides& sc) {
+void applySceneScanOptions(const CLI::App& cmd, const std::string& file,
+                           const viewer::RenderJob& job, const RenderOptionText& text,
+                           gi::SceneRenderOverrides& sc) {
   auto given = [&](const char* o) { return cmd.count(o) > 0; };
   std::vector<std::string> notForScenes;
-  for (const char* o : {"--camera", "--view", "--colour", "--layer", "--exposure", "--fixed-point-size", "--edl",
-                        "--upload-budget", "--spacing-pixels", "--loaders", "--path", "--stats", "--wait-complete"})
+  for (const char* o :
+       {"--camera", "--view", "--colour", "--layer", "--exposure", "--fixed-point-size", "--edl",
+        "--upload-budget", "--spacing-pixels", "--loaders", "--path", "--stats", "--wait-complete"})
     if (given(o)) notForScenes.push_back(o);
   if (!notForScenes.empty()) {
     std::string names;
     for (const auto& o : notForScenes) names += (names.empty() ? "" : ", ") + o;
     throw Error(names + (notForScenes.size() > 1 ? " do" : " does") +
-                " not apply to a scene file, whose camera, camera path, scans and colours come from the file "
+                " not apply to a scene file, whose camera, camera path, scans and colours come "
+                "from the file "
                 "(docs/SCENE.md); they are options of octree renders");
   }
   nlohmann::json p;
-  if (given("--point-budget")) p["point_budget"] = double(parseCount(text.pointBudget, "--point-budget"));
-  if (given("--gpu-budget")) p["gpu_budget_mb"] = double((parseBytes(text.gpuBudget) + (1u << 20) - 1) >> 20);
+  if (given("--point-budget"))
+    p["point_budget"] = double(parseCount(text.pointBudget, "--point-budget"));
+  if (given("--gpu-budget"))
+    p["gpu_budget_mb"] = double((parseBytes(text.gpuBudget) + (1u << 20) - 1) >> 20);
   if (given("--rasteriser")) p["rasteriser"] = text.rasteriser;
   if (given("--splatting")) p["splatting"] = text.splatting;
   if (given("--point-size")) p["splat_scale"] = job.settings.sizeScale;
@@ -78,59 +85,79 @@ void applySceneScanOptions(const CLI::App& cmd, const std::string& file, const v
   if (method.empty()) {
     std::ifstream in(file);
     const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-    method = j.is_object() && j.contains("gi") && j["gi"].is_object() && j["gi"].contains("method") &&
-                     j["gi"]["method"].is_string()
+    method = j.is_object() && j.contains("gi") && j["gi"].is_object() &&
+                     j["gi"].contains("method") && j["gi"]["method"].is_string()
                  ? j["gi"]["method"].get<std::string>()
                  : "reference";
   }
   const gi::MethodInfo* info = gi::findMethod(method);
   if (info && !info->gpu)
-    throw Error(p.begin().key() == "point_budget" ? std::string("--point-budget")
-                                                   : "--" + p.begin().key() + " (and the other streaming options)",
-                "", "applies to the real-time (GL) methods; '" + method +
-                        "' loads whole levels of each octree within its \"memory_budget\" in the scene file");
+    throw Error(
+        p.begin().key() == "point_budget"
+            ? std::string("--point-budget")
+            : "--" + p.begin().key() + " (and the other streaming options)",
+        "",
+        "applies to the real-time (GL) methods; '" + method +
+            "' loads whole levels of each octree within its \"memory_budget\" in the scene file");
   for (const auto& [k, v] : p.items()) sc.parameters[k] = v;
 }
 
-void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job, std::shared_ptr<RenderOptionText> text) {
-  cmd->add_option("--width", job.width, "Image width in pixels (up to 16384; large images render in tiles)")
+void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
+                      std::shared_ptr<RenderOptionText> text) {
+  cmd->add_option("--width", job.width,
+                  "Image width in pixels (up to 16384; large images render in tiles)")
       ->capture_default_str()
       ->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", job.height, "Image height in pixels")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--camera", text->camera,
-                  "Camera as EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z in world coordinates (z up); "
-                  "default: the whole scan seen from --view");
-  cmd->add_option("--view", text->view, "Azimuth,elevation in degrees of the default camera")->capture_default_str();
-  cmd->add_option("--fov", job.fovYDegrees, "Vertical field of view, degrees")->capture_default_str();
-  cmd->add_option("--rasteriser", text->rasteriser,
-                  "points: GL_POINTS splats sized by the measured point spacing; compute: compute-shader "
-                  "rasteriser (Schuetz et al. 2021), one pixel per point")
+  cmd->add_option("--height", job.height, "Image height in pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 16384));
+  cmd->add_option(
+      "--camera", text->camera,
+      "Camera as EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z in world coordinates (z up); "
+      "default: the whole scan seen from --view");
+  cmd->add_option("--view", text->view, "Azimuth,elevation in degrees of the default camera")
       ->capture_default_str();
-  cmd->add_option("--splatting", text->splatting,
-                  "Points rasteriser: hqs (high-quality splatting: splats within a small depth of the front "
-                  "surface blend, weighted; smooth colour and depth, about twice the cost) or basic (the "
-                  "nearest splat wins each pixel)")
+  cmd->add_option("--fov", job.fovYDegrees, "Vertical field of view, degrees")
       ->capture_default_str();
-  cmd->add_option("--colour", text->colour,
-                  "rgb, intensity, classification, elevation, normal or hdr (default: rgb when the scan has "
-                  "colour, else elevation). hdr: the scan's HDR colour layer (nestlight expand-hdr), drawn "
-                  "in linear colour: EXR files hold it whole (times 2^--exposure), PNG files show it through --exposure; eye-dome "
-                  "lighting is off unless --edl is given");
-  cmd->add_option("--layer", job.colourLayer, "The colour layer --colour hdr draws")->capture_default_str();
+  cmd->add_option(
+         "--rasteriser", text->rasteriser,
+         "points: GL_POINTS splats sized by the measured point spacing; compute: compute-shader "
+         "rasteriser (Schuetz et al. 2021), one pixel per point")
+      ->capture_default_str();
+  cmd->add_option(
+         "--splatting", text->splatting,
+         "Points rasteriser: hqs (high-quality splatting: splats within a small depth of the front "
+         "surface blend, weighted; smooth colour and depth, about twice the cost) or basic (the "
+         "nearest splat wins each pixel)")
+      ->capture_default_str();
+  cmd->add_option(
+      "--colour", text->colour,
+      "rgb, intensity, classification, elevation, normal or hdr (default: rgb when the scan has "
+      "colour, else elevation). hdr: the scan's HDR colour layer (nestlight expand-hdr), drawn "
+      "in linear colour: EXR files hold it whole (times 2^--exposure), PNG files show it through "
+      "--exposure; eye-dome "
+      "lighting is off unless --edl is given");
+  cmd->add_option("--layer", job.colourLayer, "The colour layer --colour hdr draws")
+      ->capture_default_str();
   cmd->add_option("--exposure", job.settings.exposureStops,
                   "Exposure in stops: colour times 2^stops (HDR highlights lie above 1)")
       ->capture_default_str()
       ->check(CLI::Range(-64.0, 64.0));
-  cmd->add_option("--point-size", job.settings.sizeScale,
-                  "Splat diameter in point spacings: the measured spacing of the finest drawn node at each "
-                  "point (points rasteriser)")
+  cmd->add_option(
+         "--point-size", job.settings.sizeScale,
+         "Splat diameter in point spacings: the measured spacing of the finest drawn node at each "
+         "point (points rasteriser)")
       ->capture_default_str();
-  cmd->add_option("--fixed-point-size", job.settings.fixedPointSize, "Every splat this many pixels (0: by spacing)");
+  cmd->add_option("--fixed-point-size", job.settings.fixedPointSize,
+                  "Every splat this many pixels (0: by spacing)");
   text->edl =
-      cmd->add_option("--edl", job.settings.edlStrength, "Eye-dome lighting strength (0: off)")->capture_default_str();
+      cmd->add_option("--edl", job.settings.edlStrength, "Eye-dome lighting strength (0: off)")
+          ->capture_default_str();
   cmd->add_option("--point-budget", text->pointBudget, "Points in the cut")->capture_default_str();
-  cmd->add_option("--gpu-budget", text->gpuBudget, "GPU memory for resident nodes")->capture_default_str();
-  cmd->add_option("--upload-budget", text->uploadBudget, "Bytes uploaded per frame")->capture_default_str();
+  cmd->add_option("--gpu-budget", text->gpuBudget, "GPU memory for resident nodes")
+      ->capture_default_str();
+  cmd->add_option("--upload-budget", text->uploadBudget, "Bytes uploaded per frame")
+      ->capture_default_str();
   cmd->add_option("--spacing-pixels", job.budgets.spacingPixels,
                   "Refine until a node's point spacing projects to at most this many pixels")
       ->capture_default_str();
@@ -152,7 +179,8 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   job.settings.rasteriser = viewer::parseRasteriser(text.rasteriser);
   job.settings.splatting = viewer::parseSplatting(text.splatting);
   if (!text.colour.empty()) job.colour = frame::parseColourMode(text.colour);
-  if (job.colour == frame::ColourMode::Hdr && text.edl && text.edl->count() == 0) job.settings.edlStrength = 0;
+  if (job.colour == frame::ColourMode::Hdr && text.edl && text.edl->count() == 0)
+    job.settings.edlStrength = 0;
   job.budgets.points = parseCount(text.pointBudget, "--point-budget");
   job.budgets.gpuBytes = parseBytes(text.gpuBudget);
   job.budgets.uploadBytesPerFrame = parseBytes(text.uploadBudget);
@@ -162,12 +190,17 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
 void addRender(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
       "render",
-      "Render an octree headless to PNG or EXR (EGL: an NVIDIA GPU, or Mesa's llvmpipe on the CPU).\n"
+      "Render an octree headless to PNG or EXR (EGL: an NVIDIA GPU, or Mesa's llvmpipe on the "
+      "CPU).\n"
       "A still by default; --path renders a camera path (JSON keyframes) to an image sequence.\n"
-      "Example: nestlight render scan.octree -o view.png --width 1920 --height 1080 --wait-complete\n\n"
-      "Given a scene file (.json, docs/SCENE.md) it renders the scene's GI instead, with the method the\n"
-      "scene or --method names, to linear EXR: the Embree path-traced reference (progressive until\n"
-      "--target-error, --time-limit or --spp), `direct` (its first bounce), or `raster` (real-time\n"
+      "Example: nestlight render scan.octree -o view.png --width 1920 --height 1080 "
+      "--wait-complete\n\n"
+      "Given a scene file (.json, docs/SCENE.md) it renders the scene's GI instead, with the "
+      "method the\n"
+      "scene or --method names, to linear EXR: the Embree path-traced reference (progressive "
+      "until\n"
+      "--target-error, --time-limit or --spp), `direct` (its first bounce), or `raster` "
+      "(real-time\n"
       "direct light with shadow maps through the GI frame, on the GPU or Mesa's llvmpipe).\n"
       "Example: nestlight render cornell/scene.json --target-error 0.01 -o cornell.exr\n"
       "         nestlight render cornell/scene.json --method raster -o cornell-raster.exr");
@@ -175,15 +208,21 @@ void addRender(CLI::App& app, int& exitCode) {
   auto text = std::make_shared<RenderOptionText>();
   auto octree = std::make_shared<std::string>();
   auto path = std::make_shared<std::string>();
-  cmd->add_option("input", *octree, "Octree folder made by `nestlight convert`, or a scene file (.json)")->required();
+  cmd->add_option("input", *octree,
+                  "Octree folder made by `nestlight convert`, or a scene file (.json)")
+      ->required();
   cmd->add_option("-o,--output", job->output,
-                  "Image file (.png or .exr); with --path a pattern with %04d. Scenes: .exr, default from the scene");
-  cmd->add_option("--path", *path, "Camera path JSON: {\"fps\": 30, \"fov\": 60, \"keyframes\": "
-                                   "[{\"time\": 0, \"eye\": [x,y,z], \"target\": [x,y,z]}, ...]}");
-  cmd->add_option("--stats", job->statsCsv, "Per-frame stats CSV (cut, resident bytes, loads, timings)");
+                  "Image file (.png or .exr); with --path a pattern with %04d. Scenes: .exr, "
+                  "default from the scene");
+  cmd->add_option("--path", *path,
+                  "Camera path JSON: {\"fps\": 30, \"fov\": 60, \"keyframes\": "
+                  "[{\"time\": 0, \"eye\": [x,y,z], \"target\": [x,y,z]}, ...]}");
+  cmd->add_option("--stats", job->statsCsv,
+                  "Per-frame stats CSV (cut, resident bytes, loads, timings)");
   cmd->add_flag("--wait-complete", job->waitComplete,
                 "Render each frame only once its cut is fully loaded (deterministic images)");
-  cmd->add_option("--timeout", job->timeoutSeconds, "Seconds to wait for a complete cut")->capture_default_str();
+  cmd->add_option("--timeout", job->timeoutSeconds, "Seconds to wait for a complete cut")
+      ->capture_default_str();
   addRenderOptions(cmd, *job, text);
   auto sc = std::make_shared<gi::SceneRenderOverrides>();
   auto mode = std::make_shared<std::string>();
@@ -195,38 +234,54 @@ void addRender(CLI::App& app, int& exitCode) {
     names.push_back(m.name);
   }
   cmd->add_option("--method", sc->method, methodHelp)->check(CLI::IsMember(names))->group(group);
-  cmd->add_option("--mode", *mode, "Scenes: radiance_cache (scan points emit their colour) or albedo (scan points "
-                                   "reflect with their colour as albedo)")
-      ->check(CLI::IsMember({"radiance_cache", "albedo"}))->group(group);
+  cmd->add_option("--mode", *mode,
+                  "Scenes: radiance_cache (scan points emit their colour) or albedo (scan points "
+                  "reflect with their colour as albedo)")
+      ->check(CLI::IsMember({"radiance_cache", "albedo"}))
+      ->group(group);
   auto variant = std::make_shared<std::string>();
-  cmd->add_option("--variant", *variant, "Scenes, method pbgi: its traversal, x (X-PBGI, default), mip (MIP-PBGI) or "
-                                         "classic (gi.parameters.variant)")
-      ->check(CLI::IsMember({"classic", "mip", "x"}))->group(group);
+  cmd->add_option("--variant", *variant,
+                  "Scenes, method pbgi: its traversal, x (X-PBGI, default), mip (MIP-PBGI) or "
+                  "classic (gi.parameters.variant)")
+      ->check(CLI::IsMember({"classic", "mip", "x"}))
+      ->group(group);
   auto estimator = std::make_shared<std::string>();
-  cmd->add_option("--estimator", *estimator, "Scenes, method ibl: mis (default), bis, smc, or the baselines env "
-                                             "(environment sampling alone) and brdf (gi.parameters.estimator; docs/IBL.md)")
-      ->check(CLI::IsMember({"mis", "bis", "smc", "env", "brdf"}))->group(group);
-  cmd->add_option("--spp", sc->spp, "Scenes: samples per pixel at most")->check(CLI::Range(1, 1 << 24))->group(group);
-  cmd->add_option("--target-error", sc->targetError,
-                  "Scenes: stop when the estimated relative error (two half-sample images) falls below")
-      ->check(CLI::Range(0.0, 1.0))->group(group);
-  cmd->add_option("--time-limit", sc->timeLimit, "Scenes: stop after this many seconds")->check(CLI::Range(0.0, 1e7))->group(group);
+  cmd->add_option("--estimator", *estimator,
+                  "Scenes, method ibl: mis (default), bis, smc, or the baselines env "
+                  "(environment sampling alone) and brdf (gi.parameters.estimator; docs/IBL.md)")
+      ->check(CLI::IsMember({"mis", "bis", "smc", "env", "brdf"}))
+      ->group(group);
+  cmd->add_option("--spp", sc->spp, "Scenes: samples per pixel at most")
+      ->check(CLI::Range(1, 1 << 24))
+      ->group(group);
+  cmd->add_option(
+         "--target-error", sc->targetError,
+         "Scenes: stop when the estimated relative error (two half-sample images) falls below")
+      ->check(CLI::Range(0.0, 1.0))
+      ->group(group);
+  cmd->add_option("--time-limit", sc->timeLimit, "Scenes: stop after this many seconds")
+      ->check(CLI::Range(0.0, 1e7))
+      ->group(group);
   cmd->add_option("--bounces", sc->bounces, "Scenes: scattering events per path (1: direct light)")
-      ->check(CLI::Range(0, 64))->group(group);
+      ->check(CLI::Range(0, 64))
+      ->group(group);
   cmd->add_option("--seed", sc->seed, "Scenes: random seed")->group(group);
-  cmd->add_flag("--still", sc->still, "Scenes: one image from the scene's camera even when it has a camera path or an "
-                                      "environment sequence (each renders one image per frame, NAME_0000.exr, ...; "
-                                      "a sequence's frame follows each image's time)")
+  cmd->add_flag("--still", sc->still,
+                "Scenes: one image from the scene's camera even when it has a camera path or an "
+                "environment sequence (each renders one image per frame, NAME_0000.exr, ...; "
+                "a sequence's frame follows each image's time)")
       ->group(group);
   cmd->callback([=, &exitCode]() {
     if (fs::path(*octree).extension() == ".json") {
       if (cmd->count("--width")) sc->width = job->width;
       if (cmd->count("--height")) sc->height = job->height;
       if (cmd->count("--fov")) {
-        if (!(job->fovYDegrees >= 0.01 && job->fovYDegrees <= 179)) throw Error("--fov: expected degrees in [0.01, 179]");
+        if (!(job->fovYDegrees >= 0.01 && job->fovYDegrees <= 179))
+          throw Error("--fov: expected degrees in [0.01, 179]");
         sc->fov = job->fovYDegrees;
       }
-      if (!mode->empty()) sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
+      if (!mode->empty())
+        sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
       if (!variant->empty()) sc->parameters["variant"] = *variant;
       if (!estimator->empty()) sc->parameters["estimator"] = *estimator;
       applySceneScanOptions(*cmd, *octree, *job, *text, *sc);
@@ -245,7 +300,8 @@ void addRender(CLI::App& app, int& exitCode) {
     bool complete = true;
     for (auto& f : frames) complete = complete && f.complete;
     if (!complete && !job->waitComplete)
-      std::printf("render: some frames were drawn before their cut was complete; --wait-complete waits\n");
+      std::printf(
+          "render: some frames were drawn before their cut was complete; --wait-complete waits\n");
     exitCode = 0;
   });
 }

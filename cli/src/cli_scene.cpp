@@ -15,11 +15,13 @@ void addMakeScene(CLI::App& app, int& exitCode) {
       "make-scene",
       "Generate a GI test scene: a synthetic scan converted into DIR/scan.octree, inserted meshes\n"
       "(OBJ) and DIR/scene.json for `nestlight render` and `nestlight bench gi`.\n"
-      "  cornell  a closed 4 m room of coloured walls (a Cornell-box-like scan) with a glossy sphere\n"
+      "  cornell  a closed 4 m room of coloured walls (a Cornell-box-like scan) with a glossy "
+      "sphere\n"
       "  nave     a 40 m nave with two colonnades and a marble statue on a pedestal\n"
       "  object   the synthetic town scan with a gold torus, under a sky and a sun (albedo mode)\n"
       "  hdr-room the HDR expansion protocol: a textured room whose true HDR colour is known (the\n"
-      "           octree's 'truth' layer), clipped to LDR by an exposure, and an HDR photograph of it\n"
+      "           octree's 'truth' layer), clipped to LDR by an exposure, and an HDR photograph of "
+      "it\n"
       "           (DIR/photo.exr); `nestlight expand-hdr DIR/scan.octree --photo DIR/photo.exr`\n"
       "           restores it and `nestlight bench hdr` measures the error\n"
       "Example: nestlight make-scene cornell -o cornell && nestlight render cornell/scene.json");
@@ -31,12 +33,18 @@ void addMakeScene(CLI::App& app, int& exitCode) {
       ->required()
       ->check(CLI::IsMember({"cornell", "nave", "object", "hdr-room"}));
   cmd->add_option("-o,--output", *dir, "Folder to write (created)")->required();
-  cmd->add_option("-n,--points", *points, "Points in the scan (e.g. 200k, 2M)")->capture_default_str();
+  cmd->add_option("-n,--points", *points, "Points in the scan (e.g. 200k, 2M)")
+      ->capture_default_str();
   cmd->add_option("--seed", opt->seed, "Seed of the synthetic scan")->capture_default_str();
-  cmd->add_option("--width", opt->width, "Image width in the scene's camera")->capture_default_str()->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", opt->height, "Image height")->capture_default_str()->check(CLI::Range(1, 16384));
+  cmd->add_option("--width", opt->width, "Image width in the scene's camera")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 16384));
+  cmd->add_option("--height", opt->height, "Image height")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 16384));
   cmd->add_flag("--overwrite", opt->overwrite,
-                "Replace a scene.json, meshes and scan the folder already holds (without it, make-scene refuses a folder\n"
+                "Replace a scene.json, meshes and scan the folder already holds (without it, "
+                "make-scene refuses a folder\n"
                 "whose scene differs from the one it writes, and rebuilds nothing it can reuse)");
   cmd->add_flag("-q,--quiet", opt->quiet, "No progress output");
   cmd->callback([=, &exitCode]() {
@@ -48,7 +56,8 @@ void addMakeScene(CLI::App& app, int& exitCode) {
       po.overwrite = opt->overwrite;
       po.quiet = opt->quiet;
       const fs::path file = gi::hdr::makeHdrProtocol(*dir, po);
-      std::printf("make-scene: wrote %s (scan.octree with its 'truth' layer, photo.exr)\n", file.c_str());
+      std::printf("make-scene: wrote %s (scan.octree with its 'truth' layer, photo.exr)\n",
+                  file.c_str());
       exitCode = 0;
       return;
     }

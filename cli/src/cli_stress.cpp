@@ -82,7 +82,7 @@ void addStress(CLI::App& app, int& exitCode) {
                  ? fs::temp_directory_path() / ("nestlight-stress-" + std::to_string(::getpid()))
                  : fs::path();
       octree = ensureSyntheticOctree(parseCount(*generate, "--generate"),
-                                       work->empty() ? temp : fs::path(*work));
+                                     work->empty() ? temp : fs::path(*work));
     }
     OctreeReader reader(octree);
     const Metadata& m = reader.metadata();

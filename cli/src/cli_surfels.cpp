@@ -15,13 +15,16 @@
 namespace nestlight::cli {
 
 void addSurfels(CLI::App& app, int& exitCode) {
-  auto* cmd = app.add_subcommand(
-      "surfels",
-      "Sample the inserted meshes of a scene into points (surfels) and write them as PLY or LAS: position,\n"
-      "normal, colour (albedo, sRGB), `area` (m^2 of surface each point stands for; they sum to the\n"
-      "mesh's area) and `material` (index into the scene's materials). Method and count per mesh come\n"
-      "from the scene's \"surfels\" field unless given here.\n"
-      "Example: nestlight surfels scene.json -o objects.ply && nestlight convert objects.ply -o objects.octree");
+  auto* cmd = app.add_subcommand("surfels",
+                                 "Sample the inserted meshes of a scene into points (surfels) and "
+                                 "write them as PLY or LAS: position,\n"
+                                 "normal, colour (albedo, sRGB), `area` (m^2 of surface each point "
+                                 "stands for; they sum to the\n"
+                                 "mesh's area) and `material` (index into the scene's materials). "
+                                 "Method and count per mesh come\n"
+                                 "from the scene's \"surfels\" field unless given here.\n"
+                                 "Example: nestlight surfels scene.json -o objects.ply && "
+                                 "nestlight convert objects.ply -o objects.octree");
   auto scene = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   auto count = std::make_shared<std::string>();
@@ -30,7 +33,8 @@ void addSurfels(CLI::App& app, int& exitCode) {
   cmd->add_option("scene", *scene, "Scene file (.json)")->required();
   cmd->add_option("-o,--output", *out, "Point file (.ply or .las)")->required();
   cmd->add_option("-n,--count", *count, "Points per mesh (e.g. 50k), instead of the scene's");
-  cmd->add_option("--method", *method, "area (uniform by area) or poisson (Poisson-disk, Yuksel 2015)")
+  cmd->add_option("--method", *method,
+                  "area (uniform by area) or poisson (Poisson-disk, Yuksel 2015)")
       ->check(CLI::IsMember({"area", "poisson"}));
   cmd->add_option("--seed", *seed, "Random seed")->capture_default_str();
   cmd->callback([=, &exitCode]() {
@@ -59,7 +63,8 @@ void addSurfels(CLI::App& app, int& exitCode) {
       gi::TriangleMesh mesh = gi::readMesh(m.path.string());
       gi::SurfelOptions so;
       so.method = method->empty() ? m.surfelMethod
-                                  : (*method == "poisson" ? gi::SurfelSampling::PoissonDisk : gi::SurfelSampling::AreaUniform);
+                                  : (*method == "poisson" ? gi::SurfelSampling::PoissonDisk
+                                                          : gi::SurfelSampling::AreaUniform);
       so.count = count->empty() ? m.surfelCount : size_t(parseCount(*count, "--count"));
       so.seed = *seed + mi;
       so.material = m.material;
@@ -74,7 +79,8 @@ void addSurfels(CLI::App& app, int& exitCode) {
         for (int a = 0; a < 3; ++a) b.xyz[3 * i + a] = s.origin[a] + double(sf.positions[i][a]);
         uint8_t* p = &b.attrs[i * stride];
         uint16_t c[3];
-        for (int a = 0; a < 3; ++a) c[a] = uint16_t(std::lround(gi::srgbEncode(sf.albedo[i][a]) * 65535.0f));
+        for (int a = 0; a < 3; ++a)
+          c[a] = uint16_t(std::lround(gi::srgbEncode(sf.albedo[i][a]) * 65535.0f));
         std::memcpy(p + rgbOff, c, 6);
         std::memcpy(p + nOff, &sf.normals[i], 12);
         std::memcpy(p + areaOff, &sf.area[i], 4);
@@ -88,7 +94,8 @@ void addSurfels(CLI::App& app, int& exitCode) {
                   gi::meshArea(mesh, s.localFromObject(m)));
     }
     writer->close();
-    std::printf("surfels: wrote %s: %llu points standing for %.6g m^2\n", out->c_str(), (unsigned long long)total, totalArea);
+    std::printf("surfels: wrote %s: %llu points standing for %.6g m^2\n", out->c_str(),
+                (unsigned long long)total, totalArea);
     exitCode = 0;
   });
 }

@@ -20,7 +20,8 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
   // A scene of meshes alone is viewed through its GI method; there is no point view.
   if (scene.octrees.empty()) {
     if (given("--show") && opt.startWithPoints)
-      throw Error(file.string(), "scene.octrees", "--show points: the scene has no scan to show as points");
+      throw Error(file.string(), "scene.octrees",
+                  "--show points: the scene has no scan to show as points");
     opt.octree.clear();
   } else {
     opt.octree = scene.octrees.front().path;
@@ -37,36 +38,51 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
   if (d.rasteriser && !given("--rasteriser")) {
     opt.settings.rasteriser = viewer::parseRasteriser(*d.rasteriser);
     if (!given("--fixed-point-size"))
-      opt.settings.fixedPointSize = opt.settings.rasteriser == viewer::Rasteriser::Compute ? 1.f : 0.f;
+      opt.settings.fixedPointSize =
+          opt.settings.rasteriser == viewer::Rasteriser::Compute ? 1.f : 0.f;
   }
-  if (d.splatting && !given("--splatting")) opt.settings.splatting = viewer::parseSplatting(*d.splatting);
+  if (d.splatting && !given("--splatting"))
+    opt.settings.splatting = viewer::parseSplatting(*d.splatting);
   if (d.pointSize && !given("--point-size")) opt.settings.sizeScale = *d.pointSize;
   if (d.edlStrength && !given("--edl")) opt.settings.edlStrength = *d.edlStrength;
 }
 }  // namespace
 
 void addView(CLI::App& app, int& exitCode) {
-  auto* cmd = app.add_subcommand(
-      "view",
-      "Open an octree in a window and fly through it; nodes stream in under the budgets. Given a scene file,\n"
-      "the scene is lit in real time through the GI frame by its gi.method (raster where the scene names an\n"
-      "offline method), with the method's parameters and per-pass GPU timings in the panel; the scene's first\n"
-      "scan is also shown as points with its camera and \"display\" settings. A scene of meshes alone is shown\n"
-      "through its GI method, framed by the meshes when it has no camera.\n"
-      "Orbit: drag (rotate), middle-drag (pan), wheel (zoom). Fly: WASD, Q/E down/up, shift faster.\n"
-      "The panel sets rasteriser, splatting, colouring, point size, eye-dome lighting and budgets, and takes "
-      "screenshots.");
+  auto* cmd =
+      app.add_subcommand("view",
+                         "Open an octree in a window and fly through it; nodes stream in under the "
+                         "budgets. Given a scene file,\n"
+                         "the scene is lit in real time through the GI frame by its gi.method "
+                         "(raster where the scene names an\n"
+                         "offline method), with the method's parameters and per-pass GPU timings "
+                         "in the panel; the scene's first\n"
+                         "scan is also shown as points with its camera and \"display\" settings. A "
+                         "scene of meshes alone is shown\n"
+                         "through its GI method, framed by the meshes when it has no camera.\n"
+                         "Orbit: drag (rotate), middle-drag (pan), wheel (zoom). Fly: WASD, Q/E "
+                         "down/up, shift faster.\n"
+                         "The panel sets rasteriser, splatting, colouring, point size, eye-dome "
+                         "lighting and budgets, and takes "
+                         "screenshots.");
   auto opt = std::make_shared<viewer::ViewerOptions>();
   auto job = std::make_shared<viewer::RenderJob>();
   auto text = std::make_shared<RenderOptionText>();
   auto input = std::make_shared<std::string>();
-  cmd->add_option("input", *input, "Octree folder made by `nestlight convert`, or a scene file (.json)")->required();
-  cmd->add_option("--frames", opt->frames, "Close after this many frames (scripted runs; 0: when closed)");
-  cmd->add_option("--orbit", opt->orbitDegreesPerFrame, "Turn the camera by this many degrees per frame");
-  cmd->add_option("--screenshot", opt->screenshot, "Save the last frame to this PNG/EXR (with --frames)");
+  cmd->add_option("input", *input,
+                  "Octree folder made by `nestlight convert`, or a scene file (.json)")
+      ->required();
+  cmd->add_option("--frames", opt->frames,
+                  "Close after this many frames (scripted runs; 0: when closed)");
+  cmd->add_option("--orbit", opt->orbitDegreesPerFrame,
+                  "Turn the camera by this many degrees per frame");
+  cmd->add_option("--screenshot", opt->screenshot,
+                  "Save the last frame to this PNG/EXR (with --frames)");
   auto show = std::make_shared<std::string>("gi");
-  cmd->add_option("--show", *show, "Scene files: open on the GI method's frame (gi) or the scan's points (points)")
-      ->check(CLI::IsMember({"gi", "points"}))->capture_default_str();
+  cmd->add_option("--show", *show,
+                  "Scene files: open on the GI method's frame (gi) or the scan's points (points)")
+      ->check(CLI::IsMember({"gi", "points"}))
+      ->capture_default_str();
   addRenderOptions(cmd, *job, text);
   cmd->callback([=, &exitCode]() {
     job->octree = *input;
@@ -75,7 +91,8 @@ void addView(CLI::App& app, int& exitCode) {
     opt->width = job->width;
     opt->height = job->height;
     opt->camera = job->camera;
-    opt->azimuth = job->azimuth, opt->elevation = job->elevation, opt->fovYDegrees = job->fovYDegrees;
+    opt->azimuth = job->azimuth, opt->elevation = job->elevation,
+    opt->fovYDegrees = job->fovYDegrees;
     opt->settings = job->settings;
     opt->budgets = job->budgets;
     opt->colour = job->colour;

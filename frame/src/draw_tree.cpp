@@ -29,6 +29,8 @@ void DrawTree::upload(const std::vector<streaming::DrawNode>& nodes) {
   buffer_.upload(words.data(), bytes_);
 }
 
-void DrawTree::bind() const { buffer_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_DRAW_TREE, 0, bytes_); }
+void DrawTree::bind() const {
+  buffer_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_DRAW_TREE, 0, bytes_);
+}
 
 }  // namespace nestlight::frame

@@ -9,7 +9,9 @@
 
 namespace nestlight::frame {
 
-const char* scopeName(Scope s) { return s == Scope::Frame ? "frame" : "tile"; }
+const char* scopeName(Scope s) {
+  return s == Scope::Frame ? "frame" : "tile";
+}
 
 struct FrameGraph::Target {
   TargetDesc desc;
@@ -53,30 +55,38 @@ void PassContext::bindFramebuffer() const {
     for (const auto& name : p.decl.writes()) {
       const auto& t = *graph_->targets_.at(name);
       if (t.desc.layers > 0 || t.desc.cube) continue;  // attached by the pass itself, per layer
-      if (t.desc.format == GL_NONE) continue;           // a buffer the pass owns
-      if (isDepthFormat(t.desc.format)) p.fbo.attach(GL_DEPTH_ATTACHMENT, t.texture);
-      else p.fbo.attach(GLenum(GL_COLOR_ATTACHMENT0 + colour++), t.texture);
+      if (t.desc.format == GL_NONE) continue;          // a buffer the pass owns
+      if (isDepthFormat(t.desc.format))
+        p.fbo.attach(GL_DEPTH_ATTACHMENT, t.texture);
+      else
+        p.fbo.attach(GLenum(GL_COLOR_ATTACHMENT0 + colour++), t.texture);
     }
     p.fbo.finish(colour, "pass '" + p.name + "'");
   }
   for (const auto& name : p.decl.writes()) {
     const auto& t = *graph_->targets_.at(name);
-    if (t.desc.fixedSize && !t.desc.layers && !t.desc.cube && t.desc.format != GL_NONE) w = t.desc.width, h = t.desc.height;
+    if (t.desc.fixedSize && !t.desc.layers && !t.desc.cube && t.desc.format != GL_NONE)
+      w = t.desc.width, h = t.desc.height;
   }
   glBindFramebuffer(GL_FRAMEBUFFER, p.fbo.id());
   glViewport(0, 0, w, h);
 }
 
-void PassContext::bindTexture(const std::string& name, GLuint unit) const { glBindTextureUnit(unit, target(name).id()); }
+void PassContext::bindTexture(const std::string& name, GLuint unit) const {
+  glBindTextureUnit(unit, target(name).id());
+}
 
-const FrameBlock& PassContext::uniforms() const { return graph_->uniforms_; }
+const FrameBlock& PassContext::uniforms() const {
+  return graph_->uniforms_;
+}
 
 FrameGraph::FrameGraph() = default;
 FrameGraph::~FrameGraph() = default;
 
 void FrameGraph::addTarget(const std::string& name, const TargetDesc& desc) {
   if (targets_.count(name)) throw Error("frame: target '" + name + "' is declared twice");
-  if ((desc.fixedSize || desc.cube || desc.layers) && (desc.width <= 0 || (!desc.cube && desc.height <= 0)))
+  if ((desc.fixedSize || desc.cube || desc.layers) &&
+      (desc.width <= 0 || (!desc.cube && desc.height <= 0)))
     throw Error("frame: fixed-size target '" + name + "' needs a size");
   auto t = std::make_unique<Target>();
   t->desc = desc;
@@ -108,15 +118,18 @@ void FrameGraph::addPass(const std::string& name, Scope scope, const SetupFn& se
 
 void FrameGraph::compile(const std::string& output) {
   auto out = targets_.find(output);
-  if (out == targets_.end()) throw Error("frame: the output '" + output + "' is not a declared target");
-  if (out->second->desc.fixedSize) throw Error("frame: the output '" + output + "' must be a tile target");
+  if (out == targets_.end())
+    throw Error("frame: the output '" + output + "' is not a declared target");
+  if (out->second->desc.fixedSize)
+    throw Error("frame: the output '" + output + "' must be a tile target");
   for (auto& [name, t] : targets_) t->writer = -1;
   margin_ = 0;
   for (size_t i = 0; i < passes_.size(); ++i) {
     Pass& p = *passes_[i];
     for (const auto& r : p.decl.reads_) {
       auto t = targets_.find(r);
-      if (t == targets_.end()) throw Error("frame: pass '" + p.name + "' reads '" + r + "', which is not a target");
+      if (t == targets_.end())
+        throw Error("frame: pass '" + p.name + "' reads '" + r + "', which is not a target");
       if (t->second->writer < 0)
         throw Error("frame: pass '" + p.name + "' reads '" + r + "' before any pass writes it");
       if (p.scope == Scope::Frame && !t->second->desc.fixedSize)
@@ -125,7 +138,8 @@ void FrameGraph::compile(const std::string& output) {
     }
     for (const auto& w : p.decl.writes_) {
       auto t = targets_.find(w);
-      if (t == targets_.end()) throw Error("frame: pass '" + p.name + "' writes '" + w + "', which is not a target");
+      if (t == targets_.end())
+        throw Error("frame: pass '" + p.name + "' writes '" + w + "', which is not a target");
       if (p.scope == Scope::Frame && !t->second->desc.fixedSize)
         throw Error("frame: frame pass '" + p.name + "' writes tile target '" + w + "'");
       if (p.scope == Scope::Tile && t->second->desc.fixedSize && t->second->desc.format != GL_NONE)
@@ -134,14 +148,16 @@ void FrameGraph::compile(const std::string& output) {
       if (t->second->writer < 0) t->second->writer = int(i);
     }
   }
-  if (targets_[output]->writer < 0) throw Error("frame: no pass writes the output '" + output + "'");
+  if (targets_[output]->writer < 0)
+    throw Error("frame: no pass writes the output '" + output + "'");
   // Cull back from the output: a pass lives when it writes something a live pass (or the output)
   // needs, or has effects outside the graph.
   std::set<std::string> needed{output};
   for (size_t k = passes_.size(); k-- > 0;) {
     Pass& p = *passes_[k];
     p.culled = !p.decl.sideEffect_ &&
-               std::none_of(p.decl.writes_.begin(), p.decl.writes_.end(), [&](const std::string& w) { return needed.count(w) > 0; });
+               std::none_of(p.decl.writes_.begin(), p.decl.writes_.end(),
+                            [&](const std::string& w) { return needed.count(w) > 0; });
     if (!p.culled) {
       needed.insert(p.decl.reads_.begin(), p.decl.reads_.end());
       // Chained neighbourhood passes widen what a tile needs: their margins add up.
@@ -186,10 +202,14 @@ void FrameGraph::allocate(int tw, int th) {
     const TargetDesc& d = t->desc;
     if (d.format == GL_NONE) continue;  // a buffer: its passes own it
     if (t->texture && (d.fixedSize || (tw == allocW_ && th == allocH_))) continue;
-    if (d.cube) t->texture = gl::Texture::cubeMap(d.format, d.width);
-    else if (d.layers) t->texture = gl::Texture::array2d(d.format, d.width, d.height, d.layers);
-    else if (d.fixedSize) t->texture = gl::Texture(d.format, d.width, d.height);
-    else t->texture = gl::Texture(d.format, tw, th);
+    if (d.cube)
+      t->texture = gl::Texture::cubeMap(d.format, d.width);
+    else if (d.layers)
+      t->texture = gl::Texture::array2d(d.format, d.width, d.height, d.layers);
+    else if (d.fixedSize)
+      t->texture = gl::Texture(d.format, d.width, d.height);
+    else
+      t->texture = gl::Texture(d.format, tw, th);
   }
   if (tw != allocW_ || th != allocH_)
     for (auto& p : passes_)
@@ -202,8 +222,10 @@ void FrameGraph::uploadUniforms(const Tile& tile) {
   uniforms_.clipFromWorld = uniforms_.clipFromView * uniforms_.viewFromWorld;
   uniforms_.worldFromClip = glm::inverse(uniforms_.clipFromWorld);
   uniforms_.tile = glm::vec4(tile.x0, tile.y0, tile.width, tile.height);
-  uniforms_.image = glm::vec4(tile.fullWidth, tile.fullHeight, 1.0f / tile.fullWidth, 1.0f / tile.fullHeight);
-  if (!ubo_) ubo_ = gl::Buffer(sizeof(FrameBlock));  // here, not in the constructor: a context is current
+  uniforms_.image =
+      glm::vec4(tile.fullWidth, tile.fullHeight, 1.0f / tile.fullWidth, 1.0f / tile.fullHeight);
+  if (!ubo_)
+    ubo_ = gl::Buffer(sizeof(FrameBlock));  // here, not in the constructor: a context is current
   ubo_.upload(&uniforms_, sizeof uniforms_);
   ubo_.bindBase(GL_UNIFORM_BUFFER, NL_UBO_FRAME);
 }
@@ -232,7 +254,9 @@ void FrameGraph::runPasses(Scope scope, const Tile& tile) {
     }
     if (syncTiming_) {
       glFinish();
-      timing.wallMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0).count();
+      timing.wallMs +=
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0)
+              .count();
     }
     ++timing.runs;
   }
@@ -240,7 +264,8 @@ void FrameGraph::runPasses(Scope scope, const Tile& tile) {
 
 std::vector<float> FrameGraph::execute(int width, int height, int maxTile) {
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
-    throw Error("frame: image size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
+    throw Error("frame: image size " + std::to_string(width) + "x" + std::to_string(height) +
+                " is out of range");
   if (!compiled_) throw Error("frame: execute() before compile()");
   NL_CHECK(maxTile >= 16);
   for (auto& t : timings_) t.gpuMs = 0, t.wallMs = 0, t.runs = 0;
@@ -258,14 +283,16 @@ std::vector<float> FrameGraph::execute(int width, int height, int maxTile) {
   for (int ty = 0; ty < height; ty += tile)
     for (int tx = 0; tx < width; tx += tile) {
       const int w = std::min(tile, width - tx), h = std::min(tile, height - ty);
-      // GL rows go up, image rows down: the image's row band [ty, ty + h) is GL's [H - ty - h, H - ty).
+      // GL rows go up, image rows down: the image's row band [ty, ty + h) is GL's [H - ty - h, H -
+      // ty).
       const int glY = height - ty - h;
       const int x0 = std::max(0, tx - m), y0 = std::max(0, glY - m);
       const int x1 = std::min(width, tx + w + m), y1 = std::min(height, glY + h + m);
       Tile t{width, height, x0, y0, x1 - x0, y1 - y0, glm::mat4(1.0f)};
       // Clip x in [-1, 1] over the full width -> over [x0, x1): scale W / tw, offset.
       const float sx = float(width) / t.width, sy = float(height) / t.height;
-      const float cx = (2.0f * x0 + t.width) / width - 1.0f, cy = (2.0f * y0 + t.height) / height - 1.0f;
+      const float cx = (2.0f * x0 + t.width) / width - 1.0f,
+                  cy = (2.0f * y0 + t.height) / height - 1.0f;
       t.clipFromFullClip[0][0] = sx;
       t.clipFromFullClip[1][1] = sy;
       t.clipFromFullClip[3][0] = -cx * sx;
@@ -276,10 +303,10 @@ std::vector<float> FrameGraph::execute(int width, int height, int maxTile) {
       if (px.size() * sizeof(float) > size_t(INT32_MAX))
         throw Error("frame: a tile of " + std::to_string(t.width) + "x" + std::to_string(t.height) +
                     " pixels is too large to read back; use smaller tiles");
-      glGetTextureSubImage(target(output_).id(), 0, 0, 0, 0, t.width, t.height, 1, GL_RGBA, GL_FLOAT,
-                           GLsizei(px.size() * sizeof(float)), px.data());
+      glGetTextureSubImage(target(output_).id(), 0, 0, 0, 0, t.width, t.height, 1, GL_RGBA,
+                           GL_FLOAT, GLsizei(px.size() * sizeof(float)), px.data());
       for (int y = 0; y < h; ++y) {
-        const int glRow = glY + y;            // full-image GL row
+        const int glRow = glY + y;  // full-image GL row
         const int imgRow = height - 1 - glRow;
         const float* src = &px[4 * (size_t(glRow - y0) * t.width + (tx - x0))];
         std::copy(src, src + 4 * size_t(w), &image[4 * (size_t(imgRow) * width + tx)]);

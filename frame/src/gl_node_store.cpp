@@ -20,13 +20,16 @@ uint32_t packNormal(float x, float y, float z) {
     u = (1 - std::fabs(v)) * (ou >= 0 ? 1.f : -1.f);
     v = (1 - std::fabs(ou)) * (v >= 0 ? 1.f : -1.f);
   }
-  auto q = [](float a) { return static_cast<uint32_t>(std::lround((std::clamp(a, -1.f, 1.f) * 0.5f + 0.5f) * 65535.f)); };
+  auto q = [](float a) {
+    return static_cast<uint32_t>(std::lround((std::clamp(a, -1.f, 1.f) * 0.5f + 0.5f) * 65535.f));
+  };
   return q(u) | (q(v) << 16);
 }
 
 glm::vec3 unpackNormal(uint32_t w) {
   if (w == 0) return glm::vec3(0);
-  const float ex = float(w & 0xffffu) / 65535.f * 2.f - 1.f, ey = float(w >> 16) / 65535.f * 2.f - 1.f;
+  const float ex = float(w & 0xffffu) / 65535.f * 2.f - 1.f,
+              ey = float(w >> 16) / 65535.f * 2.f - 1.f;
   glm::vec3 n(ex, ey, 1.f - std::fabs(ex) - std::fabs(ey));
   if (n.z < 0) {
     const float x = n.x;
@@ -46,21 +49,31 @@ uint32_t packRgba(double r, double g, double b) {
 // ASPRS standard classes (LAS 1.4 table 17), other codes by a hash hue.
 uint32_t classColour(uint32_t c) {
   switch (c) {
-    case 2: return packRgba(0.63, 0.49, 0.33);  // ground
-    case 3: return packRgba(0.55, 0.80, 0.45);  // low vegetation
-    case 4: return packRgba(0.30, 0.70, 0.30);  // medium vegetation
-    case 5: return packRgba(0.10, 0.50, 0.15);  // high vegetation
-    case 6: return packRgba(0.90, 0.35, 0.30);  // building
-    case 7: return packRgba(0.95, 0.20, 0.80);  // low point (noise)
-    case 9: return packRgba(0.20, 0.45, 0.90);  // water
-    case 17: return packRgba(0.60, 0.60, 0.65); // bridge deck
+    case 2:
+      return packRgba(0.63, 0.49, 0.33);  // ground
+    case 3:
+      return packRgba(0.55, 0.80, 0.45);  // low vegetation
+    case 4:
+      return packRgba(0.30, 0.70, 0.30);  // medium vegetation
+    case 5:
+      return packRgba(0.10, 0.50, 0.15);  // high vegetation
+    case 6:
+      return packRgba(0.90, 0.35, 0.30);  // building
+    case 7:
+      return packRgba(0.95, 0.20, 0.80);  // low point (noise)
+    case 9:
+      return packRgba(0.20, 0.45, 0.90);  // water
+    case 17:
+      return packRgba(0.60, 0.60, 0.65);  // bridge deck
     case 0:
-    case 1: return packRgba(0.75, 0.75, 0.75);  // never classified / unassigned
+    case 1:
+      return packRgba(0.75, 0.75, 0.75);  // never classified / unassigned
     default: {
       const double h = std::fmod(c * 0.618033988749895, 1.0) * 6.0;
       const double f = h - std::floor(h);
       const int i = static_cast<int>(h);
-      const double rgb[6][3] = {{1, f, 0}, {1 - f, 1, 0}, {0, 1, f}, {0, 1 - f, 1}, {f, 0, 1}, {1, 0, 1 - f}};
+      const double rgb[6][3] = {{1, f, 0},     {1 - f, 1, 0}, {0, 1, f},
+                                {0, 1 - f, 1}, {f, 0, 1},     {1, 0, 1 - f}};
       return packRgba(rgb[i][0], rgb[i][1], rgb[i][2]);
     }
   }
@@ -69,11 +82,16 @@ uint32_t classColour(uint32_t c) {
 // A perceptually ordered ramp (dark blue - teal - yellow) for scalar values in [0, 1].
 uint32_t ramp(double t) {
   t = std::clamp(t, 0.0, 1.0);
-  const double stops[5][3] = {{0.27, 0.00, 0.33}, {0.23, 0.32, 0.55}, {0.13, 0.57, 0.55}, {0.37, 0.79, 0.38}, {0.99, 0.91, 0.14}};
+  const double stops[5][3] = {{0.27, 0.00, 0.33},
+                              {0.23, 0.32, 0.55},
+                              {0.13, 0.57, 0.55},
+                              {0.37, 0.79, 0.38},
+                              {0.99, 0.91, 0.14}};
   const double x = t * 4.0;
   const int i = std::min(3, static_cast<int>(x));
   const double f = x - i;
-  return packRgba(stops[i][0] + (stops[i + 1][0] - stops[i][0]) * f, stops[i][1] + (stops[i + 1][1] - stops[i][1]) * f,
+  return packRgba(stops[i][0] + (stops[i + 1][0] - stops[i][0]) * f,
+                  stops[i][1] + (stops[i + 1][1] - stops[i][1]) * f,
                   stops[i][2] + (stops[i + 1][2] - stops[i][2]) * f);
 }
 
@@ -81,21 +99,28 @@ uint32_t ramp(double t) {
 
 const char* colourModeName(ColourMode m) {
   switch (m) {
-    case ColourMode::Rgb: return "rgb";
-    case ColourMode::Intensity: return "intensity";
-    case ColourMode::Classification: return "classification";
-    case ColourMode::Elevation: return "elevation";
-    case ColourMode::Normal: return "normal";
-    case ColourMode::Hdr: return "hdr";
+    case ColourMode::Rgb:
+      return "rgb";
+    case ColourMode::Intensity:
+      return "intensity";
+    case ColourMode::Classification:
+      return "classification";
+    case ColourMode::Elevation:
+      return "elevation";
+    case ColourMode::Normal:
+      return "normal";
+    case ColourMode::Hdr:
+      return "hdr";
   }
   return "?";
 }
 
 ColourMode parseColourMode(const std::string& name) {
-  for (ColourMode m : {ColourMode::Rgb, ColourMode::Intensity, ColourMode::Classification, ColourMode::Elevation,
-                       ColourMode::Normal, ColourMode::Hdr})
+  for (ColourMode m : {ColourMode::Rgb, ColourMode::Intensity, ColourMode::Classification,
+                       ColourMode::Elevation, ColourMode::Normal, ColourMode::Hdr})
     if (name == colourModeName(m)) return m;
-  throw Error("unknown colour mode '" + name + "' (rgb, intensity, classification, elevation, normal, hdr)");
+  throw Error("unknown colour mode '" + name +
+              "' (rgb, intensity, classification, elevation, normal, hdr)");
 }
 
 std::vector<ColourMode> availableColourModes(const Metadata& meta, const std::string& hdrLayer) {
@@ -109,7 +134,8 @@ std::vector<ColourMode> availableColourModes(const Metadata& meta, const std::st
   return out;
 }
 
-GlNodeStore::GlNodeStore(const Metadata& meta, ColourMode mode, std::shared_ptr<const ColourLayerReader> layer)
+GlNodeStore::GlNodeStore(const Metadata& meta, ColourMode mode,
+                         std::shared_ptr<const ColourLayerReader> layer)
     : meta_(meta), mode_(mode), colourLayer_(std::move(layer)) {
   NL_CHECK_MSG(mode != ColourMode::Hdr || colourLayer_, "ColourMode::Hdr without a colour layer");
   rgb_ = meta.layout.find(attr::kRgb);
@@ -125,7 +151,8 @@ void GlNodeStore::setColourMode(ColourMode m) {
   mode_ = m;
 }
 
-void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::PreparedNode& out) const {
+void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts,
+                          streaming::PreparedNode& out) const {
   const size_t n = pts.size();
   out.key = key;
   out.numPoints = static_cast<uint32_t>(n);
@@ -140,13 +167,16 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
   std::vector<float> hdr;
   if (mode == ColourMode::Hdr) {
     NL_CHECK_MSG(colourLayer_, "ColourMode::Hdr without a colour layer");
-    hdr = colourLayer_->readNode(key, uint32_t(n));  // throws on a damaged node: the loader counts it bad
+    hdr = colourLayer_->readNode(
+        key, uint32_t(n));  // throws on a damaged node: the loader counts it bad
   }
-  const double zLo = meta_.bounds.min.z, zRange = std::max(meta_.bounds.max.z - meta_.bounds.min.z, 1e-9);
+  const double zLo = meta_.bounds.min.z,
+               zRange = std::max(meta_.bounds.max.z - meta_.bounds.min.z, 1e-9);
   for (size_t i = 0; i < n; ++i) {
     uint8_t* o = &out.bytes[i * kGpuPointBytes];
     const uint32_t* p = &pts.pos[3 * i];
-    const float local[3] = {float((p[0] - base[0]) * meta_.scale.x), float((p[1] - base[1]) * meta_.scale.y),
+    const float local[3] = {float((p[0] - base[0]) * meta_.scale.x),
+                            float((p[1] - base[1]) * meta_.scale.y),
                             float((p[2] - base[2]) * meta_.scale.z)};
     std::memcpy(o, local, 12);
     const uint8_t* a = pts.attrsOf(i);
@@ -165,7 +195,8 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts, streaming::Prep
         if (intensity_ >= 0) {
           uint16_t v;
           std::memcpy(&v, a + iOff, 2);
-          const double g = std::sqrt(v / 65535.0);  // most returns are dark: a square root spreads them
+          const double g =
+              std::sqrt(v / 65535.0);  // most returns are dark: a square root spreads them
           colour = packRgba(g, g, g);
         }
         break;

@@ -18,16 +18,26 @@ namespace {
 
 std::string eglErrorName(EGLint e) {
   switch (e) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
+    case EGL_SUCCESS:
+      return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+      return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+      return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+      return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+      return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+      return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+      return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY:
+      return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+      return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER:
+      return "EGL_BAD_PARAMETER";
     default: {
       char buf[32];
       std::snprintf(buf, sizeof buf, "EGL error 0x%x", e);
@@ -90,7 +100,8 @@ EGLContext createEglContext(EGLDisplay display, std::string& why) {
     return EGL_NO_CONTEXT;
   }
   EGLConfig config = EGL_NO_CONFIG_KHR;
-  if (!hasExtension(ext, "EGL_KHR_no_config_context") && !hasExtension(ext, "EGL_MESA_configless_context")) {
+  if (!hasExtension(ext, "EGL_KHR_no_config_context") &&
+      !hasExtension(ext, "EGL_MESA_configless_context")) {
     const EGLint want[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
     EGLint n = 0;
     if (!eglChooseConfig(display, want, &config, 1, &n) || n < 1) {
@@ -104,13 +115,19 @@ EGLContext createEglContext(EGLDisplay display, std::string& why) {
   debug = true;
 #endif
   if (const char* e = std::getenv("NESTLIGHT_GL_DEBUG")) debug = std::strcmp(e, "0") != 0;
-  const EGLint attrs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                          EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                          EGL_CONTEXT_OPENGL_DEBUG, debug ? EGL_TRUE : EGL_FALSE, EGL_NONE};
+  const EGLint attrs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                          4,
+                          EGL_CONTEXT_MINOR_VERSION,
+                          5,
+                          EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                          EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                          EGL_CONTEXT_OPENGL_DEBUG,
+                          debug ? EGL_TRUE : EGL_FALSE,
+                          EGL_NONE};
   EGLContext c = eglCreateContext(display, config, EGL_NO_CONTEXT, attrs);
   if (c == EGL_NO_CONTEXT) {
-    why = "no OpenGL 4.5 core context (" + eglErrorName(eglGetError()) + "; EGL " + std::to_string(major) + "." +
-          std::to_string(minor) + ")";
+    why = "no OpenGL 4.5 core context (" + eglErrorName(eglGetError()) + "; EGL " +
+          std::to_string(major) + "." + std::to_string(minor) + ")";
     eglTerminate(display);
   }
   return c;
@@ -125,7 +142,8 @@ void GlContext::describe(const std::string& platform) {
   software_ = renderer && (std::strstr(renderer, "llvmpipe") || std::strstr(renderer, "softpipe"));
   int64Atomics_ = epoxy_has_gl_extension("GL_NV_shader_atomic_int64");
   if (epoxy_gl_version() < 45)
-    throw Error(platform + " gave OpenGL " + (version ? version : "?") + "; Nestlight needs 4.5 core");
+    throw Error(platform + " gave OpenGL " + (version ? version : "?") +
+                "; Nestlight needs 4.5 core");
   // GL 4.5 promises 8 shader-storage bindings; the GI frame's interface numbers 16
   // (shaders/interface/frame_interface.glsl). Every driver Nestlight runs on has more (llvmpipe
   // and NVIDIA 32 or more); a context with fewer is refused here rather than failing a pass.
@@ -137,7 +155,8 @@ void GlContext::describe(const std::string& platform) {
 #ifndef NDEBUG
   enableGlDebugOutput();
 #else
-  if (const char* e = std::getenv("NESTLIGHT_GL_DEBUG"); e && std::strcmp(e, "0") != 0) enableGlDebugOutput();
+  if (const char* e = std::getenv("NESTLIGHT_GL_DEBUG"); e && std::strcmp(e, "0") != 0)
+    enableGlDebugOutput();
 #endif
 }
 
@@ -199,7 +218,8 @@ std::unique_ptr<GlContext> createHeadlessContext() {
   // 2. Mesa's surfaceless platform: llvmpipe without any display.
   if (!wanted("surfaceless")) {
   } else if (hasExtension(clientExt, "EGL_MESA_platform_surfaceless")) {
-    EGLDisplay display = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    EGLDisplay display =
+        eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     std::string why = "eglGetPlatformDisplayEXT failed";
     if (display != EGL_NO_DISPLAY) {
       EGLContext c = createEglContext(display, why);
@@ -213,7 +233,9 @@ std::unique_ptr<GlContext> createHeadlessContext() {
     }
     report += "  EGL surfaceless platform: " + why + "\n";
   } else {
-    report += "  EGL surfaceless platform: EGL_MESA_platform_surfaceless not offered (install libegl-mesa0)\n";
+    report +=
+        "  EGL surfaceless platform: EGL_MESA_platform_surfaceless not offered (install "
+        "libegl-mesa0)\n";
   }
   // 3. OSMesa: Mesa rendering into client memory, for a libEGL without the platforms above.
   if (wanted("osmesa")) {
@@ -222,8 +244,10 @@ std::unique_ptr<GlContext> createHeadlessContext() {
     report += "  OSMesa: " + why + "\n";
   }
   throw Error("no OpenGL 4.5 core context could be created headless" +
-              (only.empty() ? std::string() : " (NESTLIGHT_GL_PLATFORM=" + only + ")") + "; tried:\n" + report +
-              "On Debian: apt-get install libegl-mesa0 libgl1-mesa-dri (Mesa llvmpipe), or an NVIDIA driver.");
+              (only.empty() ? std::string() : " (NESTLIGHT_GL_PLATFORM=" + only + ")") +
+              "; tried:\n" + report +
+              "On Debian: apt-get install libegl-mesa0 libgl1-mesa-dri (Mesa llvmpipe), or an "
+              "NVIDIA driver.");
 }
 
 WindowContext::WindowContext(int width, int height, const std::string& title) {
@@ -257,15 +281,19 @@ WindowContext::~WindowContext() {
   glfwTerminate();
 }
 
-void WindowContext::makeCurrent() { glfwMakeContextCurrent(window_); }
+void WindowContext::makeCurrent() {
+  glfwMakeContextCurrent(window_);
+}
 
 void enableGlDebugOutput() {
   glEnable(GL_DEBUG_OUTPUT);
   glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);
   glDebugMessageCallback(
-      [](GLenum, GLenum type, GLuint, GLenum severity, GLsizei, const GLchar* message, const void*) {
+      [](GLenum, GLenum type, GLuint, GLenum severity, GLsizei, const GLchar* message,
+         const void*) {
         if (severity == GL_DEBUG_SEVERITY_NOTIFICATION) return;
-        std::fprintf(stderr, "GL %s: %s\n", type == GL_DEBUG_TYPE_ERROR ? "error" : "debug", message);
+        std::fprintf(stderr, "GL %s: %s\n", type == GL_DEBUG_TYPE_ERROR ? "error" : "debug",
+                     message);
       },
       nullptr);
 }

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "nestlight/octree/error.h"
 #include "nestlight/gl/context.h"
+#include "nestlight/octree/error.h"
 
 namespace nestlight::gl {
 
@@ -108,8 +108,17 @@ std::unique_ptr<GlContext> createOsMesaContext(std::string& why) {
     dlclose(lib);
     return nullptr;
   }
-  const int attrs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-                       OSMESA_CONTEXT_MAJOR_VERSION, 4, OSMESA_CONTEXT_MINOR_VERSION, 5, 0};
+  const int attrs[] = {OSMESA_FORMAT,
+                       OSMESA_RGBA,
+                       OSMESA_DEPTH_BITS,
+                       0,
+                       OSMESA_PROFILE,
+                       OSMESA_CORE_PROFILE,
+                       OSMESA_CONTEXT_MAJOR_VERSION,
+                       4,
+                       OSMESA_CONTEXT_MINOR_VERSION,
+                       5,
+                       0};
   OSMesaContext ctx = create(attrs, nullptr);
   if (!ctx) {
     why = "no OpenGL 4.5 core context from OSMesaCreateContextAttribs";

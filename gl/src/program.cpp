@@ -1,8 +1,8 @@
 #include "nestlight/gl/program.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cctype>
+#include <chrono>
 #include <cstring>
 #include <sstream>
 
@@ -57,12 +57,15 @@ Directive directiveOf(const std::string& line, std::string& included) {
   if (i == std::string::npos) return Directive::None;
   auto word = [&](const char* w) {
     const size_t n = std::strlen(w);
-    return line.compare(i, n, w) == 0 && (i + n == line.size() || line[i + n] == ' ' || line[i + n] == '\t');
+    return line.compare(i, n, w) == 0 &&
+           (i + n == line.size() || line[i + n] == ' ' || line[i + n] == '\t');
   };
   if (word("version")) return Directive::Version;
   if (!word("include")) return Directive::None;
-  const size_t open = line.find('"', i + 7), close = open == std::string::npos ? open : line.find('"', open + 1);
-  if (close == std::string::npos || line.find_first_not_of(" \t", close + 1) != std::string::npos) return Directive::None;
+  const size_t open = line.find('"', i + 7),
+               close = open == std::string::npos ? open : line.find('"', open + 1);
+  if (close == std::string::npos || line.find_first_not_of(" \t", close + 1) != std::string::npos)
+    return Directive::None;
   included = line.substr(open + 1, close - open - 1);
   return included.empty() ? Directive::None : Directive::Include;
 }
@@ -76,7 +79,8 @@ void expand(const std::string& path, PreprocessedSource& out, std::vector<std::s
                 "no embedded shader file '" + path + "'");
   for (const auto& s : stack)
     if (s == path)
-      throw Error("shaders/" + from, "line " + std::to_string(fromLine), "#include cycle through '" + path + "'");
+      throw Error("shaders/" + from, "line " + std::to_string(fromLine),
+                  "#include cycle through '" + path + "'");
   stack.push_back(path);
   int number = -1;
   for (size_t i = 0; i < out.files.size(); ++i)
@@ -98,8 +102,7 @@ void expand(const std::string& path, PreprocessedSource& out, std::vector<std::s
       // Each file once per program, as with #pragma once.
       const bool seen = std::find(out.files.begin(), out.files.end(), target) != out.files.end();
       const bool cycle = std::find(stack.begin(), stack.end(), target) != stack.end();
-      if (!seen || cycle)
-        expand(target.empty() ? included : target, out, stack, path, lineNo);
+      if (!seen || cycle) expand(target.empty() ? included : target, out, stack, path, lineNo);
       out.text += "#line " + std::to_string(lineNo + 1) + " " + std::to_string(number) + "\n";
     } else if (d == Directive::Version) {
       throw Error("shaders/" + path, "line " + std::to_string(lineNo),
@@ -113,8 +116,8 @@ void expand(const std::string& path, PreprocessedSource& out, std::vector<std::s
 
 }  // namespace
 
-PreprocessedSource preprocessShader(const std::string& path,
-                                    const std::vector<std::pair<std::string, std::string>>& defines) {
+PreprocessedSource preprocessShader(
+    const std::string& path, const std::vector<std::pair<std::string, std::string>>& defines) {
   PreprocessedSource out;
   out.text = "#version 450 core\n";
   for (const auto& [k, v] : defines) out.text += "#define " + k + " " + v + "\n";
@@ -170,16 +173,20 @@ namespace {
 // Compiles and links `stages`; the program, or 0 with the mapped driver log in `error`. `log`
 // collects what the driver said even on success (NVIDIA reports warnings there).
 GLuint buildProgram(const std::vector<ShaderProgram::Stage>& stages,
-                    const std::vector<std::pair<std::string, std::string>>& defines, std::string& error,
-                    std::string* log) {
+                    const std::vector<std::pair<std::string, std::string>>& defines,
+                    std::string& error, std::string* log) {
   std::vector<GLuint> shaders;
   auto infoLog = [](GLuint object, bool program) {
     GLint len = 0;
-    if (program) glGetProgramiv(object, GL_INFO_LOG_LENGTH, &len);
-    else glGetShaderiv(object, GL_INFO_LOG_LENGTH, &len);
+    if (program)
+      glGetProgramiv(object, GL_INFO_LOG_LENGTH, &len);
+    else
+      glGetShaderiv(object, GL_INFO_LOG_LENGTH, &len);
     std::string text(static_cast<size_t>(std::max(len, 1)), '\0');
-    if (program) glGetProgramInfoLog(object, len, nullptr, text.data());
-    else glGetShaderInfoLog(object, len, nullptr, text.data());
+    if (program)
+      glGetProgramInfoLog(object, len, nullptr, text.data());
+    else
+      glGetShaderInfoLog(object, len, nullptr, text.data());
     return std::string(text.c_str());
   };
   for (const auto& st : stages) {
@@ -232,16 +239,18 @@ ShaderProgram::ShaderProgram(const std::vector<Stage>& stages,
   // A program missing from shaders/programs.json would escape the driver check that compiles
   // the catalogue (`nestlight gl-info --programs`) on a GPU before anyone runs it there.
   const ProgramSpec* spec = findProgram(stages);
-  NL_CHECK_MSG(spec, "shader program " + describeStages(stages) + " is not listed in shaders/programs.json");
+  NL_CHECK_MSG(
+      spec, "shader program " + describeStages(stages) + " is not listed in shaders/programs.json");
   for (const auto& d : defines)
-    NL_CHECK_MSG(spec->defines.count(d.first),
-                 "shaders/programs.json: program " + spec->name + " does not list the define " + d.first);
+    NL_CHECK_MSG(spec->defines.count(d.first), "shaders/programs.json: program " + spec->name +
+                                                   " does not list the define " + d.first);
   std::string error;
   id_ = buildProgram(stages, defines, error, nullptr);
   if (!id_) throw Error(error);
 }
 
-ProgramCheck checkProgram(const ProgramSpec& spec, const std::vector<std::pair<std::string, std::string>>& defines) {
+ProgramCheck checkProgram(const ProgramSpec& spec,
+                          const std::vector<std::pair<std::string, std::string>>& defines) {
   ProgramCheck c;
   c.name = spec.name;
   for (const auto& [k, v] : defines) c.defines += (c.defines.empty() ? "" : " ") + k + "=" + v;

@@ -35,23 +35,28 @@ void Buffer::bindRange(GLenum target, GLuint index, size_t offset, size_t size) 
 
 void Buffer::bindBase(GLenum target, GLuint index) const {
   if (target == GL_SHADER_STORAGE_BUFFER && bytes_ > kMaxSsboRange)
-    throw Error("a " + std::to_string(bytes_ >> 20) + " MiB buffer bound whole as an SSBO (at most 128 MiB)");
+    throw Error("a " + std::to_string(bytes_ >> 20) +
+                " MiB buffer bound whole as an SSBO (at most 128 MiB)");
   glBindBufferBase(target, index, id());
 }
 
-Texture Texture::make(GLenum target, GLenum internalFormat, int width, int height, int depth, int levels) {
+Texture Texture::make(GLenum target, GLenum internalFormat, int width, int height, int depth,
+                      int levels) {
   NL_CHECK(width > 0 && height > 0 && depth > 0 && levels > 0);
   Texture t;
   GLuint id = 0;
   glCreateTextures(target, 1, &id);
   static_cast<Object&>(t) = Object(id);
-  if (target == GL_TEXTURE_2D_ARRAY) glTextureStorage3D(id, levels, internalFormat, width, height, depth);
-  else glTextureStorage2D(id, levels, internalFormat, width, height);
+  if (target == GL_TEXTURE_2D_ARRAY)
+    glTextureStorage3D(id, levels, internalFormat, width, height, depth);
+  else
+    glTextureStorage2D(id, levels, internalFormat, width, height);
   t.width_ = width;
   t.height_ = height;
   t.format_ = internalFormat;
   // Clamped, nearest: passes fetch texels; a pass that wants filtering sets it.
-  for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R}) glTextureParameteri(id, w, GL_CLAMP_TO_EDGE);
+  for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
+    glTextureParameteri(id, w, GL_CLAMP_TO_EDGE);
   t.setFilter(GL_NEAREST, GL_NEAREST);
   return t;
 }
@@ -60,7 +65,9 @@ Texture::Texture(GLenum internalFormat, int width, int height, int levels) {
   *this = make(GL_TEXTURE_2D, internalFormat, width, height, 1, levels);
 }
 
-Texture Texture::cubeMap(GLenum internalFormat, int size) { return make(GL_TEXTURE_CUBE_MAP, internalFormat, size, size, 1, 1); }
+Texture Texture::cubeMap(GLenum internalFormat, int size) {
+  return make(GL_TEXTURE_CUBE_MAP, internalFormat, size, size, 1, 1);
+}
 
 Texture Texture::array2d(GLenum internalFormat, int width, int height, int layers) {
   return make(GL_TEXTURE_2D_ARRAY, internalFormat, width, height, layers, 1);
@@ -100,8 +107,10 @@ void Framebuffer::finish(int colourAttachments, const std::string& what) const {
   GLenum bufs[8];
   NL_CHECK(colourAttachments >= 0 && colourAttachments <= 8);
   for (int i = 0; i < colourAttachments; ++i) bufs[i] = GLenum(GL_COLOR_ATTACHMENT0 + i);
-  if (colourAttachments) glNamedFramebufferDrawBuffers(id(), colourAttachments, bufs);
-  else glNamedFramebufferDrawBuffer(id(), GL_NONE);
+  if (colourAttachments)
+    glNamedFramebufferDrawBuffers(id(), colourAttachments, bufs);
+  else
+    glNamedFramebufferDrawBuffer(id(), GL_NONE);
   const GLenum status = glCheckNamedFramebufferStatus(id(), GL_FRAMEBUFFER);
   if (status != GL_FRAMEBUFFER_COMPLETE) {
     char buf[32];

@@ -11,31 +11,45 @@ namespace nestlight {
 size_t scalarSize(ScalarType t) {
   switch (t) {
     case ScalarType::U8:
-    case ScalarType::I8: return 1;
+    case ScalarType::I8:
+      return 1;
     case ScalarType::U16:
-    case ScalarType::I16: return 2;
+    case ScalarType::I16:
+      return 2;
     case ScalarType::U32:
     case ScalarType::I32:
-    case ScalarType::F32: return 4;
+    case ScalarType::F32:
+      return 4;
     case ScalarType::U64:
     case ScalarType::I64:
-    case ScalarType::F64: return 8;
+    case ScalarType::F64:
+      return 8;
   }
   return 0;
 }
 
 const char* scalarName(ScalarType t) {
   switch (t) {
-    case ScalarType::U8: return "uint8";
-    case ScalarType::I8: return "int8";
-    case ScalarType::U16: return "uint16";
-    case ScalarType::I16: return "int16";
-    case ScalarType::U32: return "uint32";
-    case ScalarType::I32: return "int32";
-    case ScalarType::U64: return "uint64";
-    case ScalarType::I64: return "int64";
-    case ScalarType::F32: return "float";
-    case ScalarType::F64: return "double";
+    case ScalarType::U8:
+      return "uint8";
+    case ScalarType::I8:
+      return "int8";
+    case ScalarType::U16:
+      return "uint16";
+    case ScalarType::I16:
+      return "int16";
+    case ScalarType::U32:
+      return "uint32";
+    case ScalarType::I32:
+      return "int32";
+    case ScalarType::U64:
+      return "uint64";
+    case ScalarType::I64:
+      return "int64";
+    case ScalarType::F32:
+      return "float";
+    case ScalarType::F64:
+      return "double";
   }
   return "?";
 }
@@ -55,7 +69,9 @@ std::optional<ScalarType> parseScalarName(std::string_view n) {
   return std::nullopt;
 }
 
-bool isFloat(ScalarType t) { return t == ScalarType::F32 || t == ScalarType::F64; }
+bool isFloat(ScalarType t) {
+  return t == ScalarType::F32 || t == ScalarType::F64;
+}
 bool isSigned(ScalarType t) {
   return t == ScalarType::I8 || t == ScalarType::I16 || t == ScalarType::I32 ||
          t == ScalarType::I64 || isFloat(t);
@@ -90,36 +106,56 @@ void storeInt(double v, uint8_t* p) {
 
 double loadAsDouble(ScalarType t, const uint8_t* p) {
   switch (t) {
-    case ScalarType::U8: return loadRaw<uint8_t>(p);
-    case ScalarType::I8: return loadRaw<int8_t>(p);
-    case ScalarType::U16: return loadRaw<uint16_t>(p);
-    case ScalarType::I16: return loadRaw<int16_t>(p);
-    case ScalarType::U32: return loadRaw<uint32_t>(p);
-    case ScalarType::I32: return loadRaw<int32_t>(p);
-    case ScalarType::U64: return static_cast<double>(loadRaw<uint64_t>(p));
-    case ScalarType::I64: return static_cast<double>(loadRaw<int64_t>(p));
-    case ScalarType::F32: return loadRaw<float>(p);
-    case ScalarType::F64: return loadRaw<double>(p);
+    case ScalarType::U8:
+      return loadRaw<uint8_t>(p);
+    case ScalarType::I8:
+      return loadRaw<int8_t>(p);
+    case ScalarType::U16:
+      return loadRaw<uint16_t>(p);
+    case ScalarType::I16:
+      return loadRaw<int16_t>(p);
+    case ScalarType::U32:
+      return loadRaw<uint32_t>(p);
+    case ScalarType::I32:
+      return loadRaw<int32_t>(p);
+    case ScalarType::U64:
+      return static_cast<double>(loadRaw<uint64_t>(p));
+    case ScalarType::I64:
+      return static_cast<double>(loadRaw<int64_t>(p));
+    case ScalarType::F32:
+      return loadRaw<float>(p);
+    case ScalarType::F64:
+      return loadRaw<double>(p);
   }
   return 0;
 }
 
 void storeFromDouble(ScalarType t, double v, uint8_t* p) {
   switch (t) {
-    case ScalarType::U8: return storeInt<uint8_t>(v, p);
-    case ScalarType::I8: return storeInt<int8_t>(v, p);
-    case ScalarType::U16: return storeInt<uint16_t>(v, p);
-    case ScalarType::I16: return storeInt<int16_t>(v, p);
-    case ScalarType::U32: return storeInt<uint32_t>(v, p);
-    case ScalarType::I32: return storeInt<int32_t>(v, p);
-    case ScalarType::U64: return storeInt<uint64_t>(v, p);
-    case ScalarType::I64: return storeInt<int64_t>(v, p);
+    case ScalarType::U8:
+      return storeInt<uint8_t>(v, p);
+    case ScalarType::I8:
+      return storeInt<int8_t>(v, p);
+    case ScalarType::U16:
+      return storeInt<uint16_t>(v, p);
+    case ScalarType::I16:
+      return storeInt<int16_t>(v, p);
+    case ScalarType::U32:
+      return storeInt<uint32_t>(v, p);
+    case ScalarType::I32:
+      return storeInt<int32_t>(v, p);
+    case ScalarType::U64:
+      return storeInt<uint64_t>(v, p);
+    case ScalarType::I64:
+      return storeInt<int64_t>(v, p);
     case ScalarType::F32: {
       float f = static_cast<float>(v);
       std::memcpy(p, &f, 4);
       return;
     }
-    case ScalarType::F64: std::memcpy(p, &v, 8); return;
+    case ScalarType::F64:
+      std::memcpy(p, &v, 8);
+      return;
   }
 }
 

@@ -16,9 +16,12 @@ namespace nestlight {
 
 const char* codecName(Codec c) {
   switch (c) {
-    case Codec::Raw: return "raw";
-    case Codec::Zstd: return "zstd";
-    case Codec::Draco: return "draco";
+    case Codec::Raw:
+      return "raw";
+    case Codec::Zstd:
+      return "zstd";
+    case Codec::Draco:
+      return "draco";
   }
   return "?";
 }
@@ -155,10 +158,14 @@ uint8_t chooseModeTyped(const Column& c, size_t n) {
 uint8_t chooseMode(const Column& c, size_t n) {
   if (n == 0) return kConstant;  // as the loop below would say; encodePayload never passes 0
   switch (c.width) {
-    case 1: return chooseModeTyped<uint8_t>(c, n);
-    case 2: return chooseModeTyped<uint16_t>(c, n);
-    case 4: return chooseModeTyped<uint32_t>(c, n);
-    default: return chooseModeTyped<uint64_t>(c, n);
+    case 1:
+      return chooseModeTyped<uint8_t>(c, n);
+    case 2:
+      return chooseModeTyped<uint16_t>(c, n);
+    case 4:
+      return chooseModeTyped<uint32_t>(c, n);
+    default:
+      return chooseModeTyped<uint64_t>(c, n);
   }
 }
 
@@ -188,10 +195,18 @@ std::vector<uint8_t> encodeZstd(const PointLayout& layout, const PointBuffer& p)
       shuffleColumn<uint8_t>(low, n, &streams[at]);
     } else {
       switch (c.width) {
-        case 1: shuffleColumn<uint8_t>(c, n, &streams[at]); break;
-        case 2: shuffleColumn<uint16_t>(c, n, &streams[at]); break;
-        case 4: shuffleColumn<uint32_t>(c, n, &streams[at]); break;
-        default: shuffleColumn<uint64_t>(c, n, &streams[at]); break;
+        case 1:
+          shuffleColumn<uint8_t>(c, n, &streams[at]);
+          break;
+        case 2:
+          shuffleColumn<uint16_t>(c, n, &streams[at]);
+          break;
+        case 4:
+          shuffleColumn<uint32_t>(c, n, &streams[at]);
+          break;
+        default:
+          shuffleColumn<uint64_t>(c, n, &streams[at]);
+          break;
       }
     }
     at += modeBytes(modes[ci], c.width, n);
@@ -200,8 +215,10 @@ std::vector<uint8_t> encodeZstd(const PointLayout& layout, const PointBuffer& p)
   uint32_t hdr[3] = {kZstdMagic, static_cast<uint32_t>(n), static_cast<uint32_t>(rawSize)};
   std::memcpy(out.data(), hdr, 12);
   // One context per thread: ZSTD_compress would allocate and clear a fresh one for every node.
-  thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
-  size_t z = ZSTD_compressCCtx(cctx.get(), out.data() + 12, out.size() - 12, streams.data(), rawSize, kZstdLevel);
+  thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> cctx(ZSTD_createCCtx(),
+                                                                       ZSTD_freeCCtx);
+  size_t z = ZSTD_compressCCtx(cctx.get(), out.data() + 12, out.size() - 12, streams.data(),
+                               rawSize, kZstdLevel);
   NL_CHECK_MSG(!ZSTD_isError(z), ZSTD_getErrorName(z));
   out.resize(12 + z);
   return out;
@@ -251,10 +268,18 @@ std::string decodeZstd(const PointLayout& layout, const uint8_t* data, size_t si
       for (size_t i = 0; i < count; ++i) base[i * c.stride + 1] = base[i * c.stride];
     } else {
       switch (c.width) {
-        case 1: unshuffleColumn<uint8_t>(&streams[at], count, base, c.stride, c.delta); break;
-        case 2: unshuffleColumn<uint16_t>(&streams[at], count, base, c.stride, c.delta); break;
-        case 4: unshuffleColumn<uint32_t>(&streams[at], count, base, c.stride, c.delta); break;
-        default: unshuffleColumn<uint64_t>(&streams[at], count, base, c.stride, c.delta); break;
+        case 1:
+          unshuffleColumn<uint8_t>(&streams[at], count, base, c.stride, c.delta);
+          break;
+        case 2:
+          unshuffleColumn<uint16_t>(&streams[at], count, base, c.stride, c.delta);
+          break;
+        case 4:
+          unshuffleColumn<uint32_t>(&streams[at], count, base, c.stride, c.delta);
+          break;
+        default:
+          unshuffleColumn<uint64_t>(&streams[at], count, base, c.stride, c.delta);
+          break;
       }
     }
     at += need;
@@ -267,16 +292,26 @@ std::string decodeZstd(const PointLayout& layout, const uint8_t* data, size_t si
 
 draco::DataType dracoType(ScalarType t) {
   switch (t) {
-    case ScalarType::U8: return draco::DT_UINT8;
-    case ScalarType::I8: return draco::DT_INT8;
-    case ScalarType::U16: return draco::DT_UINT16;
-    case ScalarType::I16: return draco::DT_INT16;
-    case ScalarType::U32: return draco::DT_UINT32;
-    case ScalarType::I32: return draco::DT_INT32;
-    case ScalarType::U64: return draco::DT_UINT64;
-    case ScalarType::I64: return draco::DT_INT64;
-    case ScalarType::F32: return draco::DT_FLOAT32;
-    case ScalarType::F64: return draco::DT_FLOAT64;
+    case ScalarType::U8:
+      return draco::DT_UINT8;
+    case ScalarType::I8:
+      return draco::DT_INT8;
+    case ScalarType::U16:
+      return draco::DT_UINT16;
+    case ScalarType::I16:
+      return draco::DT_INT16;
+    case ScalarType::U32:
+      return draco::DT_UINT32;
+    case ScalarType::I32:
+      return draco::DT_INT32;
+    case ScalarType::U64:
+      return draco::DT_UINT64;
+    case ScalarType::I64:
+      return draco::DT_INT64;
+    case ScalarType::F32:
+      return draco::DT_FLOAT32;
+    case ScalarType::F64:
+      return draco::DT_FLOAT64;
   }
   return draco::DT_INVALID;
 }
@@ -363,9 +398,12 @@ std::string decodeDraco(const PointLayout& layout, const uint8_t* data, size_t s
 std::vector<uint8_t> encodePayload(Codec codec, const PointLayout& layout, const PointBuffer& p) {
   NL_CHECK(p.stride == layout.stride());
   switch (codec) {
-    case Codec::Raw: return encodeRaw(p);
-    case Codec::Zstd: return encodeZstd(layout, p);
-    case Codec::Draco: return encodeDraco(layout, p);
+    case Codec::Raw:
+      return encodeRaw(p);
+    case Codec::Zstd:
+      return encodeZstd(layout, p);
+    case Codec::Draco:
+      return encodeDraco(layout, p);
   }
   NL_CHECK(false);
   return {};
@@ -379,9 +417,12 @@ std::string decodePayload(Codec codec, const PointLayout& layout, const uint8_t*
   if (count > (size_t(1) << 31)) return "point count out of range";
   if (count == 0) return size == 0 ? "" : "payload bytes present for an empty node";
   switch (codec) {
-    case Codec::Raw: return decodeRaw(data, size, count, out);
-    case Codec::Zstd: return decodeZstd(layout, data, size, count, out);
-    case Codec::Draco: return decodeDraco(layout, data, size, count, out);
+    case Codec::Raw:
+      return decodeRaw(data, size, count, out);
+    case Codec::Zstd:
+      return decodeZstd(layout, data, size, count, out);
+    case Codec::Draco:
+      return decodeDraco(layout, data, size, count, out);
   }
   return "unknown codec " + std::to_string(static_cast<int>(codec));
 }

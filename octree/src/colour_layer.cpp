@@ -1,7 +1,5 @@
 #include "nestlight/octree/colour_layer.h"
 
-#include "file_io.h"
-
 #include <Imath/half.h>
 #include <fcntl.h>
 #include <unistd.h>
@@ -15,6 +13,7 @@
 #include <fstream>
 #include <random>
 
+#include "file_io.h"
 #include "nestlight/octree/checksum.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
@@ -44,7 +43,6 @@ uint64_t get64(const uint8_t* p) {
   std::memcpy(&v, p, 8);
   return v;
 }
-
 
 Metadata readMetadataFile(const fs::path& dir) {
   const fs::path mp = dir / "metadata.json";
@@ -159,8 +157,10 @@ void checkLayerName(const std::string& name) {
   if (name.empty() || name.find_first_of("/.") != std::string::npos)
     throw Error("layer name '" + name + "': must be non-empty, without '/' or '.'");
   if (name == "rgb")
-    throw Error("layer name 'rgb': scene files read \"colour\": \"rgb\" as the scan's recorded colour, so a "
-                "layer of that name could never be chosen; use another name (the default is 'hdr')");
+    throw Error(
+        "layer name 'rgb': scene files read \"colour\": \"rgb\" as the scan's recorded colour, so "
+        "a "
+        "layer of that name could never be chosen; use another name (the default is 'hdr')");
 }
 
 ColourLayerWriter::ColourLayerWriter(fs::path dir, std::string name, double scale)

@@ -15,7 +15,8 @@ void pwriteAll(int fd, const void* data, size_t size, uint64_t offset, const std
     const ssize_t w = ::pwrite(fd, p, size, static_cast<off_t>(offset));
     if (w < 0) {
       if (errno == EINTR) continue;
-      throw Error(path, Error::atByte(offset), std::string("write failed: ") + std::strerror(errno));
+      throw Error(path, Error::atByte(offset),
+                  std::string("write failed: ") + std::strerror(errno));
     }
     p += w;
     size -= size_t(w);

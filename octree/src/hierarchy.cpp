@@ -137,8 +137,7 @@ HierarchyBlob buildHierarchy(std::vector<NodeRecord> nodes, uint32_t step) {
       }
       putEntry(&blob.bytes[c.offset + i * kHierarchyEntryBytes], e);
     }
-    chunkChecksum[ci] =
-        checksum64(&blob.bytes[c.offset], c.nodes.size() * kHierarchyEntryBytes);
+    chunkChecksum[ci] = checksum64(&blob.bytes[c.offset], c.nodes.size() * kHierarchyEntryBytes);
   }
   blob.rootChunkSize = chunks[0].nodes.size() * kHierarchyEntryBytes;
   blob.rootChunkChecksum = chunkChecksum[0];

@@ -12,7 +12,9 @@ namespace nestlight {
 
 using nlohmann::json;
 
-void JsonField::fail(const std::string& why) const { throw Error(file_, path_, why); }
+void JsonField::fail(const std::string& why) const {
+  throw Error(file_, path_, why);
+}
 
 JsonField JsonField::at(const std::string& key) const {
   if (!j_->is_object()) fail("expected an object, got " + std::string(j_->type_name()));
@@ -22,7 +24,8 @@ JsonField JsonField::at(const std::string& key) const {
 }
 
 JsonField JsonField::at(size_t i) const {
-  if (!j_->is_array() || i >= j_->size()) fail("expected an array of at least " + std::to_string(i + 1) + " values");
+  if (!j_->is_array() || i >= j_->size())
+    fail("expected an array of at least " + std::to_string(i + 1) + " values");
   return JsonField((*j_)[i], path_ + "[" + std::to_string(i) + "]", file_);
 }
 
@@ -62,10 +65,12 @@ int64_t JsonField::integer(int64_t lo, int64_t hi) const {
   if (!j_->is_number_integer() && !j_->is_number_unsigned())
     fail("expected an integer, got " + std::string(j_->type_name()) + " " + j_->dump());
   if (j_->is_number_unsigned() && j_->get<uint64_t>() > uint64_t(INT64_MAX))
-    fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + j_->dump());
+    fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+         j_->dump());
   const int64_t v = j_->get<int64_t>();
   if (v < lo || v > hi)
-    fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(v));
+    fail("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+         std::to_string(v));
   return v;
 }
 
@@ -117,7 +122,8 @@ json readJsonFile(const std::filesystem::path& file) {
     // its field, so both are found here.
     const std::string what = e.what();
     const size_t q0 = what.find('\''), q1 = q0 == std::string::npos ? q0 : what.find('\'', q0 + 1);
-    const std::string literal = q1 == std::string::npos ? std::string() : what.substr(q0 + 1, q1 - q0 - 1);
+    const std::string literal =
+        q1 == std::string::npos ? std::string() : what.substr(q0 + 1, q1 - q0 - 1);
     const size_t at = literal.empty() ? std::string::npos : text.find(literal);
     if (at == std::string::npos) throw Error(file.string(), "", "invalid JSON: " + what);
     const uint64_t line = 1 + uint64_t(std::count(text.begin(), text.begin() + long(at), '\n'));
@@ -125,11 +131,14 @@ json readJsonFile(const std::filesystem::path& file) {
     const size_t colon = text.find_last_not_of(" \t\r\n", at == 0 ? 0 : at - 1);
     if (colon != std::string::npos && text[colon] == ':') {
       const size_t close = text.find_last_not_of(" \t\r\n", colon == 0 ? 0 : colon - 1);
-      const size_t open = close == std::string::npos || close == 0 ? std::string::npos : text.rfind('"', close - 1);
-      if (open != std::string::npos && text[close] == '"') field = "field \"" + text.substr(open + 1, close - open - 1) + "\": ";
+      const size_t open =
+          close == std::string::npos || close == 0 ? std::string::npos : text.rfind('"', close - 1);
+      if (open != std::string::npos && text[close] == '"')
+        field = "field \"" + text.substr(open + 1, close - open - 1) + "\": ";
     }
-    throw Error(file.string(), Error::atLine(line),
-                field + "the number " + literal + " is beyond the range of a double (about 1.8e308)");
+    throw Error(
+        file.string(), Error::atLine(line),
+        field + "the number " + literal + " is beyond the range of a double (about 1.8e308)");
   }
 }
 

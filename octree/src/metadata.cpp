@@ -19,14 +19,19 @@ void Accounting::add(const Accounting& o) {
 Box3d Metadata::nodeBounds(uint32_t level, uint32_t x, uint32_t y, uint32_t z) const {
   const double steps = static_cast<double>(cubeSize >> level);
   Box3d b;
-  b.min = {offset.x + x * steps * scale.x, offset.y + y * steps * scale.y, offset.z + z * steps * scale.z};
+  b.min = {offset.x + x * steps * scale.x, offset.y + y * steps * scale.y,
+           offset.z + z * steps * scale.z};
   b.max = {b.min.x + steps * scale.x, b.min.y + steps * scale.y, b.min.z + steps * scale.z};
   return b;
 }
 
 namespace {
-json vec(const Vec3d& v) { return json::array({v.x, v.y, v.z}); }
-json box(const Box3d& b) { return {{"min", vec(b.min)}, {"max", vec(b.max)}}; }
+json vec(const Vec3d& v) {
+  return json::array({v.x, v.y, v.z});
+}
+json box(const Box3d& b) {
+  return {{"min", vec(b.min)}, {"max", vec(b.max)}};
+}
 
 Vec3d vec3Of(const JsonField& f) {
   const auto v = f.vec3();
@@ -45,8 +50,8 @@ json Metadata::toJson() const {
   for (auto& [k, v] : accounting.rejected) rejected[k] = v;
   json srcs = json::array();
   for (const auto& s : sources) {
-    json js = {{"path", s.path}, {"format", s.format}, {"points", s.points},
-               {"warnings", s.warnings}};
+    json js = {
+        {"path", s.path}, {"format", s.format}, {"points", s.points}, {"warnings", s.warnings}};
     if (s.declaredPoints) js["declared_points"] = *s.declaredPoints;
     if (s.unreadable) js["unreadable"] = s.unreadable;
     if (!s.details.is_null()) js["details"] = s.details;
@@ -89,16 +94,18 @@ json Metadata::toJson() const {
   if (!layers.empty()) {
     json jl = json::array();
     for (const auto& l : layers)
-      jl.push_back({{"name", l.name},
-                    {"kind", l.kind},
-                    {"encoding", l.encoding},
-                    {"file", l.file},
-                    {"bytes", l.bytes},
-                    {"index", {{"offset", l.indexOffset}, {"bytes", l.indexBytes}, {"checksum", l.indexChecksum}}},
-                    {"nodes", l.nodes},
-                    {"points", l.points},
-                    {"scale", l.scale},
-                    {"build", l.build}});
+      jl.push_back(
+          {{"name", l.name},
+           {"kind", l.kind},
+           {"encoding", l.encoding},
+           {"file", l.file},
+           {"bytes", l.bytes},
+           {"index",
+            {{"offset", l.indexOffset}, {"bytes", l.indexBytes}, {"checksum", l.indexChecksum}}},
+           {"nodes", l.nodes},
+           {"points", l.points},
+           {"scale", l.scale},
+           {"build", l.build}});
     j["layers"] = jl;
   }
   if (sourceOffset) j["source_offset"] = vec(*sourceOffset);
@@ -109,7 +116,8 @@ Metadata Metadata::fromJson(const json& j, const std::string& file) {
   if (!j.is_object()) throw Error(file, "", "metadata is not a JSON object");
   const JsonField f(j, "", file);
   Metadata m;
-  if (f.at("format").string() != "nestlight-octree") f.at("format").fail("is not 'nestlight-octree'");
+  if (f.at("format").string() != "nestlight-octree")
+    f.at("format").fail("is not 'nestlight-octree'");
   const JsonField version = f.at("version");
   m.version = static_cast<int>(version.integer(0, 1 << 20));
   if (m.version < kOldestReadableVersion || m.version > kFormatVersion)
@@ -148,7 +156,8 @@ Metadata Metadata::fromJson(const json& j, const std::string& file) {
     if (!t) a.at("type").fail("is not a known scalar type");
     attr.type = *t;
     attr.components = static_cast<uint32_t>(a.at("components").integer(1, 64));
-    if (a.has("description") && a.value()["description"].is_string()) attr.description = a.value()["description"];
+    if (a.has("description") && a.value()["description"].is_string())
+      attr.description = a.value()["description"];
     if (m.layout.has(attr.name)) a.at("name").fail("repeats attribute '" + attr.name + "'");
     m.layout.add(attr);
   }
@@ -175,7 +184,8 @@ Metadata Metadata::fromJson(const json& j, const std::string& file) {
       if (s.contains("points") && s["points"].is_number_unsigned()) r.points = s["points"];
       if (s.contains("declared_points") && s["declared_points"].is_number_unsigned())
         r.declaredPoints = s["declared_points"].get<uint64_t>();
-      if (s.contains("unreadable") && s["unreadable"].is_number_unsigned()) r.unreadable = s["unreadable"];
+      if (s.contains("unreadable") && s["unreadable"].is_number_unsigned())
+        r.unreadable = s["unreadable"];
       if (s.contains("warnings") && s["warnings"].is_array())
         for (const auto& w : s["warnings"])
           if (w.is_string()) r.warnings.push_back(w);

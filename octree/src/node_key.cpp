@@ -1,14 +1,15 @@
 #include "nestlight/octree/node_key.h"
 
-#include "nestlight/octree/checksum.h"
-
 #include <xxhash.h>
+
+#include "nestlight/octree/checksum.h"
 
 namespace nestlight {
 
 std::string NodeKey::name() const {
   std::string s(level + 1, 'r');
-  for (uint32_t l = 0; l < level; ++l) s[l + 1] = static_cast<char>('0' + ancestor(l + 1).childIndex());
+  for (uint32_t l = 0; l < level; ++l)
+    s[l + 1] = static_cast<char>('0' + ancestor(l + 1).childIndex());
   return s;
 }
 
@@ -50,6 +51,8 @@ uint64_t mortonEncode21(uint32_t x, uint32_t y, uint32_t z) {
   return spread21(x) << 2 | spread21(y) << 1 | spread21(z);
 }
 
-uint64_t checksum64(const void* data, size_t size) { return XXH3_64bits(data, size); }
+uint64_t checksum64(const void* data, size_t size) {
+  return XXH3_64bits(data, size);
+}
 
 }  // namespace nestlight

@@ -1,7 +1,5 @@
 #include "nestlight/octree/octree_reader.h"
 
-#include "file_io.h"
-
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -11,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "file_io.h"
 #include "nestlight/octree/checksum.h"
 #include "nestlight/octree/codec.h"
 #include "nestlight/octree/error.h"
@@ -30,7 +29,9 @@ void readAll(int fd, void* dst, size_t size, uint64_t offset, const std::string&
 }
 
 // Proxies are counted as entries too until their chunk is loaded: at most 512 per chunk.
-size_t kMaxProxyOverhead(uint64_t nodes) { return static_cast<size_t>(nodes) + 1024; }
+size_t kMaxProxyOverhead(uint64_t nodes) {
+  return static_cast<size_t>(nodes) + 1024;
+}
 
 int openOrThrow(const fs::path& p) {
   int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
@@ -72,8 +73,12 @@ OctreeReader::~OctreeReader() {
   if (hierarchyFd_ >= 0) ::close(hierarchyFd_);
 }
 
-uint64_t OctreeReader::threadReadCalls() { return tlsReadCalls; }
-uint64_t OctreeReader::threadBytesRead() { return tlsBytesRead; }
+uint64_t OctreeReader::threadReadCalls() {
+  return tlsReadCalls;
+}
+uint64_t OctreeReader::threadBytesRead() {
+  return tlsBytesRead;
+}
 
 // Called and returns with `lock` held; reads the file without it, so that peek() and readers of
 // other chunks never wait on this read. A failure is remembered and rethrown for the same chunk.
@@ -85,11 +90,13 @@ void OctreeReader::loadChunk(std::unique_lock<std::mutex>& lock, const NodeKey& 
     throw e;
   };
   if (size > 1 << 20 || size > meta_.hierarchyBytes || offset > meta_.hierarchyBytes - size)
-    fail(Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " out of range"));
+    fail(Error(path, Error::atByte(offset),
+               "hierarchy chunk of node " + root.name() + " out of range"));
   // Each chunk is read once: a damaged file whose proxies point back at loaded chunks would
   // otherwise expand without end.
   if (!loadedChunks_.insert(offset).second)
-    fail(Error(path, Error::atByte(offset), "hierarchy chunk of node " + root.name() + " is referenced twice"));
+    fail(Error(path, Error::atByte(offset),
+               "hierarchy chunk of node " + root.name() + " is referenced twice"));
   readingChunks_.insert(offset);
   lock.unlock();
   std::vector<std::pair<NodeKey, HierarchyEntry>> entries;
@@ -99,8 +106,10 @@ void OctreeReader::loadChunk(std::unique_lock<std::mutex>& lock, const NodeKey& 
     readAll(hierarchyFd_, bytes.data(), size, offset, path);
     hierarchyBytesRead_ += size;
     if (checksum64(bytes.data(), bytes.size()) != checksum)
-      throw Error(path, Error::atByte(offset), "checksum mismatch in the hierarchy chunk of node " + root.name());
-    std::string err = parseHierarchyChunk(bytes.data(), bytes.size(), root, meta_.hierarchyStep, entries);
+      throw Error(path, Error::atByte(offset),
+                  "checksum mismatch in the hierarchy chunk of node " + root.name());
+    std::string err =
+        parseHierarchyChunk(bytes.data(), bytes.size(), root, meta_.hierarchyStep, entries);
     if (!err.empty()) throw Error(path, Error::atByte(offset), err);
   } catch (const Error& e) {
     error = e;
@@ -110,7 +119,8 @@ void OctreeReader::loadChunk(std::unique_lock<std::mutex>& lock, const NodeKey& 
   chunkRead_.notify_all();
   if (error) fail(*error);
   if (entries_.size() + entries.size() > meta_.nodes + kMaxProxyOverhead(meta_.nodes))
-    fail(Error(path, Error::atByte(offset), "hierarchy holds more nodes than metadata's " + std::to_string(meta_.nodes)));
+    fail(Error(path, Error::atByte(offset),
+               "hierarchy holds more nodes than metadata's " + std::to_string(meta_.nodes)));
   for (auto& [k, e] : entries) {
     auto it = entries_.find(k);
     // The chunk's own root entry replaces the proxy that pointed here.
@@ -219,8 +229,10 @@ PointBuffer OctreeReader::readNode(const NodeKey& key) {
   if (checksum64(bytes.data(), bytes.size()) != e->checksum)
     throw Error(path, Error::atByte(e->byteOffset), "checksum mismatch in node " + key.name());
   PointBuffer pts(meta_.layout.stride());
-  std::string err = decodePayload(e->codec, meta_.layout, bytes.data(), bytes.size(), e->numPoints, pts);
-  if (!err.empty()) throw Error(path, Error::atByte(e->byteOffset), "node " + key.name() + ": " + err);
+  std::string err =
+      decodePayload(e->codec, meta_.layout, bytes.data(), bytes.size(), e->numPoints, pts);
+  if (!err.empty())
+    throw Error(path, Error::atByte(e->byteOffset), "node " + key.name() + ": " + err);
   const uint32_t size = meta_.cubeSize >> key.level;
   const uint32_t base[3] = {key.x * size, key.y * size, key.z * size};
   for (size_t i = 0; i < pts.pos.size(); ++i) pts.pos[i] += base[i % 3];

@@ -1,16 +1,15 @@
 #include "nestlight/octree/octree_writer.h"
 
-#include "file_io.h"
-
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <algorithm>
 #include <fstream>
 #include <unordered_set>
 
+#include "file_io.h"
 #include "nestlight/octree/checksum.h"
 #include "nestlight/octree/error.h"
 
@@ -18,11 +17,12 @@ namespace nestlight {
 
 namespace fs = std::filesystem;
 
-
 bool isOctreeFileName(const std::string& n) {
-  auto ends = [&](std::string_view s) { return n.size() >= s.size() && n.compare(n.size() - s.size(), s.size(), s) == 0; };
-  return n == "metadata.json" || n == "hierarchy.bin" || n == "octree.bin" || ends(".tmp") || ends(".layer") ||
-         ends(".expand.scratch") || n.rfind(".build-", 0) == 0;
+  auto ends = [&](std::string_view s) {
+    return n.size() >= s.size() && n.compare(n.size() - s.size(), s.size(), s) == 0;
+  };
+  return n == "metadata.json" || n == "hierarchy.bin" || n == "octree.bin" || ends(".tmp") ||
+         ends(".layer") || ends(".expand.scratch") || n.rfind(".build-", 0) == 0;
 }
 
 void writeFileAtomic(const fs::path& path, const void* bytes, size_t size) {
@@ -63,7 +63,8 @@ OctreeWriter::~OctreeWriter() {
 
 void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points, uint8_t spacingCode) {
   NL_CHECK(points.stride == layout_.stride());
-  NL_CHECK_MSG(points.size() < (uint64_t(1) << 32), "node " + key.name() + " holds 2^32 points or more");
+  NL_CHECK_MSG(points.size() < (uint64_t(1) << 32),
+               "node " + key.name() + " holds 2^32 points or more");
   // An empty node (its points all moved up into its parent) has an empty payload in any codec.
   std::vector<uint8_t> bytes;
   if (!points.empty()) bytes = encodePayload(codec_, layout_, points);
@@ -81,7 +82,8 @@ void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points, uint
     nodes_.push_back(r);
   }
   // Offsets are reserved under the lock; the write itself runs in parallel.
-  detail::pwriteAll(fd_, bytes.data(), bytes.size(), r.byteOffset, (dir_ / "octree.bin.tmp").string());
+  detail::pwriteAll(fd_, bytes.data(), bytes.size(), r.byteOffset,
+                    (dir_ / "octree.bin.tmp").string());
 }
 
 void OctreeWriter::pruneEmptyLeaves() {
@@ -89,8 +91,9 @@ void OctreeWriter::pruneEmptyLeaves() {
   // if it has children. The root always stays.
   std::vector<NodeRecord> kept;
   kept.reserve(nodes_.size());
-  std::sort(nodes_.begin(), nodes_.end(),
-            [](const NodeRecord& a, const NodeRecord& b) { return b.key < a.key; });  // deepest first
+  std::sort(nodes_.begin(), nodes_.end(), [](const NodeRecord& a, const NodeRecord& b) {
+    return b.key < a.key;
+  });  // deepest first
   std::unordered_set<NodeKey, NodeKeyHash> keptKeys;
   for (const auto& n : nodes_) {
     bool hasChild = false;
@@ -115,7 +118,8 @@ void OctreeWriter::finish(Metadata& meta) {
   meta.rootChunkSize = h.rootChunkSize;
   meta.rootChunkChecksum = h.rootChunkChecksum;
   if (::fsync(fd_) != 0)
-    throw Error((dir_ / "octree.bin.tmp").string(), "", std::string("fsync failed: ") + std::strerror(errno));
+    throw Error((dir_ / "octree.bin.tmp").string(), "",
+                std::string("fsync failed: ") + std::strerror(errno));
   ::close(fd_);
   fd_ = -1;
   fs::rename(dir_ / "octree.bin.tmp", dir_ / meta.payloadFile);

@@ -23,7 +23,8 @@ uint32_t packRgb9e5(float r, float g, float b) {
   }
   uint32_t out = uint32_t(exp) << 27;
   for (int c = 0; c < 3; ++c)
-    out |= uint32_t(std::min<double>(std::floor(rgb[c] / denom + 0.5), (1 << kMantissaBits) - 1)) << (9 * c);
+    out |= uint32_t(std::min<double>(std::floor(rgb[c] / denom + 0.5), (1 << kMantissaBits) - 1))
+           << (9 * c);
   return out;
 }
 

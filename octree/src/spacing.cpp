@@ -7,8 +7,8 @@
 
 namespace nestlight {
 
-double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size_t n, size_t maxQueries,
-                              size_t window) {
+double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size_t n,
+                              size_t maxQueries, size_t window) {
   if (n < 2 || maxQueries == 0 || window == 0) return 0;
   auto at = [&](size_t i) { return xyz + 3 * size_t(indices ? indices[i] : i); };
   const size_t queries = std::min(n, maxQueries);

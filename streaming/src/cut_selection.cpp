@@ -43,7 +43,8 @@ inline bool admit(Node& n, uint32_t idx, const Weighed& w, const View& view, con
                   uint64_t frame, CutResult& out) {
   n.cutFrame = frame;
   n.weight = w.weight;
-  n.refine = n.childMask != 0 && view.projectedPixels(n.spacing, w.distance) > budgets.spacingPixels;
+  n.refine =
+      n.childMask != 0 && view.projectedPixels(n.spacing, w.distance) > budgets.spacingPixels;
   out.nodes.push_back(idx);
   if (!n.refine) return false;
   if (n.firstChild == kNone) {

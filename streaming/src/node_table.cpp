@@ -17,7 +17,9 @@ NodeTable::NodeTable(const Metadata& meta) : meta_(meta), step_(meta.hierarchySt
   nodes_.reserve(static_cast<size_t>(std::min<uint64_t>(meta.nodes + 1, 1u << 20)));
 }
 
-Box3d NodeTable::cube(const NodeKey& k) const { return meta_.nodeBounds(k.level, k.x, k.y, k.z); }
+Box3d NodeTable::cube(const NodeKey& k) const {
+  return meta_.nodeBounds(k.level, k.x, k.y, k.z);
+}
 
 uint32_t NodeTable::addNode(const NodeKey& key, const HierarchyEntry& e, uint32_t parent) {
   const uint32_t idx = size();

@@ -31,7 +31,8 @@ double threadCpuMs() {
 double percentileOf(std::vector<double> v, double p) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(std::ceil(p * double(v.size()))) - (p > 0 ? 1 : 0))];
+  return v[std::min(v.size() - 1,
+                    static_cast<size_t>(std::ceil(p * double(v.size()))) - (p > 0 ? 1 : 0))];
 }
 
 // Cameras over the scan's bounds.
@@ -47,7 +48,7 @@ struct SceneFrame {
     glm::dvec3 dir = glm::normalize(target - eye);
     const glm::dvec3 up = std::abs(dir.z) > 0.99 ? glm::dvec3(0, 1, 0) : glm::dvec3(0, 0, 1);
     return perspectiveView(eye, target, up, glm::radians(60.0), 1920, 1080,
-                                      std::max(1e-4 * diag, 0.01), 20 * diag);
+                           std::max(1e-4 * diag, 0.01), 20 * diag);
   }
   // The whole scan in view, from `angle` around it.
   View overview(double angle) const {
@@ -57,14 +58,18 @@ struct SceneFrame {
   View random(std::mt19937_64& rng) const {
     std::uniform_real_distribution<double> u(0, 1);
     const glm::dvec3 target = lo + (hi - lo) * glm::dvec3(u(rng), u(rng), u(rng));
-    const glm::dvec3 eye = target + glm::dvec3(u(rng) - 0.5, u(rng) - 0.5, 0.2 + 0.3 * u(rng)) * diag * (0.1 + 0.4 * u(rng));
+    const glm::dvec3 eye = target + glm::dvec3(u(rng) - 0.5, u(rng) - 0.5, 0.2 + 0.3 * u(rng)) *
+                                        diag * (0.1 + 0.4 * u(rng));
     return look(eye, target);
   }
 };
 
 void sleepRest(std::chrono::steady_clock::time_point frameStart, double frameMs) {
-  const double used = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frameStart).count();
-  if (frameMs > used) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(frameMs - used));
+  const double used =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - frameStart)
+          .count();
+  if (frameMs > used)
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(frameMs - used));
 }
 
 std::string mib(double bytes) {
@@ -84,10 +89,14 @@ nlohmann::json runStreamBench(const fs::path& octree, const StreamBenchOptions& 
   OctreeReader reader(octree);
   const Metadata& m = reader.metadata();
   const SceneFrame scene(m);
-  nlohmann::json results = {{"device", o.device}, {"cores", std::thread::hardware_concurrency()},
-                            {"octree", octree.string()}, {"points", m.points}, {"nodes", m.nodes}};
-  say("bench stream: %s (%llu points, %llu nodes), %s, %u cores\n", octree.c_str(), (unsigned long long)m.points,
-      (unsigned long long)m.nodes, o.device.c_str(), std::thread::hardware_concurrency());
+  nlohmann::json results = {{"device", o.device},
+                            {"cores", std::thread::hardware_concurrency()},
+                            {"octree", octree.string()},
+                            {"points", m.points},
+                            {"nodes", m.nodes}};
+  say("bench stream: %s (%llu points, %llu nodes), %s, %u cores\n", octree.c_str(),
+      (unsigned long long)m.points, (unsigned long long)m.nodes, o.device.c_str(),
+      std::thread::hardware_concurrency());
 
   // 1. Scheduler CPU time per frame with every node resident: unlimited budgets, the whole scan
   //    in view and refined to its leaves, then camera paths whose cut keeps (or changes over)
@@ -106,13 +115,15 @@ nlohmann::json runStreamBench(const fs::path& octree, const StreamBenchOptions& 
       ++loadFrames;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
-    const double loadSec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    const double loadSec =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     say("  loaded every node: %u resident (%s) in %.1f s, %d frames\n", s.stats().residentNodes,
-                mib(double(s.stats().residentBytes)).c_str(), loadSec, loadFrames);
-    results["all_resident"] = {{"resident_nodes", s.stats().residentNodes}, {"resident_bytes", s.stats().residentBytes},
+        mib(double(s.stats().residentBytes)).c_str(), loadSec, loadFrames);
+    results["all_resident"] = {{"resident_nodes", s.stats().residentNodes},
+                               {"resident_bytes", s.stats().residentBytes},
                                {"load_seconds", loadSec}};
     say("  %-34s %9s %9s %10s %10s %10s\n", "camera path (every node resident)", "cut", "drawn",
-                "cpu med", "cpu p99", "wall p99");
+        "cpu med", "cpu p99", "wall p99");
     struct Path {
       const char* name;
       double spacingPixels;
@@ -142,11 +153,17 @@ nlohmann::json runStreamBench(const fs::path& octree, const StreamBenchOptions& 
       }
       const double n = double(o.frames);
       say("  %-34s %9.0f %9.0f %7.3f ms %7.3f ms %7.3f ms\n", p.name, double(cut) / n,
-                  double(drawn) / n, percentileOf(cpu, 0.5), percentileOf(cpu, 0.99), percentileOf(wall, 0.99));
-      results["paths"].push_back({{"path", p.name}, {"frames", o.frames}, {"cut_nodes_mean", double(cut) / n},
-                                  {"draw_nodes_mean", double(drawn) / n}, {"resident_nodes_mean", double(resident) / n},
-                                  {"cpu_ms_median", percentileOf(cpu, 0.5)}, {"cpu_ms_p99", percentileOf(cpu, 0.99)},
-                                  {"cpu_ms_max", percentileOf(cpu, 1.0)}, {"wall_ms_median", percentileOf(wall, 0.5)},
+          double(drawn) / n, percentileOf(cpu, 0.5), percentileOf(cpu, 0.99),
+          percentileOf(wall, 0.99));
+      results["paths"].push_back({{"path", p.name},
+                                  {"frames", o.frames},
+                                  {"cut_nodes_mean", double(cut) / n},
+                                  {"draw_nodes_mean", double(drawn) / n},
+                                  {"resident_nodes_mean", double(resident) / n},
+                                  {"cpu_ms_median", percentileOf(cpu, 0.5)},
+                                  {"cpu_ms_p99", percentileOf(cpu, 0.99)},
+                                  {"cpu_ms_max", percentileOf(cpu, 1.0)},
+                                  {"wall_ms_median", percentileOf(wall, 0.5)},
                                   {"wall_ms_p99", percentileOf(wall, 0.99)}});
     }
   }
@@ -164,7 +181,8 @@ nlohmann::json runStreamBench(const fs::path& octree, const StreamBenchOptions& 
     {
       OctreeReader fresh(octree);  // hierarchy chunks are read as the views need them
       Streamer s(fresh, store, b);
-      while (!s.update(scene.overview(0)).complete) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      while (!s.update(scene.overview(0)).complete)
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
       for (const auto& v : views) {
         const auto t = std::chrono::steady_clock::now();
         int f = 0;
@@ -175,7 +193,9 @@ nlohmann::json runStreamBench(const fs::path& octree, const StreamBenchOptions& 
           sleepRest(fs0, o.frameMs);
         }
         tpFrames.push_back(f);
-        tpMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count());
+        tpMs.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t)
+                .count());
       }
     }
     results["teleports"] = nlohmann::json::array();
@@ -191,31 +211,42 @@ nlohmann::json runStreamBench(const fs::path& octree, const StreamBenchOptions& 
         if (s.update(v).complete) break;
         sleepRest(fs0, o.frameMs);
       }
-      coldMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count());
+      coldMs.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count());
       uint64_t needed = 0;
       for (const auto& d : s.drawList()) needed += reader.node(d.key)->byteSize;
       const uint64_t read = s.totals().bytesRead;
       const uint64_t hierarchy = cold.hierarchyBytesRead() - rootChunk;
       ratio.push_back(needed ? double(read) / double(needed) : 0);
       sumRead += read, sumNeeded += needed, sumHierarchy += hierarchy;
-      results["teleports"].push_back({{"cut_nodes", s.stats().cutNodes}, {"cut_points", s.stats().cutPoints},
-                                      {"bytes_read", read}, {"hierarchy_bytes_read", hierarchy},
+      results["teleports"].push_back({{"cut_nodes", s.stats().cutNodes},
+                                      {"cut_points", s.stats().cutPoints},
+                                      {"bytes_read", read},
+                                      {"hierarchy_bytes_read", hierarchy},
                                       {"payload_bytes_needed", needed},
                                       {"cold_ms", coldMs.back()}});
     }
-    say("  teleport to full detail (%d random views, default budgets, %.1f ms frames):\n", o.teleports, o.frameMs);
-    say("    frames median %.0f, max %.0f; time median %.0f ms, max %.0f ms; from a cold start median %.0f ms\n",
-                percentileOf(tpFrames, 0.5), percentileOf(tpFrames, 1.0), percentileOf(tpMs, 0.5),
-                percentileOf(tpMs, 1.0), percentileOf(coldMs, 0.5));
-    say("  cold start to a converged view, bytes read / payload bytes of the nodes it draws: median %.4f, "
-                "max %.4f\n    (total %s read, %s of it hierarchy, for %s of payload)\n",
-                percentileOf(ratio, 0.5), percentileOf(ratio, 1.0), mib(double(sumRead)).c_str(),
-                mib(double(sumHierarchy)).c_str(), mib(double(sumNeeded)).c_str());
-    results["teleport"] = {{"frame_ms", o.frameMs}, {"frames_median", percentileOf(tpFrames, 0.5)},
-                           {"frames_max", percentileOf(tpFrames, 1.0)}, {"ms_median", percentileOf(tpMs, 0.5)},
-                           {"ms_max", percentileOf(tpMs, 1.0)}, {"cold_ms_median", percentileOf(coldMs, 0.5)}};
-    results["bytes_read_ratio"] = {{"median", percentileOf(ratio, 0.5)}, {"max", percentileOf(ratio, 1.0)},
-                                   {"bytes_read", sumRead}, {"hierarchy_bytes_read", sumHierarchy},
+    say("  teleport to full detail (%d random views, default budgets, %.1f ms frames):\n",
+        o.teleports, o.frameMs);
+    say("    frames median %.0f, max %.0f; time median %.0f ms, max %.0f ms; from a cold start "
+        "median %.0f ms\n",
+        percentileOf(tpFrames, 0.5), percentileOf(tpFrames, 1.0), percentileOf(tpMs, 0.5),
+        percentileOf(tpMs, 1.0), percentileOf(coldMs, 0.5));
+    say("  cold start to a converged view, bytes read / payload bytes of the nodes it draws: "
+        "median %.4f, "
+        "max %.4f\n    (total %s read, %s of it hierarchy, for %s of payload)\n",
+        percentileOf(ratio, 0.5), percentileOf(ratio, 1.0), mib(double(sumRead)).c_str(),
+        mib(double(sumHierarchy)).c_str(), mib(double(sumNeeded)).c_str());
+    results["teleport"] = {{"frame_ms", o.frameMs},
+                           {"frames_median", percentileOf(tpFrames, 0.5)},
+                           {"frames_max", percentileOf(tpFrames, 1.0)},
+                           {"ms_median", percentileOf(tpMs, 0.5)},
+                           {"ms_max", percentileOf(tpMs, 1.0)},
+                           {"cold_ms_median", percentileOf(coldMs, 0.5)}};
+    results["bytes_read_ratio"] = {{"median", percentileOf(ratio, 0.5)},
+                                   {"max", percentileOf(ratio, 1.0)},
+                                   {"bytes_read", sumRead},
+                                   {"hierarchy_bytes_read", sumHierarchy},
                                    {"payload_bytes_needed", sumNeeded}};
   }
   return results;

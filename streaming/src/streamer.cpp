@@ -197,7 +197,8 @@ void Streamer::Impl::buildDrawList(FrameStats& s) {
     if (n.parent != kNone && drawFrame[n.parent] != frame) continue;
     drawFrame[idx] = frame;
     const double measured = measuredSpacing(reader.metadata(), n.key.level, n.entry);
-    drawList.push_back({n.key, n.handle, n.numPoints, table.cube(n.key), n.spacing, measured > 0 ? measured : n.spacing});
+    drawList.push_back({n.key, n.handle, n.numPoints, table.cube(n.key), n.spacing,
+                        measured > 0 ? measured : n.spacing});
     s.drawPoints += n.numPoints;
   }
   s.drawNodes = static_cast<uint32_t>(drawList.size());

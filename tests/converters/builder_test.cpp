@@ -1,10 +1,11 @@
 // The out-of-core builder: point accounting, hard cases, chunked == in-memory, order independence.
+#include "nestlight/converters/builder.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <fstream>
 
-#include "nestlight/converters/builder.h"
 #include "nestlight/converters/export.h"
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/converters/synthetic.h"
@@ -42,7 +43,8 @@ std::vector<Record> storedRecords(const fs::path& dir) {
   for (auto& [k, e] : r.allNodes()) {
     PointBuffer p = r.readNode(k);
     for (size_t i = 0; i < p.size(); ++i) {
-      Record rec(reinterpret_cast<const uint8_t*>(&p.pos[3 * i]), reinterpret_cast<const uint8_t*>(&p.pos[3 * i]) + 12);
+      Record rec(reinterpret_cast<const uint8_t*>(&p.pos[3 * i]),
+                 reinterpret_cast<const uint8_t*>(&p.pos[3 * i]) + 12);
       rec.insert(rec.end(), p.attrsOf(i), p.attrsOf(i) + p.stride);
       out.push_back(std::move(rec));
     }
@@ -61,7 +63,8 @@ std::vector<Record> sourceRecords(PointReader& src, const Metadata& m) {
     for (size_t i = 0; i < b.size(); ++i) {
       Record rec(12 + stride);
       for (int a = 0; a < 3; ++a) {
-        uint32_t q = static_cast<uint32_t>(std::llround((b.xyz[3 * i + a] - m.offset[a]) / m.scale[a]));
+        uint32_t q =
+            static_cast<uint32_t>(std::llround((b.xyz[3 * i + a] - m.offset[a]) / m.scale[a]));
         std::memcpy(&rec[4 * a], &q, 4);
       }
       std::memcpy(&rec[12], &b.attrs[i * stride], stride);
@@ -149,9 +152,11 @@ TEST(Builder, NationalGridCoordinatesAtMillimetreScale) {
   src->rewind();
   std::vector<std::array<double, 3>> pa, pb;
   while (src->read(a, 50000))
-    for (size_t i = 0; i < a.size(); ++i) pa.push_back({a.xyz[3 * i], a.xyz[3 * i + 1], a.xyz[3 * i + 2]});
+    for (size_t i = 0; i < a.size(); ++i)
+      pa.push_back({a.xyz[3 * i], a.xyz[3 * i + 1], a.xyz[3 * i + 2]});
   while (back->read(b, 50000))
-    for (size_t i = 0; i < b.size(); ++i) pb.push_back({b.xyz[3 * i], b.xyz[3 * i + 1], b.xyz[3 * i + 2]});
+    for (size_t i = 0; i < b.size(); ++i)
+      pb.push_back({b.xyz[3 * i], b.xyz[3 * i + 1], b.xyz[3 * i + 2]});
   std::sort(pa.begin(), pa.end());
   std::sort(pb.begin(), pb.end());
   ASSERT_EQ(pa.size(), pb.size());
@@ -181,7 +186,8 @@ TEST(Builder, ZeroExtentAxisAndSinglePoint) {
 
 TEST(Builder, NonFiniteCoordinatesAreRejectedAndCounted) {
   TempDir tmp;
-  nestlight::test::writeFile(tmp.file("p.xyz"), "1 2 3\nnan 2 3\n4 inf 6\n7 8 9\n-inf 0 0\n10 11 12\n");
+  nestlight::test::writeFile(tmp.file("p.xyz"),
+                             "1 2 3\nnan 2 3\n4 inf 6\n7 8 9\n-inf 0 0\n10 11 12\n");
   std::vector<std::unique_ptr<PointReader>> r;
   r.push_back(openReader(tmp.file("p.xyz")));
   BuildReport rep = buildOctree(std::move(r), quietOptions(tmp.path() / "o"));
@@ -298,7 +304,8 @@ TEST(Builder, DamagedPayloadFailsVerify) {
   spec.points = 50000;
   build(spec, quietOptions(tmp.path() / "o"));
   {
-    std::fstream f(tmp.path() / "o" / "octree.bin", std::ios::in | std::ios::out | std::ios::binary);
+    std::fstream f(tmp.path() / "o" / "octree.bin",
+                   std::ios::in | std::ios::out | std::ios::binary);
     f.seekp(100);
     char c = 0x5a;
     f.write(&c, 1);
@@ -339,7 +346,8 @@ TEST(Builder, SampledCountingNeverLosesSparsePoints) {
   // seven octants of the root, so the sampled count sees those octants empty.
   add(1, 1, 1, 0);
   for (int c = 1; c < 8; ++c) add(c & 4 ? 500 : 1, c & 2 ? 500 : 1, c & 1 ? 500 : 1, uint16_t(c));
-  for (int i = 0; i < 400000; ++i) add(10.0 + (i % 631) * 0.003, 10.0 + (i / 631) * 0.003, 5.0 + (i % 7) * 0.001, uint16_t(i));
+  for (int i = 0; i < 400000; ++i)
+    add(10.0 + (i % 631) * 0.003, 10.0 + (i / 631) * 0.003, 5.0 + (i % 7) * 0.001, uint16_t(i));
   w->write(b);
   w->close();
   std::vector<std::unique_ptr<PointReader>> r;
@@ -363,7 +371,8 @@ TEST(Builder, EveryCodecAndSamplingRoundTrips) {
       o.codec = codec;
       o.sampling = sampling;
       BuildReport r = build(spec, o);
-      SCOPED_TRACE(std::string(codecName(codec)) + (sampling == Sampling::Grid ? " grid" : " poisson"));
+      SCOPED_TRACE(std::string(codecName(codec)) +
+                   (sampling == Sampling::Grid ? " grid" : " poisson"));
       expectVerified(tmp.path() / "o");
       EXPECT_EQ(storedRecords(tmp.path() / "o"), sourceRecords(*src, r.metadata));
       OctreeReader reader(tmp.path() / "o");
@@ -381,7 +390,8 @@ TEST(Builder, ChunkedEqualsInMemoryWhenDedupShrinksASubtree) {
   auto w = createLasWriter(tmp.file("d.las"), h);
   PointBatch b;
   for (int copy = 0; copy < 6; ++copy)
-    for (int i = 0; i < 15000; ++i) b.xyz.insert(b.xyz.end(), {(i % 123) * 0.05, (i / 123) * 0.05, (i % 7) * 0.025});
+    for (int i = 0; i < 15000; ++i)
+      b.xyz.insert(b.xyz.end(), {(i % 123) * 0.05, (i / 123) * 0.05, (i % 7) * 0.025});
   w->write(b);
   w->close();
   auto run = [&](const char* name, bool inMemory) {
@@ -475,7 +485,8 @@ TEST(Builder, HeaderBoundsAreAdvisoryEveryFinitePointIsKept) {
   ASSERT_EQ(want.size(), 40000u);
   for (const char* name : {"half", "lying"}) {
     SCOPED_TRACE(name);
-    BuildReport r = buildFile(tmp.file(std::string(name) + ".las"), quietOptions(tmp.path() / name));
+    BuildReport r =
+        buildFile(tmp.file(std::string(name) + ".las"), quietOptions(tmp.path() / name));
     const Accounting& a = r.metadata.accounting;
     EXPECT_EQ(a.input, 40000u);
     EXPECT_EQ(a.kept, 40000u);
@@ -485,9 +496,11 @@ TEST(Builder, HeaderBoundsAreAdvisoryEveryFinitePointIsKept) {
     EXPECT_EQ(worldSteps(tmp.path() / name), want);
     const auto& warnings = r.metadata.sources.at(0).warnings;
     if (std::string(name) == "half") {
-      EXPECT_FALSE(test::anyContains(warnings, "outside the bounds")) << "within half a step is rounding";
+      EXPECT_FALSE(test::anyContains(warnings, "outside the bounds"))
+          << "within half a step is rounding";
     } else {
-      EXPECT_TRUE(test::anyContains(warnings, "points lie outside the bounds the header declares, up to 7.5"))
+      EXPECT_TRUE(test::anyContains(warnings,
+                                    "points lie outside the bounds the header declares, up to 7.5"))
           << (warnings.empty() ? "" : warnings.front());
       EXPECT_TRUE(test::anyContains(r.warnings, "measured from the points"));
     }
@@ -500,9 +513,10 @@ TEST(Builder, HeaderBoundsAreAdvisoryEveryFinitePointIsKept) {
 // doubles. A single grid of the finest scale would move about a third of such points.
 TEST(Builder, PerAxisScalesRoundTripBitForBit) {
   TempDir tmp;
-  const std::array<Vec3d, 3> scales = {Vec3d{1.1645e-6, 1.1645e-6, 1.003e-6}, Vec3d{0.01, 0.001, 0.0025},
-                                       Vec3d{0.00025, 0.003, 0.0001}};
-  const std::array<Vec3d, 3> offsets = {Vec3d{500000, 5000000, 0}, Vec3d{-12.5, 3, 100}, Vec3d{0, 0, 0}};
+  const std::array<Vec3d, 3> scales = {Vec3d{1.1645e-6, 1.1645e-6, 1.003e-6},
+                                       Vec3d{0.01, 0.001, 0.0025}, Vec3d{0.00025, 0.003, 0.0001}};
+  const std::array<Vec3d, 3> offsets = {Vec3d{500000, 5000000, 0}, Vec3d{-12.5, 3, 100},
+                                        Vec3d{0, 0, 0}};
   for (int f = 0; f < 3; ++f) {
     SCOPED_TRACE(f);
     SyntheticSpec spec;
@@ -515,7 +529,8 @@ TEST(Builder, PerAxisScalesRoundTripBitForBit) {
     SourceHeader h = r->header();
     h.scale = scales[f];
     h.offset = offsets[f];
-    const std::string in = tmp.file("in" + std::to_string(f) + ".las"), out = tmp.file("out" + std::to_string(f) + ".las");
+    const std::string in = tmp.file("in" + std::to_string(f) + ".las"),
+                      out = tmp.file("out" + std::to_string(f) + ".las");
     {
       auto w = createLasWriter(in, h);
       PointBatch b;
@@ -535,7 +550,8 @@ TEST(Builder, PerAxisScalesRoundTripBitForBit) {
       std::vector<std::array<double, 3>> xyz;
       PointBatch b;
       while (rd->read(b, 5000))
-        for (size_t i = 0; i < b.size(); ++i) xyz.push_back({b.xyz[3 * i], b.xyz[3 * i + 1], b.xyz[3 * i + 2]});
+        for (size_t i = 0; i < b.size(); ++i)
+          xyz.push_back({b.xyz[3 * i], b.xyz[3 * i + 1], b.xyz[3 * i + 2]});
       std::sort(xyz.begin(), xyz.end());
       return xyz;
     };
@@ -554,7 +570,8 @@ TEST(Builder, PerAxisScalesRoundTripBitForBit) {
       both.push_back(openReader(in));
       BuildReport merged = buildOctree(std::move(both), quietOptions(tmp.path() / "merged"));
       EXPECT_EQ(merged.metadata.scale, (Vec3d{0.00025, 0.001, 0.0001}));
-      EXPECT_TRUE(test::anyContains(merged.warnings, "keeps the finest of each axis (0.00025, 0.001, 1e-04)"))
+      EXPECT_TRUE(test::anyContains(merged.warnings,
+                                    "keeps the finest of each axis (0.00025, 0.001, 1e-04)"))
           << (merged.warnings.empty() ? "no warnings" : merged.warnings.front());
       ASSERT_TRUE(merged.metadata.build.contains("notes"));
     }

@@ -1,7 +1,6 @@
 // The command line as a user meets it: exit codes, messages that name the file and position,
 // --help, info --json, and the hard input cases end to end.
 #include <gtest/gtest.h>
-
 #include <sys/wait.h>
 
 #include <cstdlib>
@@ -25,7 +24,8 @@ nlohmann::json infoJson(const std::string& dir) {
 }  // namespace
 
 TEST(Cli, HelpForEverySubcommand) {
-  for (const char* c : {"", "convert", "info", "verify", "export", "generate", "demo", "bench convert"}) {
+  for (const char* c :
+       {"", "convert", "info", "verify", "export", "generate", "demo", "bench convert"}) {
     std::string out;
     EXPECT_EQ(runCli(std::string(c) + " --help", &out), 0) << c;
     EXPECT_NE(out.find("Usage"), std::string::npos) << c << ": " << out;
@@ -36,7 +36,9 @@ TEST(Cli, ConvertInfoVerifyExport) {
   TempDir t;
   std::string out;
   ASSERT_EQ(runCli("generate -n 20000 -o " + t.file("s.las"), &out), 0) << out;
-  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress json", &out), 0) << out;
+  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress json", &out),
+            0)
+      << out;
   EXPECT_NE(out.find("\"phase\""), std::string::npos);  // JSON progress lines
   nlohmann::json j = infoJson(t.file("o"));
   EXPECT_EQ(j["points"], 20000);
@@ -51,7 +53,8 @@ TEST(Cli, ConvertInfoVerifyExport) {
   EXPECT_EQ(runCli("verify " + t.file("o"), &out), 0) << out;
   EXPECT_EQ(runCli("export " + t.file("o") + " -o " + t.file("back.las"), &out), 0) << out;
   EXPECT_NE(out.find("20000 points"), std::string::npos) << out;
-  EXPECT_EQ(runCli("export " + t.file("o") + " --level 0 -o " + t.file("root.ply"), &out), 0) << out;
+  EXPECT_EQ(runCli("export " + t.file("o") + " --level 0 -o " + t.file("root.ply"), &out), 0)
+      << out;
 }
 
 TEST(Cli, EmptyFileIsAnErrorNamingIt) {
@@ -66,7 +69,8 @@ TEST(Cli, EmptyFileIsAnErrorNamingIt) {
   EXPECT_NE(out.find("empty.xyz"), std::string::npos) << out;
   // A well-formed file that holds no points converts to an empty octree.
   writeFile(t.file("none.ply"),
-            "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+            "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty "
+            "float z\n"
             "end_header\n");
   ASSERT_EQ(runCli("convert " + t.file("none.ply") + " -o " + t.file("o3"), &out), 0) << out;
   EXPECT_EQ(infoJson(t.file("o3"))["points"], 0);
@@ -90,7 +94,8 @@ TEST(Cli, TruncatedLasFailsUnlessLenient) {
   EXPECT_NE(runCli("convert " + t.file("cut.las") + " -o " + t.file("o"), &out), 0);
   EXPECT_NE(out.find("cut.las"), std::string::npos) << out;
   EXPECT_NE(out.find("byte"), std::string::npos) << out;  // the position
-  ASSERT_EQ(runCli("convert --lenient " + t.file("cut.las") + " -o " + t.file("o"), &out), 0) << out;
+  ASSERT_EQ(runCli("convert --lenient " + t.file("cut.las") + " -o " + t.file("o"), &out), 0)
+      << out;
   nlohmann::json j = infoJson(t.file("o"));
   EXPECT_LT(j["points"].get<int>(), 1000);
   EXPECT_GT(j["points"].get<int>(), 990);
@@ -102,7 +107,8 @@ TEST(Cli, HeaderClaimingFewerPointsWarns) {
   std::string out;
   // An ascii PLY that declares 2 vertices but holds 3 lines of data.
   writeFile(t.file("p.ply"),
-            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty "
+            "float z\n"
             "end_header\n1 2 3\n4 5 6\n7 8 9\n");
   // The declared vertices are read; the rest is reported, not silently dropped or invented.
   ASSERT_EQ(runCli("convert " + t.file("p.ply") + " -o " + t.file("o"), &out), 0) << out;
@@ -124,9 +130,11 @@ TEST(Cli, BigEndianPlyWithUnknownPropertiesKeepsThem) {
     int32_t quality = 1000 + i;
     be32(&x), be32(&y), be32(&z), be32(&quality);
   }
-  writeFile(t.file("be.ply"),
-            "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-            "property float z\nproperty int quality\nend_header\n" + body);
+  writeFile(
+      t.file("be.ply"),
+      "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nproperty int quality\nend_header\n" +
+          body);
   std::string out;
   ASSERT_EQ(runCli("convert " + t.file("be.ply") + " -o " + t.file("o"), &out), 0) << out;
   nlohmann::json j = infoJson(t.file("o"));
@@ -144,14 +152,19 @@ TEST(Cli, TruncatedLazNamesFileAndPosition) {
   writeFile(t.file("x.laz"), "LASF");
   std::string out;
   EXPECT_NE(runCli("convert " + t.file("x.laz") + " -o " + t.file("o"), &out), 0);
-  EXPECT_NE(out.find(t.file("x.laz") + ": byte 4: file ends inside the LAS header"), std::string::npos) << out;
+  EXPECT_NE(out.find(t.file("x.laz") + ": byte 4: file ends inside the LAS header"),
+            std::string::npos)
+      << out;
 }
 
 TEST(Cli, MemoryFarBelowInputSize) {
   TempDir t;
   std::string out;
   ASSERT_EQ(runCli("generate -n 1500000 -o " + t.file("s.las"), &out), 0) << out;
-  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --memory 16M --progress quiet", &out), 0)
+  ASSERT_EQ(
+      runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --memory 16M --progress quiet",
+             &out),
+      0)
       << out;
   nlohmann::json j = infoJson(t.file("o"));
   EXPECT_EQ(j["points"], 1500000);
@@ -163,7 +176,8 @@ TEST(Cli, VerifyFailsOnDamageWithNonZeroExit) {
   TempDir t;
   std::string out;
   ASSERT_EQ(runCli("generate -n 5000 -o " + t.file("s.las"), &out), 0);
-  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress quiet", &out), 0);
+  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress quiet", &out),
+            0);
   fs::resize_file(t.file("o") + "/octree.bin", fs::file_size(t.file("o") + "/octree.bin") - 10);
   EXPECT_NE(runCli("verify " + t.file("o"), &out), 0);
   EXPECT_NE(out.find("FAIL"), std::string::npos) << out;
@@ -176,7 +190,8 @@ TEST(Cli, DirectoryInputAndUnknownFormat) {
   std::string out;
   ASSERT_EQ(runCli("generate -n 1000 --seed 1 -o " + t.file("in/a.las"), &out), 0);
   ASSERT_EQ(runCli("generate -n 2000 --seed 2 -o " + t.file("in/b.ply"), &out), 0);
-  ASSERT_EQ(runCli("convert " + t.file("in") + " -o " + t.file("o") + " --progress quiet", &out), 0) << out;
+  ASSERT_EQ(runCli("convert " + t.file("in") + " -o " + t.file("o") + " --progress quiet", &out), 0)
+      << out;
   EXPECT_EQ(infoJson(t.file("o"))["points"], 3000);
   writeFile(t.file("x.e57"), "?");
   EXPECT_NE(runCli("convert " + t.file("x.e57") + " -o " + t.file("o2"), &out), 0);
@@ -189,7 +204,10 @@ TEST(Cli, WarningsNameTheFileOnce) {
   TempDir t;
   std::string out;
   writeTruncatedLas(t);
-  ASSERT_EQ(runCli("convert --lenient " + t.file("cut.las") + " -o " + t.file("o") + " --progress quiet", &out), 0)
+  ASSERT_EQ(
+      runCli("convert --lenient " + t.file("cut.las") + " -o " + t.file("o") + " --progress quiet",
+             &out),
+      0)
       << out;
   const size_t line = out.find("warning");
   ASSERT_NE(line, std::string::npos) << out;
@@ -207,7 +225,9 @@ TEST(Cli, ExportMakesAMissingOutputFolder) {
   TempDir t;
   std::string out;
   ASSERT_EQ(runCli("generate -n 2000 -o " + t.file("s.las"), &out), 0) << out;
-  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress quiet", &out), 0) << out;
+  ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress quiet", &out),
+            0)
+      << out;
   for (const char* f : {"new/a/all.las", "new/b/all.laz", "new/c/all.ply"}) {
     ASSERT_EQ(runCli("export " + t.file("o") + " -o " + t.file(f), &out), 0) << f << ": " << out;
     EXPECT_TRUE(fs::exists(t.file(f))) << f;
@@ -217,8 +237,8 @@ TEST(Cli, ExportMakesAMissingOutputFolder) {
 // LAZ output needs the disk space of the .laz file alone: points are compressed as they arrive,
 // nothing uncompressed is written first. A file size limit (ulimit -f, in KiB) stands in for a
 // nearly full disk: at 1.2 times the .laz file's size the export succeeds (the uncompressed LAS
-// written first would once have failed); below the .laz file's size it fails naming the file and leaves
-// nothing behind.
+// written first would once have failed); below the .laz file's size it fails naming the file and
+// leaves nothing behind.
 TEST(Cli, LazOutputNeedsOnlyTheSpaceOfTheLazFile) {
   TempDir t;
   std::string out;
@@ -258,21 +278,31 @@ TEST(Cli, SceneRendersApplyOrRefuseScanOptionsByName) {
   ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
   TempDir t;
   std::string out;
-  ASSERT_EQ(runCli("make-scene cornell -o " + t.file("room") + " -n 20k --width 24 --height 16 -q", &out), 0) << out;
+  ASSERT_EQ(
+      runCli("make-scene cornell -o " + t.file("room") + " -n 20k --width 24 --height 16 -q", &out),
+      0)
+      << out;
   const std::string scene = t.file("room/scene.json");
-  EXPECT_NE(runCli("render " + scene + " --point-budget 1M --spp 1 -o " + t.file("r.exr"), &out), 0);
+  EXPECT_NE(runCli("render " + scene + " --point-budget 1M --spp 1 -o " + t.file("r.exr"), &out),
+            0);
   EXPECT_NE(out.find("--point-budget"), std::string::npos) << out;
   EXPECT_NE(out.find("memory_budget"), std::string::npos) << out;
-  EXPECT_NE(runCli("render " + scene + " --method raster --camera 0,0,0,1,1,1 -o " + t.file("r.exr"), &out), 0);
+  EXPECT_NE(
+      runCli("render " + scene + " --method raster --camera 0,0,0,1,1,1 -o " + t.file("r.exr"),
+             &out),
+      0);
   EXPECT_NE(out.find("--camera does not apply to a scene file"), std::string::npos) << out;
-  ASSERT_EQ(runCli("render " + scene + " --method raster --point-budget 5000 --splatting basic -o " +
-                       t.file("made/here/r.exr"),
-                   &out),
-            0)
+  ASSERT_EQ(
+      runCli("render " + scene + " --method raster --point-budget 5000 --splatting basic -o " +
+                 t.file("made/here/r.exr"),
+             &out),
+      0)
       << out;
   EXPECT_TRUE(fs::exists(t.file("made/here/r.exr")));
   // The budget reached the method: its image header says so.
-  EXPECT_EQ(runCli("render " + scene + " --method raster --point-budget 0 -o " + t.file("r.exr"), &out) == 0, false)
+  EXPECT_EQ(runCli("render " + scene + " --method raster --point-budget 0 -o " + t.file("r.exr"),
+                   &out) == 0,
+            false)
       << out;
   EXPECT_NE(out.find("point_budget"), std::string::npos) << out;
 }

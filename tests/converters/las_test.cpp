@@ -868,7 +868,9 @@ void checkUpgrade(bool laz, int first, int second) {
   EXPECT_EQ(byReturn[8], want[8]);
 }
 
-TEST(LasWriter, ValuesOnlyFormat6HoldsUpgradeTheFile) { checkUpgrade(false, 100, 100); }
+TEST(LasWriter, ValuesOnlyFormat6HoldsUpgradeTheFile) {
+  checkUpgrade(false, 100, 100);
+}
 
 // LAZ is compressed as points arrive, so the upgrade decodes the chunks already written (more
 // than one group of them here, and a partial chunk still held) and compresses them again.

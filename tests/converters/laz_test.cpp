@@ -672,8 +672,9 @@ TEST(LazDamage, VariableChunksAccountForEveryDeclaredPoint) {
   // The header declares fewer points than the chunks list, and some are lost: still balanced.
   const LenientRead s = readLeniently(rewrite(b, 1000));
   EXPECT_EQ(s.points + s.unreadable, 1065u);
-  EXPECT_TRUE(test::anyContains(s.warnings, "header declares 1000 points but the LAZ chunk table "
-                                            "lists 1065"));
+  EXPECT_TRUE(test::anyContains(s.warnings,
+                                "header declares 1000 points but the LAZ chunk table "
+                                "lists 1065"));
   // And more than they list: the missing ones are counted too.
   const LenientRead m = readLeniently(rewrite(bytes, 1100));
   EXPECT_EQ(m.points, 1065u);

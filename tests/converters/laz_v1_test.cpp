@@ -64,7 +64,8 @@ class Point10Enc final : public ItemEncoder {
     if (changed & 8) enc.encodeSymbol(classification_[last_[15]], item[15]);
     if (changed & 4) scanAngle_.compress(enc, last_[16], item[16], k < 3 ? 1 : 0);
     if (changed & 2) enc.encodeSymbol(userData_[last_[17]], item[17]);
-    if (changed & 1) pointSource_.compress(enc, get<uint16_t>(last_ + 18), get<uint16_t>(item + 18));
+    if (changed & 1)
+      pointSource_.compress(enc, get<uint16_t>(last_ + 18), get<uint16_t>(item + 18));
     lastDx_[slot_] = dx;
     lastDy_[slot_] = dy;
     slot_ = (slot_ + 1) % 3;

@@ -386,7 +386,8 @@ void compareWithOctree(const PDataset& d, const fs::path& octreeDir,
   for (int a = 0; a < 3; ++a) {
     if (j["offset"][a].get<double>() != m.offset[a])
       fail("offset differs on axis " + std::to_string(a));
-    if (j["scale"][a].get<double>() != m.scale[a]) fail("scale differs on axis " + std::to_string(a));
+    if (j["scale"][a].get<double>() != m.scale[a])
+      fail("scale differs on axis " + std::to_string(a));
   }
   // The bounding box is the octree's root cube: min the grid's origin, max = min + cube edge
   // (edges equal up to the rounding of the corner coordinates).

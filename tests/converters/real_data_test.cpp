@@ -32,7 +32,8 @@ std::vector<Row> rows(PointReader& r, const Metadata& m, const std::vector<std::
       const double* p = &b.xyz[3 * i];
       if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
       Row row;
-      for (int a = 0; a < 3; ++a) row.push_back(double(std::llround((p[a] - m.offset[a]) / m.scale[a])));
+      for (int a = 0; a < 3; ++a)
+        row.push_back(double(std::llround((p[a] - m.offset[a]) / m.scale[a])));
       for (int k : idx) {
         if (k < 0) {
           row.push_back(-1e300);  // absent: fails the comparison below
@@ -40,7 +41,8 @@ std::vector<Row> rows(PointReader& r, const Metadata& m, const std::vector<std::
         }
         const Attribute& at = l[k];
         for (uint32_t c = 0; c < at.components; ++c)
-          row.push_back(loadAsDouble(at.type, b.attrs.data() + i * l.stride() + l.offset(k) + c * scalarSize(at.type)));
+          row.push_back(loadAsDouble(
+              at.type, b.attrs.data() + i * l.stride() + l.offset(k) + c * scalarSize(at.type)));
       }
       out.push_back(std::move(row));
     }
@@ -60,7 +62,8 @@ BuildReport buildQuiet(const std::vector<fs::path>& sources, const fs::path& out
 }
 
 // Returns the metadata of the build, for checks specific to one scan.
-Metadata convertVerifyExport(const std::string& rel, const std::string& exportExt, uint64_t expectedPoints) {
+Metadata convertVerifyExport(const std::string& rel, const std::string& exportExt,
+                             uint64_t expectedPoints) {
   const fs::path src = nestlight::test::sharedData() / rel;
   TempDir tmp;
   const fs::path octree = tmp.path() / "o";

@@ -1,8 +1,6 @@
 // Synthetic point source: determinism (batch sizes, rewind), counts, bounds, special shapes,
 // (its speed is measured by benchmarks, not tests).
 #include "nestlight/converters/synthetic.h"
-#include "nestlight/converters/synthetic_octree.h"
-#include "nestlight/octree/octree_reader.h"
 
 #include <time.h>
 
@@ -10,6 +8,8 @@
 #include <cstring>
 #include <vector>
 
+#include "nestlight/converters/synthetic_octree.h"
+#include "nestlight/octree/octree_reader.h"
 #include "test_support.h"
 
 namespace nestlight {

@@ -55,8 +55,9 @@ TEST(NodeLayers, FreedWithTheirNodeAndCountedInTheBudget) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(-1, 1);
     const glm::dvec3 c = test::boundsCenter(meta);
-    const double r = std::hypot(meta.bounds.max.x - meta.bounds.min.x, meta.bounds.max.y - meta.bounds.min.y,
-                                meta.bounds.max.z - meta.bounds.min.z);
+    const double r =
+        std::hypot(meta.bounds.max.x - meta.bounds.min.x, meta.bounds.max.y - meta.bounds.min.y,
+                   meta.bounds.max.z - meta.bounds.min.z);
     uint64_t maxResident = 0;
     for (int f = 0; f < 400; ++f) {
       // Teleports every 40 frames, drifting in between: nodes keep loading and being evicted.
@@ -108,8 +109,10 @@ TEST(GlNodeStoreHdr, ColourWordsAreTheLayersColourPointForPoint) {
   spec.seed = 4;
   test::buildSyntheticOctree(t.path() / "o", spec, 2000);
   auto colourOf = [](const NodeKey& k, size_t i) {
-    const float v = float(std::pow(10.0, std::fmod(double(k.x * 5 + k.y * 3 + k.z + k.level * 7) + 0.13 * double(i % 61),
-                                                   7.7) - 3.0));
+    const float v = float(std::pow(
+        10.0,
+        std::fmod(double(k.x * 5 + k.y * 3 + k.z + k.level * 7) + 0.13 * double(i % 61), 7.7) -
+            3.0));
     return std::array<float, 3>{v, 0.5f * v, 0.125f * v};
   };
   {
@@ -137,7 +140,8 @@ TEST(GlNodeStoreHdr, ColourWordsAreTheLayersColourPointForPoint) {
       // The layer holds half floats: 2^-11 relative, then RGB9E5's step.
       const auto want = colourOf(key, i);
       for (int c = 0; c < 3; ++c)
-        ASSERT_NEAR(got[c], want[c], want[0] / 512.0f + want[c] / 2048.0f) << key.name() << " point " << i;
+        ASSERT_NEAR(got[c], want[c], want[0] / 512.0f + want[c] / 2048.0f)
+            << key.name() << " point " << i;
       ++checked;
     }
   }

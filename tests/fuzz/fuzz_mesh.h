@@ -1,4 +1,5 @@
-// Shared by the mesh reader fuzz targets. Header-only: each tests/fuzz/fuzz_*.cpp builds on its own.
+// Shared by the mesh reader fuzz targets. Header-only: each tests/fuzz/fuzz_*.cpp builds on its
+// own.
 #pragma once
 
 #include <cstddef>

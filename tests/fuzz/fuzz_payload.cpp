@@ -33,7 +33,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (out.size() == count && count > 0) {
     std::vector<uint8_t> again = encodePayload(codec, layout, out);
     PointBuffer back;
-    if (!decodePayload(codec, layout, again.data(), again.size(), count, back).empty()) __builtin_trap();
+    if (!decodePayload(codec, layout, again.data(), again.size(), count, back).empty())
+      __builtin_trap();
     if (codec != Codec::Draco && (back.pos != out.pos || back.attrs != out.attrs)) __builtin_trap();
   }
   return 0;

@@ -504,5 +504,6 @@ TEST(EnvironmentMap, RealMapsLoadAndSample) {
                   m.file, k, e[k], exact[k], std::abs(e[k] / exact[k] - 1), 5 * sigma);
     }
   }
-  if (found == 0) GTEST_SKIP() << "no real maps in " << ::nestlight::test::sharedData().string() << "/hdr";
+  if (found == 0)
+    GTEST_SKIP() << "no real maps in " << ::nestlight::test::sharedData().string() << "/hdr";
 }

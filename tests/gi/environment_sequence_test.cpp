@@ -20,11 +20,16 @@ void writeFrame(const fs::path& path, float value) {
   writeExr(path.string(), img);
 }
 
-float radianceOf(const EnvironmentMap& m) { return m.eval({0.0f, 0.0f, 1.0f}).r; }
+float radianceOf(const EnvironmentMap& m) {
+  return m.eval({0.0f, 0.0f, 1.0f}).r;
+}
 
 TEST(EnvironmentSequence, APatternPlaysItsFramesAtItsRateHoldingTwo) {
   test::TempDir t;
-  for (int k = 3; k <= 8; ++k) writeFrame(t.path() / ("probe_" + std::string(k < 10 ? "000" : "00") + std::to_string(k) + ".exr"), float(k));
+  for (int k = 3; k <= 8; ++k)
+    writeFrame(
+        t.path() / ("probe_" + std::string(k < 10 ? "000" : "00") + std::to_string(k) + ".exr"),
+        float(k));
   writeFrame(t.path() / "other_0001.exr", 99.0f);  // another pattern's frame
   EnvironmentSequenceSpec spec;
   spec.source = t.path() / "probe_%04d.exr";
@@ -116,8 +121,9 @@ TEST(EnvironmentSequence, ASceneNamesOneByPatternAndRate) {
   writeFrame(t.path() / "p_2.exr", 5.0f);
   test::writeFile(t.file("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
   auto scene = [&](const std::string& environment) {
-    test::writeFile(t.file("scene.json"),
-                    R"({"version": 1, "meshes": [{"path": "tri.obj"}], "environment": )" + environment + "}");
+    test::writeFile(
+        t.file("scene.json"),
+        R"({"version": 1, "meshes": [{"path": "tri.obj"}], "environment": )" + environment + "}");
     return t.file("scene.json");
   };
   const Scene s = loadScene(scene(R"({"sequence": "p_%d.exr", "fps": 10, "scale": 2})"));
@@ -127,8 +133,10 @@ TEST(EnvironmentSequence, ASceneNamesOneByPatternAndRate) {
   EXPECT_FLOAT_EQ(radianceOf(loadEnvironmentAt(*s.environment)), 4.0f);
   EXPECT_FLOAT_EQ(radianceOf(loadEnvironmentAt(*s.environment, 0.15)), 10.0f);
   const Error none = test::errorOf([&] { loadScene(scene(R"({"sequence": "q_%d.exr"})")); });
-  EXPECT_NE(std::string(none.what()).find("environment.sequence"), std::string::npos) << none.what();
-  const Error both = test::errorOf([&] { loadScene(scene(R"({"sequence": "p_%d.exr", "path": "p_1.exr"})")); });
+  EXPECT_NE(std::string(none.what()).find("environment.sequence"), std::string::npos)
+      << none.what();
+  const Error both =
+      test::errorOf([&] { loadScene(scene(R"({"sequence": "p_%d.exr", "path": "p_1.exr"})")); });
   EXPECT_NE(std::string(both.what()).find("exactly one"), std::string::npos) << both.what();
   const Error stray = test::errorOf([&] { loadScene(scene(R"({"path": "p_1.exr", "fps": 3})")); });
   EXPECT_NE(std::string(stray.what()).find("belong to a"), std::string::npos) << stray.what();

@@ -6,10 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/gi/mesh.h"
 #include "test_support.h"
@@ -29,7 +28,8 @@ TriangleMesh irregularSquare() {
     const float t = float(i) / steps;
     m.positions.push_back({t * t * t, 1, 0});
   }
-  for (int i = 0; i < steps; ++i) m.indices.insert(m.indices.end(), {0, uint32_t(i + 3), uint32_t(i + 2)});
+  for (int i = 0; i < steps; ++i)
+    m.indices.insert(m.indices.end(), {0, uint32_t(i + 3), uint32_t(i + 2)});
   m.indices.insert(m.indices.end(), {0, 1, uint32_t(steps + 2)});
   return m;
 }
@@ -65,9 +65,11 @@ TEST(MeshSampling, MeshAreaUnderAnAffineTransform) {
 }
 
 TEST(MeshSampling, SurfelAreasSumToTheMeshArea) {
-  std::vector<std::pair<std::string, TriangleMesh>> meshes = {{"irregular square", irregularSquare()}};
+  std::vector<std::pair<std::string, TriangleMesh>> meshes = {
+      {"irregular square", irregularSquare()}};
   if (const std::string p = bunnyPath(); !p.empty()) meshes.push_back({"bunny", readMesh(p)});
-  const glm::mat4 m = glm::scale(glm::rotate(glm::mat4(1), 1.0f, glm::vec3(0, 1, 1)), glm::vec3(3, 1, 0.5f));
+  const glm::mat4 m =
+      glm::scale(glm::rotate(glm::mat4(1), 1.0f, glm::vec3(0, 1, 1)), glm::vec3(3, 1, 0.5f));
   for (const auto& [name, mesh] : meshes)
     for (auto method : {SurfelSampling::AreaUniform, SurfelSampling::PoissonDisk}) {
       SCOPED_TRACE(name + (method == SurfelSampling::PoissonDisk ? " Poisson" : " uniform"));
@@ -145,7 +147,8 @@ TEST(MeshSampling, PoissonDiskKeepsAMinimumDistanceAndTheCount) {
     EXPECT_GE(*std::min_element(d.begin(), d.end()), 1.25 * rMax) << "seed " << seed;
     // And no holes: every cell of a 10 x 10 grid holds close to its 20 points.
     std::vector<int> cells(100, 0);
-    for (const auto& p : pd.positions) cells[std::min(9, int(p.x * 10)) * 10 + std::min(9, int(p.y * 10))]++;
+    for (const auto& p : pd.positions)
+      cells[std::min(9, int(p.x * 10)) * 10 + std::min(9, int(p.y * 10))]++;
     EXPECT_GE(*std::min_element(cells.begin(), cells.end()), 12) << "seed " << seed;
     EXPECT_LE(*std::max_element(cells.begin(), cells.end()), 28) << "seed " << seed;
 
@@ -189,7 +192,8 @@ TEST(MeshSampling, NormalsStayPerpendicularUnderNonUniformScale) {
       const glm::vec3 w0 = glm::vec3(m * glm::vec4(one.positions[0], 1));
       const glm::vec3 w1 = glm::vec3(m * glm::vec4(one.positions[1], 1));
       const glm::vec3 w2 = glm::vec3(m * glm::vec4(one.positions[2], 1));
-      const glm::vec3 e[3] = {glm::normalize(w1 - w0), glm::normalize(w2 - w0), glm::normalize(w2 - w1)};
+      const glm::vec3 e[3] = {glm::normalize(w1 - w0), glm::normalize(w2 - w0),
+                              glm::normalize(w2 - w1)};
       const glm::vec3 front = glm::cross(w1 - w0, w2 - w0);  // det > 0: winding keeps its side
       SurfelOptions o;
       o.count = 8;
@@ -228,7 +232,8 @@ TEST(MeshSampling, NormalsStayOutwardUnderAMirror) {
       }
   TriangleMesh bare = oct;
   bare.normals.clear();
-  const glm::mat4 mirror = glm::scale(glm::translate(glm::mat4(1), glm::vec3(10, 0, 0)), glm::vec3(-1, 3, 0.5f));
+  const glm::mat4 mirror =
+      glm::scale(glm::translate(glm::mat4(1), glm::vec3(10, 0, 0)), glm::vec3(-1, 3, 0.5f));
   const glm::vec3 centre(10, 0, 0);
   for (const TriangleMesh* mesh : {&oct, &bare}) {
     SurfelOptions o;
@@ -265,7 +270,8 @@ TEST(MeshSampling, ShadingNormalsInterpolateAndAlbedoIsVertexColourTimesBase) {
 TEST(MeshSampling, DegenerateTrianglesGetNoPoints) {
   TriangleMesh m;
   // A good triangle at z = 1; a collinear one, a repeated-index one and a NaN one at z = 0.
-  m.positions = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {NAN, 0, 0}, {0, 5, 0}};
+  m.positions = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1},   {0, 0, 0},
+                 {1, 0, 0}, {2, 0, 0}, {NAN, 0, 0}, {0, 5, 0}};
   m.indices = {3, 4, 5, 0, 1, 2, 3, 3, 7, 3, 6, 7};
   EXPECT_NEAR(meshArea(m, glm::mat4(1)), 0.5, 1e-7);
   for (auto method : {SurfelSampling::AreaUniform, SurfelSampling::PoissonDisk}) {
@@ -289,7 +295,8 @@ TEST(MeshSampling, SameSeedSamePoints) {
     o.method = method;
     o.count = 1500;
     o.seed = 77;
-    const Surfels a = sampleSurfels(square, glm::mat4(1), o), b = sampleSurfels(square, glm::mat4(1), o);
+    const Surfels a = sampleSurfels(square, glm::mat4(1), o),
+                  b = sampleSurfels(square, glm::mat4(1), o);
     EXPECT_EQ(a.positions, b.positions);
     EXPECT_EQ(a.normals, b.normals);
     o.seed = 78;

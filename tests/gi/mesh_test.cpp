@@ -24,7 +24,8 @@ using nestlight::Error;
 
 namespace {
 
-TriangleMesh readBytes(const std::string& name, const std::string& bytes, MeshReadReport* r = nullptr) {
+TriangleMesh readBytes(const std::string& name, const std::string& bytes,
+                       MeshReadReport* r = nullptr) {
   return readMeshFromMemory(name, bytes.data(), bytes.size(), r);
 }
 
@@ -48,7 +49,9 @@ void put(std::string& s, T v, bool big) {
   s.append(b, sizeof(T));
 }
 
-std::vector<uint32_t> tri(std::initializer_list<uint32_t> i) { return i; }
+std::vector<uint32_t> tri(std::initializer_list<uint32_t> i) {
+  return i;
+}
 
 // The value of an 8-bit sRGB code in linear light (IEC 61966-2-1), computed apart from the reader.
 float srgb8(int c) {
@@ -190,7 +193,7 @@ TEST(MeshReader, ObjReadsAllCornerFormsNegativeIndicesAndFans) {
       "mtllib scene.mtl\n"
       "o thing\n"
       "v 0 0 0\n"
-      "v 1 0 0 1.0\n"  // a w is ignored
+      "v 1 0 0 1.0\n"          // a w is ignored
       "v 1 1 0 0.5 0.5 0.5\n"  // so are vertex colours
       "v 0 1 0\n"
       "vt 0 0\n"
@@ -198,10 +201,10 @@ TEST(MeshReader, ObjReadsAllCornerFormsNegativeIndicesAndFans) {
       "g group\n"
       "usemtl red\n"
       "s off\n"
-      "f 1 2 3 4\n"          // a quad: two triangles
-      "f -4/1 -3/2 -2/2\n"   // relative indices: vertices 1 2 3
+      "f 1 2 3 4\n"         // a quad: two triangles
+      "f -4/1 -3/2 -2/2\n"  // relative indices: vertices 1 2 3
       "v 5 5 5\n"
-      "f 5 -1/ 1 \\\n"       // a repeated vertex through a relative index, continued...
+      "f 5 -1/ 1 \\\n"  // a repeated vertex through a relative index, continued...
       "  2 # ...on the next line\n"
       "l 1 2\n"
       "p 3\n";
@@ -256,7 +259,8 @@ TEST(MeshReader, ObjCornersWithoutNormalsGetTheirTrianglesNormalAndAWarning) {
   EXPECT_EQ(m.normals[4], glm::vec3(0, 0, 1));
   EXPECT_EQ(m.normals[5], glm::vec3(0, 0, 1));
   ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_NE(r.warnings[0].find("3 face corners have no normal"), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("3 face corners have no normal"), std::string::npos)
+      << r.warnings[0];
 }
 
 // The "mesh with degenerate triangles" hard case: every kind is dropped and counted, none is
@@ -266,13 +270,13 @@ TEST(MeshReader, DegenerateTrianglesAreDroppedAndCounted) {
       "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\n"
       "property float z\nelement face 7\nproperty list uchar uint vertex_indices\nend_header\n"
       "0 0 0\n1 0 0\n0 1 0\n2 0 0\nnan 0 0\n1e39 0 0\n"
-      "3 0 1 2\n"        // good
-      "3 0 0 2\n"        // repeated index
-      "3 0 1 3\n"        // collinear: zero area
-      "3 0 1 4\n"        // a NaN corner
-      "3 0 2 5\n"        // a corner beyond float's range (infinite)
-      "2 0 1\n"          // an edge, not a triangle
-      "4 1 0 3 2\n";     // a quad whose first fan triangle is collinear: one kept, one dropped
+      "3 0 1 2\n"     // good
+      "3 0 0 2\n"     // repeated index
+      "3 0 1 3\n"     // collinear: zero area
+      "3 0 1 4\n"     // a NaN corner
+      "3 0 2 5\n"     // a corner beyond float's range (infinite)
+      "2 0 1\n"       // an edge, not a triangle
+      "4 1 0 3 2\n";  // a quad whose first fan triangle is collinear: one kept, one dropped
   MeshReadReport r;
   TriangleMesh m = readBytes("degenerate.ply", ply, &r);
   EXPECT_EQ(m.positions.size(), 6u);  // all vertices stay; none of the bad ones is referenced
@@ -283,8 +287,9 @@ TEST(MeshReader, DegenerateTrianglesAreDroppedAndCounted) {
   EXPECT_EQ(r.nonFiniteVertices, 2u);
   EXPECT_EQ(r.polygonsTriangulated, 1u);
 
-  const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 0 0 inf\n"
-                          "f 1 2 3\nf 1 1 3\nf 1 2 4\nf 1 2 5\nf 1 2\nf 3\n";
+  const std::string obj =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nv 0 0 inf\n"
+      "f 1 2 3\nf 1 1 3\nf 1 2 4\nf 1 2 5\nf 1 2\nf 3\n";
   MeshReadReport o;
   m = readBytes("degenerate.obj", obj, &o);
   EXPECT_EQ(m.indices, tri({0, 1, 2}));
@@ -385,8 +390,8 @@ TEST(MeshReader, MalformedFilesNameTheFileAndThePosition) {
        "ends inside element 'face': 0 of the 1"},
       {"ascii face list shorter than its count", "fs.ply",
        ascii3 + "0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", "line 13", "ends before the last property"},
-      {"ascii vertex count of 2^40", "big.ply", plyHeader("ascii", "1099511627776", "1") + "0 0 0\n",
-       "line 3", "at most 2^32 - 1"},
+      {"ascii vertex count of 2^40", "big.ply",
+       plyHeader("ascii", "1099511627776", "1") + "0 0 0\n", "line 3", "at most 2^32 - 1"},
       {"ascii vertex count of 2^31", "lie.ply", plyHeader("ascii", "2147483648", "1") + "0 0 0\n",
        "line 10", "ends inside element 'vertex': 1 of the 2147483648"},
       {"ascii face count of 10^9", "lief.ply",
@@ -407,8 +412,8 @@ TEST(MeshReader, MalformedFilesNameTheFileAndThePosition) {
        "byte " + std::to_string(binFaces + 1), "ends inside element 'face'"},
       {"binary index out of range", "br.ply", littleTriangle(3),
        "byte " + std::to_string(binFaces + 1), "vertex index 3 is out of range"},
-      {"binary negative index", "bn.ply", littleTriangle(-5), "byte " + std::to_string(binFaces + 1),
-       "negative vertex index"},
+      {"binary negative index", "bn.ply", littleTriangle(-5),
+       "byte " + std::to_string(binFaces + 1), "negative vertex index"},
       {"OBJ index out of range", "r.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "line 4",
        "vertex index 4 is out of range"},
       {"OBJ forward reference", "fw.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n", "line 3",
@@ -416,8 +421,9 @@ TEST(MeshReader, MalformedFilesNameTheFileAndThePosition) {
       {"OBJ relative index too far back", "rel.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n",
        "line 4", "index -4 is out of range"},
       {"OBJ index 0", "z.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "line 4", "index 0"},
-      {"OBJ normal out of range", "n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n",
-       "line 5", "normal index 2 is out of range"},
+      {"OBJ normal out of range", "n.obj",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n", "line 5",
+       "normal index 2 is out of range"},
       {"OBJ texture coordinate out of range", "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n",
        "line 4", "texture coordinate index 1 is out of range"},
       {"OBJ bad number", "b.obj", "v 0 0 0\nv 1 abc 0\n", "line 2", "cannot read 'abc'"},
@@ -439,7 +445,9 @@ TEST(MeshReader, MalformedFilesNameTheFileAndThePosition) {
 // never a mesh with indices out of range.
 TEST(MeshReader, EveryTruncationOfValidFilesFailsCleanly) {
   std::vector<std::pair<std::string, std::string>> files = {
-      {"a.ply", kAsciiPly}, {"l.ply", binaryPly(false)}, {"b.ply", binaryPly(true)},
+      {"a.ply", kAsciiPly},
+      {"l.ply", binaryPly(false)},
+      {"b.ply", binaryPly(true)},
       {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf -1 -2 -3\n"}};
   for (const auto& [name, bytes] : files)
     for (size_t n = 0; n <= bytes.size(); ++n) {
@@ -478,7 +486,8 @@ std::string meshFile(const char* name) {
 
 TEST(MeshReader, RealBunnyAsciiPly) {
   const std::string path = meshFile("bunny.ply");
-  if (path.empty()) GTEST_SKIP() << "no bunny.ply under " << ::nestlight::test::sharedData().string() << "/meshes";
+  if (path.empty())
+    GTEST_SKIP() << "no bunny.ply under " << ::nestlight::test::sharedData().string() << "/meshes";
   MeshReadReport r;
   TriangleMesh m = readMesh(path, &r);
   EXPECT_EQ(m.positions.size(), 35947u);
@@ -495,7 +504,9 @@ TEST(MeshReader, RealBunnyAsciiPly) {
 
 TEST(MeshReader, RealGargoyleBinaryPlyWithNormalsAndColours) {
   const std::string path = meshFile("gargoyle.ply");
-  if (path.empty()) GTEST_SKIP() << "no gargoyle.ply under " << ::nestlight::test::sharedData().string() << "/meshes";
+  if (path.empty())
+    GTEST_SKIP() << "no gargoyle.ply under " << ::nestlight::test::sharedData().string()
+                 << "/meshes";
   MeshReadReport r;
   TriangleMesh m = readMesh(path, &r);
   EXPECT_EQ(m.positions.size(), 25002u);

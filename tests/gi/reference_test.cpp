@@ -1,11 +1,11 @@
 // The path-traced reference against analytic answers: furnaces, a point light over a plane, and
 // the hard cases of issue 4.
-#include "nestlight/gi/reference/path_tracer.h"
-
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include <cmath>
+
+#include "nestlight/gi/reference/path_tracer.h"
 
 using namespace nestlight::gi;
 
@@ -32,7 +32,8 @@ TriangleMesh quad(glm::vec3 centre, glm::vec3 normal, float size) {
   Frame f = Frame::fromNormal(glm::normalize(normal));
   TriangleMesh m;
   float h = size / 2;
-  m.positions = {centre + h * (-f.s - f.t), centre + h * (f.s - f.t), centre + h * (f.s + f.t), centre + h * (-f.s + f.t)};
+  m.positions = {centre + h * (-f.s - f.t), centre + h * (f.s - f.t), centre + h * (f.s + f.t),
+                 centre + h * (-f.s + f.t)};
   m.indices = {0, 1, 2, 0, 2, 3};
   return m;
 }
@@ -56,16 +57,19 @@ SceneCamera lookAt(glm::dvec3 eye, glm::dvec3 target, int w, int h, double fov) 
 
 Rgb mean(const HdrImage& img) {
   glm::dvec3 s(0.0);
-  for (size_t i = 0; i < img.pixels(); ++i) s += glm::dvec3(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]);
+  for (size_t i = 0; i < img.pixels(); ++i)
+    s += glm::dvec3(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]);
   return Rgb(s / double(img.pixels()));
 }
 
-std::unique_ptr<ReferenceScene> furnace(const Material& receiver, float L, std::vector<DiscCloud> extra = {}) {
+std::unique_ptr<ReferenceScene> furnace(const Material& receiver, float L,
+                                        std::vector<DiscCloud> extra = {}) {
   std::vector<DiscCloud> clouds{sphereOfDiscs(20000, 1.0f, Rgb(L))};
   for (auto& c : extra) clouds.push_back(std::move(c));
-  return std::make_unique<ReferenceScene>(std::move(clouds), std::vector<TriangleMesh>{quad({0, 0, 0}, {0, -1, 0}, 0.2f)},
-                                          std::vector<uint32_t>{0}, std::vector<Material>{receiver}, std::vector<Light>{},
-                                          EnvironmentMap());
+  return std::make_unique<ReferenceScene>(
+      std::move(clouds), std::vector<TriangleMesh>{quad({0, 0, 0}, {0, -1, 0}, 0.2f)},
+      std::vector<uint32_t>{0}, std::vector<Material>{receiver}, std::vector<Light>{},
+      EnvironmentMap());
 }
 
 // Camera inside the furnace looking at the receiver so that it fills the view.
@@ -93,8 +97,10 @@ TEST(Reference, ClosedPoissonSampledBoxLeaksNoRay) {
   // edges and corners included. With the radius rule of earlier versions (2/3 of today's) rays
   // did escape, which shows the test can fail.
   TriangleMesh box;
-  box.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  box.indices = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 2, 3, 7, 2, 7, 6, 1, 2, 6, 1, 6, 5, 3, 0, 4, 3, 4, 7};
+  box.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                   {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  box.indices = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                 2, 3, 7, 2, 7, 6, 1, 2, 6, 1, 6, 5, 3, 0, 4, 3, 4, 7};
   SurfelOptions so;
   so.method = SurfelSampling::PoissonDisk;
   so.count = 12000;
@@ -112,7 +118,8 @@ TEST(Reference, ClosedPoissonSampledBoxLeaksNoRay) {
     int escaped = 0;
     for (int i = 0; i < 200000; ++i) {
       SurfaceHit h;
-      const glm::vec3 o = glm::vec3(0.5f) + 0.4f * (glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f);
+      const glm::vec3 o =
+          glm::vec3(0.5f) + 0.4f * (glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f);
       escaped += !s.intersect(o, sampleUniformSphere(rng.uniform2()), INFINITY, &h);
     }
     return escaped;
@@ -175,8 +182,10 @@ TEST(Reference, ScanNoiseDoesNotShadowItsOwnSurface) {
       float r2 = glm::dot(toLight, toLight);
       float expect = rho / kPi * I * (toLight.z / std::sqrt(r2)) / r2;
       Rgb got = traceRadiance(s, eye, d, r, o);
-      if (got.r < 0.5f * expect) ++shadowed;
-      else EXPECT_NEAR(got.r, expect, 1e-4f * expect);
+      if (got.r < 0.5f * expect)
+        ++shadowed;
+      else
+        EXPECT_NEAR(got.r, expect, 1e-4f * expect);
     }
     EXPECT_GT(hits, n * 99 / 100);
     return double(shadowed) / std::max(hits, 1);
@@ -185,10 +194,12 @@ TEST(Reference, ScanNoiseDoesNotShadowItsOwnSurface) {
     float degrees;
     double withAtMost, withoutAtLeast;
   };
-  for (auto [deg, withAtMost, withoutAtLeast] : {Case{25, 0.002, 0.005}, Case{60, 0.002, 0.015}, Case{80, 0.005, 0.05}}) {
+  for (auto [deg, withAtMost, withoutAtLeast] :
+       {Case{25, 0.002, 0.005}, Case{60, 0.002, 0.015}, Case{80, 0.005, 0.05}}) {
     double with = shadowedFraction(thick, deg), without = shadowedFraction(thin, deg);
-    std::printf("light %2.0f deg off the normal: %.1f%% shadowed (%.1f%% without the thickness offset)\n", deg,
-                100 * with, 100 * without);
+    std::printf(
+        "light %2.0f deg off the normal: %.1f%% shadowed (%.1f%% without the thickness offset)\n",
+        deg, 100 * with, 100 * without);
     EXPECT_LE(with, withAtMost) << deg;
     EXPECT_GE(without, withoutAtLeast) << deg;  // the failure this guards against is real
   }
@@ -214,7 +225,8 @@ TEST(Reference, RadianceCacheFurnaceReturnsAlbedoTimesL) {
     ReferenceOptions o;
     o.maxSamplesPerPixel = 8;
     ReferenceResult r = renderReference(*s, kFurnaceCamera, o);
-    for (size_t i = 0; i < r.image.rgb.size(); ++i) ASSERT_NEAR(r.image.rgb[i], rho * 3.0f, 3e-5f) << "rho " << rho;
+    for (size_t i = 0; i < r.image.rgb.size(); ++i)
+      ASSERT_NEAR(r.image.rgb[i], rho * 3.0f, 3e-5f) << "rho " << rho;
     EXPECT_EQ(r.nonFiniteSamples, 0u);
     EXPECT_EQ(r.samplesPerPixel, 8);
   }
@@ -249,7 +261,8 @@ TEST(Reference, AlbedoFurnaceUnderAConstantEnvironment) {
   // environment sampling and BSDF sampling combined by MIS. 64 spp x 256 pixels; each sample's
   // value lies within [0, 2 rho L], so 4 sigma of the mean is < 1%.
   Material m = lambert(0.5f);
-  ReferenceScene s({}, {quad({0, 0, 0}, {0, -1, 0}, 0.2f)}, {0}, {m}, {}, EnvironmentMap::constant(Rgb(2.0f)));
+  ReferenceScene s({}, {quad({0, 0, 0}, {0, -1, 0}, 0.2f)}, {0}, {m}, {},
+                   EnvironmentMap::constant(Rgb(2.0f)));
   ReferenceOptions o;
   o.mode = RadianceMode::Albedo;
   o.maxSamplesPerPixel = 64;
@@ -274,14 +287,16 @@ TEST(Reference, PointLightOverAPlaneMeshAndDiscs) {
       grid.colour.emplace_back(rho);
     }
   assignDiscRadii(grid.discs, 1.0f);
-  ReferenceScene meshPlane({}, {quad({0, 0, 0}, {0, 0, 1}, 20)}, {0}, {lambert(rho)}, {light}, EnvironmentMap());
+  ReferenceScene meshPlane({}, {quad({0, 0, 0}, {0, 0, 1}, 20)}, {0}, {lambert(rho)}, {light},
+                           EnvironmentMap());
   ReferenceScene discPlane({grid}, {}, {}, {}, {light}, EnvironmentMap());
   ReferenceOptions o;
   o.mode = RadianceMode::Albedo;
   o.maxBounces = 1;
   const glm::vec3 eye(1, -3, 4);
   for (const ReferenceScene* s : {&meshPlane, &discPlane}) {
-    for (glm::vec3 target : {glm::vec3(0, 0, 0), glm::vec3(0.3f, -0.2f, 0), glm::vec3(2, 1, 0), glm::vec3(-3, 4, 0)}) {
+    for (glm::vec3 target :
+         {glm::vec3(0, 0, 0), glm::vec3(0.3f, -0.2f, 0), glm::vec3(2, 1, 0), glm::vec3(-3, 4, 0)}) {
       glm::vec3 d = glm::normalize(target - eye);
       SurfaceHit hit;
       ASSERT_TRUE(s->intersect(eye, d, INFINITY, &hit));
@@ -316,7 +331,8 @@ TEST(Reference, SpotAndDirectionalLights) {
     Rng rng(1);
     return traceRadiance(s, eye, glm::normalize(p - eye), rng, o).r;
   };
-  ReferenceScene withSpot({}, {quad({0, 0, 0}, {0, 0, 1}, 20)}, {0}, {lambert(rho)}, {spot}, EnvironmentMap());
+  ReferenceScene withSpot({}, {quad({0, 0, 0}, {0, 0, 1}, 20)}, {0}, {lambert(rho)}, {spot},
+                          EnvironmentMap());
   // Inside the inner cone (10 degrees off axis): the point-light formula.
   glm::vec3 p(std::tan(glm::radians(10.0f)), 0, 0);
   float r2 = 1 + p.x * p.x;
@@ -325,11 +341,14 @@ TEST(Reference, SpotAndDirectionalLights) {
   EXPECT_EQ(radianceAt(withSpot, glm::vec3(std::tan(glm::radians(40.0f)), 0, 0)), 0.0f);
   // Between: strictly between 0 and the unattenuated value.
   glm::vec3 q(std::tan(glm::radians(25.0f)), 0, 0);
-  float q2 = 1 + q.x * q.x, full = rho / kPi * 4.0f * (1 / std::sqrt(q2)) / q2, mid = radianceAt(withSpot, q);
+  float q2 = 1 + q.x * q.x, full = rho / kPi * 4.0f * (1 / std::sqrt(q2)) / q2,
+        mid = radianceAt(withSpot, q);
   EXPECT_GT(mid, 0.0f);
   EXPECT_LT(mid, full);
-  ReferenceScene withSun({}, {quad({0, 0, 0}, {0, 0, 1}, 20)}, {0}, {lambert(rho)}, {sun}, EnvironmentMap());
-  EXPECT_NEAR(radianceAt(withSun, glm::vec3(0.5f, 0.5f, 0)), rho / kPi * 2.0f * std::cos(glm::radians(45.0f)), 1e-5f);
+  ReferenceScene withSun({}, {quad({0, 0, 0}, {0, 0, 1}, 20)}, {0}, {lambert(rho)}, {sun},
+                         EnvironmentMap());
+  EXPECT_NEAR(radianceAt(withSun, glm::vec3(0.5f, 0.5f, 0)),
+              rho / kPi * 2.0f * std::cos(glm::radians(45.0f)), 1e-5f);
 }
 
 TEST(Reference, SunOfHundredThousandOverSkyAndValuesBeyondHalfFloat) {
@@ -346,13 +365,15 @@ TEST(Reference, SunOfHundredThousandOverSkyAndValuesBeyondHalfFloat) {
   double E = 0;
   for (int y = 0; y < H; ++y) {
     double theta0 = kPi * y / H, theta1 = kPi * (y + 1) / H;
-    // Exact integral of cos(theta) sin(theta) over the row, per unit azimuth: (sin^2 t1 - sin^2 t0)/2.
+    // Exact integral of cos(theta) sin(theta) over the row, per unit azimuth: (sin^2 t1 - sin^2
+    // t0)/2.
     double rowWeight = 0.5 * (std::pow(std::sin(theta1), 2) - std::pow(std::sin(theta0), 2));
     if (theta0 >= kPi / 2) break;
     for (int x = 0; x < W; ++x) E += map.get(x, y).r * rowWeight * (2 * kPi / W);
   }
   const float rho = 0.5f;
-  ReferenceScene s({}, {quad({0, 0, 0}, {0, 0, 1}, 2)}, {0}, {lambert(rho)}, {}, EnvironmentMap(map));
+  ReferenceScene s({}, {quad({0, 0, 0}, {0, 0, 1}, 2)}, {0}, {lambert(rho)}, {},
+                   EnvironmentMap(map));
   ReferenceOptions o;
   o.mode = RadianceMode::Albedo;
   o.maxBounces = 1;
@@ -364,7 +385,8 @@ TEST(Reference, SunOfHundredThousandOverSkyAndValuesBeyondHalfFloat) {
 
 TEST(Reference, AllBlackEnvironmentGivesBlack) {
   HdrImage black(32, 16);
-  ReferenceScene s({}, {quad({0, 0, 0}, {0, 0, 1}, 2)}, {0}, {lambert(0.5f)}, {}, EnvironmentMap(black));
+  ReferenceScene s({}, {quad({0, 0, 0}, {0, 0, 1}, 2)}, {0}, {lambert(0.5f)}, {},
+                   EnvironmentMap(black));
   EXPECT_FALSE(s.hasEnvironment());
   ReferenceOptions o;
   o.mode = RadianceMode::Albedo;
@@ -380,7 +402,7 @@ TEST(Reference, ReceiverTouchingOrInsideADisc) {
   // shows either the disc (L) or the receiver (rho L): never anything else, never NaN.
   const float rho = 0.5f, L = 2.0f;
   DiscCloud through;
-  through.discs.emplace_back(0.0f, 0.0f, 0.0f, 0.05f);   // centred in the receiver, perpendicular
+  through.discs.emplace_back(0.0f, 0.0f, 0.0f, 0.05f);  // centred in the receiver, perpendicular
   through.normals.emplace_back(1, 0, 0);
   through.colour.emplace_back(L);
   DiscCloud coplanar;
@@ -447,7 +469,8 @@ TEST(Reference, GrazingAnglesStayFiniteAndMatchTheAnalyticValue) {
   Light light;
   light.position = glm::dvec3(0, 0, 1e-3);  // almost in the plane: cos(theta) ~ 1e-4 at 10 m
   light.intensity = Rgb(1e6f);
-  ReferenceScene s({}, {quad({0, 0, 0}, {0, 0, 1}, 40)}, {0}, {lambert(rho)}, {light}, EnvironmentMap::constant(Rgb(1.0f)));
+  ReferenceScene s({}, {quad({0, 0, 0}, {0, 0, 1}, 40)}, {0}, {lambert(rho)}, {light},
+                   EnvironmentMap::constant(Rgb(1.0f)));
   ReferenceOptions o;
   o.mode = RadianceMode::Albedo;
   o.maxBounces = 1;
@@ -490,7 +513,8 @@ TEST(Reference, DegenerateTrianglesAndNonFiniteColoursAreHandled) {
 
 TEST(Reference, ProgressiveErrorEstimateTracksTheTrueErrorAndStopsOnTarget) {
   Material m = lambert(0.5f);
-  ReferenceScene s({}, {quad({0, 0, 0}, {0, -1, 0}, 0.2f)}, {0}, {m}, {}, EnvironmentMap::constant(Rgb(2.0f)));
+  ReferenceScene s({}, {quad({0, 0, 0}, {0, -1, 0}, 0.2f)}, {0}, {m}, {},
+                   EnvironmentMap::constant(Rgb(2.0f)));
   ReferenceOptions o;
   o.mode = RadianceMode::Albedo;
   o.maxSamplesPerPixel = 16;
@@ -528,8 +552,10 @@ TEST(Reference, NationalGridOriginGivesTheSameImage) {
   const glm::dvec3 far(500000.0, 5000000.0, 100.0);
   Light farLight = light;
   farLight.position += far;
-  ReferenceScene near0({}, {quad({0, 0, 0}, {0, 0, 1}, 4)}, {0}, {lambert(0.5f)}, {light}, EnvironmentMap(), glm::dvec3(0.0));
-  ReferenceScene nearFar({}, {quad({0, 0, 0}, {0, 0, 1}, 4)}, {0}, {lambert(0.5f)}, {farLight}, EnvironmentMap(), far);
+  ReferenceScene near0({}, {quad({0, 0, 0}, {0, 0, 1}, 4)}, {0}, {lambert(0.5f)}, {light},
+                       EnvironmentMap(), glm::dvec3(0.0));
+  ReferenceScene nearFar({}, {quad({0, 0, 0}, {0, 0, 1}, 4)}, {0}, {lambert(0.5f)}, {farLight},
+                         EnvironmentMap(), far);
   ReferenceOptions o;
   o.mode = RadianceMode::Albedo;
   o.maxSamplesPerPixel = 2;
@@ -539,5 +565,6 @@ TEST(Reference, NationalGridOriginGivesTheSameImage) {
   // ulp of a float near 1, so pixels agree to 1e-5 relative (a float jitter at 5e6 m would be
   // 0.5 m, and the images would not look alike at all).
   auto a = renderReference(near0, c0, o).image.rgb, b = renderReference(nearFar, c1, o).image.rgb;
-  for (size_t i = 0; i < a.size(); ++i) ASSERT_NEAR(a[i], b[i], 1e-5f * std::abs(a[i]) + 1e-7f) << i;
+  for (size_t i = 0; i < a.size(); ++i)
+    ASSERT_NEAR(a[i], b[i], 1e-5f * std::abs(a[i]) + 1e-7f) << i;
 }

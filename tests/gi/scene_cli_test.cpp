@@ -13,12 +13,17 @@ using namespace nestlight;
 TEST(SceneCli, MakeSceneAndRenderBothModes) {
   test::TempDir dir;
   std::string out;
-  ASSERT_EQ(test::runCli("make-scene cornell -q -n 60k --width 24 --height 16 -o " + dir.file("cornell"), &out), 0) << out;
+  ASSERT_EQ(
+      test::runCli("make-scene cornell -q -n 60k --width 24 --height 16 -o " + dir.file("cornell"),
+                   &out),
+      0)
+      << out;
   const std::string scene = dir.file("cornell/scene.json");
   ASSERT_TRUE(std::filesystem::exists(scene));
   for (const char* mode : {"radiance_cache", "albedo"}) {
     std::string exr = dir.file(std::string("c_") + mode + ".exr");
-    ASSERT_EQ(test::runCli("render " + scene + " --spp 4 --mode " + mode + " -o " + exr, &out), 0) << out;
+    ASSERT_EQ(test::runCli("render " + scene + " --spp 4 --mode " + mode + " -o " + exr, &out), 0)
+        << out;
     gi::ImageAttributes attrs;
     gi::HdrImage img = gi::readHdrImage(exr, &attrs);
     EXPECT_EQ(img.width, 24);
@@ -36,7 +41,9 @@ TEST(SceneCli, MakeSceneAndRenderBothModes) {
 
 TEST(SceneCli, BadSceneFilesNameTheField) {
   test::TempDir dir;
-  test::writeFile(dir.file("s.json"), R"({"meshes": [{"path": "a.obj", "material": {"type": "ggx", "roughness": 2}}]})");
+  test::writeFile(
+      dir.file("s.json"),
+      R"({"meshes": [{"path": "a.obj", "material": {"type": "ggx", "roughness": 2}}]})");
   std::string out;
   EXPECT_EQ(test::runCli("render " + dir.file("s.json"), &out), 1);
   EXPECT_NE(out.find("scene.meshes[0].material.roughness"), std::string::npos) << out;
@@ -44,7 +51,9 @@ TEST(SceneCli, BadSceneFilesNameTheField) {
   test::writeFile(dir.file("nocam.json"), R"({"meshes": [{"path": "box.obj"}]})");
   EXPECT_EQ(test::runCli("render " + dir.file("nocam.json"), &out), 1);
   EXPECT_NE(out.find("scene.camera: missing"), std::string::npos) << out;
-  test::writeFile(dir.file("t.json"), R"({"meshes": [{"path": "missing.obj"}], "camera": {"eye": [0, -1, 0], "target": [0, 0, 0]}})");
+  test::writeFile(
+      dir.file("t.json"),
+      R"({"meshes": [{"path": "missing.obj"}], "camera": {"eye": [0, -1, 0], "target": [0, 0, 0]}})");
   EXPECT_EQ(test::runCli("render " + dir.file("t.json"), &out), 1);
   EXPECT_NE(out.find("missing.obj"), std::string::npos) << out;
 }
@@ -55,9 +64,13 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   // The raster method runs llvmpipe in the child, whose JIT blocks LeakSanitizer cannot attribute
   // (see tests/CMakeLists.txt); leaks of the CLI itself are covered by the other CLI tests.
   ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
-  ASSERT_EQ(test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out), 0) << out;
+  ASSERT_EQ(
+      test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out),
+      0)
+      << out;
   ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
-                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 --quality pbgi=8 --quality ibl=2 --reference-error 0.05 "
+                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 "
+                             "--quality pbgi=8 --quality ibl=2 --reference-error 0.05 "
                              "--reference-spp 256 -o " +
                              dir.file("b"),
                          &out),
@@ -91,11 +104,13 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   EXPECT_TRUE(j["rows"][6]["gpu_pass_ms"].contains("ism")) << j["rows"][6].dump();
   EXPECT_EQ(j["rows"][7]["variant"], "1 bounce");
   EXPECT_EQ(j["rows"][10]["variant"], "exact visibility");
-  EXPECT_TRUE(j["rows"][10]["attributes"].contains("nestlight:ism_agreement")) << j["rows"][10].dump();
+  EXPECT_TRUE(j["rows"][10]["attributes"].contains("nestlight:ism_agreement"))
+      << j["rows"][10].dump();
   EXPECT_TRUE(j["rows"][6]["attributes"].contains("nestlight:clamp_loss"));
   // bench gi times every pass between glFinish() calls too (llvmpipe charges compute dispatches
   // to later passes' timer queries): one wall time per pass that ran.
-  EXPECT_GT(std::stod(j["rows"][6]["attributes"]["nestlight:pass_wall_ms:ism"].get<std::string>()), 0.0)
+  EXPECT_GT(std::stod(j["rows"][6]["attributes"]["nestlight:pass_wall_ms:ism"].get<std::string>()),
+            0.0)
       << j["rows"][6]["attributes"].dump();
   EXPECT_EQ(j["rows"][4]["method"], "raster");
   EXPECT_EQ(j["rows"][4]["quality"], 64);
@@ -109,29 +124,44 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   std::string svg = test::readFile(dir.file("b/bench_gi.svg"));
   EXPECT_NE(svg.find("<svg"), std::string::npos);
   // The reference is cached: a second run does not render it again.
-  ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
-                             " --runs 1 --spp 1 --methods direct --reference-error 0.05 --reference-spp 256 -o " + dir.file("b"),
-                         &out),
-            0);
+  ASSERT_EQ(
+      test::runCli(
+          "bench gi " + dir.file("c/scene.json") +
+              " --runs 1 --spp 1 --methods direct --reference-error 0.05 --reference-spp 256 -o " +
+              dir.file("b"),
+          &out),
+      0);
   EXPECT_EQ(out.find("rendering the reference"), std::string::npos) << out;
 }
 
 TEST(SceneCli, CameraPathRendersOneImagePerFrame) {
   test::TempDir dir;
   std::string out;
-  ASSERT_EQ(test::runCli("make-scene cornell -q -n 30k --width 8 --height 6 -o " + dir.file("c"), &out), 0) << out;
+  ASSERT_EQ(
+      test::runCli("make-scene cornell -q -n 30k --width 8 --height 6 -o " + dir.file("c"), &out),
+      0)
+      << out;
   auto j = nlohmann::json::parse(test::readFile(dir.file("c/scene.json")));
   j["camera_path"] = {{"fps", 2},
-                      {"keyframes", {{{"time", 0}, {"eye", {2, 0.3, 2}}, {"target", {2, 3, 1}}},
-                                     {{"time", 1}, {"eye", {1, 0.3, 2}}, {"target", {2, 3, 1}}}}}};
+                      {"keyframes",
+                       {{{"time", 0}, {"eye", {2, 0.3, 2}}, {"target", {2, 3, 1}}},
+                        {{"time", 1}, {"eye", {1, 0.3, 2}}, {"target", {2, 3, 1}}}}}};
   test::writeFile(dir.file("c/path.json"), j.dump());
-  ASSERT_EQ(test::runCli("render " + dir.file("c/path.json") + " --spp 1 -o " + dir.file("f.exr"), &out), 0) << out;
+  ASSERT_EQ(
+      test::runCli("render " + dir.file("c/path.json") + " --spp 1 -o " + dir.file("f.exr"), &out),
+      0)
+      << out;
   // Frames at t = 0, 0.5 and 1 s; different views give different images.
   for (const char* f : {"f_0000.exr", "f_0001.exr", "f_0002.exr", "f_0000.png"})
     EXPECT_TRUE(std::filesystem::exists(dir.file(f))) << f;
   EXPECT_FALSE(std::filesystem::exists(dir.file("f_0003.exr")));
-  EXPECT_NE(gi::readHdrImage(dir.file("f_0000.exr")).rgb, gi::readHdrImage(dir.file("f_0002.exr")).rgb);
-  ASSERT_EQ(test::runCli("render " + dir.file("c/path.json") + " --spp 1 --still -o " + dir.file("s.exr"), &out), 0) << out;
+  EXPECT_NE(gi::readHdrImage(dir.file("f_0000.exr")).rgb,
+            gi::readHdrImage(dir.file("f_0002.exr")).rgb);
+  ASSERT_EQ(
+      test::runCli("render " + dir.file("c/path.json") + " --spp 1 --still -o " + dir.file("s.exr"),
+                   &out),
+      0)
+      << out;
   EXPECT_TRUE(std::filesystem::exists(dir.file("s.exr")));
 }
 
@@ -142,26 +172,33 @@ TEST(SceneCli, SurfelsOfAScaledBoxSumToItsArea) {
   test::writeFile(dir.file("box.obj"),
                   "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 0 0 1\nv 1 0 1\nv 0 1 1\nv 1 1 1\n"
                   "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n");
-  nlohmann::json scene = {{"origin", {500000.0, 5000000.0, 100.0}},
-                          {"materials", {{"red", {{"base_color", {0.5, 0.1, 0.1}}}}}},
-                          {"meshes", {{{"path", "box.obj"}, {"material", "red"},
-                                       {"transform", {{"translate", {500000.0, 5000000.0, 100.0}}, {"scale", {2, 3, 4}}}},
-                                       {"surfels", {{"method", "poisson"}, {"count", 3000}}}}}}};
+  nlohmann::json scene = {
+      {"origin", {500000.0, 5000000.0, 100.0}},
+      {"materials", {{"red", {{"base_color", {0.5, 0.1, 0.1}}}}}},
+      {"meshes",
+       {{{"path", "box.obj"},
+         {"material", "red"},
+         {"transform", {{"translate", {500000.0, 5000000.0, 100.0}}, {"scale", {2, 3, 4}}}},
+         {"surfels", {{"method", "poisson"}, {"count", 3000}}}}}}};
   test::writeFile(dir.file("scene.json"), scene.dump());
   std::string out;
-  ASSERT_EQ(test::runCli("surfels " + dir.file("scene.json") + " -o " + dir.file("s.ply"), &out), 0) << out;
+  ASSERT_EQ(test::runCli("surfels " + dir.file("scene.json") + " -o " + dir.file("s.ply"), &out), 0)
+      << out;
   auto reader = openReader(dir.file("s.ply"));
   test::Points pts = test::readAll(*reader);
   ASSERT_EQ(pts.size(), 3000u);
   double area = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
     area += test::attrAt<float>(pts, *reader, i, "area");
-    double x = pts.xyz[3 * i] - 500000.0, y = pts.xyz[3 * i + 1] - 5000000.0, z = pts.xyz[3 * i + 2] - 100.0;
+    double x = pts.xyz[3 * i] - 500000.0, y = pts.xyz[3 * i + 1] - 5000000.0,
+           z = pts.xyz[3 * i + 2] - 100.0;
     // On a face: one coordinate at 0 or its extent (within the 0.1 mm the PLY keeps plus float
     // rounding of local coordinates, 1e-3 m).
-    double d = std::min({std::abs(x), std::abs(x - 2), std::abs(y), std::abs(y - 3), std::abs(z), std::abs(z - 4)});
+    double d = std::min(
+        {std::abs(x), std::abs(x - 2), std::abs(y), std::abs(y - 3), std::abs(z), std::abs(z - 4)});
     ASSERT_LT(d, 1e-3) << x << " " << y << " " << z;
-    float n[3] = {test::attrAt<float>(pts, *reader, i, "normal", 0), test::attrAt<float>(pts, *reader, i, "normal", 1),
+    float n[3] = {test::attrAt<float>(pts, *reader, i, "normal", 0),
+                  test::attrAt<float>(pts, *reader, i, "normal", 1),
                   test::attrAt<float>(pts, *reader, i, "normal", 2)};
     ASSERT_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0, 1e-5);
     ASSERT_EQ(test::attrAt<uint32_t>(pts, *reader, i, "material"), 0u);

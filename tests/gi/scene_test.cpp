@@ -98,7 +98,8 @@ TEST(Scene, DisplaySettingsParse) {
   Scene d = parseScene(j, "/scenes/test.json");
   EXPECT_FALSE(d.display.splatting);
   EXPECT_FALSE(d.display.pointSize);
-  j["display"] = json{{"rasteriser", "points"}, {"splatting", "basic"}, {"point_size", 2.5}, {"edl_strength", 0}};
+  j["display"] = json{
+      {"rasteriser", "points"}, {"splatting", "basic"}, {"point_size", 2.5}, {"edl_strength", 0}};
   Scene s = parseScene(j, "/scenes/test.json");
   EXPECT_EQ(s.display.rasteriser.value_or(""), "points");
   EXPECT_EQ(s.display.splatting.value_or(""), "basic");
@@ -108,9 +109,10 @@ TEST(Scene, DisplaySettingsParse) {
 
 TEST(Scene, CamerasOfAPathAreInterpolatedPerFrame) {
   json j = minimal();
-  j["camera_path"] = json{{"fps", 2},
-                          {"keyframes", json::array({json{{"time", 0}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}},
-                                                     json{{"time", 1.5}, {"eye", {3, 0, 0}}, {"target", {4, 0, 0}}}})}};
+  j["camera_path"] = json{
+      {"fps", 2},
+      {"keyframes", json::array({json{{"time", 0}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}},
+                                 json{{"time", 1.5}, {"eye", {3, 0, 0}}, {"target", {4, 0, 0}}}})}};
   Scene s = parseScene(j, "/scenes/test.json");
   const auto cams = sceneCameras(s);
   ASSERT_EQ(cams.size(), 4u);  // t = 0, 0.5, 1, 1.5
@@ -161,37 +163,62 @@ TEST(Scene, ErrorsNameTheField) {
   EXPECT_EQ(errorField(with("/meshes/0/material", json{{"type", "lambert"}, {"metallic", 1}})),
             "scene.meshes[0].material.metallic");  // no effect on lambert: said, not ignored
   EXPECT_EQ(errorField(with("/meshes/0/material", "nosuch")), "scene.meshes[0].material");
-  EXPECT_EQ(errorField(with("/meshes/0/transform", json{{"scale", 0}})), "scene.meshes[0].transform.scale");
+  EXPECT_EQ(errorField(with("/meshes/0/transform", json{{"scale", 0}})),
+            "scene.meshes[0].transform.scale");
   EXPECT_EQ(errorField(with("/meshes/0/transform", json{{"matrix", json::array({1, 2, 3})}})),
             "scene.meshes[0].transform.matrix");
-  EXPECT_EQ(errorField(with("/lights", json::array({json{{"type", "area"}}}))), "scene.lights[0].type");
-  EXPECT_EQ(errorField(with("/lights", json::array({json{{"type", "spot"}, {"position", {0, 0, 1}},
-                                                          {"direction", {0, 0, 0}}, {"intensity", 1}}}))),
+  EXPECT_EQ(errorField(with("/lights", json::array({json{{"type", "area"}}}))),
+            "scene.lights[0].type");
+  EXPECT_EQ(errorField(with("/lights", json::array({json{{"type", "spot"},
+                                                         {"position", {0, 0, 1}},
+                                                         {"direction", {0, 0, 0}},
+                                                         {"intensity", 1}}}))),
             "scene.lights[0].direction");
-  EXPECT_EQ(errorField(with("/lights", json::array({json{{"type", "point"}, {"position", {0, 0, 1}},
-                                                          {"intensity", -1}}}))),
-            "scene.lights[0].intensity");
+  EXPECT_EQ(
+      errorField(
+          with("/lights",
+               json::array({json{{"type", "point"}, {"position", {0, 0, 1}}, {"intensity", -1}}}))),
+      "scene.lights[0].intensity");
   EXPECT_EQ(errorField(with("/camera/width", 0)), "scene.camera.width");
   EXPECT_EQ(errorField(with("/camera/width", 1.5)), "scene.camera.width");
   EXPECT_EQ(errorField(with("/camera/target", json::array({0, -5, 1}))), "scene.camera.target");
-  EXPECT_EQ(errorField(with("/camera/up", json::array({0, 10, -1}))), "scene.camera");  // parallel to the view
-  EXPECT_EQ(errorField(with("/environment", json{{"path", "a.hdr"}, {"constant", 1}})), "scene.environment");
+  EXPECT_EQ(errorField(with("/camera/up", json::array({0, 10, -1}))),
+            "scene.camera");  // parallel to the view
+  EXPECT_EQ(errorField(with("/environment", json{{"path", "a.hdr"}, {"constant", 1}})),
+            "scene.environment");
   EXPECT_EQ(errorField(with("/gi/mode", "photon")), "scene.gi.mode");
   EXPECT_EQ(errorField(with("/gi/samples_per_pixel", 0)), "scene.gi.samples_per_pixel");
-  EXPECT_EQ(errorField(with("/octrees", json::array({json{{"path", "a.octree"}, {"memory_budget", "lots"}}}))), "scene.octrees[0].memory_budget");
-  EXPECT_EQ(errorField(with("/camera_path", json{{"keyframes", json::array({json{{"time", 1}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}},
-                                                                             json{{"time", 1}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}}})}})),
-            "scene.camera_path.keyframes[1].time");
-  EXPECT_EQ(errorField(with("/lights", json::array({json{{"type", "spot"}, {"position", {0, 0, 1}},
-                                                          {"direction", {0, 0, -1}}, {"intensity", 1}, {"inner_angle", 60}}}))),
-            "scene.lights[0].inner_angle");  // wider than the default outer angle, which it does not name
-  EXPECT_EQ(errorField(with("/octrees", json::array({json{{"path", "a"}, {"memory_budget", "1e30GiB"}}}))),
+  EXPECT_EQ(errorField(with("/octrees",
+                            json::array({json{{"path", "a.octree"}, {"memory_budget", "lots"}}}))),
             "scene.octrees[0].memory_budget");
-  EXPECT_EQ(errorField(with("/meshes/0/transform", json{{"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1}}})),
+  EXPECT_EQ(
+      errorField(with(
+          "/camera_path",
+          json{{"keyframes",
+                json::array({json{{"time", 1}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}},
+                             json{{"time", 1}, {"eye", {0, 0, 0}}, {"target", {1, 0, 0}}}})}})),
+      "scene.camera_path.keyframes[1].time");
+  EXPECT_EQ(
+      errorField(with("/lights", json::array({json{{"type", "spot"},
+                                                   {"position", {0, 0, 1}},
+                                                   {"direction", {0, 0, -1}},
+                                                   {"intensity", 1},
+                                                   {"inner_angle", 60}}}))),
+      "scene.lights[0].inner_angle");  // wider than the default outer angle, which it does not name
+  EXPECT_EQ(errorField(
+                with("/octrees", json::array({json{{"path", "a"}, {"memory_budget", "1e30GiB"}}}))),
+            "scene.octrees[0].memory_budget");
+  EXPECT_EQ(errorField(with("/meshes/0/transform",
+                            json{{"matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 1, 1}}})),
             "scene.meshes[0].transform.matrix");  // projective
-  EXPECT_EQ(errorField(with("/camera_path", json{{"keyframes", json::array({json{{"time", 0}, {"eye", {0, 0, 0}}, {"target", {0, 0, -1}}}})}})),
-            "scene.camera_path.keyframes[0]");  // looks along up
-  EXPECT_EQ(errorField(with("/display", json{{"splatting", "gaussian"}})), "scene.display.splatting");
+  EXPECT_EQ(
+      errorField(with(
+          "/camera_path",
+          json{{"keyframes",
+                json::array({json{{"time", 0}, {"eye", {0, 0, 0}}, {"target", {0, 0, -1}}}})}})),
+      "scene.camera_path.keyframes[0]");  // looks along up
+  EXPECT_EQ(errorField(with("/display", json{{"splatting", "gaussian"}})),
+            "scene.display.splatting");
   EXPECT_EQ(errorField(with("/display", json{{"point_size", 0}})), "scene.display.point_size");
   EXPECT_EQ(errorField(with("/display", json{{"edl", 1}})), "scene.display.edl");
   EXPECT_EQ(errorField(with("/version", 2)), "scene.version");

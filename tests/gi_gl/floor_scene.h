@@ -3,7 +3,6 @@
 #pragma once
 
 #include <cmath>
-
 #include <nlohmann/json.hpp>
 
 #include "nestlight/converters/test_scenes.h"
@@ -19,11 +18,18 @@ inline nlohmann::json floorSceneJson(const test::TempDir& t, int size) {
   writeBoxObj(t.path() / "box.obj");
   using json = nlohmann::json;
   return {{"version", 1},
-          {"meshes", json::array({json{{"path", "box.obj"},
-                                       {"transform", {{"translate", {-10.0, -10.0, -0.1}}, {"scale", {20.0, 20.0, 0.1}}}},
-                                       {"material", "floor"}}})},
-          {"camera", {{"eye", {0.0, -0.001, 6.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 1.0, 0.0}}, {"fov", 60.0},
-                      {"width", size}, {"height", size}}}};
+          {"meshes",
+           json::array({json{
+               {"path", "box.obj"},
+               {"transform", {{"translate", {-10.0, -10.0, -0.1}}, {"scale", {20.0, 20.0, 0.1}}}},
+               {"material", "floor"}}})},
+          {"camera",
+           {{"eye", {0.0, -0.001, 6.0}},
+            {"target", {0.0, 0.0, 0.0}},
+            {"up", {0.0, 1.0, 0.0}},
+            {"fov", 60.0},
+            {"width", size},
+            {"height", size}}}};
 }
 
 // Where the ray through pixel (x + 0.5, y + 0.5) meets the plane z = 0 (the reference's camera),

@@ -26,12 +26,14 @@ TEST_P(HdrLayerEveryMethod, LightsAsTheLayerSays) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 40000, 2.0f, 150);
   const float k = 40.0f, L = k * srgbDecode(150.0f / 255.0f);
-  nestlight::test::writeColourLayer(t.path() / "sphere.octree", "hdr",
-                                    [&](const NodeKey&, size_t) { return std::array<float, 3>{L, L, L}; });
+  nestlight::test::writeColourLayer(t.path() / "sphere.octree", "hdr", [&](const NodeKey&, size_t) {
+    return std::array<float, 3>{L, L, L};
+  });
   const MethodInfo* info = findMethod(GetParam());
   ASSERT_NE(info, nullptr);
   Scene s = boxInSphereScene(t, 0.5, info->name, nlohmann::json::object());
-  info->applyQuality(s.gi, info->qualityName == "samples per pixel" ? 4 : info->defaultQualities.front());
+  info->applyQuality(s.gi,
+                     info->qualityName == "samples per pixel" ? 4 : info->defaultQualities.front());
   // Wide enough that the sphere shows around the box: the raster method (direct light only, and
   // none here) draws nothing but the scan's own emission.
   s.camera.fovYDegrees = 100;
@@ -46,8 +48,9 @@ TEST_P(HdrLayerEveryMethod, LightsAsTheLayerSays) {
     ++lit;
     worst = std::max(worst, std::abs(hdr.rgb[i] / (k * recorded.rgb[i]) - 1.0));
   }
-  std::printf("%s: hdr / rgb = %.5f over the image (k = %.0f), worst pixel off by %.4f, %zu lit values\n",
-              info->name.c_str(), sumHdr / sumRecorded, k, worst, lit);
+  std::printf(
+      "%s: hdr / rgb = %.5f over the image (k = %.0f), worst pixel off by %.4f, %zu lit values\n",
+      info->name.c_str(), sumHdr / sumRecorded, k, worst, lit);
   EXPECT_GT(lit, recorded.rgb.size() / 2) << info->name;
   EXPECT_NEAR(sumHdr / sumRecorded / k, 1.0, 0.01) << info->name;
   EXPECT_LT(worst, 0.01) << info->name;

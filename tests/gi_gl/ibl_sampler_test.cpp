@@ -5,8 +5,8 @@
 // gi/core's at its direction. Also the meshes' BVH against brute force.
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <bit>
+#include <cmath>
 #include <memory>
 
 #include "gi/chi2.h"
@@ -27,7 +27,9 @@ using test::Chi2Result;
 // Runs shaders/tests/ibl_samplers.comp: `count` samples (xyz, pdf; pdf < 0: none).
 class SamplerHarness {
  public:
-  SamplerHarness() : ctx_(gl::createHeadlessContext()), program_({{GL_COMPUTE_SHADER, "tests/ibl_samplers.comp"}}) {}
+  SamplerHarness()
+      : ctx_(gl::createHeadlessContext()),
+        program_({{GL_COMPUTE_SHADER, "tests/ibl_samplers.comp"}}) {}
 
   std::vector<glm::vec4> environment(const EnvironmentMap& map, size_t count, uint32_t seed) {
     const ibl::EnvironmentTable t = ibl::buildEnvironmentTable(map);
@@ -79,8 +81,8 @@ class SamplerHarness {
 };
 
 // Feeds precomputed samples to chi2Test one by one.
-Chi2Result chi2Of(const std::vector<glm::vec4>& s, const std::function<double(const glm::vec3&)>& pdf,
-                  Chi2Options o) {
+Chi2Result chi2Of(const std::vector<glm::vec4>& s,
+                  const std::function<double(const glm::vec3&)>& pdf, Chi2Options o) {
   size_t next = 0;
   o.samples = s.size();
   return test::chi2Test(
@@ -98,7 +100,8 @@ TEST(IblSamplers, EnvironmentCdfsMatchTheMapsDensityChiSquare) {
   SamplerHarness h;
   HdrImage img(32, 16);
   for (int y = 0; y < 16; ++y)
-    for (int x = 0; x < 32; ++x) img.set(x, y, Rgb(0.1f + 0.05f * float(x % 7) + (y < 8 ? 0.5f : 0.0f)));
+    for (int x = 0; x < 32; ++x)
+      img.set(x, y, Rgb(0.1f + 0.05f * float(x % 7) + (y < 8 ? 0.5f : 0.0f)));
   for (int x = 0; x < 32; ++x) img.set(x, 11, Rgb(0.0f));
   img.set(20, 3, Rgb(2000.0f));
   const EnvironmentMap map(img, 30.0f, 0.5f);
@@ -112,7 +115,8 @@ TEST(IblSamplers, EnvironmentCdfsMatchTheMapsDensityChiSquare) {
   }
   EXPECT_LT(mismatch, 20u) << "samples whose density differs from EnvironmentMap::pdf";
   Chi2Options o;
-  const Chi2Result r = chi2Of(s, [&](const glm::vec3& d) { return double(map.pdf(d)); }, o);
+  const Chi2Result r = chi2Of(
+      s, [&](const glm::vec3& d) { return double(map.pdf(d)); }, o);
   EXPECT_TRUE(r.passed) << r.message;
   EXPECT_EQ(r.failedSamples, 0u);
   EXPECT_NEAR(r.pdfIntegral, 1.0, 1e-4);
@@ -129,14 +133,15 @@ TEST(IblSamplers, BsdfSamplingMatchesGiCoresPdfChiSquare) {
   lambert.baseColor = Rgb(0.6f);
   cases.push_back({"lambert", lambert});
   Material rough;
-  rough.type = MaterialType::GGX, rough.baseColor = Rgb(0.8f, 0.5f, 0.2f), rough.roughness = 0.5f, rough.metallic = 0.3f;
+  rough.type = MaterialType::GGX, rough.baseColor = Rgb(0.8f, 0.5f, 0.2f), rough.roughness = 0.5f,
+  rough.metallic = 0.3f;
   cases.push_back({"ggx r0.5 m0.3", rough});
   Material glossy = rough;
   glossy.roughness = 0.2f, glossy.metallic = 1;
   cases.push_back({"ggx r0.2 metal", glossy});
   Material coat;
-  coat.type = MaterialType::Principled, coat.baseColor = Rgb(0.3f, 0.6f, 0.9f), coat.roughness = 0.4f,
-  coat.sheen = 0.5f, coat.clearcoat = 1, coat.clearcoatGloss = 0.5f;
+  coat.type = MaterialType::Principled, coat.baseColor = Rgb(0.3f, 0.6f, 0.9f),
+  coat.roughness = 0.4f, coat.sheen = 0.5f, coat.clearcoat = 1, coat.clearcoatGloss = 0.5f;
   cases.push_back({"principled clearcoat", coat});
   const float thetas[] = {0.3f, 1.2f};
   Chi2Options o;
@@ -144,7 +149,8 @@ TEST(IblSamplers, BsdfSamplingMatchesGiCoresPdfChiSquare) {
   uint32_t seed = 1;
   for (const Case& c : cases)
     for (float theta : thetas) {
-      const glm::vec3 wo(std::sin(theta) * std::cos(0.7f), std::sin(theta) * std::sin(0.7f), std::cos(theta));
+      const glm::vec3 wo(std::sin(theta) * std::cos(0.7f), std::sin(theta) * std::sin(0.7f),
+                         std::cos(theta));
       const std::vector<glm::vec4> s = h.bsdf(c.m, wo, 1 << 20, seed++);
       size_t mismatch = 0;
       for (const glm::vec4& v : s) {
@@ -155,7 +161,8 @@ TEST(IblSamplers, BsdfSamplingMatchesGiCoresPdfChiSquare) {
       // GPU transcendental functions are not the CPU's to the last ulp: 0.1% agreement, with a few
       // in a million on the lobes' steep flanks allowed.
       EXPECT_LT(mismatch, 50u) << c.name << " theta " << theta;
-      const Chi2Result r = chi2Of(s, [&](const glm::vec3& d) { return double(pdfBsdf(c.m, wo, d)); }, o);
+      const Chi2Result r = chi2Of(
+          s, [&](const glm::vec3& d) { return double(pdfBsdf(c.m, wo, d)); }, o);
       EXPECT_TRUE(r.passed) << c.name << " theta " << theta << ": " << r.message;
     }
 }
@@ -167,9 +174,11 @@ TEST(IblSamplers, TriangleBvhFindsTheNearestHit) {
   std::vector<glm::vec3> corners;
   for (int i = 0; i < 3000; ++i) {
     const glm::vec3 c = glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0f;
-    for (int k = 0; k < 3; ++k) corners.push_back(c + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f);
+    for (int k = 0; k < 3; ++k)
+      corners.push_back(c + glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5f);
   }
-  for (int i = 0; i < 5; ++i) corners.insert(corners.end(), {glm::vec3(1.0f), glm::vec3(1.0f), glm::vec3(2.0f)});
+  for (int i = 0; i < 5; ++i)
+    corners.insert(corners.end(), {glm::vec3(1.0f), glm::vec3(1.0f), glm::vec3(2.0f)});
   const ibl::TriangleBvh bvh = ibl::buildTriangleBvh(corners);
   EXPECT_EQ(bvh.degenerate, 5u);
   EXPECT_EQ(bvh.triangles.size(), 3000u);
@@ -182,7 +191,8 @@ TEST(IblSamplers, TriangleBvhFindsTheNearestHit) {
   for (int i = 0; i < 2000; ++i) {
     const glm::vec3 o = glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 14.0f - 2.0f;
     const glm::vec3 d = sampleUniformSphere(rng.uniform2());
-    const float a = ibl::traceTriangleBvh(bvh, o, d, 0, 1e30f), b = ibl::traceTriangleBvh(brute, o, d, 0, 1e30f);
+    const float a = ibl::traceTriangleBvh(bvh, o, d, 0, 1e30f),
+                b = ibl::traceTriangleBvh(brute, o, d, 0, 1e30f);
     ASSERT_EQ(a < 0, b < 0) << i;
     if (b >= 0) {
       EXPECT_FLOAT_EQ(a, b);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "floor_scene.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/material.h"
@@ -14,7 +15,6 @@
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
-#include "floor_scene.h"
 #include "sphere_scan.h"
 #include "test_support.h"
 
@@ -25,13 +25,14 @@ using json = nlohmann::json;
 constexpr double kPiD = 3.14159265358979323846;
 
 // The floor (floor_scene.h), optionally a 2 x 2 m slab 1 m above it, and the environment.
-Scene floorScene(const test::TempDir& t, const json& material, const json& environment, const json& parameters,
-                 int size = 32, bool occluder = false) {
+Scene floorScene(const test::TempDir& t, const json& material, const json& environment,
+                 const json& parameters, int size = 32, bool occluder = false) {
   json j = floorSceneJson(t, size);
   if (occluder)
-    j["meshes"].push_back(json{{"path", "box.obj"},
-                               {"transform", {{"translate", {-1.0, -1.0, 1.0}}, {"scale", {2.0, 2.0, 0.1}}}},
-                               {"material", "floor"}});
+    j["meshes"].push_back(
+        json{{"path", "box.obj"},
+             {"transform", {{"translate", {-1.0, -1.0, 1.0}}, {"scale", {2.0, 2.0, 0.1}}}},
+             {"material", "floor"}});
   j["materials"] = {{"floor", material}};
   j["environment"] = environment;
   j["gi"] = {{"method", "ibl"}, {"mode", "albedo"}, {"seed", 7}, {"parameters", parameters}};
@@ -64,8 +65,8 @@ Stats ratioStats(const Scene& s, const MethodFrame& f, Want want) {
 const char* kEstimators[] = {"mis", "bis", "smc", "env", "brdf"};
 
 json estimatorParameters(const std::string& e) {
-  return {{"estimator", e}, {"brdf_samples", 8}, {"env_samples", 8}, {"bis_proposals", 64}, {"bis_samples", 8},
-          {"smc_particles", 8}};
+  return {{"estimator", e},      {"brdf_samples", 8}, {"env_samples", 8},
+          {"bis_proposals", 64}, {"bis_samples", 8},  {"smc_particles", 8}};
 }
 
 // The furnace: a constant sky L over a convex floor. Lambert: every pixel returns rho L exactly;
@@ -81,8 +82,9 @@ TEST(Ibl, EveryEstimatorIsUnbiasedInAFurnace) {
     std::vector<double> want;  // per pixel, filled by the first estimator's pass
     for (const char* e : kEstimators) {
       test::TempDir t;
-      const json material = glossy ? json{{"type", "ggx"}, {"base_color", 0.9}, {"roughness", 0.3}, {"metallic", 1.0}}
-                                   : json{{"type", "lambert"}, {"base_color", 0.5}};
+      const json material =
+          glossy ? json{{"type", "ggx"}, {"base_color", 0.9}, {"roughness", 0.3}, {"metallic", 1.0}}
+                 : json{{"type", "lambert"}, {"base_color", 0.5}};
       Scene s = floorScene(t, material, {{"constant", 2.0}}, estimatorParameters(e));
       const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
       const glm::vec3 eye = glm::vec3(s.camera.eye - s.origin);
@@ -90,7 +92,8 @@ TEST(Ibl, EveryEstimatorIsUnbiasedInAFurnace) {
       const bool fill = want.empty();
       const Stats st = ratioStats(s, f, [&](const glm::vec3& p) {
         if (fill) {
-          const glm::vec3 wo = glm::normalize(eye - p);  // the floor's frame is the world's (n = +z)
+          const glm::vec3 wo =
+              glm::normalize(eye - p);  // the floor's frame is the world's (n = +z)
           want.push_back(glossy ? 2.0 * double(directionalAlbedo(m, wo, 20000, 3).r) : 1.0);
         }
         return want.at(k++);
@@ -114,7 +117,8 @@ struct SunTexel {
       for (int x = 0; x < 16; ++x) map.set(x, y, Rgb(sky));
     map.set(column, 2, Rgb(E));
     const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
-    radiance = 0.5 / kPiD * (E - sky) * (2 * kPiD / 16) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2 +
+    radiance = 0.5 / kPiD * (E - sky) * (2 * kPiD / 16) *
+                   (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2 +
                0.5 * sky;
   }
 };
@@ -148,10 +152,12 @@ TEST(Ibl, ManySamplesRunAsPasses) {
   for (const json& p : {json{{"estimator", "mis"}, {"brdf_samples", 8}, {"env_samples", 8}},
                         json{{"estimator", "mis"}, {"brdf_samples", 160}, {"env_samples", 160}},
                         json{{"estimator", "bis"}, {"bis_proposals", 8192}, {"bis_samples", 16}}}) {
-    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sun.exr"}}, p, 24);
+    Scene s =
+        floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sun.exr"}}, p, 24);
     const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
     const Stats st = ratioStats(s, f, [&](const glm::vec3&) { return want; });
-    EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3) << p.dump() << ": sd " << st.sd;
+    EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3)
+        << p.dump() << ": sd " << st.sd;
     EXPECT_EQ(f.attributes.at("nestlight:ibl_loop_limit_pixels"), "0") << p.dump();
     if (p.at("estimator") == "mis" && p.at("brdf_samples") == 8) sd16 = st.sd;
     if (p.at("estimator") == "mis" && p.at("brdf_samples") == 160) {
@@ -173,7 +179,8 @@ TEST(Ibl, TheMeshesShadowTheSky) {
   for (bool visibility : {true, false}) {
     json p = estimatorParameters("env");
     p["visibility"] = visibility;
-    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sun.exr"}}, p, 64, true);
+    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sun.exr"}}, p,
+                         64, true);
     const MethodFrame f = createMethod(s, {true, false})->render(s.camera);
     std::vector<double> shade, open;
     for (int y = 0; y < 64; ++y)
@@ -212,8 +219,11 @@ TEST(Ibl, TheScanShadowsTheSky) {
   test::TempDir t;
   buildSphereScan(t, 20000, 1.0f, 128);
   for (bool visibility : {true, false}) {
-    Scene s = boxInSphereScene(t, 0.5, "ibl", {{"estimator", "mis"}, {"brdf_samples", 8}, {"env_samples", 8},
-                                              {"visibility", visibility}});
+    Scene s = boxInSphereScene(t, 0.5, "ibl",
+                               {{"estimator", "mis"},
+                                {"brdf_samples", 8},
+                                {"env_samples", 8},
+                                {"visibility", visibility}});
     SceneEnvironment e;
     e.constant = Rgb(1.0f);
     s.environment = e;
@@ -221,7 +231,8 @@ TEST(Ibl, TheScanShadowsTheSky) {
     double sum = 0;
     int n = 0;
     for (int y = 8; y < 24; ++y)
-      for (int x = 8; x < 24; ++x) sum += f.image.get(x, y).r, n++;  // the box's face fills the middle
+      for (int x = 8; x < 24; ++x)
+        sum += f.image.get(x, y).r, n++;  // the box's face fills the middle
     if (visibility) {
       EXPECT_LT(sum / n, 0.02 * 0.5) << "light through a closed scan";
       EXPECT_NE(f.attributes.at("nestlight:ibl_scan_hierarchy_nodes"), "0");
@@ -271,11 +282,13 @@ TEST(Ibl, SmcTracksTheNormalisingConstantAndReinitialisesOnAJump) {
   test::TempDir t;
   const int frames = 10;
   for (int f = 0; f < frames; ++f)
-    writeExr(t.file("sky_" + std::to_string(f) + ".exr"), rotatingSky(f, f == frames - 1 ? 1000.0f : 50.0f));
+    writeExr(t.file("sky_" + std::to_string(f) + ".exr"),
+             rotatingSky(f, f == frames - 1 ? 1000.0f : 50.0f));
   json p = estimatorParameters("smc");
   p["smc_statistics"] = true;
   p["bis_proposals"] = 256;
-  Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"sequence", "sky_%d.exr"}, {"fps", 10}}, p, 24);
+  Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}},
+                       {{"sequence", "sky_%d.exr"}, {"fps", 10}}, p, 24);
   const std::vector<SceneCamera> cameras = sceneCameras(s);
   ASSERT_EQ(cameras.size(), size_t(frames));
   auto m = createMethod(s, {true, false});
@@ -288,8 +301,10 @@ TEST(Ibl, SmcTracksTheNormalisingConstantAndReinitialisesOnAJump) {
     const long fresh = std::stol(r.attributes.at("nestlight:ibl_smc_reinit_new"));
     const long carried = std::stol(r.attributes.at("nestlight:ibl_smc_reprojected"));
     const int bridges = std::stoi(r.attributes.at("nestlight:ibl_smc_bridges"));
-    std::printf("frame %d: Z mean %.4f, true %.4f (%.3f); %ld receivers, %ld carried, %ld jumps, %ld fresh; %d bridges\n",
-                f, zMean, want, zMean / want, receivers, carried, jumps, fresh, bridges);
+    std::printf(
+        "frame %d: Z mean %.4f, true %.4f (%.3f); %ld receivers, %ld carried, %ld jumps, %ld "
+        "fresh; %d bridges\n",
+        f, zMean, want, zMean / want, receivers, carried, jumps, fresh, bridges);
     ASSERT_GT(receivers, 300);
     if (f == 0) {
       EXPECT_EQ(fresh, receivers);
@@ -353,17 +368,20 @@ TEST(Ibl, SmcInBandsOfRowsEqualsOneBand) {
     json p = estimatorParameters("smc");
     p["bis_proposals"] = 32;
     if (banded) p["smc_band_rows"] = 16;
-    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sky.exr"}}, p, 64);
+    Scene s =
+        floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sky.exr"}}, p, 64);
     auto m = createMethod(s, {true, false});
     for (int f = 0; f < 3; ++f) {
       const MethodFrame r = m->render(s.camera);
       images[banded].push_back(r.image.rgb);
       if (f > 0) {
-        EXPECT_EQ(r.attributes.at("nestlight:ibl_smc_reprojected"), r.attributes.at("nestlight:ibl_receivers"));
+        EXPECT_EQ(r.attributes.at("nestlight:ibl_smc_reprojected"),
+                  r.attributes.at("nestlight:ibl_receivers"));
       }
     }
   }
-  for (int f = 0; f < 3; ++f) EXPECT_TRUE(images[0][size_t(f)] == images[1][size_t(f)]) << "frame " << f;
+  for (int f = 0; f < 3; ++f)
+    EXPECT_TRUE(images[0][size_t(f)] == images[1][size_t(f)]) << "frame " << f;
 }
 
 // Hard cases: a sun of 1e5 in a sky of 1e-3 stays finite and unbiased for every estimator; an
@@ -379,7 +397,8 @@ TEST(Ibl, ASunOf1e5AndABlackFrame) {
     json p = estimatorParameters(e);
     p["bis_proposals"] = 256;
     p["smc_statistics"] = true;
-    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"sequence", "sun_%d.exr"}, {"fps", 1}}, p);
+    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}},
+                         {{"sequence", "sun_%d.exr"}, {"fps", 1}}, p);
     const std::vector<SceneCamera> cameras = sceneCameras(s);
     ASSERT_EQ(cameras.size(), 3u);
     auto m = createMethod(s, {true, false});
@@ -391,9 +410,11 @@ TEST(Ibl, ASunOf1e5AndABlackFrame) {
         EXPECT_EQ(st.mean, 0.0) << e << ": the black frame";
         continue;
       }
-      EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3) << e << " frame " << f << ": sd " << st.sd;
+      EXPECT_NEAR(st.mean, 1.0, 4 * st.sd / std::sqrt(double(st.n)) + 2e-3)
+          << e << " frame " << f << ": sd " << st.sd;
       if (std::string(e) == "smc" && f == 2) {
-        EXPECT_EQ(r.attributes.at("nestlight:ibl_smc_reinit_new"), r.attributes.at("nestlight:ibl_receivers"))
+        EXPECT_EQ(r.attributes.at("nestlight:ibl_smc_reinit_new"),
+                  r.attributes.at("nestlight:ibl_receivers"))
             << "after a black frame no pixel holds samples: all start afresh";
       }
     }
@@ -409,7 +430,8 @@ TEST(Ibl, GlossyUnderAHighFrequencyMapAgreesWithTheReference) {
   for (int y = 0; y < 64; ++y)
     for (int x = 0; x < 128; ++x) img.set(x, y, Rgb(((x / 8 + y / 8) % 2) ? 20.0f : 1.0f));
   writeExr(t.file("checker.exr"), img);
-  const json glossy = {{"type", "ggx"}, {"base_color", 0.9}, {"roughness", 0.05}, {"metallic", 1.0}};
+  const json glossy = {
+      {"type", "ggx"}, {"base_color", 0.9}, {"roughness", 0.05}, {"metallic", 1.0}};
   Scene ref = floorScene(t, glossy, {{"path", "checker.exr"}}, json::object(), 24);
   ref.gi.method = "direct";
   ref.gi.samplesPerPixel = 256;
@@ -445,7 +467,8 @@ TEST(Ibl, ADamagedProbeFrameIsNamedOrThePreviousKept) {
   for (bool keep : {false, true}) {
     json env = {{"sequence", "p_%d.exr"}, {"fps", 1}};
     if (keep) env["on_bad_frame"] = "previous";
-    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, env, estimatorParameters("mis"), 16);
+    Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, env,
+                         estimatorParameters("mis"), 16);
     const std::vector<SceneCamera> cameras = sceneCameras(s);
     ASSERT_EQ(cameras.size(), 2u);
     auto m = createMethod(s, {true, false});
@@ -457,7 +480,8 @@ TEST(Ibl, ADamagedProbeFrameIsNamedOrThePreviousKept) {
       const MethodFrame second = m->render(cameras[1]);
       EXPECT_EQ(second.attributes.at("nestlight:environment_frame"), "1");
       double a = 0, b = 0;
-      for (size_t i = 0; i < first.image.rgb.size(); ++i) a += first.image.rgb[i], b += second.image.rgb[i];
+      for (size_t i = 0; i < first.image.rgb.size(); ++i)
+        a += first.image.rgb[i], b += second.image.rgb[i];
       // The same map sampled again with the next frame's random numbers: 5% of the image's light.
       EXPECT_NEAR(b / a, 1.0, 0.05) << "the previous frame's light";
     }
@@ -469,8 +493,11 @@ TEST(Ibl, ADamagedProbeFrameIsNamedOrThePreviousKept) {
 TEST(Ibl, BenchIblWritesItsTablesAndPlots) {
   test::TempDir t;
   std::string out;
-  const int rc = test::runCli("bench ibl --scenes moving-sun --frames 2 --size 16 --timing-size 0 --samples 1,2 "
-                              "--reference-spp 4 --no-variance -o " + t.path().string(), &out);
+  const int rc = test::runCli(
+      "bench ibl --scenes moving-sun --frames 2 --size 16 --timing-size 0 --samples 1,2 "
+      "--reference-spp 4 --no-variance -o " +
+          t.path().string(),
+      &out);
   ASSERT_EQ(rc, 0) << out;
   std::ifstream csv(t.path() / "bench_ibl.csv");
   std::string line;
@@ -487,17 +514,22 @@ TEST(Ibl, BenchIblWritesItsTablesAndPlots) {
   EXPECT_TRUE(std::filesystem::exists(t.path() / "moving-sun_speed.svg"));
   EXPECT_TRUE(std::filesystem::exists(t.path() / "moving-sun_frames.svg"));
   // Scanned receivers (the object scene's town in the albedo mode): errors on 4 x 4 block means
-  // and the image mean's ratio too, as there the per-pixel error has the splats' colours as a floor.
-  // A wiring check: at 16 x 16 pixels and 16 samples (the reference's too) the town's mean is 0.94
-  // of the reference's, noisy; a block or ratio computed over the wrong pixels lands far off.
-  const int scanned = test::runCli("bench ibl --scenes scanned --estimators mis --frames 2 --size 16 --timing-size 0 "
-                                   "--samples 16 --reference-spp 16 --no-variance -o " + (t.path() / "scan").string(), &out);
+  // and the image mean's ratio too, as there the per-pixel error has the splats' colours as a
+  // floor. A wiring check: at 16 x 16 pixels and 16 samples (the reference's too) the town's mean
+  // is 0.94 of the reference's, noisy; a block or ratio computed over the wrong pixels lands far
+  // off.
+  const int scanned = test::runCli(
+      "bench ibl --scenes scanned --estimators mis --frames 2 --size 16 --timing-size 0 "
+      "--samples 16 --reference-spp 16 --no-variance -o " +
+          (t.path() / "scan").string(),
+      &out);
   ASSERT_EQ(scanned, 0) << out;
   const json js2 = json::parse(std::ifstream(t.path() / "scan" / "bench_ibl.json"));
   const json& level = js2.at("scenes").at(0).at("estimators").at(0).at("levels").at(0);
   EXPECT_NEAR(level.at("median_mean_ratio").get<double>(), 1.0, 0.25) << level.dump();
   EXPECT_TRUE(level.contains("median_relative_l2_4x4")) << level.dump();
-  const int bad = test::runCli("bench ibl --estimators mis,foo --frames 2 -o " + t.path().string(), &out);
+  const int bad =
+      test::runCli("bench ibl --estimators mis,foo --frames 2 -o " + t.path().string(), &out);
   EXPECT_NE(bad, 0);
   EXPECT_NE(out.find("foo"), std::string::npos) << out;
 }
@@ -523,10 +555,13 @@ TEST(Ibl, ABadEnvironmentMapIsAWarningInEveryGlMethod) {
   std::ofstream(t.file("room/sky.json")) << scene.dump(1);
   for (const char* method : {"raster", "vpl"}) {
     std::string out;
-    ASSERT_EQ(test::runCli(std::string("render ") + t.file("room/sky.json") + " --method " + method + " -o " + t.file("o.exr"), &out),
+    ASSERT_EQ(test::runCli(std::string("render ") + t.file("room/sky.json") + " --method " +
+                               method + " -o " + t.file("o.exr"),
+                           &out),
               0)
         << out;
-    EXPECT_NE(out.find("sky.exr: environment: 3 NaN, infinite or negative texels set to 0"), std::string::npos)
+    EXPECT_NE(out.find("sky.exr: environment: 3 NaN, infinite or negative texels set to 0"),
+              std::string::npos)
         << method << ": " << out;
   }
 }

@@ -6,24 +6,23 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <glm/gtc/matrix_transform.hpp>
 #include <vector>
 
-#include <glm/gtc/matrix_transform.hpp>
-
+#include "floor_scene.h"
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/bench_gi.h"
 #include "nestlight/gi/method.h"
-#include "nestlight/gl/context.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/raster/shadow_fit.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/srgb.h"
 #include "nestlight/gi/tone_map.h"
+#include "nestlight/gl/context.h"
 #include "nestlight/octree/error.h"
-#include "floor_scene.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -36,9 +35,10 @@ using json = nlohmann::json;
 Scene floorScene(const test::TempDir& t, const json& lights, int size = 64, bool occluder = false) {
   json j = floorSceneJson(t, size);
   if (occluder)
-    j["meshes"].push_back(json{{"path", "box.obj"},
-                               {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-                               {"material", "floor"}});
+    j["meshes"].push_back(
+        json{{"path", "box.obj"},
+             {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+             {"material", "floor"}});
   j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
   j["lights"] = lights;
   j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 1024}}}};
@@ -55,7 +55,8 @@ MethodFrame renderRaster(const Scene& s) {
 TEST(Raster, PointLightOverPlaneIsTheClosedForm) {
   test::TempDir t;
   const float I = 40.0f, h = 3.0f;
-  Scene s = floorScene(t, json::array({json{{"type", "point"}, {"position", {1.0, 0.5, h}}, {"intensity", I}}}));
+  Scene s = floorScene(
+      t, json::array({json{{"type", "point"}, {"position", {1.0, 0.5, h}}, {"intensity", I}}}));
   MethodFrame f = renderRaster(s);
   ASSERT_EQ(f.image.width, 64);
   double worst = 0;
@@ -80,8 +81,12 @@ TEST(Raster, PointLightOverPlaneIsTheClosedForm) {
 TEST(Raster, SpotConeIsTheClosedForm) {
   test::TempDir t;
   const float I = 50.0f, h = 4.0f;
-  Scene s = floorScene(t, json::array({json{{"type", "spot"}, {"position", {0.0, 0.0, h}}, {"direction", {0.0, 0.0, -1.0}},
-                                            {"intensity", I}, {"inner_angle", 15.0}, {"outer_angle", 25.0}}}));
+  Scene s = floorScene(t, json::array({json{{"type", "spot"},
+                                            {"position", {0.0, 0.0, h}},
+                                            {"direction", {0.0, 0.0, -1.0}},
+                                            {"intensity", I},
+                                            {"inner_angle", 15.0},
+                                            {"outer_angle", 25.0}}}));
   MethodFrame f = renderRaster(s);
   const float cosIn = std::cos(glm::radians(15.0f)), cosOut = std::cos(glm::radians(25.0f));
   int inside = 0, outside = 0, edge = 0;
@@ -118,7 +123,9 @@ TEST(Raster, OccluderCastsAnUmbra) {
   // A 1 x 1 x 0.2 m plate 1 m above the floor, the light at (1.5, 0, 4): by similar triangles the
   // plate's shadow spans x in [-1.36, 0.17], |y| < 0.71 on the floor. The camera, above the
   // centre, sees the floor beside the plate (|x| or |y| > 0.63) in the shadow's left part.
-  Scene s = floorScene(t, json::array({json{{"type", "point"}, {"position", {1.5, 0.0, 4.0}}, {"intensity", 40.0}}}), 64, true);
+  Scene s = floorScene(
+      t, json::array({json{{"type", "point"}, {"position", {1.5, 0.0, 4.0}}, {"intensity", 40.0}}}),
+      64, true);
   MethodFrame f = renderRaster(s);
   int shadowed = 0, lit = 0;
   for (int y = 0; y < 64; ++y)
@@ -143,7 +150,9 @@ TEST(Raster, OccluderCastsAnUmbra) {
 
 TEST(Raster, TiledFrameEqualsUntiled) {
   test::TempDir t;
-  Scene s = floorScene(t, json::array({json{{"type", "point"}, {"position", {0.0, 0.0, 4.0}}, {"intensity", 40.0}}}), 80, true);
+  Scene s = floorScene(
+      t, json::array({json{{"type", "point"}, {"position", {0.0, 0.0, 4.0}}, {"intensity", 40.0}}}),
+      80, true);
   s.camera.width = 96;
   MethodFrame whole = renderRaster(s);
   s.gi.parameters["max_tile"] = 32;
@@ -156,7 +165,8 @@ TEST(Raster, TiledFrameEqualsUntiled) {
     worst = std::max(worst, rel);
     differ += rel > 1e-4;
   }
-  std::printf("tiled vs untiled: largest relative difference %.3g, %zu values beyond 1e-4\n", worst, differ);
+  std::printf("tiled vs untiled: largest relative difference %.3g, %zu values beyond 1e-4\n", worst,
+              differ);
   // The tile's projection is the full one scaled and offset, so positions reconstructed from depth
   // round differently in the last bits (relative 1e-6); beyond 1e-4 only pixels that a triangle
   // or shadow edge covers in one and not the other may differ.
@@ -169,7 +179,8 @@ TEST(Raster, TiledFrameEqualsUntiled) {
   std::sort(tiledNames.begin(), tiledNames.end());
   std::sort(wholeNames.begin(), wholeNames.end());
   EXPECT_EQ(tiledNames, wholeNames);
-  EXPECT_EQ(std::adjacent_find(tiledNames.begin(), tiledNames.end()), tiledNames.end()) << "a pass listed twice";
+  EXPECT_EQ(std::adjacent_find(tiledNames.begin(), tiledNames.end()), tiledNames.end())
+      << "a pass listed twice";
   EXPECT_NE(std::find(tiledNames.begin(), tiledNames.end(), "shadow_maps"), tiledNames.end());
 }
 
@@ -199,8 +210,8 @@ TEST(Raster, TiledScanFrameEqualsUntiled) {
       writeToneMappedPng(std::string(keep) + "/tile_whole_" + splatting + ".png", whole.image, 0);
       writeToneMappedPng(std::string(keep) + "/tile_tiled_" + splatting + ".png", tiled.image, 0);
     }
-    std::printf("%s: tiled vs untiled scan frame, %zu of %zu values beyond 2%%\n", splatting, differ,
-                whole.image.rgb.size());
+    std::printf("%s: tiled vs untiled scan frame, %zu of %zu values beyond 2%%\n", splatting,
+                differ, whole.image.rgb.size());
     // Positions reconstructed under the tile's projection differ in their last bits, which moves
     // soft shadow edges (PCF) by far less than 1%; and llvmpipe rasterises a splat's rim in fixed
     // point relative to the viewport, so a few rim pixels flip between nearest splats. A seam
@@ -234,7 +245,8 @@ TEST(Methods, RegistryMakesEveryNameSceneFilesAccept) {
   s.gi.method = "raster";
   s.gi.parameters = json{{"shadow_map_size", 5}};
   Error bad = test::errorOf([&] { createMethod(s); });
-  EXPECT_NE(std::string(bad.what()).find("scene.gi.parameters.shadow_map_size"), std::string::npos) << bad.what();
+  EXPECT_NE(std::string(bad.what()).find("scene.gi.parameters.shadow_map_size"), std::string::npos)
+      << bad.what();
   s.gi.parameters = json{{"shadow_map_sise", 1024}};
   Error typo = test::errorOf([&] { createMethod(s); });
   EXPECT_NE(std::string(typo.what()).find("unknown field"), std::string::npos) << typo.what();
@@ -248,13 +260,16 @@ class EveryMethod : public ::testing::TestWithParam<std::string> {};
 TEST_P(EveryMethod, PointLightOverPlane) {
   test::TempDir t;
   const float I = 40.0f, h = 3.0f;
-  Scene s = floorScene(t, json::array({json{{"type", "point"}, {"position", {1.0, 0.5, h}}, {"intensity", I}}}), 32);
+  Scene s = floorScene(
+      t, json::array({json{{"type", "point"}, {"position", {1.0, 0.5, h}}, {"intensity", I}}}), 32);
   const MethodInfo* info = findMethod(GetParam());
   ASSERT_NE(info, nullptr);
-  if (!info->albedoMode) GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
+  if (!info->albedoMode)
+    GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
   s.gi.method = info->name;
   // The lowest quality a sampling method needs here: 16 samples per pixel jitter over the pixel.
-  info->applyQuality(s.gi, info->qualityName == "samples per pixel" ? 16 : info->defaultQualities.back());
+  info->applyQuality(s.gi,
+                     info->qualityName == "samples per pixel" ? 16 : info->defaultQualities.back());
   MethodFrame f = createMethod(s, {true, false})->render(s.camera);
   double sum = 0, sumWant = 0, worst = 0;
   for (int y = 0; y < 32; ++y)
@@ -283,7 +298,8 @@ TEST_P(EveryMethod, VideoLightProbeFollowsTheCameraTime) {
   Scene s = floorScene(t, json::array(), 16);
   const MethodInfo* info = findMethod(GetParam());
   ASSERT_NE(info, nullptr);
-  if (!info->albedoMode) GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
+  if (!info->albedoMode)
+    GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
   const float sky[3] = {1.0f, 3.0f, 0.5f};
   for (int i = 0; i < 3; ++i) {
     HdrImage img(16, 8);
@@ -295,7 +311,8 @@ TEST_P(EveryMethod, VideoLightProbeFollowsTheCameraTime) {
   e.fps = 10;
   s.environment = e;
   s.gi.method = info->name;
-  info->applyQuality(s.gi, info->qualityName == "samples per pixel" ? 16 : info->defaultQualities.back());
+  info->applyQuality(s.gi,
+                     info->qualityName == "samples per pixel" ? 16 : info->defaultQualities.back());
   const std::vector<SceneCamera> cameras = sceneCameras(s);
   ASSERT_EQ(cameras.size(), 3u);
   auto m = createMethod(s, {true, false});
@@ -326,7 +343,7 @@ INSTANTIATE_TEST_SUITE_P(Registered, EveryMethod, ::testing::ValuesIn(methodName
 struct Agreement {
   double relativeL2 = 0;   // over all pixels
   double energyRatio = 0;  // sum raster / sum direct
-  double within25 = 0;     // share of pixels within 25% (relative to the pixel, floor 5% of the mean)
+  double within25 = 0;  // share of pixels within 25% (relative to the pixel, floor 5% of the mean)
   double blockLo = INFINITY, blockHi = 0;  // raster / direct over 8 x 8 pixel blocks (lit blocks)
 };
 
@@ -364,18 +381,23 @@ Agreement rasterAgainstDirect(TestSceneKind kind, bool dropEnvironment, const st
     for (int bx = 0; bx + 8 <= ref.image.width; bx += 8) {
       double r = 0, d = 0;
       for (int y = by; y < by + 8; ++y)
-        for (int x = bx; x < bx + 8; ++x) r += luminance(ras.image.get(x, y)), d += luminance(ref.image.get(x, y));
+        for (int x = bx; x < bx + 8; ++x)
+          r += luminance(ras.image.get(x, y)), d += luminance(ref.image.get(x, y));
       if (d < 0.2 * meanLum * 64) continue;  // a dark block's ratio is mostly noise
       a.blockLo = std::min(a.blockLo, r / d);
       a.blockHi = std::max(a.blockHi, r / d);
     }
-  std::printf("%s: raster against direct (256 spp, its own error %.4f): relative L2 %.4f, energy ratio %.4f, "
-              "%.1f%% of pixels within 25%%, 8x8 blocks %.2f to %.2f\n",
-              testSceneKindName(kind), ref.relativeError, a.relativeL2, a.energyRatio, 100 * a.within25, a.blockLo,
-              a.blockHi);
+  std::printf(
+      "%s: raster against direct (256 spp, its own error %.4f): relative L2 %.4f, energy ratio "
+      "%.4f, "
+      "%.1f%% of pixels within 25%%, 8x8 blocks %.2f to %.2f\n",
+      testSceneKindName(kind), ref.relativeError, a.relativeL2, a.energyRatio, 100 * a.within25,
+      a.blockLo, a.blockHi);
   if (const char* keep = std::getenv("NESTLIGHT_TEST_KEEP")) {
-    writeToneMappedPng(std::string(keep) + "/" + testSceneKindName(kind) + "_raster.png", ras.image, 0);
-    writeToneMappedPng(std::string(keep) + "/" + testSceneKindName(kind) + "_direct.png", ref.image, 0);
+    writeToneMappedPng(std::string(keep) + "/" + testSceneKindName(kind) + "_raster.png", ras.image,
+                       0);
+    writeToneMappedPng(std::string(keep) + "/" + testSceneKindName(kind) + "_direct.png", ref.image,
+                       0);
   }
   return a;
 }
@@ -411,20 +433,29 @@ TEST(Raster, ScannedPlaneUnderAPointLightIsTheClosedForm) {
   test::TempDir t;
   {
     std::ofstream ply(t.file("plane.ply"));
-    ply << "ply\nformat ascii 1.0\nelement vertex 120000\nproperty float x\nproperty float y\nproperty float z\n"
-           "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\n"
+    ply << "ply\nformat ascii 1.0\nelement vertex 120000\nproperty float x\nproperty float "
+           "y\nproperty float z\n"
+           "property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty "
+           "uchar green\n"
            "property uchar blue\nend_header\n";
     Rng rng(7);
-    for (int i = 0; i < 120000; ++i) ply << rng.uniform() * 8 - 4 << " " << rng.uniform() * 8 - 4 << " 0 0 0 1 188 188 188\n";
+    for (int i = 0; i < 120000; ++i)
+      ply << rng.uniform() * 8 - 4 << " " << rng.uniform() * 8 - 4 << " 0 0 0 1 188 188 188\n";
   }
   test::buildOctreeFrom(t.file("plane.ply"), t.path() / "plane.octree");
   const float I = 40.0f;
   const glm::vec3 light(0.5f, 0.3f, 3.0f);
   json j = {{"version", 1},
             {"octrees", {{{"path", "plane.octree"}}}},
-            {"lights", {{{"type", "point"}, {"position", {light.x, light.y, light.z}}, {"intensity", I}}}},
-            {"camera", {{"eye", {0.0, -0.001, 6.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 1.0, 0.0}}, {"fov", 40.0},
-                        {"width", 48}, {"height", 48}}},
+            {"lights",
+             {{{"type", "point"}, {"position", {light.x, light.y, light.z}}, {"intensity", I}}}},
+            {"camera",
+             {{"eye", {0.0, -0.001, 6.0}},
+              {"target", {0.0, 0.0, 0.0}},
+              {"up", {0.0, 1.0, 0.0}},
+              {"fov", 40.0},
+              {"width", 48},
+              {"height", 48}}},
             {"gi", {{"method", "raster"}, {"mode", "albedo"}, {"samples_per_pixel", 64}}}};
   std::ofstream(t.file("scene.json")) << j.dump();
   Scene s = loadScene(t.file("scene.json"));
@@ -449,7 +480,8 @@ TEST(Raster, ScannedPlaneUnderAPointLightIsTheClosedForm) {
         sumWant += rho / kPi * I * (toL.z / std::sqrt(d2)) / d2;
         ++n;
       }
-    std::printf("%s: scanned plane, mean radiance / closed form = %.4f over %d pixels\n", method, sum / sumWant, n);
+    std::printf("%s: scanned plane, mean radiance / closed form = %.4f over %d pixels\n", method,
+                sum / sumWant, n);
     EXPECT_NEAR(sum / sumWant, 1.0, 0.01) << method;
   }
 }
@@ -466,25 +498,35 @@ TEST(Raster, OccludersOutOfViewStillCastShadows) {
     std::ofstream ply(t.file("s.ply"));
     const int floor = 60000, plate = 20000;
     ply << "ply\nformat ascii 1.0\nelement vertex " << floor + plate
-        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
-           "property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
+           "float ny\n"
+           "property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
+           "blue\nend_header\n";
     Rng rng(3);
-    for (int i = 0; i < floor; ++i) ply << rng.uniform() * 8 - 4 << " " << rng.uniform() * 8 - 1 << " 0 0 0 1 188 188 188\n";
+    for (int i = 0; i < floor; ++i)
+      ply << rng.uniform() * 8 - 4 << " " << rng.uniform() * 8 - 1 << " 0 0 0 1 188 188 188\n";
     for (int i = 0; i < plate; ++i)
-      ply << rng.uniform() * 1.6 - 0.8 << " " << rng.uniform() * 1.6 + 2.2 << " 1.5 0 0 1 188 188 188\n";
+      ply << rng.uniform() * 1.6 - 0.8 << " " << rng.uniform() * 1.6 + 2.2
+          << " 1.5 0 0 1 188 188 188\n";
   }
   test::buildOctreeFrom(t.file("s.ply"), t.path() / "s.octree");
   json j = {{"version", 1},
             {"origin", {0.0, 0.0, 0.0}},  // world = local, as floorPoint() assumes
             {"octrees", {{{"path", "s.octree"}}}},
             {"lights", {{{"type", "point"}, {"position", {0.0, 3.0, 4.0}}, {"intensity", 40.0}}}},
-            {"camera", {{"eye", {1.28, 2.999, 1.0}}, {"target", {1.28, 3.0, 0.0}}, {"up", {0.0, 1.0, 0.0}}, {"fov", 40.0},
-                        {"width", 32}, {"height", 32}}},
+            {"camera",
+             {{"eye", {1.28, 2.999, 1.0}},
+              {"target", {1.28, 3.0, 0.0}},
+              {"up", {0.0, 1.0, 0.0}},
+              {"fov", 40.0},
+              {"width", 32},
+              {"height", 32}}},
             {"gi", {{"method", "raster"}, {"mode", "albedo"}}}};
   std::ofstream(t.file("scene.json")) << j.dump();
   Scene s = loadScene(t.file("scene.json"));
   MethodFrame f = renderRaster(s);
-  if (const char* keep = std::getenv("NESTLIGHT_TEST_KEEP")) writeToneMappedPng(std::string(keep) + "/outofview.png", f.image, 0);
+  if (const char* keep = std::getenv("NESTLIGHT_TEST_KEEP"))
+    writeToneMappedPng(std::string(keep) + "/outofview.png", f.image, 0);
   // The plate's edge x = 0.8 at z = 1.5 casts the shadow's edge at x = 0.8 x 4 / 2.5 = 1.28.
   const float rho = srgbDecode(188.0f / 255.0f);
   int inside = 0, outside = 0, litOk = 0;
@@ -512,8 +554,12 @@ TEST(Raster, OccludersOutOfViewStillCastShadows) {
 
 TEST(Raster, RunsOnTheOsMesaFallback) {
   test::TempDir t;
-  Scene s = floorScene(t, json::array({json{{"type", "spot"}, {"position", {0.0, 0.0, 4.0}}, {"direction", {0.0, 0.0, -1.0}},
-                                            {"intensity", 50.0}}}), 32, true);
+  Scene s = floorScene(t,
+                       json::array({json{{"type", "spot"},
+                                         {"position", {0.0, 0.0, 4.0}},
+                                         {"direction", {0.0, 0.0, -1.0}},
+                                         {"intensity", 50.0}}}),
+                       32, true);
   MethodFrame egl = renderRaster(s);
   ::setenv("NESTLIGHT_GL_PLATFORM", "osmesa", 1);
   MethodFrame osmesa;
@@ -529,7 +575,8 @@ TEST(Raster, RunsOnTheOsMesaFallback) {
   // The same Mesa rasteriser behind both: the same image, every GL function of a library outside
   // the viewer (frame, raster) resolved through OSMesa's table.
   ASSERT_EQ(osmesa.image.rgb.size(), egl.image.rgb.size());
-  for (size_t i = 0; i < egl.image.rgb.size(); ++i) ASSERT_NEAR(osmesa.image.rgb[i], egl.image.rgb[i], 1e-5f) << i;
+  for (size_t i = 0; i < egl.image.rgb.size(); ++i)
+    ASSERT_NEAR(osmesa.image.rgb[i], egl.image.rgb[i], 1e-5f) << i;
   double sum = 0;
   for (float v : osmesa.image.rgb) sum += v;
   EXPECT_GT(sum, 0);
@@ -579,12 +626,14 @@ TEST(Raster, AFarMeshDoesNotClipTheScan) {
 TEST(Raster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
   test::TempDir t;
   json j = floorSceneJson(t, 64);
-  j["meshes"].push_back(json{{"path", "box.obj"},
-                             {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-                             {"material", "floor"}});
+  j["meshes"].push_back(
+      json{{"path", "box.obj"},
+           {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+           {"material", "floor"}});
   j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
   const float E = 2.0f;
-  j["lights"] = json::array({json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  j["lights"] = json::array(
+      {json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
   j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 512}}}};
   std::ofstream(t.file("near.json")) << j.dump(1);
   j["meshes"].push_back(json{{"path", "box.obj"},
@@ -614,13 +663,15 @@ TEST(Raster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
           EXPECT_LT(got, 0.05f * lit) << (k ? "far" : "near") << ": umbra at " << p.x << "," << p.y;
         } else if (p.x > 0.75f || p.x < -1.85f || std::abs(p.y) > 0.65f) {
           ++clear;
-          EXPECT_NEAR(got, lit, 1e-3f * lit) << (k ? "far" : "near") << ": lit at " << p.x << "," << p.y;
+          EXPECT_NEAR(got, lit, 1e-3f * lit)
+              << (k ? "far" : "near") << ": lit at " << p.x << "," << p.y;
         }
       }
     EXPECT_GT(umbra, 40);
     EXPECT_GT(clear, 2500);
   }
-  EXPECT_EQ(f[0].attributes.at("nestlight:shadow_texel:0"), f[1].attributes.at("nestlight:shadow_texel:0"));
+  EXPECT_EQ(f[0].attributes.at("nestlight:shadow_texel:0"),
+            f[1].attributes.at("nestlight:shadow_texel:0"));
   // Both frames fit the same map, so the shadow is the same; what differs is the camera's far
   // plane (1000 km with the far box) and with it the depth the G-buffer reconstructs positions
   // from (about 1e-7 m here), which could flip a pixel exactly on a PCF edge: at most 1% of the
@@ -640,7 +691,8 @@ TEST(Raster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
 // origin moves in whole texels, its size in quarter octaves), a far box out of view changes
 // nothing, and a camera that sees nothing gets the whole scene.
 TEST(Raster, DirectionalShadowFitKeepsItsTexelGrid) {
-  const std::vector<ShadowBox> near = {{{-10, -10, -0.1f}, {10, 10, 0}}, {{-0.5f, -0.5f, 1}, {0.5f, 0.5f, 1.2f}}};
+  const std::vector<ShadowBox> near = {{{-10, -10, -0.1f}, {10, 10, 0}},
+                                       {{-0.5f, -0.5f, 1}, {0.5f, 0.5f, 1.2f}}};
   std::vector<ShadowBox> far = near;
   far.push_back({{1e6f, 0, 0}, {1e6f + 20, 20, 20}});
   const glm::vec3 dir(-0.4f, -0.3f, -0.87f);

@@ -15,13 +15,14 @@ namespace nestlight::gi {
 // `grey` (8-bit sRGB), built into an octree at t/sphere.octree; only its points with z >= minZ
 // (unit sphere) when minZ > -1; without normals when `normals` is false; nodes of at most
 // maxNodePoints points (the converter's default when 0).
-inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, int grey, float minZ = -1.0f,
-                            bool normals = true, uint32_t maxNodePoints = 0) {
+inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, int grey,
+                            float minZ = -1.0f, bool normals = true, uint32_t maxNodePoints = 0) {
   {
     std::ofstream ply(t.file("sphere.ply"));
     int kept = 0;
     for (int i = 0; i < n; ++i) kept += 1 - 2 * (i + 0.5) / n >= minZ;
-    ply << "ply\nformat ascii 1.0\nelement vertex " << kept << "\nproperty float x\nproperty float y\nproperty float z\n"
+    ply << "ply\nformat ascii 1.0\nelement vertex " << kept
+        << "\nproperty float x\nproperty float y\nproperty float z\n"
         << (normals ? "property float nx\nproperty float ny\nproperty float nz\n" : "")
         << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
     const double golden = kPi * (3 - std::sqrt(5.0));
@@ -40,8 +41,8 @@ inline void buildSphereScan(const nestlight::test::TempDir& t, int n, float R, i
 // A grey Lambert box of albedo rho (0.4 m, at the origin) inside the sphere scan (radiance-cache
 // mode: the scan's colour is its light), seen from inside the sphere at 32 x 32, rendered by
 // `method` with `parameters`.
-inline Scene boxInSphereScene(const nestlight::test::TempDir& t, double rho, const std::string& method,
-                              const nlohmann::json& parameters) {
+inline Scene boxInSphereScene(const nestlight::test::TempDir& t, double rho,
+                              const std::string& method, const nlohmann::json& parameters) {
   writeBoxObj(t.path() / "box.obj");
   nlohmann::json j = {
       {"version", 1},
@@ -51,8 +52,13 @@ inline Scene boxInSphereScene(const nestlight::test::TempDir& t, double rho, con
                      {"path", "box.obj"},
                      {"transform", {{"translate", {-0.2, -0.2, -0.2}}, {"scale", {0.4, 0.4, 0.4}}}},
                      {"material", "grey"}}})},
-      {"camera", {{"eye", {-0.55, 0.0, 0.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 30.0},
-                  {"width", 32}, {"height", 32}}},
+      {"camera",
+       {{"eye", {-0.55, 0.0, 0.0}},
+        {"target", {0.0, 0.0, 0.0}},
+        {"up", {0.0, 0.0, 1.0}},
+        {"fov", 30.0},
+        {"width", 32},
+        {"height", 32}}},
       {"gi", {{"method", method}, {"mode", "radiance_cache"}, {"parameters", parameters}}}};
   std::ofstream(t.file("scene.json")) << j.dump(2);
   return loadScene(t.file("scene.json"));

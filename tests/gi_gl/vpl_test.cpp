@@ -11,19 +11,19 @@
 #include <sstream>
 
 #include "../gi/chi2.h"
+#include "gi_gl/sphere_scan.h"
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/test_scenes.h"
-#include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"
+#include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/srgb.h"
 #include "nestlight/gi/tone_map.h"
 #include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/octree/error.h"
-#include "gi_gl/sphere_scan.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -31,14 +31,24 @@ namespace {
 
 using json = nlohmann::json;
 
-Scene sphereScene(const nestlight::test::TempDir& t, float I, int bounces, const json& parameters, int size = 32) {
+Scene sphereScene(const nestlight::test::TempDir& t, float I, int bounces, const json& parameters,
+                  int size = 32) {
   json j = {{"version", 1},
             {"octrees", {{{"path", "sphere.octree"}}}},
             {"lights", {{{"type", "point"}, {"position", {0.0, 0.0, 0.0}}, {"intensity", I}}}},
-            {"camera", {{"eye", {-0.3, 0.0, 0.1}}, {"target", {1.0, 0.2, 0.3}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
-                        {"width", size}, {"height", size}}},
-            {"gi", {{"method", "vpl"}, {"mode", "albedo"}, {"max_bounces", bounces}, {"samples_per_pixel", 16},
-                    {"parameters", parameters}}}};
+            {"camera",
+             {{"eye", {-0.3, 0.0, 0.1}},
+              {"target", {1.0, 0.2, 0.3}},
+              {"up", {0.0, 0.0, 1.0}},
+              {"fov", 60.0},
+              {"width", size},
+              {"height", size}}},
+            {"gi",
+             {{"method", "vpl"},
+              {"mode", "albedo"},
+              {"max_bounces", bounces},
+              {"samples_per_pixel", 16},
+              {"parameters", parameters}}}};
   std::ofstream(t.file("scene.json")) << j.dump(2);
   return loadScene(t.file("scene.json"));
 }
@@ -70,8 +80,8 @@ TEST(Vpl, ClosedSphereGivesTheGeometricSeriesOverBounces) {
     for (int b = 0; b < bounces; ++b) series += std::pow(rho, b);
     const double want = rho / kPi * I / (R * R) * series;
     const double got = meanRed(f.image);
-    std::printf("vpl, %d bounce(s): mean radiance %.5f, closed form %.5f (ratio %.4f); %s\n", bounces, got, want,
-                got / want, f.summary.c_str());
+    std::printf("vpl, %d bounce(s): mean radiance %.5f, closed form %.5f (ratio %.4f); %s\n",
+                bounces, got, want, got / want, f.summary.c_str());
     EXPECT_NEAR(got / want, 1.0, 0.03) << bounces << " bounces";
   }
 }
@@ -96,7 +106,8 @@ TEST(Vpl, BounceRaysStayInsideAClosedRoom) {
   MethodFrame f = createMethod(s, {true, false})->render(s.camera);
   const int live = std::stoi(f.attributes.at("nestlight:vpls_live"));
   const int generations = std::stoi(f.attributes.at("nestlight:vpl_generations"));
-  std::printf("%d of %d VPLs live over %d generations; %s\n", live, generations * 256, generations, f.summary.c_str());
+  std::printf("%d of %d VPLs live over %d generations; %s\n", live, generations * 256, generations,
+              f.summary.c_str());
   EXPECT_EQ(generations, 3);
   EXPECT_GE(live, generations * 256 * 99 / 100);
 }
@@ -134,21 +145,32 @@ TEST(Vpl, OneVplLightsAPerpendicularWallAsTheClosedForm) {
   nestlight::test::TempDir t;
   writeBoxObj(t.path() / "box.obj");
   const float I = 2.0e5f, rhoF = 0.5f, rhoW = 0.5f, halfAngle = 0.4f;
-  json meshes = json::array({json{{"path", "box.obj"},
-                                  {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
-                                  {"material", "floor"}},
-                             json{{"path", "box.obj"},
-                                  {"transform", {{"translate", {2.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 5.0}}}},
-                                  {"material", "wall"}}});
+  json meshes = json::array(
+      {json{{"path", "box.obj"},
+            {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+            {"material", "floor"}},
+       json{{"path", "box.obj"},
+            {"transform", {{"translate", {2.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 5.0}}}},
+            {"material", "wall"}}});
   json j = {{"version", 1},
             {"materials",
-             {{"floor", {{"type", "lambert"}, {"base_color", rhoF}}}, {"wall", {{"type", "lambert"}, {"base_color", rhoW}}}}},
+             {{"floor", {{"type", "lambert"}, {"base_color", rhoF}}},
+              {"wall", {{"type", "lambert"}, {"base_color", rhoW}}}}},
             {"meshes", meshes},
             {"lights",
-             {{{"type", "spot"}, {"position", {0.0, 0.0, 3.0}}, {"direction", {0.0, 0.0, -1.0}}, {"intensity", I},
-               {"outer_angle", halfAngle}, {"inner_angle", halfAngle}}}},
-            {"camera", {{"eye", {-1.0, 0.0, 1.2}}, {"target", {2.0, 0.0, 1.2}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 50.0},
-                        {"width", 48}, {"height", 48}}},
+             {{{"type", "spot"},
+               {"position", {0.0, 0.0, 3.0}},
+               {"direction", {0.0, 0.0, -1.0}},
+               {"intensity", I},
+               {"outer_angle", halfAngle},
+               {"inner_angle", halfAngle}}}},
+            {"camera",
+             {{"eye", {-1.0, 0.0, 1.2}},
+              {"target", {2.0, 0.0, 1.2}},
+              {"up", {0.0, 0.0, 1.0}},
+              {"fov", 50.0},
+              {"width", 48},
+              {"height", 48}}},
             {"gi",
              {{"method", "vpl"},
               {"mode", "albedo"},
@@ -168,14 +190,16 @@ TEST(Vpl, OneVplLightsAPerpendicularWallAsTheClosedForm) {
       const glm::vec3 p = o + d * ((2.0f - o.x) / d.x);
       if (p.z < 0.2f || p.z > 4.5f || std::abs(p.y) > 4.5f) continue;
       const double dist = glm::length(p);
-      const double want = rhoW / kPi * phi * rhoF / kPi * (p.z / dist) * (p.x / dist) / (dist * dist);
+      const double want =
+          rhoW / kPi * phi * rhoF / kPi * (p.z / dist) * (p.x / dist) / (dist * dist);
       const double got = f.image.get(x, y).r;
       worst = std::max(worst, std::abs(got / want - 1));
-      if (std::abs(got / want - 1) > 0.04) std::printf("  pixel %d %d at %.2f %.2f %.2f: %.4f\n", x, y, p.x, p.y, p.z, got / want);
+      if (std::abs(got / want - 1) > 0.04)
+        std::printf("  pixel %d %d at %.2f %.2f %.2f: %.4f\n", x, y, p.x, p.y, p.z, got / want);
       sum += got, sumWant += want, ++n;
     }
-  std::printf("one VPL: wall mean / closed form = %.4f over %d pixels, worst pixel %.4f; %s\n", sum / sumWant, n, worst,
-              f.summary.c_str());
+  std::printf("one VPL: wall mean / closed form = %.4f over %d pixels, worst pixel %.4f; %s\n",
+              sum / sumWant, n, worst, f.summary.c_str());
   ASSERT_GT(n, 500);
   EXPECT_NEAR(sum / sumWant, 1.0, 0.02);
   EXPECT_LT(worst, 0.04);
@@ -188,24 +212,38 @@ TEST(Vpl, OneVplLightsAPerpendicularWallAsTheClosedForm) {
 TEST(Vpl, IsmVisibilityAgreesWithExactRays) {
   nestlight::test::TempDir t;
   writeBoxObj(t.path() / "box.obj");
-  json meshes = json::array({json{{"path", "box.obj"},
-                                  {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
-                                  {"material", "white"}},
-                             json{{"path", "box.obj"},
-                                  {"transform", {{"translate", {3.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 4.0}}}},
-                                  {"material", "white"}},
-                             json{{"path", "box.obj"},
-                                  {"transform", {{"translate", {1.0, -0.5, 0.0}}, {"scale", {0.6, 1.0, 1.2}}}},
-                                  {"material", "white"}}});
+  json meshes = json::array(
+      {json{{"path", "box.obj"},
+            {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+            {"material", "white"}},
+       json{{"path", "box.obj"},
+            {"transform", {{"translate", {3.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 4.0}}}},
+            {"material", "white"}},
+       json{{"path", "box.obj"},
+            {"transform", {{"translate", {1.0, -0.5, 0.0}}, {"scale", {0.6, 1.0, 1.2}}}},
+            {"material", "white"}}});
   json j = {{"version", 1},
             {"materials", {{"white", {{"type", "lambert"}, {"base_color", 0.7}}}}},
             {"meshes", meshes},
             {"lights",
-             {{{"type", "spot"}, {"position", {-2.0, 0.0, 2.5}}, {"direction", {1.0, 0.0, -0.1}}, {"intensity", 40.0},
-               {"outer_angle", 25.0}, {"inner_angle", 20.0}}}},
-            {"camera", {{"eye", {-1.5, -0.2, 4.0}}, {"target", {1.2, 0.0, 0.0}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
-                        {"width", 48}, {"height", 48}}},
-            {"gi", {{"method", "vpl"}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", {{"vpls", 256}}}}}};
+             {{{"type", "spot"},
+               {"position", {-2.0, 0.0, 2.5}},
+               {"direction", {1.0, 0.0, -0.1}},
+               {"intensity", 40.0},
+               {"outer_angle", 25.0},
+               {"inner_angle", 20.0}}}},
+            {"camera",
+             {{"eye", {-1.5, -0.2, 4.0}},
+              {"target", {1.2, 0.0, 0.0}},
+              {"up", {0.0, 0.0, 1.0}},
+              {"fov", 60.0},
+              {"width", 48},
+              {"height", 48}}},
+            {"gi",
+             {{"method", "vpl"},
+              {"mode", "albedo"},
+              {"max_bounces", 2},
+              {"parameters", {{"vpls", 256}}}}}};
   std::ofstream(t.file("scene.json")) << j.dump(2);
   Scene s = loadScene(t.file("scene.json"));
   s.gi.parameters["visibility"] = "exact";
@@ -226,8 +264,10 @@ TEST(Vpl, IsmVisibilityAgreesWithExactRays) {
     return v;
   };
   std::printf("%s\n", exact.summary.c_str());
-  std::printf("ISM vs exact visibility: %.2f%% of pairs agree; light with ISMs / exact = %.4f, without visibility = %.4f\n",
-              100 * agree, sum(ism.image) / sum(exact.image), sum(none.image) / sum(exact.image));
+  std::printf(
+      "ISM vs exact visibility: %.2f%% of pairs agree; light with ISMs / exact = %.4f, without "
+      "visibility = %.4f\n",
+      100 * agree, sum(ism.image) / sum(exact.image), sum(none.image) / sum(exact.image));
   // Measured: 90% of the pairs and 92% of their light (32^2 ISMs, bias 1.5 texels slope-scaled):
   // the disagreements are grazing pairs on either side of the bias (8% false shadows, 2% leaks).
   EXPECT_GT(agree, 0.85);
@@ -259,10 +299,11 @@ TEST(Vpl, RadianceCacheScanLightsAnInsertedObject) {
     int n = 0;
     for (int y = 8; y < 24; ++y)
       for (int x = 8; x < 24; ++x) sum += f.image.get(x, y).r, ++n;
-    std::printf("radiance cache, %d bounce(s): box %.5f, rho L = %.5f (ratio %.4f); %s\n", bounces, sum / n, rho * L,
-                sum / n / (rho * L), f.summary.c_str());
+    std::printf("radiance cache, %d bounce(s): box %.5f, rho L = %.5f (ratio %.4f); %s\n", bounces,
+                sum / n, rho * L, sum / n / (rho * L), f.summary.c_str());
     EXPECT_NEAR(sum / n / (rho * L), 1.0, 0.2) << bounces;
-    EXPECT_GT(sum / n / (rho * L), 1.0) << bounces;  // the known direction of the area estimate's bias here
+    EXPECT_GT(sum / n / (rho * L), 1.0)
+        << bounces;  // the known direction of the area estimate's bias here
   }
 }
 
@@ -320,14 +361,23 @@ bool allFinite(const HdrImage& img) {
 TEST(Vpl, LightsThatSeeNothingGiveNoVpls) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 20000, 2.0f, 188);
-  json spot = {{"type", "spot"}, {"position", {0.0, 0.0, 10.0}}, {"direction", {0.0, 0.0, 1.0}}, {"intensity", 50.0},
-               {"outer_angle", 20.0}, {"inner_angle", 15.0}};
+  json spot = {{"type", "spot"},    {"position", {0.0, 0.0, 10.0}}, {"direction", {0.0, 0.0, 1.0}},
+               {"intensity", 50.0}, {"outer_angle", 20.0},          {"inner_angle", 15.0}};
   json j = {{"version", 1},
             {"octrees", {{{"path", "sphere.octree"}}}},
             {"lights", {spot}},
-            {"camera", {{"eye", {-0.3, 0.0, 0.1}}, {"target", {1.0, 0.2, 0.3}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
-                        {"width", 24}, {"height", 24}}},
-            {"gi", {{"method", "vpl"}, {"mode", "albedo"}, {"max_bounces", 3}, {"parameters", {{"vpls", 64}}}}}};
+            {"camera",
+             {{"eye", {-0.3, 0.0, 0.1}},
+              {"target", {1.0, 0.2, 0.3}},
+              {"up", {0.0, 0.0, 1.0}},
+              {"fov", 60.0},
+              {"width", 24},
+              {"height", 24}}},
+            {"gi",
+             {{"method", "vpl"},
+              {"mode", "albedo"},
+              {"max_bounces", 3},
+              {"parameters", {{"vpls", 64}}}}}};
   std::ofstream(t.file("scene.json")) << j.dump(2);
   Scene s = loadScene(t.file("scene.json"));
   MethodFrame f = createMethod(s, {true, false})->render(s.camera);
@@ -342,18 +392,30 @@ TEST(Vpl, LightsThatSeeNothingGiveNoVpls) {
 TEST(Vpl, GrazingVplsStayFinite) {
   nestlight::test::TempDir t;
   writeBoxObj(t.path() / "box.obj");
-  json j = {{"version", 1},
-            {"materials", {{"white", {{"type", "lambert"}, {"base_color", 0.8}}}}},
-            {"meshes", json::array({json{{"path", "box.obj"},
-                                         {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
-                                         {"material", "white"}},
-                                    json{{"path", "box.obj"},
-                                         {"transform", {{"translate", {2.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 3.0}}}},
-                                         {"material", "white"}}})},
-            {"lights", {{{"type", "point"}, {"position", {-3.0, 0.0, 0.002}}, {"intensity", 10.0}}}},
-            {"camera", {{"eye", {-1.0, 0.0, 1.5}}, {"target", {2.0, 0.0, 0.5}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
-                        {"width", 24}, {"height", 24}}},
-            {"gi", {{"method", "vpl"}, {"mode", "albedo"}, {"max_bounces", 3}, {"parameters", {{"vpls", 256}}}}}};
+  json j = {
+      {"version", 1},
+      {"materials", {{"white", {{"type", "lambert"}, {"base_color", 0.8}}}}},
+      {"meshes",
+       json::array(
+           {json{{"path", "box.obj"},
+                 {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+                 {"material", "white"}},
+            json{{"path", "box.obj"},
+                 {"transform", {{"translate", {2.0, -5.0, 0.0}}, {"scale", {0.1, 10.0, 3.0}}}},
+                 {"material", "white"}}})},
+      {"lights", {{{"type", "point"}, {"position", {-3.0, 0.0, 0.002}}, {"intensity", 10.0}}}},
+      {"camera",
+       {{"eye", {-1.0, 0.0, 1.5}},
+        {"target", {2.0, 0.0, 0.5}},
+        {"up", {0.0, 0.0, 1.0}},
+        {"fov", 60.0},
+        {"width", 24},
+        {"height", 24}}},
+      {"gi",
+       {{"method", "vpl"},
+        {"mode", "albedo"},
+        {"max_bounces", 3},
+        {"parameters", {{"vpls", 256}}}}}};
   std::ofstream(t.file("scene.json")) << j.dump(2);
   Scene s = loadScene(t.file("scene.json"));
   MethodFrame f = createMethod(s, {true, false})->render(s.camera);
@@ -361,14 +423,15 @@ TEST(Vpl, GrazingVplsStayFinite) {
   for (float v : f.image.rgb) EXPECT_GE(v, 0.0f);
 }
 
-// A receiver touching a VPL: inside the sphere, the camera looks at the wall where the light G-buffer
-// puts VPLs, and a small clamp distance (0.1% of the radius) lets 1 / d^2 grow huge for the
-// nearest pixels; the clamp keeps every pixel finite and bounded, and its measured loss is
+// A receiver touching a VPL: inside the sphere, the camera looks at the wall where the light
+// G-buffer puts VPLs, and a small clamp distance (0.1% of the radius) lets 1 / d^2 grow huge for
+// the nearest pixels; the clamp keeps every pixel finite and bounded, and its measured loss is
 // reported (and small: few pixels are that near a VPL).
 TEST(Vpl, ReceiversTouchingVplsStayFiniteAndTheClampLossIsMeasured) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 80000, 2.0f, 188);
-  Scene s = sphereScene(t, 10.0f, 2, json{{"vpls", 1024}, {"light_resolution", 64}, {"clamp", 0.0005}}, 32);
+  Scene s = sphereScene(t, 10.0f, 2,
+                        json{{"vpls", 1024}, {"light_resolution", 64}, {"clamp", 0.0005}}, 32);
   MethodFrame f = createMethod(s, {true, false})->render(s.camera);
   EXPECT_TRUE(allFinite(f.image));
   const double loss = std::stod(f.attributes.at("nestlight:clamp_loss"));
@@ -401,7 +464,8 @@ TEST(Vpl, NationalGridCoordinatesGiveTheSameImage) {
       if (header) {
         // Positions this far out need doubles (a float's step at 4e6 is 0.25 m).
         for (const char* axis : {"x", "y", "z"})
-          if (line == std::string("property float ") + axis) line = std::string("property double ") + axis;
+          if (line == std::string("property float ") + axis)
+            line = std::string("property double ") + axis;
         out << line << "\n";
         header = line != "end_header";
         continue;
@@ -454,9 +518,11 @@ TEST(Vpl, AutomaticCountFollowsTheTimeTarget) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 20000, 2.0f, 188);
   auto countFor = [&](double ms) {
-    Scene s = sphereScene(t, 10.0f, 3, json{{"vpls", "auto"}, {"target_ms", ms}, {"light_resolution", 32}}, 16);
+    Scene s = sphereScene(t, 10.0f, 3,
+                          json{{"vpls", "auto"}, {"target_ms", ms}, {"light_resolution", 32}}, 16);
     MethodFrame f = createMethod(s, {true, false})->render(s.camera);
-    std::printf("target %.1f ms: %s VPLs, %.1f ms; %s\n", ms, f.attributes.at("nestlight:vpls").c_str(), f.seconds * 1e3,
+    std::printf("target %.1f ms: %s VPLs, %.1f ms; %s\n", ms,
+                f.attributes.at("nestlight:vpls").c_str(), f.seconds * 1e3,
                 f.summary.substr(f.summary.find("vpl:")).c_str());
     return std::stoi(f.attributes.at("nestlight:vpls"));
   };

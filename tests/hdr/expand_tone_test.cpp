@@ -386,10 +386,11 @@ TEST(ExpandExposure, AMaskLetsAnUnregisteredPhotographWithBackgroundExpand) {
     const double ldr = relativeL2(dir, "ldr");
     const ExpandReport r = expandHdr(dir, photo, o);
     const double ours = relativeL2(dir, "hdr");
-    std::printf("masked %-28s exposure 2^%.2f (histogram 2^%.2f) spread %.3f matched %.1f%%: "
-                "relative L2 %.4f, LDR %.4f; largest %.4g (bound %.4g)\n",
-                c.name, r.log2Exposure, r.checks.histogramLog2, r.checks.spreadStops,
-                100 * r.checks.matchedShare, ours, ldr, r.maxValue, r.checks.bound);
+    std::printf(
+        "masked %-28s exposure 2^%.2f (histogram 2^%.2f) spread %.3f matched %.1f%%: "
+        "relative L2 %.4f, LDR %.4f; largest %.4g (bound %.4g)\n",
+        c.name, r.log2Exposure, r.checks.histogramLog2, r.checks.spreadStops,
+        100 * r.checks.matchedShare, ours, ldr, r.maxValue, r.checks.bound);
     EXPECT_TRUE(r.checks.failed.empty());
     EXPECT_LT(ours, 0.9 * ldr);
     if (&c.tone == &tones()[0]) {
@@ -415,7 +416,8 @@ TEST(ExpandExposure, AMaskOfAnotherSizeOrAllBlackIsRefused) {
   EXPECT_NE(std::string(test::errorOf([&] { expandHdr(dir, photo, o); }).what()).find("photo mask"),
             std::string::npos);
   o.photoMask.assign(photo.pixels(), 0);
-  EXPECT_NE(std::string(test::errorOf([&] { expandHdr(dir, photo, o); }).what()).find("mask lets it count"),
+  EXPECT_NE(std::string(test::errorOf([&] { expandHdr(dir, photo, o); }).what())
+                .find("mask lets it count"),
             std::string::npos);
   EXPECT_EQ(OctreeReader(dir).metadata().layer("hdr"), nullptr);
 }
@@ -432,7 +434,8 @@ TEST(ExpandExposure, CliTakesAPngMask) {
     if (scenes().sceneMask[i]) mask.rgb[3 * i] = mask.rgb[3 * i + 1] = mask.rgb[3 * i + 2] = 1.0f;
   writePng((tmp.path() / "mask.png").string(), mask);
   writePng((tmp.path() / "wrong.png").string(), wrong);
-  const std::string base = "expand-hdr " + dir.string() + " --photo " + (tmp.path() / "photo.exr").string() +
+  const std::string base = "expand-hdr " + dir.string() + " --photo " +
+                           (tmp.path() / "photo.exr").string() +
                            " --auto-views 2 --face-size 96 -q --photo-mask ";
   std::string out;
   EXPECT_NE(test::runCli(base + (tmp.path() / "wrong.png").string(), &out), 0);

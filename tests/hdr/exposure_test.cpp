@@ -1,12 +1,12 @@
 // The exposure search of HDR expansion: Wasserstein distances between luminance histograms, and
 // the search recovering a known exposure (eq. 1 and 2 of Sabbadin et al. 2019).
+#include "nestlight/gi/hdr/exposure.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <random>
-
-#include "nestlight/gi/hdr/exposure.h"
 
 namespace nestlight::gi::hdr {
 namespace {
@@ -42,11 +42,14 @@ TEST(Exposure, SearchRecoversAKnownExposure) {
   for (double log2e : {-3.3, 0.0, 4.7}) {
     std::vector<float> scan;
     for (size_t i = 0; i < photo.size(); i += 3)  // the scan sees part of the same scene
-      if (std::isfinite(photo[i])) scan.push_back(float(std::min(1.0, std::exp2(log2e) * photo[i])));
+      if (std::isfinite(photo[i]))
+        scan.push_back(float(std::min(1.0, std::exp2(log2e) * photo[i])));
     const ExposureSearch s = findBestExposure(photo, luminanceHistogram(scan));
     ASSERT_TRUE(s.usable);
-    EXPECT_NEAR(s.log2Exposure, log2e, 0.05) << "distance " << s.distance << " after " << s.iterations;
-    std::printf("log2 e %.2f: found %.4f (distance %.2e, %d iterations)\n", log2e, s.log2Exposure, s.distance, s.iterations);
+    EXPECT_NEAR(s.log2Exposure, log2e, 0.05)
+        << "distance " << s.distance << " after " << s.iterations;
+    std::printf("log2 e %.2f: found %.4f (distance %.2e, %d iterations)\n", log2e, s.log2Exposure,
+                s.distance, s.iterations);
     EXPECT_LT(s.distance, 0.01);
     // The first range is the photograph's: from bringing 1e2 to 1 to bringing 1e-3 to 1.
     EXPECT_NEAR(s.log2Lo, -std::log2(100.0), 0.01);
@@ -61,7 +64,8 @@ TEST(Exposure, BlackPhotographsAndEmptyScansAreReportedUnusable) {
   EXPECT_FALSE(findBestExposure(std::vector<float>(100, 0.0f), scan).usable);
   EXPECT_FALSE(findBestExposure({NAN, INFINITY}, scan).usable);
   EXPECT_FALSE(findBestExposure({0.5f, 1.0f}, Histogram{}).usable);
-  const ExposureSearch one = findBestExposure(std::vector<float>(100, 4.0f), luminanceHistogram({0.5f}));
+  const ExposureSearch one =
+      findBestExposure(std::vector<float>(100, 4.0f), luminanceHistogram({0.5f}));
   ASSERT_TRUE(one.usable);
   EXPECT_NEAR(one.log2Exposure, -3.0, 0.05);  // 4 x 2^-3 = 0.5
 }

@@ -261,7 +261,6 @@ TEST(ColourLayer, DecodersRejectHostileBytes) {
   EXPECT_NE(parseLayerIndex(index.data(), index.size(), entries), "");
 }
 
-
 // "rgb" is what scene files call the recorded colour: a layer of that name could never be
 // chosen, so it is refused, as are names that are not file names.
 TEST(ColourLayer, ReservedAndMalformedNamesAreRefused) {
@@ -271,7 +270,9 @@ TEST(ColourLayer, ReservedAndMalformedNamesAreRefused) {
     const Error e = test::errorOf([&] { ColourLayerWriter w(dir, bad, 1.0); });
     EXPECT_NE(std::string(e.what()).find("layer name"), std::string::npos) << e.what();
   }
-  EXPECT_NE(std::string(test::errorOf([&] { checkLayerName("rgb"); }).what()).find("recorded colour"), std::string::npos);
+  EXPECT_NE(
+      std::string(test::errorOf([&] { checkLayerName("rgb"); }).what()).find("recorded colour"),
+      std::string::npos);
   EXPECT_NO_THROW(checkLayerName("hdr"));
   EXPECT_TRUE(orphanLayerFiles(dir, OctreeReader(dir).metadata()).empty());
 }

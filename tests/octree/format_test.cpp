@@ -65,7 +65,8 @@ TEST_P(CodecRoundTrip, ExactForEveryType) {
       auto records = [&](const PointBuffer& p) {
         std::vector<std::vector<uint8_t>> r(p.size());
         for (size_t i = 0; i < p.size(); ++i) {
-          r[i].assign(reinterpret_cast<const uint8_t*>(&p.pos[3 * i]), reinterpret_cast<const uint8_t*>(&p.pos[3 * i]) + 12);
+          r[i].assign(reinterpret_cast<const uint8_t*>(&p.pos[3 * i]),
+                      reinterpret_cast<const uint8_t*>(&p.pos[3 * i]) + 12);
           r[i].insert(r[i].end(), p.attrsOf(i), p.attrsOf(i) + p.stride);
         }
         std::sort(r.begin(), r.end());
@@ -90,7 +91,8 @@ TEST_P(CodecRoundTrip, RejectsDamage) {
   EXPECT_NE(decodePayload(GetParam(), l, bytes.data(), 0, 500, out), "");
 }
 
-INSTANTIATE_TEST_SUITE_P(AllCodecs, CodecRoundTrip, ::testing::Values(Codec::Raw, Codec::Zstd, Codec::Draco),
+INSTANTIATE_TEST_SUITE_P(AllCodecs, CodecRoundTrip,
+                         ::testing::Values(Codec::Raw, Codec::Zstd, Codec::Draco),
                          [](const auto& info) { return std::string(codecName(info.param)); });
 
 TEST(Codec, ZstdIsCompactOnSortedSurfaces) {
@@ -123,7 +125,8 @@ TEST(Hierarchy, ChunksRoundTripAndRootChunkIsSmall) {
   EXPECT_EQ(blob.rootChunkSize, (1 + 8 + 64 + 512) * kHierarchyEntryBytes);
   // Walk every chunk the way a reader does.
   std::map<std::string, HierarchyEntry> found;
-  std::function<void(NodeKey, uint64_t, uint64_t)> walk = [&](NodeKey root, uint64_t off, uint64_t size) {
+  std::function<void(NodeKey, uint64_t, uint64_t)> walk = [&](NodeKey root, uint64_t off,
+                                                              uint64_t size) {
     std::vector<std::pair<NodeKey, HierarchyEntry>> out;
     ASSERT_EQ(parseHierarchyChunk(blob.bytes.data() + off, size, root, kHierarchyStep, out), "");
     for (auto& [k, e] : out) {
@@ -151,7 +154,9 @@ TEST(Hierarchy, RejectsInconsistentChunks) {
                                    {NodeKey::root().child(3), Codec::Raw, 1, 10, 10, 0}};
   HierarchyBlob blob = buildHierarchy(nodes);
   std::vector<std::pair<NodeKey, HierarchyEntry>> out;
-  EXPECT_NE(parseHierarchyChunk(blob.bytes.data(), blob.bytes.size() - kHierarchyEntryBytes, NodeKey::root(), 3, out), "");
+  EXPECT_NE(parseHierarchyChunk(blob.bytes.data(), blob.bytes.size() - kHierarchyEntryBytes,
+                                NodeKey::root(), 3, out),
+            "");
   out.clear();
   std::vector<uint8_t> extra = blob.bytes;
   extra.insert(extra.end(), blob.bytes.begin(), blob.bytes.begin() + kHierarchyEntryBytes);

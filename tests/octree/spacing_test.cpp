@@ -1,5 +1,7 @@
 // The measured point spacing stored in format version 2 hierarchy entries: the estimator on sets
 // whose spacing is known, and its one-byte encoding.
+#include "nestlight/octree/spacing.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,7 +10,6 @@
 #include <vector>
 
 #include "nestlight/octree/hierarchy.h"
-#include "nestlight/octree/spacing.h"
 
 using namespace nestlight;
 
@@ -17,14 +18,16 @@ namespace {
 uint64_t morton(uint32_t x, uint32_t y, uint32_t z) {
   uint64_t m = 0;
   for (int b = 0; b < 21; ++b)
-    m |= (uint64_t(x >> b & 1) << (3 * b + 2)) | (uint64_t(y >> b & 1) << (3 * b + 1)) | (uint64_t(z >> b & 1) << (3 * b));
+    m |= (uint64_t(x >> b & 1) << (3 * b + 2)) | (uint64_t(y >> b & 1) << (3 * b + 1)) |
+         (uint64_t(z >> b & 1) << (3 * b));
   return m;
 }
 
 // Points on the plane z = 7 in Morton order, as the builder hands them over.
 std::vector<uint32_t> sortedPlane(std::vector<std::array<uint32_t, 3>> pts) {
-  std::sort(pts.begin(), pts.end(),
-            [](const auto& a, const auto& b) { return morton(a[0], a[1], a[2]) < morton(b[0], b[1], b[2]); });
+  std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) {
+    return morton(a[0], a[1], a[2]) < morton(b[0], b[1], b[2]);
+  });
   std::vector<uint32_t> flat;
   for (auto& p : pts) flat.insert(flat.end(), p.begin(), p.end());
   return flat;
@@ -38,7 +41,8 @@ TEST(Spacing, RegularGridMeasuresItsStep) {
     for (uint32_t x = 0; x < 120; ++x) pts.push_back({x * 10, y * 10, 7});
   const auto xyz = sortedPlane(pts);
   // The 6th neighbour of a grid point lies at sqrt(2) steps: sqrt(2 pi / 6) = 1.023 steps.
-  EXPECT_NEAR(medianNeighbourSpacing(xyz.data(), nullptr, pts.size()), 10.0 * std::sqrt(2 * M_PI / 6), 1e-9);
+  EXPECT_NEAR(medianNeighbourSpacing(xyz.data(), nullptr, pts.size()),
+              10.0 * std::sqrt(2 * M_PI / 6), 1e-9);
 }
 
 TEST(Spacing, JitteredGridMeasuresItsStepWhereNearestNeighboursDoNot) {
@@ -49,7 +53,8 @@ TEST(Spacing, JitteredGridMeasuresItsStepWhereNearestNeighboursDoNot) {
   std::vector<std::array<uint32_t, 3>> pts;
   for (uint32_t y = 1; y < 150; ++y)
     for (uint32_t x = 1; x < 150; ++x)
-      pts.push_back({uint32_t(std::lround(x * 10 + jitter(rng))), uint32_t(std::lround(y * 10 + jitter(rng))), 7});
+      pts.push_back({uint32_t(std::lround(x * 10 + jitter(rng))),
+                     uint32_t(std::lround(y * 10 + jitter(rng))), 7});
   const auto xyz = sortedPlane(pts);
   const double s = medianNeighbourSpacing(xyz.data(), nullptr, pts.size());
   // The step is 10; the estimator's spread on this pattern is a few percent.
@@ -64,7 +69,8 @@ TEST(Spacing, IndicesSelectTheSetAndDegenerateSetsAreUnknown) {
   for (uint32_t y = 0; y < 64; ++y)
     for (uint32_t x = 0; x < 64; ++x) pts.push_back({x * 10, y * 10, 0});
   const auto xyz = sortedPlane(pts);
-  // The checkerboard half of the grid (a grid turned 45 degrees, its step x sqrt(2)): spacing x sqrt(2).
+  // The checkerboard half of the grid (a grid turned 45 degrees, its step x sqrt(2)): spacing x
+  // sqrt(2).
   std::vector<uint32_t> half;
   for (uint32_t i = 0; i < pts.size(); ++i)
     if ((xyz[3 * i] / 10 + xyz[3 * i + 1] / 10) % 2 == 0) half.push_back(i);
@@ -80,7 +86,8 @@ TEST(Spacing, IndicesSelectTheSetAndDegenerateSetsAreUnknown) {
   std::vector<std::array<uint32_t, 3>> tripled;
   for (auto& p : pts) tripled.insert(tripled.end(), {p, p, p});
   const auto xyz3 = sortedPlane(tripled);
-  EXPECT_NEAR(medianNeighbourSpacing(xyz3.data(), nullptr, tripled.size(), 128, 96), all, 0.02 * all);
+  EXPECT_NEAR(medianNeighbourSpacing(xyz3.data(), nullptr, tripled.size(), 128, 96), all,
+              0.02 * all);
   EXPECT_EQ(medianNeighbourSpacing(xyz.data(), nullptr, 0), 0.0);
 }
 
@@ -108,7 +115,9 @@ TEST(Spacing, HierarchyEntriesRoundTripTheCode) {
   nodes.push_back({NodeKey::root().child(3), Codec::Zstd, 20, 100, 50, 2, 97});
   HierarchyBlob blob = buildHierarchy(nodes);
   std::vector<std::pair<NodeKey, HierarchyEntry>> out;
-  ASSERT_EQ(parseHierarchyChunk(blob.bytes.data(), blob.bytes.size(), NodeKey::root(), kHierarchyStep, out), "");
+  ASSERT_EQ(parseHierarchyChunk(blob.bytes.data(), blob.bytes.size(), NodeKey::root(),
+                                kHierarchyStep, out),
+            "");
   ASSERT_EQ(out.size(), 2u);
   EXPECT_EQ(out[0].second.spacingCode, 140);
   EXPECT_EQ(out[1].second.spacingCode, 97);

@@ -42,7 +42,8 @@ Budgets generous() {
 double nearestDistance(const DrawNode& n, const Box3d& bounds, const glm::dvec3& eye) {
   double d2 = 0;
   for (int a = 0; a < 3; ++a) {
-    const double lo = std::max(n.worldBounds.min[a], bounds.min[a]), hi = std::min(n.worldBounds.max[a], bounds.max[a]);
+    const double lo = std::max(n.worldBounds.min[a], bounds.min[a]),
+                 hi = std::min(n.worldBounds.max[a], bounds.max[a]);
     const double e = a == 0 ? eye.x : a == 1 ? eye.y : eye.z;
     const double d = e < lo ? lo - e : e > hi ? e - hi : 0;
     d2 += d * d;
@@ -74,7 +75,8 @@ TEST(RefinementCriterion, ConvergedCutsFinestSpacingProjectsToAboutOnePixel) {
   Streamer s(reader, store, generous());
   const glm::dvec3 c = test::boundsCenter(meta);
   const double size = meta.bounds.max.x - meta.bounds.min.x;
-  for (const glm::dvec3& eye : {c + glm::dvec3(size * 0.9, size * 0.4, size * 0.5), c + glm::dvec3(0, -size * 0.3, size * 0.1)}) {
+  for (const glm::dvec3& eye : {c + glm::dvec3(size * 0.9, size * 0.4, size * 0.5),
+                                c + glm::dvec3(0, -size * 0.3, size * 0.1)}) {
     const View v = test::camera(eye, c);
     const Frustum frustum(v.clipFromWorld);
     ASSERT_GT(test::runUntilComplete(s, v, 5000), 0);
@@ -88,7 +90,8 @@ TEST(RefinementCriterion, ConvergedCutsFinestSpacingProjectsToAboutOnePixel) {
       for (int i = 0; i < 8; ++i) childDrawn |= drawn.count(n.key.child(i)) > 0;
       bool childVisible = false;  // children all outside the view are rightly not drawn
       for (int i = 0; i < 8; ++i)
-        if (e->childMask & (1u << i)) childVisible |= frustum.intersects(childBox(n, i, meta.bounds));
+        if (e->childMask & (1u << i))
+          childVisible |= frustum.intersects(childBox(n, i, meta.bounds));
       if (childDrawn || !childVisible) continue;  // refined, or nothing finer in view
       ++finest;
       // Not refined although children exist: its spacing must project to at most one pixel at
@@ -101,17 +104,22 @@ TEST(RefinementCriterion, ConvergedCutsFinestSpacingProjectsToAboutOnePixel) {
     // to more than 1 px at its far side was refined (where it has children).
     for (const DrawNode& n : s.drawList()) {
       const auto e = reader.peek(n.key);
-      const glm::dvec3 mid = 0.5 * (glm::dvec3(n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z) +
-                                    glm::dvec3(n.worldBounds.max.x, n.worldBounds.max.y, n.worldBounds.max.z));
-      const double far = glm::length(mid - eye) + glm::length(mid - glm::dvec3(n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z));
+      const glm::dvec3 mid =
+          0.5 * (glm::dvec3(n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z) +
+                 glm::dvec3(n.worldBounds.max.x, n.worldBounds.max.y, n.worldBounds.max.z));
+      const double far = glm::length(mid - eye) +
+                         glm::length(mid - glm::dvec3(n.worldBounds.min.x, n.worldBounds.min.y,
+                                                      n.worldBounds.min.z));
       if (e->childMask == 0 || v.projectedPixels(n.spacing, far) <= 1.0) continue;
       bool childVisible = false;
       for (int i = 0; i < 8; ++i)
-        if (e->childMask & (1u << i)) childVisible |= frustum.intersects(childBox(n, i, meta.bounds));
+        if (e->childMask & (1u << i))
+          childVisible |= frustum.intersects(childBox(n, i, meta.bounds));
       if (!childVisible) continue;
       bool childDrawn = false;
       for (int i = 0; i < 8; ++i) childDrawn |= drawn.count(n.key.child(i)) > 0;
-      EXPECT_TRUE(childDrawn) << n.key.name() << " projects its spacing to more than 1 px yet was not refined";
+      EXPECT_TRUE(childDrawn) << n.key.name()
+                              << " projects its spacing to more than 1 px yet was not refined";
     }
   }
 }
@@ -156,14 +164,16 @@ void downgradeToVersion1(const fs::path& dir) {
     ASSERT_NE(h[i], uint8_t(NodeType::Proxy)) << "the test octree must be one hierarchy chunk";
     h[i + 3] = 0;
   }
-  std::ofstream(dir / "hierarchy.bin", std::ios::binary).write(reinterpret_cast<const char*>(h.data()), h.size());
+  std::ofstream(dir / "hierarchy.bin", std::ios::binary)
+      .write(reinterpret_cast<const char*>(h.data()), h.size());
   std::ifstream mf(dir / "metadata.json");
   std::stringstream ss;
   ss << mf.rdbuf();
   std::string meta = ss.str();
   meta = std::regex_replace(meta, std::regex(R"("version":\s*2\b)"), "\"version\": 1");
-  meta = std::regex_replace(meta, std::regex(R"("root_chunk_checksum":\s*\d+)"),
-                            "\"root_chunk_checksum\": " + std::to_string(checksum64(h.data(), h.size())));
+  meta = std::regex_replace(
+      meta, std::regex(R"("root_chunk_checksum":\s*\d+)"),
+      "\"root_chunk_checksum\": " + std::to_string(checksum64(h.data(), h.size())));
   std::ofstream(dir / "metadata.json") << meta;
 }
 

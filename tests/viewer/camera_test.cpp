@@ -1,25 +1,25 @@
 // The viewer's camera control keeps a scene camera's up: it opens on the camera as given and
 // turns about that up (the viewer assumed z-up and dropped it).
+#include "nestlight/viewer/camera.h"
+
 #include <gtest/gtest.h>
 
 #include <glm/glm.hpp>
-
-#include "nestlight/viewer/camera.h"
 
 using namespace nestlight::viewer;
 
 namespace {
 
 void expectNear(const glm::dvec3& a, const glm::dvec3& b, double tol) {
-  EXPECT_NEAR(glm::length(a - b), 0.0, tol) << a.x << " " << a.y << " " << a.z << " vs " << b.x << " " << b.y << " "
-                                             << b.z;
+  EXPECT_NEAR(glm::length(a - b), 0.0, tol)
+      << a.x << " " << a.y << " " << a.z << " vs " << b.x << " " << b.y << " " << b.z;
 }
 
 }  // namespace
 
 TEST(CameraController, OpensOnTheCameraAsGivenWhateverItsUp) {
-  for (const glm::dvec3 up : {glm::dvec3(0, 0, 1), glm::dvec3(0, 1, 0), glm::dvec3(1, 0, 0), glm::dvec3(0.3, -0.5, 0.8),
-                              glm::dvec3(0, 0, -1)}) {
+  for (const glm::dvec3 up : {glm::dvec3(0, 0, 1), glm::dvec3(0, 1, 0), glm::dvec3(1, 0, 0),
+                              glm::dvec3(0.3, -0.5, 0.8), glm::dvec3(0, 0, -1)}) {
     Camera c;
     c.eye = {3, -2, 5};
     c.target = {0.5, 1, -1};
@@ -35,7 +35,8 @@ TEST(CameraController, OpensOnTheCameraAsGivenWhateverItsUp) {
     // Yaw turns about that up: the eye's height along it and its distance stay, it moves.
     cc.yaw += 90;
     const Camera turned = cc.camera();
-    EXPECT_NEAR(glm::dot(turned.eye - c.target, glm::normalize(up)), glm::dot(c.eye - c.target, glm::normalize(up)), 1e-9);
+    EXPECT_NEAR(glm::dot(turned.eye - c.target, glm::normalize(up)),
+                glm::dot(c.eye - c.target, glm::normalize(up)), 1e-9);
     EXPECT_NEAR(glm::length(turned.eye - c.target), glm::length(c.eye - c.target), 1e-9);
     EXPECT_GT(glm::length(turned.eye - c.eye), 1.0);
   }

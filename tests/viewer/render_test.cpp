@@ -9,9 +9,9 @@
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/synthetic.h"
-#include "nestlight/octree/octree_reader.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gl/context.h"
+#include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/headless.h"
 #include "test_support.h"
 
@@ -21,7 +21,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path goldenDir() { return ::nestlight::test::sourceDir() / "tests" / "goldens"; }
+fs::path goldenDir() {
+  return ::nestlight::test::sourceDir() / "tests" / "goldens";
+}
 
 void convert(std::vector<std::unique_ptr<PointReader>> readers, const fs::path& out) {
   BuildOptions o;
@@ -40,8 +42,8 @@ fs::path convertShared(const std::string& rel, const test::TempDir& tmp) {
 }
 
 // A seeded synthetic scan converted into `tmp`/`name`.
-fs::path syntheticOctree(const test::TempDir& tmp, const std::string& name, uint64_t points, uint64_t seed = 1,
-                         Vec3d origin = {0, 0, 0}) {
+fs::path syntheticOctree(const test::TempDir& tmp, const std::string& name, uint64_t points,
+                         uint64_t seed = 1, Vec3d origin = {0, 0, 0}) {
   SyntheticSpec spec;
   spec.points = points;
   spec.seed = seed;
@@ -66,7 +68,8 @@ RenderJob smallJob(const fs::path& octree, const std::string& output) {
 
 // Compares `file` with the golden `name`: a pixel differs when a channel is off by more than
 // `channelTol`; at most `maxFraction` of pixels may differ.
-void expectMatchesGolden(const std::string& file, const std::string& name, float channelTol, double maxFraction) {
+void expectMatchesGolden(const std::string& file, const std::string& name, float channelTol,
+                         double maxFraction) {
   const fs::path golden = goldenDir() / (name + ".png");
   const char* update = std::getenv("NESTLIGHT_UPDATE_GOLDENS");
   if (update && std::string(update) == "1") {
@@ -77,16 +80,17 @@ void expectMatchesGolden(const std::string& file, const std::string& name, float
   Image got = readImage(file), want = readImage(golden.string());
   ImageDiff d = compareImages(got, want, channelTol);
   // Always said, pass or fail: scripts/gpu-run.sh reports how far a GPU's image is from llvmpipe's.
-  std::printf("golden %s: %zu of %zu pixels differ by more than %.4f (%.3f%%), max channel error %.4f\n", name.c_str(),
-              size_t(d.differing), size_t(got.width) * size_t(got.height), channelTol, 100.0 * d.fraction,
-              double(d.maxChannel));
+  std::printf(
+      "golden %s: %zu of %zu pixels differ by more than %.4f (%.3f%%), max channel error %.4f\n",
+      name.c_str(), size_t(d.differing), size_t(got.width) * size_t(got.height), channelTol,
+      100.0 * d.fraction, double(d.maxChannel));
   if (d.fraction > maxFraction) {
     fs::copy_file(file, "render-" + name + ".png", fs::copy_options::overwrite_existing);
     writeImage(d.diff, "render-" + name + "-diff.png");
   }
-  EXPECT_LE(d.fraction, maxFraction) << name << ": " << d.differing << " pixels differ (max channel error "
-                                     << d.maxChannel << "); see render-" << name << "-diff.png in "
-                                     << fs::current_path();
+  EXPECT_LE(d.fraction, maxFraction)
+      << name << ": " << d.differing << " pixels differ (max channel error " << d.maxChannel
+      << "); see render-" << name << "-diff.png in " << fs::current_path();
 }
 
 double coverage(const Image& img, const glm::vec3& background) {
@@ -94,7 +98,9 @@ double coverage(const Image& img, const glm::vec3& background) {
   for (int y = 0; y < img.height; ++y)
     for (int x = 0; x < img.width; ++x) {
       const float* p = img.at(x, y);
-      if (std::fabs(p[0] - background.x) + std::fabs(p[1] - background.y) + std::fabs(p[2] - background.z) > 0.02f)
+      if (std::fabs(p[0] - background.x) + std::fabs(p[1] - background.y) +
+              std::fabs(p[2] - background.z) >
+          0.02f)
         ++covered;
     }
   return double(covered) / (double(img.width) * img.height);
@@ -123,7 +129,8 @@ TEST(RenderGolden, LionPoints) {
 TEST(RenderGolden, LionCompute) {
   NL_REQUIRE_SHARED("scans/lion_takanawa.las");
   test::TempDir tmp;
-  RenderJob j = smallJob(convertShared("scans/lion_takanawa.las", tmp), tmp.file("lion_compute.png"));
+  RenderJob j =
+      smallJob(convertShared("scans/lion_takanawa.las", tmp), tmp.file("lion_compute.png"));
   j.settings.rasteriser = Rasteriser::Compute;
   j.settings.fixedPointSize = 1;
   renderHeadless(j);
@@ -183,7 +190,8 @@ TEST(Render, TiledEqualsUntiled) {
     // bits from the whole image's, which moves a splat's edge across a pixel centre now and
     // then, and HQS weights with it: a handful of pixels (11 of 60,000 measured on llvmpipe).
     const size_t allowed = 20;
-    EXPECT_LE(d.differing, allowed) << splattingName(splatting) << ": max channel error " << d.maxChannel;
+    EXPECT_LE(d.differing, allowed)
+        << splattingName(splatting) << ": max channel error " << d.maxChannel;
   }
 }
 
@@ -261,8 +269,10 @@ TEST(Render, HdrColourLayerIsWrittenLinearlyToExr) {
     Splatting s;
     bool atomic64;  // compute: the one-pass 64-bit variant where the GPU has it (llvmpipe never)
   };
-  for (Case c : {Case{Rasteriser::Points, Splatting::Basic, true}, Case{Rasteriser::Points, Splatting::Hqs, true},
-                 Case{Rasteriser::Compute, Splatting::Basic, true}, Case{Rasteriser::Compute, Splatting::Basic, false}}) {
+  for (Case c : {Case{Rasteriser::Points, Splatting::Basic, true},
+                 Case{Rasteriser::Points, Splatting::Hqs, true},
+                 Case{Rasteriser::Compute, Splatting::Basic, true},
+                 Case{Rasteriser::Compute, Splatting::Basic, false}}) {
     j.settings.rasteriser = c.r;
     j.settings.splatting = c.s;
     j.settings.allowAtomic64 = c.atomic64;
@@ -275,9 +285,11 @@ TEST(Render, HdrColourLayerIsWrittenLinearlyToExr) {
       if (img.rgb[3 * p] < 1.0f) continue;  // the background (linear, below 0.01)
       ++covered;
       for (int k = 0; k < 3; ++k)
-        worst = std::max(worst, std::abs(double(img.rgb[3 * p + k]) - want[k]) / (want[0] / 512.0 + want[k] / 1024.0));
+        worst = std::max(worst, std::abs(double(img.rgb[3 * p + k]) - want[k]) /
+                                    (want[0] / 512.0 + want[k] / 1024.0));
     }
-    const std::string name = std::string(rasteriserName(c.r)) + "/" + splattingName(c.s) + (c.atomic64 ? "" : "/32-bit");
+    const std::string name =
+        std::string(rasteriserName(c.r)) + "/" + splattingName(c.s) + (c.atomic64 ? "" : "/32-bit");
     EXPECT_GT(covered, img.pixels() / 10) << name;
     EXPECT_LE(worst, 1.0) << name << ": worst error in units of the tolerance";
   }
@@ -300,8 +312,9 @@ TEST(Render, UnknownFormatVersionFailsBeforeGl) {
 TEST(Render, CameraPathWritesSequenceAndStats) {
   test::TempDir tmp;
   const fs::path oct = syntheticOctree(tmp, "s.octree", 100'000, 1);
-  test::writeFile(tmp.file("path.json"),
-                  R"({"fps": 4, "fov": 50, "keyframes": [{"time": 0, "eye": [150, -50, 80], "target": [50, 50, 0]},
+  test::writeFile(
+      tmp.file("path.json"),
+      R"({"fps": 4, "fov": 50, "keyframes": [{"time": 0, "eye": [150, -50, 80], "target": [50, 50, 0]},
                       {"time": 1, "eye": [50, -100, 60], "target": [50, 50, 0]}]})");
   RenderJob j = smallJob(oct, tmp.file("f_%04d.png"));
   j.path = gi::loadCameraPath(tmp.file("path.json"));
@@ -319,7 +332,8 @@ TEST(Render, CameraPathWritesSequenceAndStats) {
   int lines = 0;
   while (std::getline(csv, line)) ++lines;
   EXPECT_EQ(lines, 6);  // header + 5 frames
-  test::writeFile(tmp.file("bad.json"), R"({"keyframes": [{"time": 0, "eye": [1, 2], "target": [0, 0, 0]}]})");
+  test::writeFile(tmp.file("bad.json"),
+                  R"({"keyframes": [{"time": 0, "eye": [1, 2], "target": [0, 0, 0]}]})");
   Error e = test::errorOf([&] { gi::loadCameraPath(tmp.file("bad.json")); });
   EXPECT_NE(std::string(e.what()).find("keyframes[0].eye"), std::string::npos) << e.what();
 }
@@ -345,7 +359,8 @@ TEST(Render, UnknownGlPlatformIsRejectedWithTheChoices) {
   ::setenv("NESTLIGHT_GL_PLATFORM", "bogus", 1);
   Error e = test::errorOf([] { gl::createHeadlessContext(); });
   ::unsetenv("NESTLIGHT_GL_PLATFORM");
-  EXPECT_NE(std::string(e.what()).find("device, surfaceless or osmesa"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("device, surfaceless or osmesa"), std::string::npos)
+      << e.what();
 }
 
 // A damaged payload while rendering: the node is marked bad and logged, the frame completes

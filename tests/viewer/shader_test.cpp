@@ -5,11 +5,11 @@
 #include <cstdlib>
 #include <set>
 
-#include "nestlight/shaders/embedded.h"
-#include "nestlight/viewer/frame_renderer.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/program_catalogue.h"
+#include "nestlight/shaders/embedded.h"
+#include "nestlight/viewer/frame_renderer.h"
 #include "test_support.h"
 
 using namespace nestlight;
@@ -24,7 +24,8 @@ TEST(Shaders, EveryFileIsEmbedded) {
 }
 
 TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
-  gl::PreprocessedSource s = gl::preprocessShader("points/raster_depth.comp", {{"TEST_DEFINE", "3"}});
+  gl::PreprocessedSource s =
+      gl::preprocessShader("points/raster_depth.comp", {{"TEST_DEFINE", "3"}});
   EXPECT_EQ(s.text.rfind("#version 450 core\n", 0), 0u);
   EXPECT_NE(s.text.find("#define TEST_DEFINE 3\n"), std::string::npos);
   // raster_depth includes raster_common, which includes point_data, which includes the frame
@@ -63,7 +64,9 @@ TEST(Shaders, CompileErrorNamesFileAndLineOnThisDriver) {
   // A real driver log for a broken include: line 2 of the second file.
   gl::PreprocessedSource src;
   src.files = {"points/main.frag", "common/broken.glsl"};
-  src.text = "#version 450 core\n#line 1 0\nout vec4 c;\n#line 1 1\nfloat f() { return 1.0; }\nfloat g() { return undeclared_name; }\n#line 3 0\nvoid main() { c = vec4(f()); }\n";
+  src.text =
+      "#version 450 core\n#line 1 0\nout vec4 c;\n#line 1 1\nfloat f() { return 1.0; }\nfloat g() "
+      "{ return undeclared_name; }\n#line 3 0\nvoid main() { c = vec4(f()); }\n";
   GLuint s = glCreateShader(GL_FRAGMENT_SHADER);
   const char* t = src.text.c_str();
   glShaderSource(s, 1, &t, nullptr);
@@ -87,9 +90,11 @@ TEST(Shaders, EveryProgramCompilesAndLinks) {
   const std::vector<gl::ProgramCheck> checks = gl::checkCatalogue();
   size_t ok = 0;
   for (const auto& c : checks) {
-    EXPECT_NE(c.status, gl::ProgramCheck::Status::Failed) << c.name << " " << c.defines << ":\n" << c.log;
+    EXPECT_NE(c.status, gl::ProgramCheck::Status::Failed) << c.name << " " << c.defines << ":\n"
+                                                          << c.log;
     if (c.status == gl::ProgramCheck::Status::Unsupported) {
-      EXPECT_TRUE(c.name == "points.compute_atomic64" || c.name == "points.compute_resolve64") << c.name << ": " << c.log;
+      EXPECT_TRUE(c.name == "points.compute_atomic64" || c.name == "points.compute_resolve64")
+          << c.name << ": " << c.log;
     }
     ok += c.status == gl::ProgramCheck::Status::Ok;
   }
@@ -113,9 +118,12 @@ TEST(Shaders, CatalogueCoversEveryStageFile) {
     const std::string ext = path.substr(path.rfind('.'));
     if (ext == ".vert" || ext == ".frag" || ext == ".comp") files.insert(path);
   }
-  for (const auto& f : files) EXPECT_TRUE(listed.count(f)) << f << " is in no program of shaders/programs.json";
-  for (const auto& f : listed) EXPECT_TRUE(files.count(f)) << f << " is listed but is no embedded stage file";
-  EXPECT_EQ(gl::findProgram({{GL_COMPUTE_SHADER, "points/raster_colour.comp"}, {GL_COMPUTE_SHADER, "points/raster_depth.comp"}}),
+  for (const auto& f : files)
+    EXPECT_TRUE(listed.count(f)) << f << " is in no program of shaders/programs.json";
+  for (const auto& f : listed)
+    EXPECT_TRUE(files.count(f)) << f << " is listed but is no embedded stage file";
+  EXPECT_EQ(gl::findProgram({{GL_COMPUTE_SHADER, "points/raster_colour.comp"},
+                             {GL_COMPUTE_SHADER, "points/raster_depth.comp"}}),
             nullptr);
 }
 
@@ -125,13 +133,15 @@ TEST(ShadersDeathTest, UncataloguedProgramIsRefused) {
   EXPECT_DEATH(
       {
         auto ctx = gl::createHeadlessContext();
-        gl::ShaderProgram p({{GL_COMPUTE_SHADER, "tests/ibl_samplers.comp"}}, {{"NOT_LISTED", "1"}});
+        gl::ShaderProgram p({{GL_COMPUTE_SHADER, "tests/ibl_samplers.comp"}},
+                            {{"NOT_LISTED", "1"}});
       },
       "does not list the define NOT_LISTED");
   EXPECT_DEATH(
       {
         auto ctx = gl::createHeadlessContext();
-        gl::ShaderProgram p({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}});
+        gl::ShaderProgram p(
+            {{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}});
       },
       "is not listed in shaders/programs.json");
 }

@@ -21,7 +21,8 @@ namespace {
 
 // A jittered grid on the plane z = 0 (a scanner's pattern): `n` x `n` points, `step` apart,
 // each moved by up to 0.3 steps; colour varies smoothly. Written as XYZ text and converted.
-fs::path gridPlane(const test::TempDir& tmp, const std::string& name, int n, double step, uint32_t maxNodePoints) {
+fs::path gridPlane(const test::TempDir& tmp, const std::string& name, int n, double step,
+                   uint32_t maxNodePoints) {
   const fs::path xyz = tmp.path() / (name + ".xyz");
   {
     std::ofstream f(xyz);
@@ -31,8 +32,8 @@ fs::path gridPlane(const test::TempDir& tmp, const std::string& name, int n, dou
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
         const double px = (x + 0.5 + jitter(rng)) * step, py = (y + 0.5 + jitter(rng)) * step;
-        std::snprintf(line, sizeof line, "%.4f %.4f 0 %d %d 120\n", px, py, int(128 + 100 * std::sin(px * 7)),
-                      int(128 + 100 * std::sin(py * 11)));
+        std::snprintf(line, sizeof line, "%.4f %.4f 0 %d %d 120\n", px, py,
+                      int(128 + 100 * std::sin(px * 7)), int(128 + 100 * std::sin(py * 11)));
         f << line;
       }
   }
@@ -48,7 +49,8 @@ fs::path gridPlane(const test::TempDir& tmp, const std::string& name, int n, dou
   return o.output;
 }
 
-RenderJob job(const fs::path& octree, const std::string& out, const glm::dvec3& eye, const glm::dvec3& target) {
+RenderJob job(const fs::path& octree, const std::string& out, const glm::dvec3& eye,
+              const glm::dvec3& target) {
   RenderJob j;
   j.octree = octree;
   j.output = out;
@@ -94,7 +96,8 @@ TEST(Splats, NoHolesOnAnEvenlySampledSurfaceAtAnyZoom) {
       const Image img = readImage(out);
       const double holes = holeFraction(img, j.settings.background);
       if (holes > 0)
-        writeImage(img, "splats-holes-" + std::string(splattingName(splatting)) + "-" + std::to_string(int(h * 100)) + "cm.png");
+        writeImage(img, "splats-holes-" + std::string(splattingName(splatting)) + "-" +
+                            std::to_string(int(h * 100)) + "cm.png");
       EXPECT_EQ(holes, 0.0) << splattingName(splatting) << " at " << h << " m";
     }
 }
@@ -138,10 +141,12 @@ TEST(Splats, DefaultCameraFramesTheBounds) {
     const glm::dmat4 clipFromWorld = c.clipFromWorld(aspect);
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (int k = 0; k < 8; ++k) {
-      const glm::dvec4 p = clipFromWorld * glm::dvec4((k & 4) ? b.max.x : b.min.x, (k & 2) ? b.max.y : b.min.y,
-                                                      (k & 1) ? b.max.z : b.min.z, 1.0);
+      const glm::dvec4 p =
+          clipFromWorld * glm::dvec4((k & 4) ? b.max.x : b.min.x, (k & 2) ? b.max.y : b.min.y,
+                                     (k & 1) ? b.max.z : b.min.z, 1.0);
       ASSERT_GT(p.w, 0);
-      for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], p[a] / p.w), hi[a] = std::max(hi[a], p[a] / p.w);
+      for (int a = 0; a < 2; ++a)
+        lo[a] = std::min(lo[a], p[a] / p.w), hi[a] = std::max(hi[a], p[a] / p.w);
     }
     // Inside the frame less its margin, and touching both edges on one axis: no closer view
     // shows the whole box.
@@ -151,7 +156,7 @@ TEST(Splats, DefaultCameraFramesTheBounds) {
     }
     const bool fillsX = lo[0] < -(1 - margin) + 1e-6 && hi[0] > (1 - margin) - 1e-6;
     const bool fillsY = lo[1] < -(1 - margin) + 1e-6 && hi[1] > (1 - margin) - 1e-6;
-    EXPECT_TRUE(fillsX || fillsY) << "aspect " << aspect << ": x " << lo[0] << ".." << hi[0] << ", y " << lo[1]
-                                  << ".." << hi[1];
+    EXPECT_TRUE(fillsX || fillsY) << "aspect " << aspect << ": x " << lo[0] << ".." << hi[0]
+                                  << ", y " << lo[1] << ".." << hi[1];
   }
 }

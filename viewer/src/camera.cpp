@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <glm/gtc/matrix_transform.hpp>
+#include <limits>
 
 namespace nestlight::viewer {
 
-Camera Camera::framing(const Box3d& box, double fovYDegrees, double aspect, double azimuth, double elevation,
-                       double margin) {
+Camera Camera::framing(const Box3d& box, double fovYDegrees, double aspect, double azimuth,
+                       double elevation, double margin) {
   Camera c;
   c.fovYDegrees = fovYDegrees;
   const glm::dvec3 lo(box.min.x, box.min.y, box.min.z), hi(box.max.x, box.max.y, box.max.z);
@@ -44,9 +44,10 @@ Camera Camera::framing(const Box3d& box, double fovYDegrees, double aspect, doub
   // A scan of one point (or of coincident ones) has no extent to fit: stand off by a distance
   // that doubles and the GPU's float offsets still resolve at the scan's coordinates.
   const double radius = glm::length(hi - lo) * 0.5;
-  const double magnitude = std::max({std::fabs(centre.x), std::fabs(centre.y), std::fabs(centre.z)});
-  const double distance = std::max({(hiX - loX) / (2 * tanX), (hiY - loY) / (2 * tanY), 1e-3 * radius,
-                                    1e-6 * magnitude, 1e-3});
+  const double magnitude =
+      std::max({std::fabs(centre.x), std::fabs(centre.y), std::fabs(centre.z)});
+  const double distance = std::max(
+      {(hiX - loX) / (2 * tanX), (hiY - loY) / (2 * tanY), 1e-3 * radius, 1e-6 * magnitude, 1e-3});
   c.target = centre + right * (0.5 * (hiX + loX)) + upAxis * (0.5 * (hiY + loY));
   c.eye = c.target + dir * distance;
   if (glm::length(glm::cross(forward, c.up)) < 1e-9) c.up = upAxis;
@@ -64,7 +65,9 @@ void Camera::fitClipPlanes(const Box3d& box) {
   nearPlane = std::max(d - radius * 1.01, farPlane * 1e-4);
 }
 
-glm::dmat4 Camera::viewRotation() const { return glm::lookAt(glm::dvec3(0), target - eye, up); }
+glm::dmat4 Camera::viewRotation() const {
+  return glm::lookAt(glm::dvec3(0), target - eye, up);
+}
 
 glm::dmat4 Camera::projection(double aspect) const {
   return glm::perspective(glm::radians(fovYDegrees), aspect, nearPlane, farPlane);

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <unordered_map>
 #include <glm/gtc/type_ptr.hpp>
+#include <unordered_map>
 
 #include "nestlight/octree/error.h"
 
@@ -19,14 +19,18 @@ void setMat4(GLuint prog, const char* name, const glm::dmat4& m) {
 }
 }  // namespace
 
-const char* rasteriserName(Rasteriser r) { return r == Rasteriser::Points ? "points" : "compute"; }
+const char* rasteriserName(Rasteriser r) {
+  return r == Rasteriser::Points ? "points" : "compute";
+}
 Rasteriser parseRasteriser(const std::string& name) {
   if (name == "points") return Rasteriser::Points;
   if (name == "compute") return Rasteriser::Compute;
   throw Error("unknown rasteriser '" + name + "' (points, compute)");
 }
 
-const char* splattingName(Splatting s) { return s == Splatting::Basic ? "basic" : "hqs"; }
+const char* splattingName(Splatting s) {
+  return s == Splatting::Basic ? "basic" : "hqs";
+}
 Splatting parseSplatting(const std::string& name) {
   if (name == "basic") return Splatting::Basic;
   if (name == "hqs") return Splatting::Hqs;
@@ -34,14 +38,20 @@ Splatting parseSplatting(const std::string& name) {
 }
 
 FrameRenderer::FrameRenderer()
-    : points_({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/points.frag"}}),
-      hqsDepth_({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/hqs_depth.frag"}}),
-      hqsAccum_({{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/hqs_accum.frag"}}),
-      hqsResolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/hqs_resolve.frag"}}),
+    : points_(
+          {{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/points.frag"}}),
+      hqsDepth_({{GL_VERTEX_SHADER, "points/points.vert"},
+                 {GL_FRAGMENT_SHADER, "points/hqs_depth.frag"}}),
+      hqsAccum_({{GL_VERTEX_SHADER, "points/points.vert"},
+                 {GL_FRAGMENT_SHADER, "points/hqs_accum.frag"}}),
+      hqsResolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                   {GL_FRAGMENT_SHADER, "points/hqs_resolve.frag"}}),
       depthPass_({{GL_COMPUTE_SHADER, "points/raster_depth.comp"}}),
       colourPass_({{GL_COMPUTE_SHADER, "points/raster_colour.comp"}}),
-      resolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve.frag"}}),
-      edl_({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}}) {
+      resolve_({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                {GL_FRAGMENT_SHADER, "points/raster_resolve.frag"}}),
+      edl_(
+          {{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}}) {
   vao_ = gl::VertexArray::create();
   gbufferFbo_ = gl::Framebuffer::create();
   hqsFbo_ = gl::Framebuffer::create();
@@ -49,11 +59,11 @@ FrameRenderer::FrameRenderer()
   // GPU timers would stall every pass; the point view reports its wall time instead.
   graph_.setTiming(false);
   graph_.addTarget("depth", {GL_DEPTH_COMPONENT32F});
-  graph_.addTarget("colour", {GL_RGBA16F});     // linear scan colour (recorded sRGB decoded)
-  graph_.addTarget("normal", {GL_RGBA16F});     // view-space normal, a = 1 when known
-  graph_.addTarget("hqs_colour", {GL_RGBA32F}); // HQS sums: rgb w, w
-  graph_.addTarget("hqs_normal", {GL_RGBA32F}); // HQS sums: normal w, depth w
-  graph_.addTarget("output", {GL_RGBA16F});     // display-referred (sRGB), or linear (linearOutput)
+  graph_.addTarget("colour", {GL_RGBA16F});      // linear scan colour (recorded sRGB decoded)
+  graph_.addTarget("normal", {GL_RGBA16F});      // view-space normal, a = 1 when known
+  graph_.addTarget("hqs_colour", {GL_RGBA32F});  // HQS sums: rgb w, w
+  graph_.addTarget("hqs_normal", {GL_RGBA32F});  // HQS sums: normal w, depth w
+  graph_.addTarget("output", {GL_RGBA16F});  // display-referred (sRGB), or linear (linearOutput)
   graph_.addPass(
       "points", frame::Scope::Tile,
       [](frame::PassBuilder& b) {
@@ -79,11 +89,14 @@ FrameRenderer::FrameRenderer()
         glProgramUniform1f(e, edl_.uniform("uNear"), float(camera_.nearPlane));
         glProgramUniform1f(e, edl_.uniform("uFar"), float(camera_.farPlane));
         glProgramUniform1f(e, edl_.uniform("uStrength"), s.edlStrength);
-        glProgramUniform1f(e, edl_.uniform("uRadius"), std::min(s.edlRadius, RenderSettings::kMaxEdlRadius));
-        glProgramUniform3f(e, edl_.uniform("uBackground"), s.background.x, s.background.y, s.background.z);
+        glProgramUniform1f(e, edl_.uniform("uRadius"),
+                           std::min(s.edlRadius, RenderSettings::kMaxEdlRadius));
+        glProgramUniform3f(e, edl_.uniform("uBackground"), s.background.x, s.background.y,
+                           s.background.z);
         glProgramUniform1i(e, edl_.uniform("uLinearOutput"), s.linearOutput);
         glProgramUniform1f(e, edl_.uniform("uExposure"), std::exp2(s.exposureStops));
-        glProgramUniform2f(e, edl_.uniform("uViewport"), float(ctx.tile().width), float(ctx.tile().height));
+        glProgramUniform2f(e, edl_.uniform("uViewport"), float(ctx.tile().width),
+                           float(ctx.tile().height));
         ctx.bindFramebuffer();
         glDisable(GL_DEPTH_TEST);
         glBindVertexArray(vao_.id());
@@ -91,15 +104,19 @@ FrameRenderer::FrameRenderer()
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
       });
   graph_.compile("output");
-  if (epoxy_has_gl_extension("GL_NV_shader_atomic_int64") && epoxy_has_gl_extension("GL_ARB_gpu_shader_int64")) {
+  if (epoxy_has_gl_extension("GL_NV_shader_atomic_int64") &&
+      epoxy_has_gl_extension("GL_ARB_gpu_shader_int64")) {
     try {
       atomic64_ = std::make_unique<gl::ShaderProgram>(std::vector<gl::ShaderProgram::Stage>{
           {GL_COMPUTE_SHADER, "points/raster_atomic64.comp"}});
       resolve64_ = std::make_unique<gl::ShaderProgram>(std::vector<gl::ShaderProgram::Stage>{
-          {GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/raster_resolve64.frag"}});
+          {GL_VERTEX_SHADER, "common/fullscreen.vert"},
+          {GL_FRAGMENT_SHADER, "points/raster_resolve64.frag"}});
     } catch (const Error& e) {
       // A driver that offers the extension but rejects the shader: the 32-bit path still works.
-      std::fprintf(stderr, "nestlight: 64-bit compute rasteriser unavailable, using two passes: %s\n", e.what());
+      std::fprintf(stderr,
+                   "nestlight: 64-bit compute rasteriser unavailable, using two passes: %s\n",
+                   e.what());
       atomic64_.reset();
       resolve64_.reset();
     }
@@ -115,7 +132,8 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
   const RenderSettings& s = settings_;
   DrawTimings* t = timings_;
   const frame::Tile& tile = ctx.tile();
-  const int fullW = tile.fullWidth, fullH = tile.fullHeight, x0 = tile.x0, y0 = tile.y0, w = tile.width, h = tile.height;
+  const int fullW = tile.fullWidth, fullH = tile.fullHeight, x0 = tile.x0, y0 = tile.y0,
+            w = tile.width, h = tile.height;
   const bool compute = s.rasteriser == Rasteriser::Compute;
   if (compute) ensureSsbos(size_t(w) * h);
   // The G-buffer and the HQS sums, on this run's targets (the graph reallocates them with size).
@@ -174,10 +192,11 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     // leave its part inside uncovered (holes along the edges). The splats are drawn into a
     // viewport larger by half the largest splat on every side, with the projection widened to
     // match: pixels inside the frame map exactly as before.
-    const int guard = int(std::ceil(0.5 * (s.fixedPointSize > 0 ? s.fixedPointSize : s.maxPointSize))) + 1;
-    const glm::dmat4 splatClipFromView = tileFromClip(fullW, fullH, x0 - guard, y0 - guard, w + 2 * guard,
-                                                      h + 2 * guard) *
-                                         camera.projection(double(fullW) / fullH);
+    const int guard =
+        int(std::ceil(0.5 * (s.fixedPointSize > 0 ? s.fixedPointSize : s.maxPointSize))) + 1;
+    const glm::dmat4 splatClipFromView =
+        tileFromClip(fullW, fullH, x0 - guard, y0 - guard, w + 2 * guard, h + 2 * guard) *
+        camera.projection(double(fullW) / fullH);
     // One draw of every node with `prog`: the splat vertex shader's uniforms and each node's
     // buffer, offset and place in the draw tree.
     auto drawSplats = [&](const gl::ShaderProgram& prog, bool countPoints) {
@@ -211,7 +230,8 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     glEnable(GL_DEPTH_TEST);
     glViewport(-guard, -guard, w + 2 * guard, h + 2 * guard);
     if (!hqs) {
-      glProgramUniform1i(points_.id(), points_.uniform("uRound"), s.roundPoints && s.fixedPointSize != 1.0f);
+      glProgramUniform1i(points_.id(), points_.uniform("uRound"),
+                         s.roundPoints && s.fixedPointSize != 1.0f);
       glDepthFunc(GL_LESS);
       glBindFramebuffer(GL_FRAMEBUFFER, gbuffer_);
       drawSplats(points_, true);
@@ -251,11 +271,13 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
     // One pass: min over (depth << 32 | colour); all ones is "empty".
     const size_t pixels = size_t(w) * h;
     const uint32_t empty[2] = {0xffffffffu, 0xffffffffu};
-    glClearNamedBufferSubData(packedSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8), GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
-    glClearNamedBufferSubData(packedNormalSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8), GL_RG_INTEGER, GL_UNSIGNED_INT,
-                              empty);
+    glClearNamedBufferSubData(packedSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8), GL_RG_INTEGER,
+                              GL_UNSIGNED_INT, empty);
+    glClearNamedBufferSubData(packedNormalSsbo_.id(), GL_RG32UI, 0, GLsizeiptr(pixels * 8),
+                              GL_RG_INTEGER, GL_UNSIGNED_INT, empty);
     packedSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_PACKED, 0, pixels * 8);
-    packedNormalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_PACKED_NORMAL, 0, pixels * 8);
+    packedNormalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_PACKED_NORMAL, 0,
+                                pixels * 8);
     dispatchNodes(*atomic64_, true);
     const GLuint r = resolve64_->id();
     resolve64_->use();
@@ -271,9 +293,12 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
   } else {
     const size_t pixels = size_t(w) * h;
     const uint32_t far = 0xffffffffu, zero = 0;
-    glClearNamedBufferSubData(depthSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
-    glClearNamedBufferSubData(accumSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    glClearNamedBufferSubData(normalSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(depthSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &far);
+    glClearNamedBufferSubData(accumSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(normalSsbo_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
     depthSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_DEPTH, 0, pixels * 4);
     accumSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_ACCUM, 0, pixels * 16);
     normalSsbo_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_RASTER_NORMAL, 0, pixels * 4);
@@ -307,8 +332,9 @@ void FrameRenderer::ensureSsbos(size_t pixels) {
   ssboPixels_ = pixels;
 }
 
-void FrameRenderer::begin(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
-                          const Camera& camera, const RenderSettings& s, DrawTimings* t) {
+void FrameRenderer::begin(const std::vector<streaming::DrawNode>& nodes,
+                          const frame::GlNodeStore& store, const Camera& camera,
+                          const RenderSettings& s, DrawTimings* t) {
   nodes_ = &nodes;
   store_ = &store;
   camera_ = camera;
@@ -322,23 +348,27 @@ GLuint FrameRenderer::outputFramebuffer() {
   return outputFbo_.id();
 }
 
-GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
-                                      const Camera& camera, int width, int height, const RenderSettings& s,
+GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes,
+                                      const frame::GlNodeStore& store, const Camera& camera,
+                                      int width, int height, const RenderSettings& s,
                                       DrawTimings* t) {
   const auto t0 = std::chrono::steady_clock::now();
   begin(nodes, store, camera, s, t);
   graph_.executeToTarget(width, height);
   if (t) {
     glFinish();
-    t->msDraw += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    t->msDraw +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
   return graph_.target("output").id();
 }
 
-Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
-                            const Camera& camera, int width, int height, const RenderSettings& s, DrawTimings* t) {
+Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes,
+                            const frame::GlNodeStore& store, const Camera& camera, int width,
+                            int height, const RenderSettings& s, DrawTimings* t) {
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
-    throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range");
+    throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) +
+                " is out of range");
   const auto t0 = std::chrono::steady_clock::now();
   begin(nodes, store, camera, s, t);
   // Tiles no larger than the compute path's buffers allow (16 bytes per pixel within an SSBO
@@ -350,7 +380,9 @@ Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes, const
   img.width = width, img.height = height;
   img.linear = s.linearOutput;
   img.rgba = graph_.execute(width, height, tile);
-  if (t) t->msDraw += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (t)
+    t->msDraw +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return img;
 }
 

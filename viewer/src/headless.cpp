@@ -8,9 +8,9 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "nestlight/gl/context.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
-#include "nestlight/gl/context.h"
 
 namespace nestlight::viewer {
 
@@ -32,15 +32,19 @@ std::string frameFile(const std::string& pattern, int frame) {
 std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
   OctreeReader reader(job.octree);  // before any GL work: a bad octree fails here
   const Metadata& meta = reader.metadata();
-  const frame::ColourMode mode = job.colour ? *job.colour
-                                     : (meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb : frame::ColourMode::Elevation);
+  const frame::ColourMode mode =
+      job.colour
+          ? *job.colour
+          : (meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb : frame::ColourMode::Elevation);
   const auto modes = frame::availableColourModes(meta, job.colourLayer);
   if (mode == frame::ColourMode::Hdr && !meta.layer(job.colourLayer))
-    throw Error(job.octree.string(), "", "the scan has no colour layer '" + job.colourLayer +
-                                             "' (nestlight expand-hdr makes one)");
+    throw Error(
+        job.octree.string(), "",
+        "the scan has no colour layer '" + job.colourLayer + "' (nestlight expand-hdr makes one)");
   if (std::find(modes.begin(), modes.end(), mode) == modes.end())
-    throw Error(job.octree.string(), "", std::string("the scan has no attribute for colour mode '") +
-                                             frame::colourModeName(mode) + "'");
+    throw Error(job.octree.string(), "",
+                std::string("the scan has no attribute for colour mode '") +
+                    frame::colourModeName(mode) + "'");
   // An HDR layer is drawn in linear colour: EXR files keep it whole, PNG files clamp it.
   std::shared_ptr<const ColourLayerReader> layer;
   RenderSettings settings = job.settings;
@@ -60,8 +64,10 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
       if (!job.statsCsv.empty()) {
         csv.open(job.statsCsv);
         if (!csv) throw Error(job.statsCsv, "", "cannot write stats CSV");
-        csv << "frame,file,complete,cut_nodes,cut_points,draw_nodes,draw_points,resident_nodes,resident_bytes,"
-               "uploads,upload_bytes,evictions,cancelled,queue,in_flight,bytes_read,bad_nodes,ms_cut,ms_upload,"
+        csv << "frame,file,complete,cut_nodes,cut_points,draw_nodes,draw_points,resident_nodes,"
+               "resident_bytes,"
+               "uploads,upload_bytes,evictions,cancelled,queue,in_flight,bytes_read,bad_nodes,ms_"
+               "cut,ms_upload,"
                "ms_update,ms_draw\n";
       }
       const int frames = job.path ? job.path->frames() : 1;
@@ -71,19 +77,23 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
           const gi::CameraKey k = job.path->at(f);
           cam.eye = k.eye, cam.target = k.target;
           cam.fovYDegrees = job.path->fovYDegrees.value_or(job.fovYDegrees);
-        }
-        else if (job.camera) cam = *job.camera;
-        else cam = Camera::framing(meta.bounds, job.fovYDegrees, double(job.width) / job.height, job.azimuth, job.elevation);
+        } else if (job.camera)
+          cam = *job.camera;
+        else
+          cam = Camera::framing(meta.bounds, job.fovYDegrees, double(job.width) / job.height,
+                                job.azimuth, job.elevation);
         cam.fitClipPlanes(meta.bounds);
         const streaming::View view = cam.view(job.width, job.height);
         streaming::FrameStats st = streamer.update(view);
         if (job.waitComplete) {
           const auto t0 = std::chrono::steady_clock::now();
           while (!st.complete) {
-            if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > job.timeoutSeconds)
+            if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >
+                job.timeoutSeconds)
               throw Error("render: the view's cut did not load completely within " +
-                          std::to_string(job.timeoutSeconds) + " s (" + std::to_string(st.queueLength) +
-                          " queued, " + std::to_string(st.inFlight) + " loading)");
+                          std::to_string(job.timeoutSeconds) + " s (" +
+                          std::to_string(st.queueLength) + " queued, " +
+                          std::to_string(st.inFlight) + " loading)");
             std::this_thread::sleep_for(std::chrono::milliseconds(2));
             st = streamer.update(view);
           }
@@ -94,7 +104,8 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
           }
         }
         DrawTimings timings;
-        Image img = renderer.render(streamer.drawList(), store, cam, job.width, job.height, settings, &timings);
+        Image img = renderer.render(streamer.drawList(), store, cam, job.width, job.height,
+                                    settings, &timings);
         RenderedFrame rf;
         rf.file = job.path ? frameFile(job.output, f) : job.output;
         rf.stats = st;
@@ -102,15 +113,17 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
         rf.complete = st.complete;
         writeImage(img, rf.file);
         if (csv) {
-          csv << f << ',' << rf.file << ',' << (st.complete ? 1 : 0) << ',' << st.cutNodes << ',' << st.cutPoints << ','
-              << st.drawNodes << ',' << st.drawPoints << ',' << st.residentNodes << ',' << st.residentBytes << ','
-              << st.uploads << ',' << st.uploadBytes << ',' << st.evictions << ',' << st.cancelled << ','
-              << st.queueLength << ',' << st.inFlight << ',' << st.bytesRead << ',' << st.badNodes << ','
-              << st.msCutSelection << ',' << st.msUpload << ',' << st.msUpdate << ',' << rf.msDraw << '\n';
+          csv << f << ',' << rf.file << ',' << (st.complete ? 1 : 0) << ',' << st.cutNodes << ','
+              << st.cutPoints << ',' << st.drawNodes << ',' << st.drawPoints << ','
+              << st.residentNodes << ',' << st.residentBytes << ',' << st.uploads << ','
+              << st.uploadBytes << ',' << st.evictions << ',' << st.cancelled << ','
+              << st.queueLength << ',' << st.inFlight << ',' << st.bytesRead << ',' << st.badNodes
+              << ',' << st.msCutSelection << ',' << st.msUpload << ',' << st.msUpdate << ','
+              << rf.msDraw << '\n';
         }
         if (!job.quiet)
-          std::printf("  %s  %dx%d px, %llu points in %u nodes%s, draw %.1f ms\n", rf.file.c_str(), job.width,
-                      job.height, (unsigned long long)st.drawPoints, st.drawNodes,
+          std::printf("  %s  %dx%d px, %llu points in %u nodes%s, draw %.1f ms\n", rf.file.c_str(),
+                      job.width, job.height, (unsigned long long)st.drawPoints, st.drawNodes,
                       st.complete ? "" : " (cut not complete)", rf.msDraw);
         out.push_back(rf);
       }

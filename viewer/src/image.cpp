@@ -24,23 +24,30 @@ std::string extensionOf(const std::string& path) {
 void writeImage(const Image& img, const std::string& path) {
   const std::string ext = extensionOf(path);
   if (img.width <= 0 || img.height <= 0) throw Error(path, "", "cannot write an empty image");
-  if (ext != ".png" && ext != ".exr") throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
+  if (ext != ".png" && ext != ".exr")
+    throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
   gi::HdrImage out(img.width, img.height);
   for (size_t p = 0; p < out.pixels(); ++p)
     for (int k = 0; k < 3; ++k) {
       const float v = img.rgba[4 * p + k];
-      if (ext == ".exr") out.rgb[3 * p + k] = img.linear ? v : gi::srgbDecode(v);
-      else out.rgb[3 * p + k] = img.linear ? gi::srgbEncode(v) : v;
+      if (ext == ".exr")
+        out.rgb[3 * p + k] = img.linear ? v : gi::srgbDecode(v);
+      else
+        out.rgb[3 * p + k] = img.linear ? gi::srgbEncode(v) : v;
     }
-  if (ext == ".png") gi::writePng(path, out);
+  if (ext == ".png")
+    gi::writePng(path, out);
   else
-    gi::writeExr(path, out, {{"nestlight:content", img.linear ? "point view, linear colour (HDR colour layer)"
-                                                              : "point view, linear from display-referred sRGB"}});
+    gi::writeExr(
+        path, out,
+        {{"nestlight:content", img.linear ? "point view, linear colour (HDR colour layer)"
+                                          : "point view, linear from display-referred sRGB"}});
 }
 
 Image readImage(const std::string& path) {
   const std::string ext = extensionOf(path);
-  if (ext != ".png" && ext != ".exr") throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
+  if (ext != ".png" && ext != ".exr")
+    throw Error(path, "", "unknown image type '" + ext + "' (use .png or .exr)");
   const gi::HdrImage in = ext == ".png" ? gi::readPng(path) : gi::readHdrImage(path);
   Image img;
   img.width = in.width, img.height = in.height;
@@ -55,8 +62,9 @@ Image readImage(const std::string& path) {
 
 ImageDiff compareImages(const Image& a, const Image& b, float tol) {
   if (a.width != b.width || a.height != b.height)
-    throw Error("images differ in size: " + std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
-                std::to_string(b.width) + "x" + std::to_string(b.height));
+    throw Error("images differ in size: " + std::to_string(a.width) + "x" +
+                std::to_string(a.height) + " and " + std::to_string(b.width) + "x" +
+                std::to_string(b.height));
   ImageDiff d;
   d.diff = a;
   double sq = 0;

@@ -52,9 +52,11 @@ ScanColours scanColours(const ViewerOptions& opt, const Metadata& meta) {
   modes = frame::availableColourModes(meta, opt.colourLayer);
   mode = opt.colour ? *opt.colour : modes.front();
   if (std::find(modes.begin(), modes.end(), mode) == modes.end())
-    throw Error(opt.octree.string(), "", std::string("the scan has nothing to show for colour mode '") +
-                                             frame::colourModeName(mode) + "'" +
-                                             (mode == frame::ColourMode::Hdr ? " (no colour layer '" + opt.colourLayer + "')" : ""));
+    throw Error(
+        opt.octree.string(), "",
+        std::string("the scan has nothing to show for colour mode '") +
+            frame::colourModeName(mode) + "'" +
+            (mode == frame::ColourMode::Hdr ? " (no colour layer '" + opt.colourLayer + "')" : ""));
   if (meta.layer(opt.colourLayer)) {
     try {
       hdrLayer = std::make_shared<const ColourLayerReader>(opt.octree, meta, opt.colourLayer);
@@ -135,8 +137,10 @@ void pointsPanel(RenderSettings& settings, ScanColours& colours, OctreeReader& r
   ImGui::SliderFloat("EDL radius", &settings.edlRadius, 0.5f, 4.f);
   float pts = float(budgets.points) / 1e6f, gpuMiB = float(budgets.gpuBytes >> 20);
   float spacing = float(budgets.spacingPixels);
-  bool changed = ImGui::SliderFloat("points (M)", &pts, 0.1f, 50.f, "%.1f", ImGuiSliderFlags_Logarithmic);
-  changed |= ImGui::SliderFloat("GPU (MiB)", &gpuMiB, 16.f, 8192.f, "%.0f", ImGuiSliderFlags_Logarithmic);
+  bool changed =
+      ImGui::SliderFloat("points (M)", &pts, 0.1f, 50.f, "%.1f", ImGuiSliderFlags_Logarithmic);
+  changed |=
+      ImGui::SliderFloat("GPU (MiB)", &gpuMiB, 16.f, 8192.f, "%.0f", ImGuiSliderFlags_Logarithmic);
   changed |= ImGui::SliderFloat("spacing px", &spacing, 0.f, 8.f);
   if (changed) {
     budgets.points = uint64_t(pts * 1e6f);
@@ -145,11 +149,12 @@ void pointsPanel(RenderSettings& settings, ScanColours& colours, OctreeReader& r
     streamer->setBudgets(budgets);
   }
   ImGui::Separator();
-  ImGui::Text("cut %u nodes, %.2f M points%s", st.cutNodes, st.cutPoints / 1e6, st.complete ? " (complete)" : "");
+  ImGui::Text("cut %u nodes, %.2f M points%s", st.cutNodes, st.cutPoints / 1e6,
+              st.complete ? " (complete)" : "");
   ImGui::Text("drawn %u nodes, %.2f M points", st.drawNodes, st.drawPoints / 1e6);
   ImGui::Text("resident %u nodes, %.1f MiB", st.residentNodes, st.residentBytes / 1048576.0);
-  ImGui::Text("queue %u, loading %u, uploads %u, evictions %u", st.queueLength, st.inFlight, st.uploads,
-              st.evictions);
+  ImGui::Text("queue %u, loading %u, uploads %u, evictions %u", st.queueLength, st.inFlight,
+              st.uploads, st.evictions);
   ImGui::Text("ms: cut %.2f upload %.2f draw %.1f", st.msCutSelection, st.msUpload, timings.msDraw);
 }
 
@@ -177,8 +182,10 @@ void saveScreenshot(const std::string& file, gi::Method* method, const gi::Scene
                     const RenderSettings& settings) {
   if (method) {
     const gi::MethodFrame f = method->render(sceneCam);
-    if (std::filesystem::path(file).extension() == ".exr") gi::writeExr(file, f.image, f.attributes);
-    else gi::writeToneMappedPng(file, f.image, exposure);
+    if (std::filesystem::path(file).extension() == ".exr")
+      gi::writeExr(file, f.image, f.attributes);
+    else
+      gi::writeToneMappedPng(file, f.image, exposure);
   } else {
     Image img = renderer.render(streamer->drawList(), *store, cam, fbw, fbh, settings);
     writeImage(img, file);
@@ -234,20 +241,24 @@ int runViewer(const ViewerOptions& opt) {
   // A scene may hold meshes alone: then there is no scan to stream, and the GI frame is the view.
   std::unique_ptr<OctreeReader> reader;
   if (!opt.octree.empty())
-    reader = std::make_unique<OctreeReader>(opt.octree);  // a bad octree fails before a window opens
+    reader =
+        std::make_unique<OctreeReader>(opt.octree);  // a bad octree fails before a window opens
   else if (!opt.scene || opt.scene->meshes.empty())
-    throw Error(opt.scene ? opt.scene->file.string() : "", "", "nothing to view: no scan and no mesh");
+    throw Error(opt.scene ? opt.scene->file.string() : "", "",
+                "nothing to view: no scan and no mesh");
   const Metadata* meta = reader ? &reader->metadata() : nullptr;
   ScanColours colours;
   if (meta) colours = scanColours(opt, *meta);
   const frame::ColourMode& mode = colours.mode;
   const std::shared_ptr<const ColourLayerReader>& hdrLayer = colours.hdrLayer;
   const Box3d bounds = meta ? meta->bounds : meshBounds(*opt.scene);
-  if (bounds.empty()) throw Error(opt.scene->file.string(), "scene.meshes", "the meshes have no finite vertex");
+  if (bounds.empty())
+    throw Error(opt.scene->file.string(), "scene.meshes", "the meshes have no finite vertex");
   const double extent = meta ? meta->cubeWorldSize()
                              : std::max({bounds.max.x - bounds.min.x, bounds.max.y - bounds.min.y,
                                          bounds.max.z - bounds.min.z});
-  const std::string title = reader ? opt.octree.filename().string() : opt.scene->file.filename().string();
+  const std::string title =
+      reader ? opt.octree.filename().string() : opt.scene->file.filename().string();
   gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + title);
   std::printf("view: %s\n", ctx.description().c_str());
 
@@ -282,8 +293,9 @@ int runViewer(const ViewerOptions& opt) {
     int winW = opt.width, winH = opt.height;
     glfwGetFramebufferSize(ctx.window(), &winW, &winH);
     cc.from(opt.camera ? *opt.camera
-                       : Camera::framing(bounds, opt.fovYDegrees, double(std::max(winW, 1)) / std::max(winH, 1),
-                                         opt.azimuth, opt.elevation));
+                       : Camera::framing(bounds, opt.fovYDegrees,
+                                         double(std::max(winW, 1)) / std::max(winH, 1), opt.azimuth,
+                                         opt.elevation));
     cc.speed = std::max(extent * 0.1, 1e-3);
     std::string status;
     int frame = 0;
@@ -323,11 +335,12 @@ int runViewer(const ViewerOptions& opt) {
       if (showMethod) {
         const GLuint tex = method->renderInteractive(sceneCam, exposure, &methodStats);
         methodFbo.attachRaw(GL_COLOR_ATTACHMENT0, tex);
-        glBlitNamedFramebuffer(methodFbo.id(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+        glBlitNamedFramebuffer(methodFbo.id(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh,
+                               GL_COLOR_BUFFER_BIT, GL_NEAREST);
       } else {
         renderer.renderToTexture(streamer->drawList(), *store, cam, fbw, fbh, settings, &timings);
-        glBlitNamedFramebuffer(renderer.outputFramebuffer(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh, GL_COLOR_BUFFER_BIT,
-                               GL_NEAREST);
+        glBlitNamedFramebuffer(renderer.outputFramebuffer(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh,
+                               GL_COLOR_BUFFER_BIT, GL_NEAREST);
       }
 
       // The panel.
@@ -349,8 +362,7 @@ int runViewer(const ViewerOptions& opt) {
       int camMode = cc.mode == CameraController::Mode::Orbit ? 0 : 1;
       if (ImGui::Combo("camera", &camMode, "orbit (drag, wheel)\0fly (WASD QE, drag)\0"))
         cc.mode = camMode == 0 ? CameraController::Mode::Orbit : CameraController::Mode::Fly;
-      if (reader)
-        pointsPanel(settings, colours, *reader, *store, streamer, budgets, st, timings);
+      if (reader) pointsPanel(settings, colours, *reader, *store, streamer, budgets, st, timings);
       bool shot = ImGui::Button("screenshot");
       if (!status.empty()) ImGui::TextUnformatted(status.c_str());
       ImGui::End();
@@ -363,7 +375,8 @@ int runViewer(const ViewerOptions& opt) {
       const bool last = opt.frames > 0 && frame >= opt.frames;
       if (shot || (last && !opt.screenshot.empty())) {
         // The last frame's goes where asked; a button's gets the time in its name.
-        const std::string file = last && !opt.screenshot.empty() ? opt.screenshot : timedScreenshotName();
+        const std::string file =
+            last && !opt.screenshot.empty() ? opt.screenshot : timedScreenshotName();
         saveScreenshot(file, showMethod ? method.get() : nullptr, sceneCam, exposure, renderer,
                        streamer.get(), store.get(), cam, fbw, fbh, settings);
         status = "saved " + file;

@@ -14,31 +14,30 @@
 #include "nestlight/converters/builder.h"
 
 #include <sys/resource.h>
-#include <unistd.h>
-
-#include <tbb/task_arena.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_for_each.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_arena.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <condition_variable>
-#include <deque>
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <set>
-#include <mutex>
 #include <thread>
 #include <unordered_set>
 
@@ -46,8 +45,8 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/node_key.h"
 #include "nestlight/octree/octree_writer.h"
-#include "nestlight/octree/staged_directory.h"
 #include "nestlight/octree/spacing.h"
+#include "nestlight/octree/staged_directory.h"
 
 namespace nestlight {
 
@@ -63,7 +62,8 @@ uint64_t peakRssBytes() {
     uint64_t kb = 0;
     bool found = false;
     while (std::fgets(line, sizeof line, f))
-      if (std::strncmp(line, "VmHWM:", 6) == 0) kb = std::strtoull(line + 6, nullptr, 10), found = true;
+      if (std::strncmp(line, "VmHWM:", 6) == 0)
+        kb = std::strtoull(line + 6, nullptr, 10), found = true;
     std::fclose(f);
     if (found) return kb * 1024;
   }
@@ -85,11 +85,15 @@ constexpr size_t kBatchPoints = 1 << 18;
 constexpr uint32_t kGridLevel = 7;  // counting grid: 128^3 cells
 constexpr size_t kCountSampleStep = 8;
 
-double seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
+double seconds(Clock::time_point a) {
+  return std::chrono::duration<double>(Clock::now() - a).count();
+}
 
 // Exact Morton order of two integer positions without computing 93-bit codes: compare on the
 // axis whose coordinates differ in the highest bit (x before y before z at equal bits).
-inline bool lessMsb(uint32_t a, uint32_t b) { return a < b && a < (a ^ b); }
+inline bool lessMsb(uint32_t a, uint32_t b) {
+  return a < b && a < (a ^ b);
+}
 inline bool mortonLess(const uint32_t* p, const uint32_t* q) {
   int axis = 0;
   uint32_t best = p[0] ^ q[0];
@@ -140,7 +144,8 @@ class Builder {
   using json = nlohmann::json;
 
  public:
-  Builder(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& o, bool measureBounds)
+  Builder(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& o,
+          bool measureBounds)
       : opt_(o), progress_(o.progress), measureBounds_(measureBounds) {
     for (auto& r : sources) {
       SourceState s;
@@ -157,7 +162,8 @@ class Builder {
   BuildReport run() {
     auto t0 = Clock::now();
     BuildReport report;
-    unsigned threads = opt_.threads ? opt_.threads : std::max(1u, std::thread::hardware_concurrency());
+    unsigned threads =
+        opt_.threads ? opt_.threads : std::max(1u, std::thread::hardware_concurrency());
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     threads_ = threads;
 
@@ -166,7 +172,8 @@ class Builder {
     // Built beside the output and swapped in at the end: a failed, full-disk or killed run leaves
     // an existing octree (and its layers) as it was.
     if (fs::exists(opt_.output / "metadata.json") && !opt_.overwrite)
-      throw Error(opt_.output.string(), "", "already holds an octree; pass --overwrite to replace it");
+      throw Error(opt_.output.string(), "",
+                  "already holds an octree; pass --overwrite to replace it");
     StagedDirectory staged(opt_.output, isOctreeFileName);
     for (const fs::path& p : staged.staleRemoved())
       report.warnings.push_back("removed " + p.string() + ", left by a conversion that was killed");
@@ -241,9 +248,10 @@ class Builder {
           layout_.add(a);
         } else if (!(layout_[i] == a)) {
           if (layout_[i].components != a.components)
-            throw Error(h.path, "", "attribute '" + a.name + "' has " + std::to_string(a.components) +
-                                        " components here but " + std::to_string(layout_[i].components) +
-                                        " in another input");
+            throw Error(h.path, "",
+                        "attribute '" + a.name + "' has " + std::to_string(a.components) +
+                            " components here but " + std::to_string(layout_[i].components) +
+                            " in another input");
           // Mixed types: widen to double, which holds every integer type up to 32 bits exactly.
           widened_.insert(a.name);
         }
@@ -300,7 +308,8 @@ class Builder {
       if (opt_.precision <= 0 && h.scale) {
         seen.insert({h.scale->x, h.scale->y, h.scale->z});
         for (int a = 0; a < 3; ++a)
-          if ((*h.scale)[a] > 0) scales[a] = scales[a] > 0 ? std::min(scales[a], (*h.scale)[a]) : (*h.scale)[a];
+          if ((*h.scale)[a] > 0)
+            scales[a] = scales[a] > 0 ? std::min(scales[a], (*h.scale)[a]) : (*h.scale)[a];
       }
     }
     // Axes no input scales: the finest scale any axis has, else a millimetre.
@@ -310,10 +319,11 @@ class Builder {
     for (int a = 0; a < 3; ++a)
       if (!(scales[a] > 0)) scales[a] = finest > 0 ? finest : 0.001;
     if (seen.size() > 1)
-      buildNotes_.push_back("the inputs have " + std::to_string(seen.size()) +
-                                " different scales; the octree keeps the finest of each axis (" +
-                                shortNumber(scales.x) + ", " + shortNumber(scales.y) + ", " + shortNumber(scales.z) +
-                                "): coordinates of the other inputs that are not on that grid are rounded to it");
+      buildNotes_.push_back(
+          "the inputs have " + std::to_string(seen.size()) +
+          " different scales; the octree keeps the finest of each axis (" + shortNumber(scales.x) +
+          ", " + shortNumber(scales.y) + ", " + shortNumber(scales.z) +
+          "): coordinates of the other inputs that are not on that grid are rounded to it");
     report.warnings.insert(report.warnings.end(), buildNotes_.begin(), buildNotes_.end());
     meta_.scale = scales;
     meta_.sourceOffset = base;
@@ -379,8 +389,9 @@ class Builder {
       const double steps = std::ceil((bounds.max[a] - meta_.offset[a]) / sa) + 1;
       if (!(steps < double(uint64_t(1) << 31)))
         throw Error("", "",
-                    "the scan spans " + std::to_string(steps * sa) + " units along " + std::string(1, "xyz"[a]) +
-                        ", more than 2^31 steps of " + std::to_string(sa) + "; use a coarser --precision");
+                    "the scan spans " + std::to_string(steps * sa) + " units along " +
+                        std::string(1, "xyz"[a]) + ", more than 2^31 steps of " +
+                        std::to_string(sa) + "; use a coarser --precision");
       extent = std::max(extent, steps);
     }
     uint64_t cube = 1;
@@ -394,8 +405,8 @@ class Builder {
   struct Item {
     size_t source = 0;
     PointBatch batch;
-    size_t points = 0;             // input points this batch stands for
-    size_t weight = 1;             // input points per batch point (sampled counting)
+    size_t points = 0;  // input points this batch stands for
+    size_t weight = 1;  // input points per batch point (sampled counting)
     // Output of the parallel stage.
     std::unique_ptr<uint8_t[]> records;  // 12 + stride bytes each, grouped by chunk
     size_t recordBytes = 0;
@@ -428,49 +439,48 @@ class Builder {
       live.erase(it);
     };
     try {
-    tbb::parallel_pipeline(
-        threads_ * 2,
-        tbb::make_filter<void, Item*>(tbb::filter_mode::serial_in_order,
-                                      [&](tbb::flow_control& fc) -> Item* {
-                                        while (current < sources_.size()) {
-                                          auto item = std::make_unique<Item>();
-                                          auto& r = *sources_[current].reader;
-                                          // Compressed sources leave decoding to the
-                                          // parallel stage (batch.finish()).
-                                          const size_t weight = r.readDeferred(
-                                              item->batch, kBatchPoints, sampleStep);
-                                          if (weight) {
-                                            item->source = current;
-                                            item->weight = weight;
-                                            item->points = (item->batch.pending ? item->batch.pendingPoints
-                                                                                : item->batch.size()) *
-                                                           weight;
-                                            progress_.advance(r.bytesConsumed() - consumedBefore,
-                                                              item->points);
-                                            consumedBefore = r.bytesConsumed();
-                                            adopt(item.get());
-                                            return item.release();
-                                          }
-                                          ++current;
-                                          consumedBefore = 0;
-                                        }
-                                        fc.stop();
-                                        return nullptr;
-                                      }) &
-            tbb::make_filter<Item*, Item*>(tbb::filter_mode::parallel,
-                                           [&](Item* it) {
-                                             if (it->batch.pending) {
-                                               it->batch.finish();  // may throw on damage
-                                               it->points = it->batch.size() * it->weight;
-                                             }
-                                             work(*it);
-                                             return it;
-                                           }) &
-            tbb::make_filter<Item*, void>(tbb::filter_mode::serial_in_order, [&](Item* it) {
-              release(it);
-              std::unique_ptr<Item> own(it);
-              collect(own);
-            }));
+      tbb::parallel_pipeline(
+          threads_ * 2,
+          tbb::make_filter<void, Item*>(
+              tbb::filter_mode::serial_in_order,
+              [&](tbb::flow_control& fc) -> Item* {
+                while (current < sources_.size()) {
+                  auto item = std::make_unique<Item>();
+                  auto& r = *sources_[current].reader;
+                  // Compressed sources leave decoding to the
+                  // parallel stage (batch.finish()).
+                  const size_t weight = r.readDeferred(item->batch, kBatchPoints, sampleStep);
+                  if (weight) {
+                    item->source = current;
+                    item->weight = weight;
+                    item->points =
+                        (item->batch.pending ? item->batch.pendingPoints : item->batch.size()) *
+                        weight;
+                    progress_.advance(r.bytesConsumed() - consumedBefore, item->points);
+                    consumedBefore = r.bytesConsumed();
+                    adopt(item.get());
+                    return item.release();
+                  }
+                  ++current;
+                  consumedBefore = 0;
+                }
+                fc.stop();
+                return nullptr;
+              }) &
+              tbb::make_filter<Item*, Item*>(tbb::filter_mode::parallel,
+                                             [&](Item* it) {
+                                               if (it->batch.pending) {
+                                                 it->batch.finish();  // may throw on damage
+                                                 it->points = it->batch.size() * it->weight;
+                                               }
+                                               work(*it);
+                                               return it;
+                                             }) &
+              tbb::make_filter<Item*, void>(tbb::filter_mode::serial_in_order, [&](Item* it) {
+                release(it);
+                std::unique_ptr<Item> own(it);
+                collect(own);
+              }));
     } catch (...) {
       for (Item* it : live) delete it;
       throw;
@@ -510,7 +520,8 @@ class Builder {
   }
 
   uint32_t gridCell(const uint32_t q[3]) const {
-    return ((q[0] >> gridShift_) << (2 * gridLevel_)) | ((q[1] >> gridShift_) << gridLevel_) | (q[2] >> gridShift_);
+    return ((q[0] >> gridShift_) << (2 * gridLevel_)) | ((q[1] >> gridShift_) << gridLevel_) |
+           (q[2] >> gridShift_);
   }
   uint32_t cubeBits() const {
     uint32_t b = 0;
@@ -619,7 +630,8 @@ class Builder {
           bool ok = f != nullptr;
           for (auto& [p, n] : perChunk[c]) ok = ok && std::fwrite(p, 1, n, f) == n;
           if (f) ok = std::fclose(f) == 0 && ok;
-          if (!ok) throw Error(chunks_[c].file.string(), "", "cannot write chunk file (disk full?)");
+          if (!ok)
+            throw Error(chunks_[c].file.string(), "", "cannot write chunk file (disk full?)");
         }
         std::lock_guard<std::mutex> lock(m);
         queued -= groupBytes;
@@ -680,8 +692,7 @@ class Builder {
               std::memcpy(r, q, 12);
               if (s.identity) {
                 if (stride_) std::memcpy(r + 12, it.batch.attrs.data() + k * srcStride, stride_);
-              }
-              else
+              } else
                 mapAttributes(s, h.layout, it.batch.attrs.data() + k * srcStride, r + 12);
               chunkOf[kept] = static_cast<uint32_t>(cellChunk_[gridCell(q)]);
               ++kept;
@@ -703,13 +714,16 @@ class Builder {
           [&](std::unique_ptr<Item>& it) {
             sources_[it->source].read += it->points;
             sources_[it->source].outsideDeclared += it->outside.first;
-            sources_[it->source].outsideMax = std::max(sources_[it->source].outsideMax, it->outside.second);
+            sources_[it->source].outsideMax =
+                std::max(sources_[it->source].outsideMax, it->outside.second);
             accounting_.add(it->acc);
             meta_.bounds.extend(it->box);
             for (auto& [c, n] : it->runs) chunks_[c].points += n;
             std::unique_lock<std::mutex> lock(m);
             if (writeError) std::rethrow_exception(writeError);
-            cv.wait(lock, [&] { return queued + it->recordBytes <= budget || queue.empty() || writeError; });
+            cv.wait(lock, [&] {
+              return queued + it->recordBytes <= budget || queue.empty() || writeError;
+            });
             if (writeError) std::rethrow_exception(writeError);
             queued += it->recordBytes;
             queue.push_back(std::move(it));
@@ -732,7 +746,8 @@ class Builder {
     std::vector<int32_t>().swap(cellChunk_);
   }
 
-  void mapAttributes(const SourceState& s, const PointLayout& src, const uint8_t* in, uint8_t* out) const {
+  void mapAttributes(const SourceState& s, const PointLayout& src, const uint8_t* in,
+                     uint8_t* out) const {
     for (size_t i = 0; i < layout_.size(); ++i) {
       const Attribute& a = layout_[i];
       uint8_t* o = out + layout_.offset(i);
@@ -743,7 +758,8 @@ class Builder {
         const Attribute& sa = src[e.src];
         const size_t w = scalarSize(sa.type), ow = scalarSize(a.type);
         for (uint32_t c = 0; c < a.components; ++c)
-          storeFromDouble(a.type, loadAsDouble(sa.type, in + src.offset(e.src) + c * w), o + c * ow);
+          storeFromDouble(a.type, loadAsDouble(sa.type, in + src.offset(e.src) + c * w),
+                          o + c * ow);
       } else if (static_cast<int>(i) == normalIndex_ && estimate_) {
         const float nan = std::nanf("");
         for (int c = 0; c < 3; ++c) std::memcpy(o + 4 * c, &nan, 4);
@@ -789,7 +805,8 @@ class Builder {
       for (int ci = 0; ci < 8; ++ci) {
         if (!out[ci]) continue;
         std::fclose(out[ci]);
-        Chunk child{c.key.child(ci), counts[ci], tmp_ / ("chunk-" + c.key.child(ci).name() + ".bin")};
+        Chunk child{c.key.child(ci), counts[ci],
+                    tmp_ / ("chunk-" + c.key.child(ci).name() + ".bin")};
         if (first) {
           chunks_[i] = child;
           first = false;
@@ -807,7 +824,8 @@ class Builder {
     progress_.begin("index", total, "points");
     std::vector<size_t> order(chunks_.size());
     std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return chunks_[a].points > chunks_[b].points; });
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return chunks_[a].points > chunks_[b].points; });
     std::atomic<uint64_t> merged{0};
     tbb::parallel_for_each(order.begin(), order.end(), [&](size_t ci) {
       // Isolated: while a chunk's nested parallel sort waits, this thread must not start another
@@ -856,7 +874,8 @@ class Builder {
     return pts;
   }
 
-  void saveRecords(const fs::path& file, const PointBuffer& pts, const std::vector<uint32_t>& set) const {
+  void saveRecords(const fs::path& file, const PointBuffer& pts,
+                   const std::vector<uint32_t>& set) const {
     const size_t rec = 12 + stride_;
     std::vector<uint8_t> buf(set.size() * rec);
     for (size_t k = 0; k < set.size(); ++k) {
@@ -899,7 +918,8 @@ class Builder {
         h = sum;
         sum += c;
       }
-      for (size_t i = 0; i < n; ++i) tmp[hist[(keys[i].first >> s0) & ((1u << kDigit) - 1)]++] = keys[i];
+      for (size_t i = 0; i < n; ++i)
+        tmp[hist[(keys[i].first >> s0) & ((1u << kDigit) - 1)]++] = keys[i];
       keys.swap(tmp);
     }
     tmp.reset();
@@ -919,19 +939,21 @@ class Builder {
     sorted.pos.resize(n * 3);
     sorted.attrs.resize(n * stride_);
     // A random gather: prefetch a few points ahead, or every read is a cache miss.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      constexpr size_t kAhead = 16;
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        if (i + kAhead < n) {
-          const size_t f = keys[i + kAhead].second;
-          __builtin_prefetch(&pts.pos[3 * f]);
-          if (stride_) __builtin_prefetch(pts.attrsOf(f));
-        }
-        const size_t j = keys[i].second;
-        std::memcpy(&sorted.pos[3 * i], &pts.pos[3 * j], 12);
-        if (stride_) std::memcpy(&sorted.attrs[i * stride_], pts.attrsOf(j), stride_);
-      }
-    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        constexpr size_t kAhead = 16;
+                        for (size_t i = r.begin(); i < r.end(); ++i) {
+                          if (i + kAhead < n) {
+                            const size_t f = keys[i + kAhead].second;
+                            __builtin_prefetch(&pts.pos[3 * f]);
+                            if (stride_) __builtin_prefetch(pts.attrsOf(f));
+                          }
+                          const size_t j = keys[i].second;
+                          std::memcpy(&sorted.pos[3 * i], &pts.pos[3 * j], 12);
+                          if (stride_)
+                            std::memcpy(&sorted.attrs[i * stride_], pts.attrsOf(j), stride_);
+                        }
+                      });
     pts = std::move(sorted);
   }
   static uint32_t mask(uint32_t bits) { return bits >= 32 ? ~0u : ((1u << bits) - 1); }
@@ -973,12 +995,14 @@ class Builder {
     for (size_t i = 0; i < n; ++i) {
       float cur[3];
       std::memcpy(cur, pts.attrs.data() + i * stride_ + off, 12);
-      if (std::isnan(cur[0])) std::memcpy(pts.attrs.data() + i * stride_ + off, &normals[3 * i], 12);
+      if (std::isnan(cur[0]))
+        std::memcpy(pts.attrs.data() + i * stride_ + off, &normals[3 * i], 12);
     }
   }
 
   // Returns the node's current sample (indices into pts); writes every node below it.
-  std::vector<uint32_t> buildSubtree(const PointBuffer& pts, const NodeKey& key, size_t b, size_t e) {
+  std::vector<uint32_t> buildSubtree(const PointBuffer& pts, const NodeKey& key, size_t b,
+                                     size_t e) {
     const uint32_t size = meta_.cubeSize >> key.level;
     if (e - b <= opt_.maxNodePoints || size <= 1) {
       std::vector<uint32_t> all(e - b);
@@ -1035,14 +1059,16 @@ class Builder {
   std::vector<char> sample(const PointBuffer& pts, const NodeKey& key,
                            const std::vector<uint32_t>& cand) const {
     const double size = meta_.cubeSize >> key.level;
-    const uint32_t base[3] = {key.x * (meta_.cubeSize >> key.level), key.y * (meta_.cubeSize >> key.level),
+    const uint32_t base[3] = {key.x * (meta_.cubeSize >> key.level),
+                              key.y * (meta_.cubeSize >> key.level),
                               key.z * (meta_.cubeSize >> key.level)};
     double r = size / 128.0;
     std::vector<char> chosen(cand.size());
     for (int attempt = 0;; ++attempt) {
       const size_t limit = opt_.maxNodePoints;
-      size_t accepted = opt_.sampling == Sampling::Grid ? sampleGrid(pts, cand, base, r, chosen, limit)
-                                                         : samplePoisson(pts, cand, base, r, chosen, limit);
+      size_t accepted = opt_.sampling == Sampling::Grid
+                            ? sampleGrid(pts, cand, base, r, chosen, limit)
+                            : samplePoisson(pts, cand, base, r, chosen, limit);
       if (accepted <= opt_.maxNodePoints || attempt > 60) {
         NL_CHECK(accepted <= opt_.maxNodePoints);
         return chosen;
@@ -1097,8 +1123,9 @@ class Builder {
 
   // Both samplers give up once `limit` points are accepted and return an estimate of the total
   // they would have accepted, so that an over-full attempt costs only part of a pass.
-  size_t samplePoisson(const PointBuffer& pts, const std::vector<uint32_t>& cand, const uint32_t base[3],
-                       double r, std::vector<char>& chosen, size_t limit) const {
+  size_t samplePoisson(const PointBuffer& pts, const std::vector<uint32_t>& cand,
+                       const uint32_t base[3], double r, std::vector<char>& chosen,
+                       size_t limit) const {
     // Neighbour cells, own cell first: in dense data most candidates are rejected there.
     static const std::array<std::array<int, 3>, 27> offsets = [] {
       std::array<std::array<int, 3>, 27> o{};
@@ -1153,15 +1180,17 @@ class Builder {
     return accepted;
   }
 
-  size_t sampleGrid(const PointBuffer& pts, const std::vector<uint32_t>& cand, const uint32_t base[3], double r,
-                    std::vector<char>& chosen, size_t limit) const {
+  size_t sampleGrid(const PointBuffer& pts, const std::vector<uint32_t>& cand,
+                    const uint32_t base[3], double r, std::vector<char>& chosen,
+                    size_t limit) const {
     CellMap cells(std::min(cand.size(), limit + 1));
     const double inv = 1.0 / r;
     size_t accepted = 0;
     for (size_t k = 0; k < cand.size(); ++k) {
       const uint32_t* p = &pts.pos[3 * size_t(cand[k])];
-      int32_t& head = cells.slot(cellKey(int64_t((p[0] - base[0]) * inv), int64_t((p[1] - base[1]) * inv),
-                                         int64_t((p[2] - base[2]) * inv)));
+      int32_t& head =
+          cells.slot(cellKey(int64_t((p[0] - base[0]) * inv), int64_t((p[1] - base[1]) * inv),
+                             int64_t((p[2] - base[2]) * inv)));
       chosen[k] = head < 0;
       if (head < 0) {
         head = 0;
@@ -1187,14 +1216,17 @@ class Builder {
     }
     // In integer steps; the largest axis step makes it world units (the axes' steps differ by a
     // few per cent at most where they differ at all).
-    const double measured = medianNeighbourSpacing(pts.pos.data(), drawnSet.data(), drawnSet.size()) * meta_.maxScale();
+    const double measured =
+        medianNeighbourSpacing(pts.pos.data(), drawnSet.data(), drawnSet.size()) * meta_.maxScale();
     writer_->writeNode(key, local, encodeSpacing(measured, meta_.levelSpacing(key.level)));
     stored_ += set.size();
   }
 
   // ---- merge ----------------------------------------------------------------------------------
 
-  fs::path provisionalFile(const NodeKey& k) const { return tmp_ / ("sample-" + k.name() + ".bin"); }
+  fs::path provisionalFile(const NodeKey& k) const {
+    return tmp_ / ("sample-" + k.name() + ".bin");
+  }
 
   void saveProvisional(const NodeKey& key, const PointBuffer& pts, const std::vector<uint32_t>& set,
                        uint64_t subtreePoints) {
@@ -1258,8 +1290,8 @@ class Builder {
   void finishMetadata() {
     accounting_.kept = stored_.load();
     NL_CHECK_MSG(accounting_.balanced(),
-                 "point accounting does not balance: input " + std::to_string(accounting_.input) + ", kept " +
-                     std::to_string(accounting_.kept) + ", merged " +
+                 "point accounting does not balance: input " + std::to_string(accounting_.input) +
+                     ", kept " + std::to_string(accounting_.kept) + ", merged " +
                      std::to_string(accounting_.duplicatesMerged) + ", rejected " +
                      std::to_string(accounting_.rejectedTotal()));
     meta_.generator = "nestlight 0.1.0";
@@ -1291,24 +1323,26 @@ class Builder {
       }
       if (s.outsideDeclared) {
         char w[256];
-        std::snprintf(w, sizeof w,
-                      "%llu points lie outside the bounds the header declares, up to %.6g beyond them; kept "
-                      "(the octree's bounds are the points')",
-                      (unsigned long long)s.outsideDeclared, s.outsideMax);
+        std::snprintf(
+            w, sizeof w,
+            "%llu points lie outside the bounds the header declares, up to %.6g beyond them; kept "
+            "(the octree's bounds are the points')",
+            (unsigned long long)s.outsideDeclared, s.outsideMax);
         r.warnings.push_back(w);
       }
       r.details = h.details;
       if (meta_.crs.is_null() && !h.crs.is_null()) meta_.crs = h.crs;
       meta_.sources.push_back(std::move(r));
     }
-    meta_.build = {{"sampling", opt_.sampling == Sampling::Grid ? "grid" : "poisson"},
-                   {"codec", codecName(opt_.codec)},
-                   {"max_node_points", opt_.maxNodePoints},
-                   {"memory_bytes", opt_.memoryBytes},
-                   {"dedup", opt_.dedup},
-                   {"chunks", chunks_.size()},
-                   {"max_chunk_points", maxChunkPoints_ == UINT64_MAX ? json(nullptr) : json(maxChunkPoints_)},
-                   {"command_line", opt_.commandLine}};
+    meta_.build = {
+        {"sampling", opt_.sampling == Sampling::Grid ? "grid" : "poisson"},
+        {"codec", codecName(opt_.codec)},
+        {"max_node_points", opt_.maxNodePoints},
+        {"memory_bytes", opt_.memoryBytes},
+        {"dedup", opt_.dedup},
+        {"chunks", chunks_.size()},
+        {"max_chunk_points", maxChunkPoints_ == UINT64_MAX ? json(nullptr) : json(maxChunkPoints_)},
+        {"command_line", opt_.commandLine}};
     if (!buildNotes_.empty()) meta_.build["notes"] = buildNotes_;
   }
   BuildOptions opt_;
@@ -1336,12 +1370,14 @@ class Builder {
   std::atomic<uint64_t> stored_{0};
   bool measureBounds_ = false;  // plan the cube from the points even where headers declare bounds
   mutable std::atomic<bool> outsideCube_{false};  // a point beyond the planned cube was met
-  std::vector<std::string> buildNotes_;  // facts of the build that `info` shows (metadata build.notes)
+  std::vector<std::string>
+      buildNotes_;  // facts of the build that `info` shows (metadata build.notes)
 };
 
 }  // namespace
 
-BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& options) {
+BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources,
+                        const BuildOptions& options) {
   Builder b(std::move(sources), options, false);
   try {
     return b.run();
@@ -1350,8 +1386,9 @@ BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources, const
   }
   Builder measured(b.takeSources(), options, true);
   BuildReport r = measured.run();
-  r.warnings.push_back("points lie far outside the bounds a header declares: the extent was measured from the "
-                       "points, which took one more reading of the input");
+  r.warnings.push_back(
+      "points lie far outside the bounds a header declares: the extent was measured from the "
+      "points, which took one more reading of the input");
   return r;
 }
 

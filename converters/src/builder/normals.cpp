@@ -62,8 +62,8 @@ struct Cloud {
     return false;
   }
 };
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>, Cloud, 3,
-                                                 size_t>;
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>, Cloud,
+                                                 3, size_t>;
 }  // namespace
 
 void estimateNormals(const uint32_t* pos, size_t n, unsigned k, int orientation,
@@ -73,29 +73,30 @@ void estimateNormals(const uint32_t* pos, size_t n, unsigned k, int orientation,
   Tree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
   const size_t kk = std::min<size_t>(k, n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<size_t> idx(kk);
-    std::vector<double> dist(kk), xyz(3 * kk);
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      double q[3] = {double(pos[3 * i]), double(pos[3 * i + 1]), double(pos[3 * i + 2])};
-      size_t found = tree.knnSearch(q, kk, idx.data(), dist.data());
-      for (size_t j = 0; j < found; ++j)
-        for (int a = 0; a < 3; ++a) xyz[3 * j + a] = pos[3 * idx[j] + a];
-      float* nrm = normals + 3 * i;
-      if (!fitPlaneNormal(xyz.data(), found, nrm)) continue;
-      // A plane fit has no sign. Orient by the scan's shape: statues and buildings seen from
-      // outside face away from their centre; interiors face it; terrain faces up.
-      double d;
-      if (orientation == 2) {
-        d = nrm[2];
-      } else {
-        double v[3] = {q[0] - centre[0], q[1] - centre[1], q[2] - centre[2]};
-        d = (v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2]) * (orientation == 1 ? -1 : 1);
-      }
-      if (d < 0)
-        for (int a = 0; a < 3; ++a) nrm[a] = -nrm[a];
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<size_t> idx(kk);
+        std::vector<double> dist(kk), xyz(3 * kk);
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          double q[3] = {double(pos[3 * i]), double(pos[3 * i + 1]), double(pos[3 * i + 2])};
+          size_t found = tree.knnSearch(q, kk, idx.data(), dist.data());
+          for (size_t j = 0; j < found; ++j)
+            for (int a = 0; a < 3; ++a) xyz[3 * j + a] = pos[3 * idx[j] + a];
+          float* nrm = normals + 3 * i;
+          if (!fitPlaneNormal(xyz.data(), found, nrm)) continue;
+          // A plane fit has no sign. Orient by the scan's shape: statues and buildings seen from
+          // outside face away from their centre; interiors face it; terrain faces up.
+          double d;
+          if (orientation == 2) {
+            d = nrm[2];
+          } else {
+            double v[3] = {q[0] - centre[0], q[1] - centre[1], q[2] - centre[2]};
+            d = (v[0] * nrm[0] + v[1] * nrm[1] + v[2] * nrm[2]) * (orientation == 1 ? -1 : 1);
+          }
+          if (d < 0)
+            for (int a = 0; a < 3; ++a) nrm[a] = -nrm[a];
+        }
+      });
 }
 
 }  // namespace nestlight

@@ -9,7 +9,8 @@
 namespace nestlight {
 
 Progress::Progress(ProgressMode mode) : mode_(mode) {
-  if (mode_ == ProgressMode::Auto) mode_ = ::isatty(2) ? ProgressMode::Terminal : ProgressMode::Json;
+  if (mode_ == ProgressMode::Auto)
+    mode_ = ::isatty(2) ? ProgressMode::Terminal : ProgressMode::Json;
 }
 
 void Progress::begin(const std::string& phase, uint64_t total, const std::string& unit) {

@@ -49,13 +49,15 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
   }
   rep.nodes = nodes.size();
   if (nodes.size() != m.nodes)
-    fail("hierarchy holds " + std::to_string(nodes.size()) + " nodes, metadata says " + std::to_string(m.nodes));
+    fail("hierarchy holds " + std::to_string(nodes.size()) + " nodes, metadata says " +
+         std::to_string(m.nodes));
 
   // Payload ranges must not overlap and must account for the whole payload file.
   std::vector<std::pair<uint64_t, uint64_t>> ranges;
   uint64_t sum = 0;
   for (auto& [k, e] : nodes) {
-    if (e.type == NodeType::Proxy) fail("node " + k.name() + " remains a proxy after loading its chunk");
+    if (e.type == NodeType::Proxy)
+      fail("node " + k.name() + " remains a proxy after loading its chunk");
     if (k.level > m.depth) fail("node " + k.name() + " is deeper than metadata's depth");
     if (e.byteSize) ranges.emplace_back(e.byteOffset, e.byteSize);
     sum += e.numPoints;
@@ -68,15 +70,16 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
     covered += s;
   }
   if (covered != m.payloadBytes)
-    fail("node payloads cover " + std::to_string(covered) + " bytes of " + std::to_string(m.payloadBytes));
+    fail("node payloads cover " + std::to_string(covered) + " bytes of " +
+         std::to_string(m.payloadBytes));
 
   tbb::parallel_for(size_t(0), nodes.size(), [&](size_t i) {
     const auto& [k, e] = nodes[i];
     try {
       PointBuffer pts = reader->readNode(k);
       if (pts.size() != e.numPoints) {
-        fail("node " + k.name() + " decodes to " + std::to_string(pts.size()) + " points, expected " +
-             std::to_string(e.numPoints));
+        fail("node " + k.name() + " decodes to " + std::to_string(pts.size()) +
+             " points, expected " + std::to_string(e.numPoints));
         return;
       }
       const uint64_t s = m.cubeSize >> k.level;
@@ -85,7 +88,8 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
         for (int a = 0; a < 3; ++a) {
           uint64_t v = pts.pos[3 * p + a];
           if (v < base[a] || v >= base[a] + s) {
-            fail("node " + k.name() + ": point " + std::to_string(p) + " lies outside the node's cube");
+            fail("node " + k.name() + ": point " + std::to_string(p) +
+                 " lies outside the node's cube");
             return;
           }
         }
@@ -99,12 +103,15 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
 
   const Accounting& a = m.accounting;
   if (sum != m.points)
-    fail("nodes hold " + std::to_string(sum) + " points, metadata says " + std::to_string(m.points));
+    fail("nodes hold " + std::to_string(sum) + " points, metadata says " +
+         std::to_string(m.points));
   if (a.kept != m.points)
-    fail("accounting: kept " + std::to_string(a.kept) + " differs from points stored " + std::to_string(m.points));
+    fail("accounting: kept " + std::to_string(a.kept) + " differs from points stored " +
+         std::to_string(m.points));
   if (!a.balanced())
-    fail("accounting does not balance: input " + std::to_string(a.input) + " != kept " + std::to_string(a.kept) +
-         " + merged " + std::to_string(a.duplicatesMerged) + " + rejected " + std::to_string(a.rejectedTotal()));
+    fail("accounting does not balance: input " + std::to_string(a.input) + " != kept " +
+         std::to_string(a.kept) + " + merged " + std::to_string(a.duplicatesMerged) +
+         " + rejected " + std::to_string(a.rejectedTotal()));
   for (const LayerRecord& l : m.layers) {
     std::unique_ptr<ColourLayerReader> layer;
     try {
@@ -115,8 +122,8 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
     }
     rep.layers++;
     if (layer->entries().size() != nodes.size())
-      fail("layer '" + l.name + "' has " + std::to_string(layer->entries().size()) + " nodes, the octree " +
-           std::to_string(nodes.size()));
+      fail("layer '" + l.name + "' has " + std::to_string(layer->entries().size()) +
+           " nodes, the octree " + std::to_string(nodes.size()));
     uint64_t layerPoints = 0;
     for (const auto& e : layer->entries()) layerPoints += e.points;
     if (layerPoints != l.points || layerPoints != sum)
@@ -138,24 +145,26 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
     });
   }
   for (const auto& n : orphanLayerFiles(dir, m))
-    rep.notes.push_back(n + ": a layer file metadata.json does not name (left by an interrupted run; "
+    rep.notes.push_back(n +
+                        ": a layer file metadata.json does not name (left by an interrupted run; "
                         "the next `expand-hdr` deletes it)");
   for (const auto& p : staleStagingFolders(dir)) {
     std::error_code ec;
     uint64_t bytes = 0;
     for (const auto& e : fs::recursive_directory_iterator(p, ec))
       if (e.is_regular_file(ec)) bytes += e.file_size(ec);
-    rep.notes.push_back(p.string() + ": " + std::to_string(bytes) +
-                        " bytes left by a conversion that was killed (the next `convert` to this output "
-                        "removes it; so may you)");
+    rep.notes.push_back(
+        p.string() + ": " + std::to_string(bytes) +
+        " bytes left by a conversion that was killed (the next `convert` to this output "
+        "removes it; so may you)");
   }
 
   // A lenient conversion counts a source's undecodable points as input it rejected.
   uint64_t fromSources = 0;
   for (auto& s : m.sources) fromSources += s.points + s.unreadable;
   if (!m.sources.empty() && fromSources != a.input)
-    fail("sources report " + std::to_string(fromSources) + " points read or unreadable, accounting says input " +
-         std::to_string(a.input));
+    fail("sources report " + std::to_string(fromSources) +
+         " points read or unreadable, accounting says input " + std::to_string(a.input));
   return rep;
 }
 

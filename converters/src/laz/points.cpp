@@ -174,7 +174,7 @@ void LazPoints::readChunkTable(uint64_t declared) {
     c.bytes = bytes[i];
     c.firstPoint = first;
     // Fixed-size chunks are full but for the last, whose count the header's implies.
-    c.points = !fixed       ? counts[i]
+    c.points = !fixed      ? counts[i]
                : i + 1 < n ? info_.chunkSize
                            : uint32_t(std::min<uint64_t>(info_.chunkSize,
                                                          declared > first ? declared - first : 0));
@@ -252,8 +252,8 @@ void LazPoints::countLastChunk(uint64_t declared) {
       {info_.chunkSize, kMaxChunkPoints, kMaxChunkRecordBytes / std::max<size_t>(recordSize_, 1)}));
   RecordBuffer scratch;
   if (!layered) scratch.resize(size_t(most) * recordSize_);
-  const ChunkDecoder::PointCount count = decoders_->local()->countPoints(
-      src_->data() + last.offset, last.bytes, most, scratch.data());
+  const ChunkDecoder::PointCount count =
+      decoders_->local()->countPoints(src_->data() + last.offset, last.bytes, most, scratch.data());
   if (count.least == 0) return;  // damaged: decoding it will say so
   const uint64_t held = before + count.least;
   if (held <= declared) return;

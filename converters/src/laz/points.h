@@ -97,7 +97,7 @@ class LazPoints {
   std::atomic<uint64_t> unreadable_{0};
   uint64_t unreadableAtOpen_ = 0;
   uint64_t declaredShort_ = 0;  // points the chunks hold beyond the header's count
-  std::mutex warnMutex_;  // warn_ from concurrent decodes
+  std::mutex warnMutex_;        // warn_ from concurrent decodes
   uint64_t tableStart_ = 0;
   struct Decoders;  // one ChunkDecoder per thread
   std::unique_ptr<Decoders> decoders_;

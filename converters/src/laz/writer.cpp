@@ -20,16 +20,15 @@
 #include <cstring>
 #include <filesystem>
 
-#include "readers/las_format.h"
 #include "laz/arithmetic.h"
 #include "laz/format.h"
 #include "laz/items.h"
 #include "nestlight/converters/byte_source.h"
 #include "nestlight/octree/error.h"
+#include "readers/las_format.h"
 
 namespace nestlight::laz {
 namespace {
-
 
 class ItemEncoder {
  public:

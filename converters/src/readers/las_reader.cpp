@@ -21,10 +21,10 @@
 #include <set>
 #include <string>
 
-#include "readers/las_format.h"
 #include "laz/points.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/error.h"
+#include "readers/las_format.h"
 
 namespace nestlight {
 namespace {
@@ -454,9 +454,8 @@ void LasReader::countRecords(uint64_t declared, uint64_t dataEnd) {
     const uint64_t end = pointStart_ + declared * recordLength_;
     if (end < dataEnd) {
       const uint64_t trailing = dataEnd - end;
-      std::string what = std::to_string(trailing) + " bytes after the " +
-                         std::to_string(declared) + " declared points (from byte " +
-                         std::to_string(end) + ") are not EVLRs";
+      std::string what = std::to_string(trailing) + " bytes after the " + std::to_string(declared) +
+                         " declared points (from byte " + std::to_string(end) + ") are not EVLRs";
       if (trailing >= recordLength_)
         what += "; they would hold " + std::to_string(trailing / recordLength_) +
                 " more records: does the header claim fewer points than the file holds?";

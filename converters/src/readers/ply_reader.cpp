@@ -274,7 +274,9 @@ inline void applyOps(const Op* ops, size_t nops, const uint8_t* rec, double* xyz
 class PlyReader final : public PointReader {
  public:
   PlyReader(std::shared_ptr<ByteSource> src, const ReadOptions& options)
-      : src_(std::move(src)), options_(options), ply_(ply::parseHeader(src_->name(), src_->data(), src_->size())) {
+      : src_(std::move(src)),
+        options_(options),
+        ply_(ply::parseHeader(src_->name(), src_->data(), src_->size())) {
     for (size_t i = 0; i < ply_.elements.size(); ++i)
       if (ply_.elements[i].name == "vertex") vertexIndex_ = i;
     if (vertexIndex_ == kNone)

@@ -11,7 +11,8 @@ namespace nestlight {
 namespace {
 std::string lowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 }  // namespace
@@ -35,7 +36,8 @@ std::unique_ptr<PointWriter> createWriter(const std::string& path, const SourceH
   if (ext == ".las" || ext == ".laz" || ext == ".ply") {
     const std::filesystem::path parent = std::filesystem::path(path).parent_path();
     std::error_code ec;
-    if (!parent.empty() && !std::filesystem::exists(parent, ec) && !std::filesystem::create_directories(parent, ec))
+    if (!parent.empty() && !std::filesystem::exists(parent, ec) &&
+        !std::filesystem::create_directories(parent, ec))
       throw Error(path, "", "cannot create its folder " + parent.string() + ": " + ec.message());
   }
   if (ext == ".las") return createLasWriter(path, header);

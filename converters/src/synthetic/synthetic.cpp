@@ -163,14 +163,24 @@ std::vector<Prim> buildingScene() {
 std::vector<Prim> roomScene() {
   std::vector<Prim> s;
   const std::array<int, 3> white{200, 196, 188}, red{190, 40, 36}, green{44, 160, 60};
-  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, 0, 0, white, 0.7});    // floor
-  s.push_back({Prim::Rect, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}, 0, 0, white, 0.7});   // ceiling
-  s.push_back({Prim::Rect, {0, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, 0, 0, red, 0.5});      // left
-  s.push_back({Prim::Rect, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, 0, 0, green, 0.5});   // right
-  s.push_back({Prim::Rect, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}, {0, -1, 0}, 0, 0, white, 0.7});   // back
-  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}, 0, 0, white, 0.7});    // front
+  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, 0, 0, white, 0.7});  // floor
+  s.push_back(
+      {Prim::Rect, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}, 0, 0, white, 0.7});       // ceiling
+  s.push_back({Prim::Rect, {0, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}, 0, 0, red, 0.5});  // left
+  s.push_back(
+      {Prim::Rect, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, 0, 0}, 0, 0, green, 0.5});  // right
+  s.push_back({Prim::Rect, {0, 1, 0}, {1, 0, 0}, {0, 0, 1}, {0, -1, 0}, 0, 0, white, 0.7});  // back
+  s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}, 0, 0, white, 0.7});  // front
   // The light: a patch just below the ceiling, facing down, saturated white in the scan.
-  s.push_back({Prim::Rect, {0.38, 0.38, 0.995}, {0.24, 0, 0}, {0, 0.24, 0}, {0, 0, -1}, 0, 0, {255, 255, 255}, 1.0});
+  s.push_back({Prim::Rect,
+               {0.38, 0.38, 0.995},
+               {0.24, 0, 0},
+               {0, 0.24, 0},
+               {0, 0, -1},
+               0,
+               0,
+               {255, 255, 255},
+               1.0});
   addBuilding(s, 0.18, 0.55, 0.46, 0.83, 0.60, white, white);  // tall block
   addBuilding(s, 0.55, 0.18, 0.83, 0.46, 0.30, white, white);  // short block
   return s;
@@ -187,7 +197,15 @@ std::vector<Prim> naveScene() {
   s.push_back({Prim::Rect, {0, 0, 0}, {1, 0, 0}, {0, 0, H}, {0, 1, 0}, 0, 0, stone, 0.6});
   s.push_back({Prim::Rect, {0, W, 0}, {1, 0, 0}, {0, 0, H}, {0, -1, 0}, 0, 0, stone, 0.6});
   s.push_back({Prim::Rect, {0, 0, 0}, {0, W, 0}, {0, 0, H}, {1, 0, 0}, 0, 0, stone, 0.6});
-  s.push_back({Prim::Rect, {1, 0, 0}, {0, W, 0}, {0, 0, H}, {-1, 0, 0}, 0, 0, {210, 170, 90}, 0.6});  // gilded east wall
+  s.push_back({Prim::Rect,
+               {1, 0, 0},
+               {0, W, 0},
+               {0, 0, H},
+               {-1, 0, 0},
+               0,
+               0,
+               {210, 170, 90},
+               0.6});  // gilded east wall
   Prim column{Prim::Cylinder, {0, 0, 0}, {}, {}, {}, 0.018, H, stone, 0.7};
   for (int k = 0; k < 7; ++k) {
     column.c[0] = 0.12 + 0.12 * k;

@@ -31,8 +31,8 @@ fs::path ensureSyntheticOctree(uint64_t points, const fs::path& dir, bool quiet)
   std::vector<std::unique_ptr<PointReader>> sources;
   sources.push_back(openSynthetic(spec));
   if (!quiet)
-    std::fprintf(stderr, "generating and converting %llu synthetic points into %s\n", (unsigned long long)points,
-                 dir.c_str());
+    std::fprintf(stderr, "generating and converting %llu synthetic points into %s\n",
+                 (unsigned long long)points, dir.c_str());
   const auto t = std::chrono::steady_clock::now();
   buildOctree(std::move(sources), o);
   if (!quiet)

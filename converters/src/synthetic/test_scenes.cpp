@@ -51,11 +51,11 @@ void writeIcosphereObj(const fs::path& path, int subdivisions) {
   // Icosahedron, then each triangle split in four with the new vertices pushed onto the sphere.
   const double t = (1 + std::sqrt(5.0)) / 2;
   ObjMesh m;
-  m.v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-         {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-         {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  m.v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+         {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+         {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   auto normalise = [](std::array<double, 3>& p) {
     double l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
     for (double& c : p) c /= l;
@@ -67,7 +67,8 @@ void writeIcosphereObj(const fs::path& path, int subdivisions) {
       auto key = std::minmax(a, b);
       auto it = mid.find(key);
       if (it != mid.end()) return it->second;
-      std::array<double, 3> p{(m.v[a][0] + m.v[b][0]) / 2, (m.v[a][1] + m.v[b][1]) / 2, (m.v[a][2] + m.v[b][2]) / 2};
+      std::array<double, 3> p{(m.v[a][0] + m.v[b][0]) / 2, (m.v[a][1] + m.v[b][1]) / 2,
+                              (m.v[a][2] + m.v[b][2]) / 2};
       normalise(p);
       m.v.push_back(p);
       return mid[key] = uint32_t(m.v.size() - 1);
@@ -82,7 +83,8 @@ void writeIcosphereObj(const fs::path& path, int subdivisions) {
     }
     m.f = std::move(next);
   }
-  writeObj(path, m, "unit icosphere, " + std::to_string(subdivisions) + " subdivisions (nestlight)");
+  writeObj(path, m,
+           "unit icosphere, " + std::to_string(subdivisions) + " subdivisions (nestlight)");
 }
 
 void writeTorusObj(const fs::path& path, double R, double r, int segments, int sides) {
@@ -91,7 +93,8 @@ void writeTorusObj(const fs::path& path, double R, double r, int segments, int s
   for (int i = 0; i < segments; ++i)
     for (int j = 0; j < sides; ++j) {
       double u = tau * i / segments, v = tau * j / sides;
-      m.v.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+      m.v.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u),
+                     r * std::sin(v)});
     }
   auto id = [&](int i, int j) { return uint32_t((i % segments) * sides + (j % sides)); };
   for (int i = 0; i < segments; ++i)
@@ -104,7 +107,8 @@ void writeTorusObj(const fs::path& path, double R, double r, int segments, int s
 
 void writeBoxObj(const fs::path& path) {
   ObjMesh m;
-  for (int i = 0; i < 8; ++i) m.v.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
+  for (int i = 0; i < 8; ++i)
+    m.v.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
   // Counter-clockwise seen from outside.
   m.f = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
          {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
@@ -120,15 +124,19 @@ std::optional<TestSceneKind> parseTestSceneKind(const std::string& name) {
 
 const char* testSceneKindName(TestSceneKind kind) {
   switch (kind) {
-    case TestSceneKind::Cornell: return "cornell";
-    case TestSceneKind::Nave: return "nave";
-    case TestSceneKind::Object: return "object";
+    case TestSceneKind::Cornell:
+      return "cornell";
+    case TestSceneKind::Nave:
+      return "nave";
+    case TestSceneKind::Object:
+      return "object";
   }
   return "?";
 }
 
 fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneOptions& o) {
-  std::vector<std::function<void()>> meshWrites;  // after the checks below: nothing is touched before
+  std::vector<std::function<void()>>
+      meshWrites;  // after the checks below: nothing is touched before
   SyntheticSpec spec;
   spec.points = o.points;
   spec.seed = o.seed;
@@ -138,7 +146,8 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
   scene["version"] = 1;
   scene["octrees"] = json::array({json{{"path", "scan.octree"}}});
   auto camera = [&](std::array<double, 3> eye, std::array<double, 3> target, double fov) {
-    return json{{"eye", eye}, {"target", target}, {"fov", fov}, {"width", o.width}, {"height", o.height}};
+    return json{
+        {"eye", eye}, {"target", target}, {"fov", fov}, {"width", o.width}, {"height", o.height}};
   };
   switch (kind) {
     case TestSceneKind::Cornell: {
@@ -147,16 +156,25 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
       spec.size = 4;
       spec.noise = 0.001;
       meshWrites.push_back([dir] { writeIcosphereObj(dir / "sphere.obj", 3); });
-      scene["materials"] = {{"glossy", {{"type", "ggx"}, {"base_color", {0.9, 0.8, 0.6}}, {"roughness", 0.35}, {"metallic", 0.0}}}};
-      scene["meshes"] = json::array({json{{"path", "sphere.obj"},
-                                          {"transform", {{"translate", {2.6, 2.6, 0.5}}, {"scale", 0.5}}},
-                                          {"material", "glossy"},
-                                          {"surfels", {{"method", "area"}, {"count", 20000}}}}});
+      scene["materials"] = {{"glossy",
+                             {{"type", "ggx"},
+                              {"base_color", {0.9, 0.8, 0.6}},
+                              {"roughness", 0.35},
+                              {"metallic", 0.0}}}};
+      scene["meshes"] =
+          json::array({json{{"path", "sphere.obj"},
+                            {"transform", {{"translate", {2.6, 2.6, 0.5}}, {"scale", 0.5}}},
+                            {"material", "glossy"},
+                            {"surfels", {{"method", "area"}, {"count", 20000}}}}});
       // A lamp under the light patch: it lights the sphere in both modes, and the whole room in
       // the albedo mode, where the scan's recorded light does not emit.
-      scene["lights"] = json::array({json{{"type", "point"}, {"position", {2.0, 2.0, 3.7}}, {"intensity", 6.0}}});
+      scene["lights"] =
+          json::array({json{{"type", "point"}, {"position", {2.0, 2.0, 3.7}}, {"intensity", 6.0}}});
       scene["camera"] = camera({2.0, 0.12, 3.2}, {2.2, 3.0, 0.5}, 68);
-      scene["gi"] = {{"method", "reference"}, {"mode", "radiance_cache"}, {"max_bounces", 4}, {"samples_per_pixel", 1024},
+      scene["gi"] = {{"method", "reference"},
+                     {"mode", "radiance_cache"},
+                     {"max_bounces", 4},
+                     {"samples_per_pixel", 1024},
                      {"target_relative_error", 0.01}};
       break;
     }
@@ -166,16 +184,25 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
       spec.noise = 0.003;
       meshWrites.push_back([dir] { writeIcosphereObj(dir / "statue.obj", 3); });
       meshWrites.push_back([dir] { writeBoxObj(dir / "pedestal.obj"); });
-      scene["materials"] = {{"marble", {{"type", "principled"}, {"base_color", {0.85, 0.83, 0.8}}, {"roughness", 0.3},
-                                        {"specular", 0.5}, {"clearcoat", 0.3}}},
+      scene["materials"] = {{"marble",
+                             {{"type", "principled"},
+                              {"base_color", {0.85, 0.83, 0.8}},
+                              {"roughness", 0.3},
+                              {"specular", 0.5},
+                              {"clearcoat", 0.3}}},
                             {"stone", {{"type", "lambert"}, {"base_color", {0.5, 0.48, 0.45}}}}};
       scene["meshes"] = json::array(
           {json{{"path", "pedestal.obj"},
                 {"transform", {{"translate", {23.0, 9.0, 0.0}}, {"scale", {2.0, 2.0, 1.2}}}},
                 {"material", "stone"}},
-           json{{"path", "statue.obj"}, {"transform", {{"translate", {24.0, 10.0, 2.2}}, {"scale", 1.0}}}, {"material", "marble"}}});
+           json{{"path", "statue.obj"},
+                {"transform", {{"translate", {24.0, 10.0, 2.2}}, {"scale", 1.0}}},
+                {"material", "marble"}}});
       scene["camera"] = camera({4.0, 10.0, 3.0}, {30.0, 10.0, 3.5}, 55);
-      scene["gi"] = {{"method", "reference"}, {"mode", "radiance_cache"}, {"max_bounces", 4}, {"samples_per_pixel", 1024},
+      scene["gi"] = {{"method", "reference"},
+                     {"mode", "radiance_cache"},
+                     {"max_bounces", 4},
+                     {"samples_per_pixel", 1024},
                      {"target_relative_error", 0.01}};
       break;
     }
@@ -183,27 +210,40 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
       spec.shape = SyntheticShape::Surfaces;
       spec.size = 100;
       meshWrites.push_back([dir] { writeTorusObj(dir / "torus.obj", 1.0, 0.35, 64, 24); });
-      scene["materials"] = {{"gold", {{"type", "ggx"}, {"base_color", {1.0, 0.78, 0.34}}, {"roughness", 0.25}, {"metallic", 1.0}}}};
-      scene["meshes"] = json::array({json{{"path", "torus.obj"},
-                                          {"transform", {{"translate", {50.0, 45.0, 5.0}}, {"rotate", {60.0, 0.0, 20.0}}, {"scale", 3.0}}},
-                                          {"material", "gold"}}});
-      scene["lights"] = json::array({json{{"type", "directional"}, {"direction", {-0.4, -0.3, -0.87}}, {"irradiance", {3.0, 2.9, 2.7}}}});
+      scene["materials"] = {{"gold",
+                             {{"type", "ggx"},
+                              {"base_color", {1.0, 0.78, 0.34}},
+                              {"roughness", 0.25},
+                              {"metallic", 1.0}}}};
+      scene["meshes"] = json::array(
+          {json{{"path", "torus.obj"},
+                {"transform",
+                 {{"translate", {50.0, 45.0, 5.0}}, {"rotate", {60.0, 0.0, 20.0}}, {"scale", 3.0}}},
+                {"material", "gold"}}});
+      scene["lights"] = json::array({json{{"type", "directional"},
+                                          {"direction", {-0.4, -0.3, -0.87}},
+                                          {"irradiance", {3.0, 2.9, 2.7}}}});
       scene["environment"] = {{"constant", {0.35, 0.45, 0.6}}};
       // From the street between the two buildings (x 42..55), looking north at the torus.
       scene["camera"] = camera({48.5, 20.0, 10.0}, {50.0, 45.0, 5.0}, 50);
-      scene["gi"] = {{"method", "reference"}, {"mode", "albedo"}, {"max_bounces", 3}, {"samples_per_pixel", 1024},
+      scene["gi"] = {{"method", "reference"},
+                     {"mode", "albedo"},
+                     {"max_bounces", 3},
+                     {"samples_per_pixel", 1024},
                      {"target_relative_error", 0.01}};
       break;
     }
   }
-  scene["output"] = {{"exr", std::string(testSceneKindName(kind)) + ".exr"}, {"png", std::string(testSceneKindName(kind)) + ".png"}};
+  scene["output"] = {{"exr", std::string(testSceneKindName(kind)) + ".exr"},
+                     {"png", std::string(testSceneKindName(kind)) + ".png"}};
 
   // What the scan is made from: an octree in the folder is reused only when it was made from
   // exactly this (a nave's scan never stands in a cornell scene), and a scene file that differs
   // from this one (edited, or another scene's) is replaced only with `overwrite`.
   const json stamp = {{"kind", testSceneKindName(kind)}, {"points", o.points}, {"seed", o.seed}};
   const std::string text = scene.dump(2) + "\n";
-  const fs::path file = dir / "scene.json", octree = dir / "scan.octree", stampFile = dir / "scene-source.json";
+  const fs::path file = dir / "scene.json", octree = dir / "scan.octree",
+                 stampFile = dir / "scene-source.json";
   auto read = [](const fs::path& p) {
     std::ifstream in(p, std::ios::binary);
     return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -216,11 +256,13 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
     if (fs::exists(file) && read(file) != text)
       throw Error(file.string(), "",
                   "differs from the " + std::string(testSceneKindName(kind)) +
-                      " scene make-scene writes (edited, or another scene's); pass --overwrite to replace the folder's "
+                      " scene make-scene writes (edited, or another scene's); pass --overwrite to "
+                      "replace the folder's "
                       "scene, meshes and scan");
     if (haveOctree && !sameScan)
       throw Error(octree.string(), "",
-                  "was not made for this scene (" + (oldStamp.is_object() ? oldStamp.dump() : std::string("unknown source")) +
+                  "was not made for this scene (" +
+                      (oldStamp.is_object() ? oldStamp.dump() : std::string("unknown source")) +
                       ", not " + stamp.dump() + "); pass --overwrite to rebuild it");
   }
   fs::create_directories(dir);

@@ -45,10 +45,12 @@ uint64_t exportOctree(const std::filesystem::path& dir, const std::filesystem::p
     } else {
       const size_t in = m.layout.stride(), out = h.layout.stride();
       batch.attrs.assign(pts.size() * out, 0);
-      for (size_t i = 0; i < pts.size(); ++i) std::memcpy(&batch.attrs[i * out], pts.attrsOf(i), in);
+      for (size_t i = 0; i < pts.size(); ++i)
+        std::memcpy(&batch.attrs[i * out], pts.attrsOf(i), in);
       for (size_t li = 0; li < layers.size(); ++li) {
         const std::vector<float> rgb = layers[li]->readNode(key, entry.numPoints);
-        for (size_t i = 0; i < pts.size(); ++i) std::memcpy(&batch.attrs[i * out + in + 12 * li], &rgb[3 * i], 12);
+        for (size_t i = 0; i < pts.size(); ++i)
+          std::memcpy(&batch.attrs[i * out + in + 12 * li], &rgb[3 * i], 12);
       }
     }
     writer->write(batch);

@@ -18,11 +18,11 @@
 #include <limits>
 #include <string>
 
-#include "readers/las_format.h"
 #include "laz/points.h"
 #include "laz/writer.h"
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/octree/error.h"
+#include "readers/las_format.h"
 
 namespace nestlight {
 namespace {
@@ -589,8 +589,7 @@ class LasWriter final : public PointWriter {
         std::vector<uint8_t> in(chunk * plan_.recordLength);
         for (uint64_t done = 0; done < count_;) {
           const size_t n = static_cast<size_t>(std::min<uint64_t>(chunk, count_ - done));
-          if (std::fread(in.data(), plan_.recordLength, n, file_) != n)
-            ioError(tmp_, "read back");
+          if (std::fread(in.data(), plan_.recordLength, n, file_) != n) ioError(tmp_, "read back");
           reencode(in.data(), n, done);
           done += n;
         }

@@ -15,12 +15,12 @@
 #include <set>
 #include <thread>
 
-#include "readers/las_format.h"
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
-#include "nestlight/octree/staged_directory.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/octree/octree_writer.h"
+#include "nestlight/octree/staged_directory.h"
+#include "readers/las_format.h"
 
 namespace nestlight {
 namespace fs = std::filesystem;
@@ -506,9 +506,10 @@ PotreeExportReport Exporter::run(const fs::path& outDir, const std::string& name
   j["scale"] = {s.x, s.y, s.z};
   j["spacing"] = meta_.spacing > 0 ? meta_.spacing : cube / 128;
   // The octree's cube: the viewer derives every node's box from it by halving.
-  j["boundingBox"] = {
-      {"min", {meta_.offset.x, meta_.offset.y, meta_.offset.z}},
-      {"max", {meta_.world(0, meta_.cubeSize), meta_.world(1, meta_.cubeSize), meta_.world(2, meta_.cubeSize)}}};
+  j["boundingBox"] = {{"min", {meta_.offset.x, meta_.offset.y, meta_.offset.z}},
+                      {"max",
+                       {meta_.world(0, meta_.cubeSize), meta_.world(1, meta_.cubeSize),
+                        meta_.world(2, meta_.cubeSize)}}};
   j["encoding"] = "DEFAULT";
   j["attributes"] = attributes;
   const std::string text = j.dump(2) + "\n";

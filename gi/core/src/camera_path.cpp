@@ -38,8 +38,10 @@ CameraKey CameraPath::at(int frame) const {
 }
 
 CameraPath parseCameraPath(const JsonField& f, bool allowFov) {
-  if (allowFov) f.expectObject({"fps", "fov", "keyframes"});
-  else f.expectObject({"fps", "keyframes"});
+  if (allowFov)
+    f.expectObject({"fps", "fov", "keyframes"});
+  else
+    f.expectObject({"fps", "keyframes"});
   CameraPath p;
   if (f.has("fps")) p.fps = f.at("fps").number(0.001, 10000);
   if (allowFov && f.has("fov")) p.fovYDegrees = f.at("fov").number(0.01, 179);
@@ -47,14 +49,17 @@ CameraPath parseCameraPath(const JsonField& f, bool allowFov) {
   for (size_t i = 0, n = keys.arraySize(); i < n; ++i) {
     const JsonField k = keys.at(i);
     k.expectObject({"time", "eye", "target"});
-    if (!k.has("time") || !k.has("eye") || !k.has("target")) k.fail("a key needs \"time\", \"eye\" and \"target\"");
+    if (!k.has("time") || !k.has("eye") || !k.has("target"))
+      k.fail("a key needs \"time\", \"eye\" and \"target\"");
     CameraKey key{k.at("time").number(0, 1e6), vec3(k.at("eye")), vec3(k.at("target"))};
-    if (!p.keys.empty() && !(key.time > p.keys.back().time)) k.at("time").fail("key times must increase");
+    if (!p.keys.empty() && !(key.time > p.keys.back().time))
+      k.at("time").fail("key times must increase");
     if (!(glm::length(key.eye - key.target) > 0)) k.fail("eye and target coincide");
     p.keys.push_back(key);
   }
   if (p.keys.empty()) keys.fail("a camera path needs at least one key");
-  // The product first: frames() converts it to int, which more than a million frames would overflow.
+  // The product first: frames() converts it to int, which more than a million frames would
+  // overflow.
   if ((p.keys.back().time - p.keys.front().time) * p.fps >= kMaxFrames)
     f.fail("asks for more than " + std::to_string(int(kMaxFrames)) + " frames");
   return p;

@@ -15,7 +15,8 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
   return s;
 }
 
@@ -47,9 +48,11 @@ EnvironmentSequence::EnvironmentSequence(EnvironmentSequenceSpec spec) : spec_(s
   } else {
     std::string prefix, suffix;
     int width = 0;
-    const fs::path dir = spec_.source.has_parent_path() ? spec_.source.parent_path() : fs::path(".");
+    const fs::path dir =
+        spec_.source.has_parent_path() ? spec_.source.parent_path() : fs::path(".");
     if (!splitPattern(spec_.source.filename().string(), prefix, width, suffix))
-      throw Error(source, "", "neither a folder nor a file pattern with one %d or %0Nd (e.g. probe_%04d.exr)");
+      throw Error(source, "",
+                  "neither a folder nor a file pattern with one %d or %0Nd (e.g. probe_%04d.exr)");
     std::map<long, fs::path> found;
     if (fs::is_directory(dir, ec))
       for (const auto& e : fs::directory_iterator(dir)) {
@@ -57,8 +60,11 @@ EnvironmentSequence::EnvironmentSequence(EnvironmentSequenceSpec spec) : spec_(s
         if (n.size() <= prefix.size() + suffix.size() || n.compare(0, prefix.size(), prefix) != 0 ||
             n.compare(n.size() - suffix.size(), suffix.size(), suffix) != 0)
           continue;
-        const std::string digits = n.substr(prefix.size(), n.size() - prefix.size() - suffix.size());
-        if (digits.empty() || digits.size() > 9 || !std::all_of(digits.begin(), digits.end(), ::isdigit)) continue;
+        const std::string digits =
+            n.substr(prefix.size(), n.size() - prefix.size() - suffix.size());
+        if (digits.empty() || digits.size() > 9 ||
+            !std::all_of(digits.begin(), digits.end(), ::isdigit))
+          continue;
         if (width > 0 && int(digits.size()) != width) continue;
         found[std::stol(digits)] = e.path();
       }
@@ -86,17 +92,20 @@ size_t EnvironmentSequence::frameAt(double seconds) const {
 
 std::shared_ptr<const EnvironmentMap> EnvironmentSequence::frame(size_t i) {
   if (i >= frames())
-    throw Error(spec_.source.string(), "", "frame " + std::to_string(i) + " asked of " + std::to_string(frames()));
+    throw Error(spec_.source.string(), "",
+                "frame " + std::to_string(i) + " asked of " + std::to_string(frames()));
   for (size_t k = 0; k < cache_.size(); ++k)
     if (cache_[k].index == i) {
-      std::rotate(cache_.begin() + std::ptrdiff_t(k), cache_.begin() + std::ptrdiff_t(k) + 1, cache_.end());
+      std::rotate(cache_.begin() + std::ptrdiff_t(k), cache_.begin() + std::ptrdiff_t(k) + 1,
+                  cache_.end());
       return cache_.back().map;
     }
   std::shared_ptr<const EnvironmentMap> map;
   try {
     std::error_code ec;
     if (!fs::exists(paths_[i], ec))
-      throw Error(paths_[i].string(), "", "frame " + std::to_string(i) + " of the sequence is missing");
+      throw Error(paths_[i].string(), "",
+                  "frame " + std::to_string(i) + " of the sequence is missing");
     map = std::make_shared<const EnvironmentMap>(
         EnvironmentMap::load(paths_[i].string(), spec_.rotationDegrees, spec_.scale));
     ++reads_;

@@ -14,13 +14,18 @@ EnvironmentSource::EnvironmentSource(const std::optional<SceneEnvironment>& e) {
   } else if (!e->sequence.empty()) {
     sequence_ = std::make_unique<EnvironmentSequence>(sequenceSpec(*e));
   } else {
-    still_ = std::make_shared<EnvironmentMap>(EnvironmentMap::load(e->path.string(), e->rotationDegrees, e->scale));
+    still_ = std::make_shared<EnvironmentMap>(
+        EnvironmentMap::load(e->path.string(), e->rotationDegrees, e->scale));
   }
 }
 
-size_t EnvironmentSource::frameAt(double seconds) const { return sequence_ ? sequence_->frameAt(seconds) : 0; }
+size_t EnvironmentSource::frameAt(double seconds) const {
+  return sequence_ ? sequence_->frameAt(seconds) : 0;
+}
 
-size_t EnvironmentSource::frames() const { return sequence_ ? sequence_->frames() : 1; }
+size_t EnvironmentSource::frames() const {
+  return sequence_ ? sequence_->frames() : 1;
+}
 
 std::shared_ptr<const EnvironmentMap> EnvironmentSource::at(double seconds) {
   if (!sequence_) return still_;

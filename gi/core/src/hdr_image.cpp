@@ -33,8 +33,9 @@ HdrImage readExr(const std::string& path, ImageAttributes* attributes) {
     Imath::Box2i dw = h.dataWindow();
     int64_t w64 = int64_t(dw.max.x) - dw.min.x + 1, h64 = int64_t(dw.max.y) - dw.min.y + 1;
     if (w64 <= 0 || h64 <= 0 || w64 * h64 > (int64_t(1) << 31))
-      throw Error(path, "header", "data window of " + std::to_string(w64) + "x" + std::to_string(h64) +
-                                      " pixels is empty or too large");
+      throw Error(path, "header",
+                  "data window of " + std::to_string(w64) + "x" + std::to_string(h64) +
+                      " pixels is empty or too large");
     HdrImage img{int(w64), int(h64)};
     const Imf::ChannelList& ch = h.channels();
     bool rgb = ch.findChannel("R") && ch.findChannel("G") && ch.findChannel("B");
@@ -55,7 +56,8 @@ HdrImage readExr(const std::string& path, ImageAttributes* attributes) {
     in.setFrameBuffer(fb);
     in.readPixels(dw.min.y, dw.max.y);
     if (!rgb)
-      for (size_t i = 0; i < img.pixels(); ++i) img.rgb[3 * i + 1] = img.rgb[3 * i + 2] = img.rgb[3 * i];
+      for (size_t i = 0; i < img.pixels(); ++i)
+        img.rgb[3 * i + 1] = img.rgb[3 * i + 2] = img.rgb[3 * i];
     if (attributes) {
       for (auto it = h.begin(); it != h.end(); ++it)
         if (auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
@@ -72,7 +74,8 @@ HdrImage readExr(const std::string& path, ImageAttributes* attributes) {
 HdrImage readRadianceHdr(const std::string& path) {
   int w = 0, h = 0, n = 0;
   float* data = stbi_loadf(path.c_str(), &w, &h, &n, 3);
-  if (!data) throw Error(path, "", std::string("cannot read Radiance HDR: ") + stbi_failure_reason());
+  if (!data)
+    throw Error(path, "", std::string("cannot read Radiance HDR: ") + stbi_failure_reason());
   HdrImage img(w, h);
   std::copy(data, data + img.rgb.size(), img.rgb.begin());
   stbi_image_free(data);

@@ -1,12 +1,12 @@
 // Polygon soup to clean triangles for the mesh readers. Fan triangulation is exact for the convex
 // polygons that PLY and OBJ writers emit (the Wavefront OBJ spec, appendix B1, asks for convex
 // faces); the sRGB decoding is IEC 61966-2-1.
-#include <glm/geometric.hpp>
+#include "mesh_builder.h"
 
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <string>
 
-#include "mesh_builder.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::gi::meshio {
@@ -27,7 +27,9 @@ void MeshBuilder::addPolygon(const uint32_t* corners, size_t n) {
 }
 
 namespace {
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(const glm::vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 // Twice the area vector, in double: float edges of a large but valid triangle can overflow a
 // float cross product, and collinear float corners give exactly zero here.

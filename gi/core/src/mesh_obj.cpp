@@ -135,7 +135,8 @@ class ObjMeshReader {
       const uint64_t v = resolve(part[0], out_.mesh.positions.size(), "vertex");
       if (parts >= 2 && !part[1].empty()) resolve(part[1], texcoords_, "texture coordinate");
       uint32_t vn = kNoNormal;
-      if (parts == 3 && !part[2].empty()) vn = uint32_t(resolve(part[2], normals_.size(), "normal"));
+      if (parts == 3 && !part[2].empty())
+        vn = uint32_t(resolve(part[2], normals_.size(), "normal"));
       cornerVertex_.push_back(uint32_t(v));
       cornerNormal_.push_back(vn);
       if (n == std::numeric_limits<uint32_t>::max()) fail("a face of more than 2^32 - 1 corners");
@@ -194,7 +195,8 @@ class ObjMeshReader {
     size_t c = 0;
     for (uint32_t n : polygonSizes_) {
       corners.clear();
-      for (uint32_t k = 0; k < n; ++k, ++c) corners.push_back(assign(cornerVertex_[c], cornerNormal_[c]));
+      for (uint32_t k = 0; k < n; ++k, ++c)
+        corners.push_back(assign(cornerVertex_[c], cornerNormal_[c]));
       out_.addPolygon(corners.data(), corners.size());
     }
   }

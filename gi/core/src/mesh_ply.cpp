@@ -64,16 +64,33 @@ bool parseAscii(ScalarType t, std::string_view tok, double& out) {
   }
   double lo = 0, hi = 0;
   switch (t) {
-    case ScalarType::U8: lo = 0, hi = 255; break;
-    case ScalarType::I8: lo = -128, hi = 127; break;
-    case ScalarType::U16: lo = 0, hi = 65535; break;
-    case ScalarType::I16: lo = -32768, hi = 32767; break;
-    case ScalarType::U32: lo = 0, hi = 4294967295.0; break;
-    case ScalarType::I32: lo = -2147483648.0, hi = 2147483647.0; break;
-    case ScalarType::U64: lo = 0, hi = 18446744073709551615.0; break;
-    case ScalarType::I64: lo = -9223372036854775808.0, hi = 9223372036854775807.0; break;
+    case ScalarType::U8:
+      lo = 0, hi = 255;
+      break;
+    case ScalarType::I8:
+      lo = -128, hi = 127;
+      break;
+    case ScalarType::U16:
+      lo = 0, hi = 65535;
+      break;
+    case ScalarType::I16:
+      lo = -32768, hi = 32767;
+      break;
+    case ScalarType::U32:
+      lo = 0, hi = 4294967295.0;
+      break;
+    case ScalarType::I32:
+      lo = -2147483648.0, hi = 2147483647.0;
+      break;
+    case ScalarType::U64:
+      lo = 0, hi = 18446744073709551615.0;
+      break;
+    case ScalarType::I64:
+      lo = -9223372036854775808.0, hi = 9223372036854775807.0;
+      break;
     case ScalarType::F32:
-    case ScalarType::F64: break;
+    case ScalarType::F64:
+      break;
   }
   return out >= lo && out <= hi;
 }
@@ -81,8 +98,7 @@ bool parseAscii(ScalarType t, std::string_view tok, double& out) {
 class PlyMeshReader {
  public:
   PlyMeshReader(const std::string& file, const uint8_t* data, size_t size, MeshBuilder& out)
-      : file_(file), data_(data), size_(size), out_(out),
-        h_(ply::parseHeader(file, data, size)) {
+      : file_(file), data_(data), size_(size), out_(out), h_(ply::parseHeader(file, data, size)) {
     swap_ = h_.encoding != ply::Encoding::Ascii &&
             (h_.encoding == ply::Encoding::BinaryLittle) != kNativeLittle;
   }
@@ -164,7 +180,8 @@ class PlyMeshReader {
       hasNormals_ = true;
       for (int c = 0; c < 3; ++c) vr[normal[c]] = Role(int(Role::NX) + c);
     }
-    const auto rgb = group({{"red", "green", "blue"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}});
+    const auto rgb =
+        group({{"red", "green", "blue"}, {"diffuse_red", "diffuse_green", "diffuse_blue"}});
     if (rgb[0] >= 0) {
       bool ok = true;
       for (int c = 0; c < 3; ++c) {
@@ -195,9 +212,9 @@ class PlyMeshReader {
       throw Error(file_, Error::atLine(f.line),
                   "the face element has no list property 'vertex_indices' or 'vertex_index'");
     if (isFloat(f.properties[list].type))
-      throw Error(file_, Error::atLine(f.line),
-                  "vertex indices of type " + f.properties[list].typeName +
-                      "; indices must be integers");
+      throw Error(
+          file_, Error::atLine(f.line),
+          "vertex indices of type " + f.properties[list].typeName + "; indices must be integers");
     roles_[face_][list] = Role::Indices;
   }
 
@@ -301,8 +318,9 @@ class PlyMeshReader {
       corners_.clear();
       auto tooFew = [&] {
         throw Error(file_, where(),
-                    e.name + " " + std::to_string(r) + ": the line ends before the last property '" +
-                        e.properties.back().name + "'");
+                    e.name + " " + std::to_string(r) +
+                        ": the line ends before the last property '" + e.properties.back().name +
+                        "'");
       };
       for (size_t p = 0; p < e.properties.size(); ++p) {
         const ply::Property& prop = e.properties[p];
@@ -379,9 +397,9 @@ class PlyMeshReader {
         if (size_ - pos_ < cs) endsInside(element, r);
         const auto n = ply::listCount(prop.countType, data_ + pos_, swap_);
         if (!n)
-          throw Error(file_, where(),
-                      e.name + " " + std::to_string(r) + ": negative length of list '" +
-                          prop.name + "'");
+          throw Error(
+              file_, where(),
+              e.name + " " + std::to_string(r) + ": negative length of list '" + prop.name + "'");
         pos_ += cs;
         const size_t is = scalarSize(prop.type);
         if (*n > (size_ - pos_) / is) endsInside(element, r);

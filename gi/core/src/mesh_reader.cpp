@@ -43,7 +43,8 @@ TriangleMesh readMesh(const std::string& path, MeshReadReport* report) {
   size_t n;
   while ((n = std::fread(buf, 1, sizeof buf, f.get())) > 0) bytes.append(buf, n);
   if (std::ferror(f.get()))
-    throw Error(path, Error::atByte(bytes.size()), std::string("read error: ") + std::strerror(errno));
+    throw Error(path, Error::atByte(bytes.size()),
+                std::string("read error: ") + std::strerror(errno));
   return readMeshFromMemory(path, bytes.data(), bytes.size(), report);
 }
 

@@ -15,12 +15,12 @@
 // transpose of its linear part, computed as the cofactor matrix times the determinant's sign:
 // the same up to a positive factor (normals are normalised anyway), and still defined where the
 // matrix is singular. With the sign, a mirror keeps outward normals outward.
-#include <nanoflann.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <nanoflann.hpp>
 #include <utility>
 #include <vector>
 
@@ -91,7 +91,8 @@ std::vector<Candidate> areaUniform(const WorldMesh& w, size_t n, Rng& rng) {
     const glm::vec3 b = sampleUniformTriangle(rng.uniform2());
     // From a corner along the edges: a point of a plane z = c keeps z = c exactly.
     const glm::dvec3 a = w.corner(t, 0);
-    const glm::dvec3 p = a + double(b[1]) * (w.corner(t, 1) - a) + double(b[2]) * (w.corner(t, 2) - a);
+    const glm::dvec3 p =
+        a + double(b[1]) * (w.corner(t, 1) - a) + double(b[2]) * (w.corner(t, 2) - a);
     out.push_back({t, b, glm::vec3(p)});
   }
   return out;
@@ -107,8 +108,8 @@ struct Cloud {
     return false;
   }
 };
-using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud>, Cloud, 3,
-                                                 uint32_t>;
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Cloud>, Cloud,
+                                                 3, uint32_t>;
 
 // Calls f(index, squared distance) for every candidate closer than sqrt(r2), the query included.
 template <typename F>

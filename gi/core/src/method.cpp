@@ -3,7 +3,8 @@
 namespace nestlight::gi {
 
 const std::vector<std::string>& methodNames() {
-  static const std::vector<std::string> names = {"reference", "direct", "raster", "vpl", "pbgi", "ibl"};
+  static const std::vector<std::string> names = {"reference", "direct", "raster",
+                                                 "vpl",       "pbgi",   "ibl"};
   return names;
 }
 

@@ -56,7 +56,8 @@ glm::vec3 sampleUniformTriangle(glm::vec2 u) {
   return {b0, b1, 1 - b0 - b1};
 }
 
-Distribution1D::Distribution1D(std::span<const float> f) : func_(f.begin(), f.end()), cdf_(f.size() + 1) {
+Distribution1D::Distribution1D(std::span<const float> f)
+    : func_(f.begin(), f.end()), cdf_(f.size() + 1) {
   NL_CHECK(!f.empty());
   size_t n = func_.size();
   double sum = 0;
@@ -71,8 +72,7 @@ Distribution1D::Distribution1D(std::span<const float> f) : func_(f.begin(), f.en
   }
   integral_ = float(sum);
   uniform_ = !(sum > 0) || !std::isfinite(sum);
-  for (size_t i = 1; i <= n; ++i)
-    cdf_[i] = uniform_ ? float(double(i) / n) : float(acc[i] / sum);
+  for (size_t i = 1; i <= n; ++i) cdf_[i] = uniform_ ? float(double(i) / n) : float(acc[i] / sum);
   cdf_[n] = 1;
 }
 

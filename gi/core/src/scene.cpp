@@ -23,7 +23,8 @@ using json = nlohmann::json;
 // The shared validator (nestlight/octree/json_field.h) with the scene's own value types.
 class Field : public JsonField {
  public:
-  Field(const json& j, std::string path, const std::string& file) : JsonField(j, std::move(path), file) {}
+  Field(const json& j, std::string path, const std::string& file)
+      : JsonField(j, std::move(path), file) {}
   explicit Field(const JsonField& f) : JsonField(f) {}
   Field at(const std::string& key) const { return Field(JsonField::at(key)); }
   Field at(size_t i) const { return Field(JsonField::at(i)); }
@@ -50,15 +51,18 @@ class Field : public JsonField {
     double v = std::strtod(s.c_str(), &end);
     std::string unit(end);
     double mul = 0;
-    if (unit.empty() || unit == "B") mul = 1;
-    else if (unit == "KiB" || unit == "K") mul = 1024.0;
-    else if (unit == "MiB" || unit == "M") mul = 1024.0 * 1024;
-    else if (unit == "GiB" || unit == "G") mul = 1024.0 * 1024 * 1024;
+    if (unit.empty() || unit == "B")
+      mul = 1;
+    else if (unit == "KiB" || unit == "K")
+      mul = 1024.0;
+    else if (unit == "MiB" || unit == "M")
+      mul = 1024.0 * 1024;
+    else if (unit == "GiB" || unit == "G")
+      mul = 1024.0 * 1024 * 1024;
     if (mul == 0 || !(v > 0) || end == s.c_str() || !std::isfinite(v * mul) || v * mul > 1e18)
       fail("expected a size such as \"512MiB\" or \"2GiB\", got '" + s + "'");
     return uint64_t(v * mul);
   }
-
 };
 
 std::filesystem::path resolvePath(const Field& f, const std::filesystem::path& sceneFile) {
@@ -74,13 +78,16 @@ glm::dmat4 parseTransform(const Field& f) {
     if (f.has("translate") || f.has("rotate") || f.has("scale"))
       f.fail("give either \"matrix\" or translate/rotate/scale, not both");
     Field m = f.at("matrix");
-    if (m.arraySize() != 16) m.fail("expected 16 numbers (row-major 4x4), got " + std::to_string(m.arraySize()));
+    if (m.arraySize() != 16)
+      m.fail("expected 16 numbers (row-major 4x4), got " + std::to_string(m.arraySize()));
     glm::dmat4 r(1.0);
     for (int row = 0; row < 4; ++row)
       for (int col = 0; col < 4; ++col) r[col][row] = m.at(size_t(row * 4 + col)).number();
     if (std::abs(glm::determinant(glm::dmat3(r))) < 1e-18) m.fail("the matrix is singular");
     if (r[0][3] != 0 || r[1][3] != 0 || r[2][3] != 0 || r[3][3] != 1)
-      m.fail("the last row must be 0, 0, 0, 1 (an affine transform; projective ones are not meshes' transforms)");
+      m.fail(
+          "the last row must be 0, 0, 0, 1 (an affine transform; projective ones are not meshes' "
+          "transforms)");
     return r;
   }
   glm::dmat4 t(1.0);
@@ -101,12 +108,15 @@ glm::dmat4 parseTransform(const Field& f) {
 }
 
 Material parseMaterial(const Field& f, const std::string& name) {
-  f.expectObject({"type", "base_color", "roughness", "metallic", "specular", "specular_tint", "sheen",
-                  "sheen_tint", "clearcoat", "clearcoat_gloss", "emission"});
+  f.expectObject({"type", "base_color", "roughness", "metallic", "specular", "specular_tint",
+                  "sheen", "sheen_tint", "clearcoat", "clearcoat_gloss", "emission"});
   Material m;
   m.name = name;
-  std::string type = f.has("type") ? f.at("type").choice({"lambert", "ggx", "principled"}) : "lambert";
-  m.type = type == "ggx" ? MaterialType::GGX : type == "principled" ? MaterialType::Principled : MaterialType::Lambert;
+  std::string type =
+      f.has("type") ? f.at("type").choice({"lambert", "ggx", "principled"}) : "lambert";
+  m.type = type == "ggx"          ? MaterialType::GGX
+           : type == "principled" ? MaterialType::Principled
+                                  : MaterialType::Lambert;
   if (f.has("base_color")) m.baseColor = f.at("base_color").colour(0, 1);
   auto unit = [&](const char* key, float& out) {
     if (f.has(key)) out = float(f.at(key).number(0, 1));
@@ -121,11 +131,18 @@ Material parseMaterial(const Field& f, const std::string& name) {
   unit("clearcoat_gloss", m.clearcoatGloss);
   if (f.has("emission")) m.emission = f.at("emission").colour(0, 1e30);
   if (m.type == MaterialType::Lambert) {
-    for (const char* k : {"roughness", "metallic", "specular", "specular_tint", "sheen", "sheen_tint", "clearcoat", "clearcoat_gloss"})
-      if (f.has(k)) f.at(k).fail(std::string("'") + k + "' has no effect on a lambert material (use \"type\": \"ggx\" or \"principled\")");
+    for (const char* k : {"roughness", "metallic", "specular", "specular_tint", "sheen",
+                          "sheen_tint", "clearcoat", "clearcoat_gloss"})
+      if (f.has(k))
+        f.at(k).fail(
+            std::string("'") + k +
+            "' has no effect on a lambert material (use \"type\": \"ggx\" or \"principled\")");
   } else if (m.type == MaterialType::GGX) {
-    for (const char* k : {"specular", "specular_tint", "sheen", "sheen_tint", "clearcoat", "clearcoat_gloss"})
-      if (f.has(k)) f.at(k).fail(std::string("'") + k + "' is a principled parameter (use \"type\": \"principled\")");
+    for (const char* k :
+         {"specular", "specular_tint", "sheen", "sheen_tint", "clearcoat", "clearcoat_gloss"})
+      if (f.has(k))
+        f.at(k).fail(std::string("'") + k +
+                     "' is a principled parameter (use \"type\": \"principled\")");
   }
   return m;
 }
@@ -151,7 +168,8 @@ Light parseLight(const Field& f) {
     if (!f.has("intensity")) f.fail("missing \"intensity\" (W/sr, a number or [r, g, b])");
     l.intensity = f.at("intensity").colour(0, 1e30);
   } else {
-    if (!f.has("irradiance")) f.fail("missing \"irradiance\" (W/m^2 on a surface facing the light)");
+    if (!f.has("irradiance"))
+      f.fail("missing \"irradiance\" (W/m^2 on a surface facing the light)");
     l.intensity = f.at("irradiance").colour(0, 1e30);
   }
   if (l.type != LightType::Point) {
@@ -163,8 +181,9 @@ Light parseLight(const Field& f) {
     if (f.has("outer_angle")) l.outerAngleDegrees = float(f.at("outer_angle").number(0, 179));
     if (l.outerAngleDegrees < l.innerAngleDegrees)
       (f.has("outer_angle") ? f.at("outer_angle") : f.at("inner_angle"))
-          .fail("outer_angle (" + std::to_string(l.outerAngleDegrees) + ") must not be smaller than inner_angle (" +
-                std::to_string(l.innerAngleDegrees) + ")");
+          .fail("outer_angle (" + std::to_string(l.outerAngleDegrees) +
+                ") must not be smaller than inner_angle (" + std::to_string(l.innerAngleDegrees) +
+                ")");
   }
   return l;
 }
@@ -204,7 +223,8 @@ SceneOctree parseOctree(Field o, const std::filesystem::path& file) {
   if (o.value().is_string()) {
     t.path = resolvePath(o, file);
   } else {
-    o.expectObject({"path", "max_level", "memory_budget", "radius_scale", "colour_scale", "colour"});
+    o.expectObject(
+        {"path", "max_level", "memory_budget", "radius_scale", "colour_scale", "colour"});
     if (!o.has("path")) o.fail("missing \"path\"");
     t.path = resolvePath(o.at("path"), file);
     if (o.has("max_level")) t.maxLevel = int(o.at("max_level").integer(0, 30));
@@ -222,8 +242,10 @@ SceneOctree parseOctree(Field o, const std::filesystem::path& file) {
         const OctreeReader reader(t.path);
         const LayerRecord* layer = reader.metadata().layer(t.colour);
         if (!layer)
-          c.fail("the octree has no colour layer '" + t.colour + "' (nestlight expand-hdr makes \"hdr\")");
-        if (layer->kind != "colour") c.fail("layer '" + t.colour + "' holds '" + layer->kind + "', not colour");
+          c.fail("the octree has no colour layer '" + t.colour +
+                 "' (nestlight expand-hdr makes \"hdr\")");
+        if (layer->kind != "colour")
+          c.fail("layer '" + t.colour + "' holds '" + layer->kind + "', not colour");
       }
     }
   }
@@ -232,7 +254,8 @@ SceneOctree parseOctree(Field o, const std::filesystem::path& file) {
 
 // A mesh; a material given inline (or none: the default) is appended to `materials`.
 SceneMesh parseMesh(Field o, size_t i, const std::filesystem::path& file,
-                    const std::map<std::string, uint32_t>& materialIndex, std::vector<Material>& materials) {
+                    const std::map<std::string, uint32_t>& materialIndex,
+                    std::vector<Material>& materials) {
   o.expectObject({"path", "transform", "material", "surfels"});
   SceneMesh mesh;
   if (!o.has("path")) o.fail("missing \"path\" (a .ply or .obj file)");
@@ -242,7 +265,8 @@ SceneMesh parseMesh(Field o, size_t i, const std::filesystem::path& file,
     Field mf = o.at("material");
     if (mf.value().is_string()) {
       auto it = materialIndex.find(mf.string());
-      if (it == materialIndex.end()) mf.fail("no material named '" + mf.string() + "' in \"materials\"");
+      if (it == materialIndex.end())
+        mf.fail("no material named '" + mf.string() + "' in \"materials\"");
       mesh.material = it->second;
     } else {
       mesh.material = uint32_t(materials.size());
@@ -256,8 +280,9 @@ SceneMesh parseMesh(Field o, size_t i, const std::filesystem::path& file,
     Field sf = o.at("surfels");
     sf.expectObject({"method", "count"});
     if (sf.has("method"))
-      mesh.surfelMethod = sf.at("method").choice({"area", "poisson"}) == "poisson" ? SurfelSampling::PoissonDisk
-                                                                                  : SurfelSampling::AreaUniform;
+      mesh.surfelMethod = sf.at("method").choice({"area", "poisson"}) == "poisson"
+                              ? SurfelSampling::PoissonDisk
+                              : SurfelSampling::AreaUniform;
     if (sf.has("count")) mesh.surfelCount = size_t(sf.at("count").integer(1, 100'000'000));
   }
   return mesh;
@@ -267,8 +292,10 @@ SceneEnvironment parseEnvironment(Field e, const std::filesystem::path& file) {
   e.expectObject({"path", "constant", "sequence", "fps", "on_bad_frame", "rotation", "scale"});
   SceneEnvironment env;
   if (int(e.has("path")) + int(e.has("constant")) + int(e.has("sequence")) != 1)
-    e.fail("give exactly one of \"path\" (EXR or HDR lat-long), \"constant\" and \"sequence\" (a frame "
-           "pattern such as probe_%04d.exr, or a folder)");
+    e.fail(
+        "give exactly one of \"path\" (EXR or HDR lat-long), \"constant\" and \"sequence\" (a "
+        "frame "
+        "pattern such as probe_%04d.exr, or a folder)");
   if (e.has("path")) env.path = resolvePath(e.at("path"), file);
   if (e.has("sequence")) {
     env.sequence = resolvePath(e.at("sequence"), file);
@@ -296,15 +323,18 @@ SceneEnvironment parseEnvironment(Field e, const std::filesystem::path& file) {
 
 GiSettings parseGi(Field g) {
   GiSettings gi;
-  g.expectObject({"method", "mode", "max_bounces", "samples_per_pixel", "target_relative_error", "time_limit",
-                  "seed", "parameters"});
+  g.expectObject({"method", "mode", "max_bounces", "samples_per_pixel", "target_relative_error",
+                  "time_limit", "seed", "parameters"});
   if (g.has("method")) gi.method = g.at("method").choice(methodNames());
   if (g.has("mode"))
-    gi.mode = g.at("mode").choice({"radiance_cache", "albedo"}) == "albedo" ? RadianceMode::Albedo
-                                                                             : RadianceMode::RadianceCache;
+    gi.mode = g.at("mode").choice({"radiance_cache", "albedo"}) == "albedo"
+                  ? RadianceMode::Albedo
+                  : RadianceMode::RadianceCache;
   if (g.has("max_bounces")) gi.maxBounces = int(g.at("max_bounces").integer(0, 64));
-  if (g.has("samples_per_pixel")) gi.samplesPerPixel = int(g.at("samples_per_pixel").integer(1, 1 << 24));
-  if (g.has("target_relative_error")) gi.targetRelativeError = g.at("target_relative_error").number(0, 1);
+  if (g.has("samples_per_pixel"))
+    gi.samplesPerPixel = int(g.at("samples_per_pixel").integer(1, 1 << 24));
+  if (g.has("target_relative_error"))
+    gi.targetRelativeError = g.at("target_relative_error").number(0, 1);
   if (g.has("time_limit")) gi.timeLimitSeconds = g.at("time_limit").number(0, 1e7);
   if (g.has("seed")) gi.seed = uint64_t(g.at("seed").integer(0, INT64_MAX));
   if (g.has("parameters")) {
@@ -319,8 +349,8 @@ GiSettings parseGi(Field g) {
 Scene parseScene(const json& j, const std::filesystem::path& file) {
   const std::string fileName = file.string();
   Field root(j, "scene", fileName);
-  root.expectObject({"version", "origin", "octrees", "materials", "meshes", "lights", "environment", "camera",
-                     "camera_path", "gi", "display", "output"});
+  root.expectObject({"version", "origin", "octrees", "materials", "meshes", "lights", "environment",
+                     "camera", "camera_path", "gi", "display", "output"});
   Scene s;
   s.file = file;
   if (root.has("version") && root.at("version").integer(1, 1000) != 1)
@@ -374,7 +404,8 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
   if (root.has("display")) {
     Field d = root.at("display");
     d.expectObject({"rasteriser", "splatting", "point_size", "edl_strength"});
-    if (d.has("rasteriser")) s.display.rasteriser = d.at("rasteriser").choice({"points", "compute"});
+    if (d.has("rasteriser"))
+      s.display.rasteriser = d.at("rasteriser").choice({"points", "compute"});
     if (d.has("splatting")) s.display.splatting = d.at("splatting").choice({"hqs", "basic"});
     if (d.has("point_size")) s.display.pointSize = float(d.at("point_size").number(0.05, 64));
     if (d.has("edl_strength")) s.display.edlStrength = float(d.at("edl_strength").number(0, 100));
@@ -421,7 +452,8 @@ std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
   const std::string file = scene.file.string();
   std::vector<SceneCamera> cameras;
   if (scene.cameraPath.empty() || still) {
-    if (!scene.cameraSet) throw Error(file, "scene.camera", "missing: a render needs a camera (or a camera_path)");
+    if (!scene.cameraSet)
+      throw Error(file, "scene.camera", "missing: a render needs a camera (or a camera_path)");
     if (!still && scene.environment && !scene.environment->sequence.empty()) {
       const EnvironmentSequence seq(sequenceSpec(*scene.environment));
       for (size_t f = 0; f < seq.frames(); ++f) {
@@ -444,7 +476,8 @@ std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still) {
     c.time = double(f) / scene.cameraPath.fps;
     if (!viewIsValid(c.eye, c.target, c.up))
       throw Error(file, "scene.camera_path",
-                  "frame " + std::to_string(f) + ": eye meets target or looks along \"up\" between keyframes");
+                  "frame " + std::to_string(f) +
+                      ": eye meets target or looks along \"up\" between keyframes");
     cameras.push_back(c);
   }
   return cameras;

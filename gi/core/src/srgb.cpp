@@ -1,4 +1,5 @@
-// sRGB transfer function, IEC 61966-2-1:1999 (linear toe below 0.0031308 / 0.04045, 2.4 power above).
+// sRGB transfer function, IEC 61966-2-1:1999 (linear toe below 0.0031308 / 0.04045, 2.4 power
+// above).
 #include "nestlight/gi/srgb.h"
 
 #include <algorithm>

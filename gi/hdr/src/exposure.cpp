@@ -34,7 +34,8 @@ Histogram luminanceHistogram(const std::vector<float>& luminance) {
 
 Histogram exposedHistogram(const std::vector<float>& hdrLuminance, double exposure) {
   Histogram h;
-  for (float v : hdrLuminance) add(h, std::isfinite(v) ? float(std::clamp(exposure * double(v), 0.0, 1.0)) : v);
+  for (float v : hdrLuminance)
+    add(h, std::isfinite(v) ? float(std::clamp(exposure * double(v), 0.0, 1.0)) : v);
   normalise(h);
   return h;
 }

@@ -167,7 +167,8 @@ class LevelSolver {
         // The same place in the target, scaled by the images' size ratio.
         const float ratio = float(t_.width) / float(s_.width);
         const float scale = std::clamp(ratio, o_.minScale, o_.maxScale);
-        consider(field[i], patch, (glm::vec2(x, y) + 0.5f) * ratio - 0.5f, 0.0f, scale, glm::vec2(scale, 0.0f));
+        consider(field[i], patch, (glm::vec2(x, y) + 0.5f) * ratio - 0.5f, 0.0f, scale,
+                 glm::vec2(scale, 0.0f));
       }
       considerRandom(field[i], patch, i);
     });
@@ -185,7 +186,8 @@ class LevelSolver {
         const int qx = std::min(x / 2 + (k & 1), cw - 1), qy = std::min(y / 2 + (k >> 1), ch - 1);
         const Match& n = coarse[size_t(qy) * cw + qx];
         const glm::vec2 d = glm::vec2(x, y) - 2.0f * glm::vec2(qx, qy);
-        consider(best, patch, 2.0f * n.centre + apply(n.similarity, d), n.angle, n.scale, n.similarity);
+        consider(best, patch, 2.0f * n.centre + apply(n.similarity, d), n.angle, n.scale,
+                 n.similarity);
       }
       considerRandom(best, patch, i);
       field[i] = best;
@@ -361,7 +363,8 @@ class LevelSolver {
   // whose position window is still wide, and a good angle by one whose angle window is.
   void randomSearch(Match& best, Rng& rng, const Patch& patch) const {
     float start = float(std::max(t_.width, t_.height));
-    if (o_.searchRadius > 0) start = std::min(start, std::max(1.0f, o_.searchRadius / float(1 << level_)));
+    if (o_.searchRadius > 0)
+      start = std::min(start, std::max(1.0f, o_.searchRadius / float(1 << level_)));
     for (float radius = start; radius >= 1.0f; radius *= 0.5f) {
       const glm::vec2 u = 2.0f * rng.uniform2() - 1.0f;
       consider(best, patch, best.centre + radius * u, best.angle, best.scale, best.similarity);

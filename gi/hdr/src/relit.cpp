@@ -29,7 +29,8 @@ struct Box {
 // In the sunlit patch of the floor (x 0.8-2.6, y 0.4-2.6), clear of the room's block: the
 // floor under and around them is clipped in the LDR scan, so their light is what expansion
 // restores; the lamp above adds a highlight on the glossy one.
-const Box kBoxes[] = {{{1.15, 1.0, 0.0}, {1.75, 1.6, 0.6}, "matte"}, {{1.95, 1.55, 0.0}, {2.35, 1.95, 0.9}, "glossy"}};
+const Box kBoxes[] = {{{1.15, 1.0, 0.0}, {1.75, 1.6, 0.6}, "matte"},
+                      {{1.95, 1.55, 0.0}, {2.35, 1.95, 0.9}, "glossy"}};
 
 bool hitsBox(const glm::vec3& o, const glm::vec3& d, const glm::vec3& lo, const glm::vec3& hi) {
   float t0 = 0, t1 = INFINITY;
@@ -62,29 +63,38 @@ void writeBaselineLayers(const fs::path& octree, double clipThreshold, double la
     ldr.writeNode(key, a.data(), n.ldr.size());
     landis.writeNode(key, b.data(), n.ldr.size());
   });
-  const json build = {{"tool", "nestlight bench hdr"}, {"clip_threshold", clipThreshold}, {"landis_max", landisMax}};
+  const json build = {{"tool", "nestlight bench hdr"},
+                      {"clip_threshold", clipThreshold},
+                      {"landis_max", landisMax}};
   ldr.finish(build);
   landis.finish(build);
 }
 
-fs::path writeRelitScene(const fs::path& protocolDir, const std::string& colour, const RelitOptions& o) {
+fs::path writeRelitScene(const fs::path& protocolDir, const std::string& colour,
+                         const RelitOptions& o) {
   writeBoxObj(protocolDir / "box.obj");
   json meshes = json::array();
   for (const Box& b : kBoxes)
     meshes.push_back({{"path", "box.obj"},
-                      {"transform", {{"translate", {b.lo.x, b.lo.y, b.lo.z}},
-                                     {"scale", {b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z}}}},
+                      {"transform",
+                       {{"translate", {b.lo.x, b.lo.y, b.lo.z}},
+                        {"scale", {b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z}}}},
                       {"material", b.material}});
   const json scene = {
       {"version", 1},
       {"octrees", {{{"path", "scan.octree"}, {"colour", colour}}}},
       {"materials",
        {{"matte", {{"type", "lambert"}, {"base_color", 0.7}}},
-        {"glossy", {{"type", "ggx"}, {"base_color", 0.8}, {"roughness", 0.25}, {"metallic", 0.0}}}}},
+        {"glossy",
+         {{"type", "ggx"}, {"base_color", 0.8}, {"roughness", 0.25}, {"metallic", 0.0}}}}},
       {"meshes", meshes},
       {"camera",
-       {{"eye", {0.55, 0.35, 1.45}}, {"target", {1.75, 1.5, 0.4}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 50.0},
-        {"width", o.width}, {"height", o.height}}},
+       {{"eye", {0.55, 0.35, 1.45}},
+        {"target", {1.75, 1.5, 0.4}},
+        {"up", {0.0, 0.0, 1.0}},
+        {"fov", 50.0},
+        {"width", o.width},
+        {"height", o.height}}},
       {"gi", {{"method", o.method}, {"mode", "radiance_cache"}}}};
   const fs::path file = protocolDir / ("relit-" + colour + ".json");
   std::ofstream out(file);
@@ -101,13 +111,16 @@ std::vector<uint8_t> relitObjectMask(const Scene& scene) {
       glm::vec3 o, d;
       cameraRay(c, scene.origin, float(x) + 0.5f, float(y) + 0.5f, &o, &d);
       for (const Box& b : kBoxes)
-        if (hitsBox(o, d, scene.local(b.lo), scene.local(b.hi))) mask[size_t(y) * size_t(c.width) + size_t(x)] = 1;
+        if (hitsBox(o, d, scene.local(b.lo), scene.local(b.hi)))
+          mask[size_t(y) * size_t(c.width) + size_t(x)] = 1;
     }
   return mask;
 }
 
-RelitError compareRelit(const HdrImage& render, const HdrImage& truth, const std::vector<uint8_t>& mask) {
-  NL_CHECK(render.width == truth.width && render.height == truth.height && mask.size() == truth.pixels());
+RelitError compareRelit(const HdrImage& render, const HdrImage& truth,
+                        const std::vector<uint8_t>& mask) {
+  NL_CHECK(render.width == truth.width && render.height == truth.height &&
+           mask.size() == truth.pixels());
   double sq = 0, sum = 0;
   RelitError e;
   for (size_t p = 0; p < mask.size(); ++p) {

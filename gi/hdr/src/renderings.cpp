@@ -50,8 +50,7 @@ ScanNode ScanAccess::read(const NodeKey& key, const HierarchyEntry& entry) const
   const size_t rgbOff = m.layout.offset(size_t(rgb_));
   const size_t nOff = normal_ >= 0 ? m.layout.offset(size_t(normal_)) : 0;
   for (size_t i = 0; i < count; ++i) {
-    for (int a = 0; a < 3; ++a)
-      n.world[i][a] = m.world(a, double(pts.pos[3 * i + size_t(a)]));
+    for (int a = 0; a < 3; ++a) n.world[i][a] = m.world(a, double(pts.pos[3 * i + size_t(a)]));
     const uint8_t* at = pts.attrsOf(i);
     uint16_t c[3];
     std::memcpy(c, at + rgbOff, 6);

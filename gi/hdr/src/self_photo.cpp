@@ -20,8 +20,9 @@ SelfPhotoViews selfPhotoViews(const Metadata& meta) {
   const glm::dvec3 lo{b.min.x, b.min.y, b.min.z}, hi{b.max.x, b.max.y, b.max.z};
   const glm::dvec3 centre = (lo + hi) * 0.5;
   const double diagonal = glm::length(hi - lo);
-  return {lookAt(centre + diagonal * glm::dvec3(1.0, 0.6, 0.5), centre, {0, 0, 1}, 40.0, 640, 480),
-          lookAt(centre + diagonal * glm::dvec3(-0.3, 1.1, 0.5), centre, {0, 0, 1}, 40.0, 640, 480)};
+  return {
+      lookAt(centre + diagonal * glm::dvec3(1.0, 0.6, 0.5), centre, {0, 0, 1}, 40.0, 640, 480),
+      lookAt(centre + diagonal * glm::dvec3(-0.3, 1.1, 0.5), centre, {0, 0, 1}, 40.0, 640, 480)};
 }
 
 namespace {
@@ -45,17 +46,20 @@ HdrImage renderSelfPhoto(const std::filesystem::path& octree, const View& view) 
   });
 }
 
-void writeBeforeAfter(const std::filesystem::path& octree, const View& view, const std::string& layer,
-                      const std::filesystem::path& stem) {
+void writeBeforeAfter(const std::filesystem::path& octree, const View& view,
+                      const std::string& layer, const std::filesystem::path& stem) {
   OctreeReader reader(octree);
   std::unique_ptr<ColourLayerReader> colours;
-  if (layer != "ldr") colours = std::make_unique<ColourLayerReader>(octree, reader.metadata(), layer);
-  const HdrImage img = renderLinear(reader, view, [&](const ScanNode& n, std::vector<uint32_t>& out) {
-    std::vector<float> rgb;
-    if (colours) rgb = colours->readNode(n.key, uint32_t(n.world.size()));
-    for (size_t i = 0; i < out.size(); ++i)
-      out[i] = packRgb9e5(colours ? glm::vec3(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]) : n.ldr[i]);
-  });
+  if (layer != "ldr")
+    colours = std::make_unique<ColourLayerReader>(octree, reader.metadata(), layer);
+  const HdrImage img =
+      renderLinear(reader, view, [&](const ScanNode& n, std::vector<uint32_t>& out) {
+        std::vector<float> rgb;
+        if (colours) rgb = colours->readNode(n.key, uint32_t(n.world.size()));
+        for (size_t i = 0; i < out.size(); ++i)
+          out[i] = packRgb9e5(colours ? glm::vec3(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2])
+                                      : n.ldr[i]);
+      });
   writeExr(stem.string() + ".exr", img);
   for (const float e : {1.0f, 0.125f}) {
     HdrImage d = img;

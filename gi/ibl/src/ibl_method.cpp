@@ -11,16 +11,15 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/ibl/environment_table.h"
 #include "nestlight/gi/ibl/triangle_bvh.h"
-#include "nestlight/gi/sampling.h"
 #include "nestlight/gi/pbgi/bsh_layer.h"
 #include "nestlight/gi/pbgi/cut_hierarchies.h"
 #include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/sampling.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -34,11 +33,16 @@ constexpr int kSmcMax = 32, kBisMax = 64;
 
 int estimatorCode(IblParameters::Estimator e) {
   switch (e) {
-    case IblParameters::Estimator::Mis: return IBL_MIS;
-    case IblParameters::Estimator::Bis: return IBL_BIS;
-    case IblParameters::Estimator::Smc: return IBL_SMC;
-    case IblParameters::Estimator::Environment: return IBL_ENVIRONMENT;
-    case IblParameters::Estimator::Brdf: return IBL_BRDF;
+    case IblParameters::Estimator::Mis:
+      return IBL_MIS;
+    case IblParameters::Estimator::Bis:
+      return IBL_BIS;
+    case IblParameters::Estimator::Smc:
+      return IBL_SMC;
+    case IblParameters::Estimator::Environment:
+      return IBL_ENVIRONMENT;
+    case IblParameters::Estimator::Brdf:
+      return IBL_BRDF;
   }
   return IBL_MIS;
 }
@@ -62,11 +66,13 @@ constexpr int kBridgesMax = 16;
 int smcBridges(const EnvironmentMap& previous, const EnvironmentMap& current, int least) {
   const HdrImage &a = previous.image(), &b = current.image();
   if (&previous == &current) return least;
-  if (a.width != b.width || a.height != b.height || a.pixels() == 0) return std::max(least, kBridgesMax);
+  if (a.width != b.width || a.height != b.height || a.pixels() == 0)
+    return std::max(least, kBridgesMax);
   std::vector<double> pa(a.pixels()), pb(b.pixels());
   double sa = 0, sb = 0;
   for (int y = 0; y < a.height; ++y) {
-    const double band = std::cos(double(kPi) * y / a.height) - std::cos(double(kPi) * (y + 1) / a.height);
+    const double band =
+        std::cos(double(kPi) * y / a.height) - std::cos(double(kPi) * (y + 1) / a.height);
     for (int x = 0; x < a.width; ++x) {
       const size_t i = size_t(y) * size_t(a.width) + size_t(x);
       sa += pa[i] = std::max(0.0, double(luminance(a.get(x, y)))) * band;
@@ -80,7 +86,8 @@ int smcBridges(const EnvironmentMap& previous, const EnvironmentMap& current, in
     if (pa[i] <= 0) return std::max(least, kBridgesMax);
     chi2 += (pb[i] / sb) * (pb[i] / sb) / (pa[i] / sa);
   }
-  const int k = int(std::ceil(std::sqrt(std::log1p(std::max(chi2, 0.0)) / std::log1p(kBridgeChi2))));
+  const int k =
+      int(std::ceil(std::sqrt(std::log1p(std::max(chi2, 0.0)) / std::log1p(kBridgeChi2))));
   return std::clamp(k, least, std::max(least, kBridgesMax));
 }
 
@@ -105,7 +112,8 @@ class SlabBshLayer : public frame::NodeLayer {
     if (count) std::memcpy(nodes.data(), out.data(), count * sizeof(pbgi::BshNode));
     // Depth first: a node's sub-tree is [i, end), its right child's sub-tree ending it.
     std::vector<uint32_t> end(count);
-    for (size_t i = count; i-- > 0;) end[i] = nodes[i].links.x == BSH_LEAF ? uint32_t(i + 1) : end[nodes[i].links.y];
+    for (size_t i = count; i-- > 0;)
+      end[i] = nodes[i].links.x == BSH_LEAF ? uint32_t(i + 1) : end[nodes[i].links.y];
     for (size_t i = 0; i < count; ++i) {
       pbgi::BshNode& n = nodes[i];
       if (n.links.x == BSH_LEAF) continue;
@@ -123,11 +131,13 @@ class SlabBshLayer : public frame::NodeLayer {
         // A disc about m reaches disc * sin(angle to the axis) either side of its centre's height;
         // one without a normal faces each ray: its whole sphere.
         const float cosA = glm::dot(m, axis);
-        const float reach = l.links.w == 0 ? l.sphere.w : disc * std::sqrt(std::max(0.0f, 1.0f - cosA * cosA));
+        const float reach =
+            l.links.w == 0 ? l.sphere.w : disc * std::sqrt(std::max(0.0f, 1.0f - cosA * cosA));
         const float h = glm::dot(glm::vec3(l.sphere) - c, axis);
         lo = std::min(lo, h - reach), hi = std::max(hi, h + reach);
       }
-      // Float rounding of the centres, the heights and the decoded axes, as the shader will meet them.
+      // Float rounding of the centres, the heights and the decoded axes, as the shader will meet
+      // them.
       const float mag = std::max({std::fabs(c.x), std::fabs(c.y), std::fabs(c.z), n.sphere.w});
       const float pad = 1e-4f * n.sphere.w + 8.0f * mag * 1.2e-7f;
       n.colour = glm::vec4(lo - pad, hi + pad, 1.0f, n.colour.w);
@@ -146,7 +156,8 @@ class SlabBshLayer : public frame::NodeLayer {
 
 class IblExtension : public RasterExtension {
  public:
-  explicit IblExtension(const Scene& scene) : params_(iblParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
+  explicit IblExtension(const Scene& scene)
+      : params_(iblParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
 
   std::string name() const override { return "ibl"; }
   // The environment's visibility is traced, not read from shadow maps: the scene's lights are
@@ -197,14 +208,16 @@ class IblExtension : public RasterExtension {
     }
     const auto t0 = std::chrono::steady_clock::now();
     ibl::TriangleBvh bvh = ibl::buildTriangleBvh(corners);
-    bvhMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    bvhMs_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     bvhNodes_ = bvh.nodes.size();
     bvhTriangles_ = bvh.triangles.size();
     bvhDepth_ = bvh.depth;
     NL_CHECK_MSG(bvh.nodes.size() * sizeof(ibl::BvhNode) <= gl::kMaxSsboRange &&
                      bvh.triangles.size() * sizeof(ibl::BvhTriangle) <= gl::kMaxSsboRange,
                  "ibl: the meshes' BVH exceeds one 128 MiB buffer range");
-    bvh_ = gl::Buffer(std::max<size_t>(bvh.nodes.size(), 1) * sizeof(ibl::BvhNode), bvh.nodes.empty() ? nullptr : bvh.nodes.data(), 0);
+    bvh_ = gl::Buffer(std::max<size_t>(bvh.nodes.size(), 1) * sizeof(ibl::BvhNode),
+                      bvh.nodes.empty() ? nullptr : bvh.nodes.data(), 0);
     triangles_ = gl::Buffer(std::max<size_t>(bvh.triangles.size(), 1) * sizeof(ibl::BvhTriangle),
                             bvh.triangles.empty() ? nullptr : bvh.triangles.data(), 0);
     program_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/ibl/ibl_shade.comp"}},
@@ -217,7 +230,8 @@ class IblExtension : public RasterExtension {
     g.addPass(
         "ibl_shade", frame::Scope::Tile,
         [](frame::PassBuilder& b) {
-          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"}) b.read(t);
+          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
+            b.read(t);
           b.write("radiance_ibl");
         },
         [this, &f](const frame::PassContext& ctx) { shade(f, ctx); });
@@ -244,7 +258,8 @@ class IblExtension : public RasterExtension {
       uploadPrevious(*previous);
       prevTextureMap_ = previous;
     }
-    if (params_.estimator == IblParameters::Estimator::Smc && (current != bridgesMap_ || previous != bridgesPrev_)) {
+    if (params_.estimator == IblParameters::Estimator::Smc &&
+        (current != bridgesMap_ || previous != bridgesPrev_)) {
       bridges_ = smcBridges(*previous, *current, params_.smcIntermediate);
       bridgesMap_ = current, bridgesPrev_ = previous;
     }
@@ -273,12 +288,14 @@ class IblExtension : public RasterExtension {
     mf.rays += s[IBL_STAT_RAYS];
     mf.attributes["nestlight:ibl_loop_limit_pixels"] = std::to_string(s[IBL_STAT_LOOP_LIMIT]);
     char line[256];
-    std::snprintf(line, sizeof line, "; ibl %s: %u receivers, %u visibility rays; CDF tables %.2f ms",
-                  estimatorName(params_.estimator), s[IBL_STAT_RECEIVERS], s[IBL_STAT_RAYS], tableMs_);
+    std::snprintf(
+        line, sizeof line, "; ibl %s: %u receivers, %u visibility rays; CDF tables %.2f ms",
+        estimatorName(params_.estimator), s[IBL_STAT_RECEIVERS], s[IBL_STAT_RAYS], tableMs_);
     mf.summary += line;
     if (s[IBL_STAT_LOOP_LIMIT] && llvmpipe_)
       mf.summary += "; warning: " + std::to_string(s[IBL_STAT_LOOP_LIMIT]) +
-                    " pixels neared llvmpipe's 65,535 loop iterations per invocation (their estimates may be cut "
+                    " pixels neared llvmpipe's 65,535 loop iterations per invocation (their "
+                    "estimates may be cut "
                     "short): use fewer samples per pixel";
     if (params_.estimator == IblParameters::Estimator::Smc) {
       mf.attributes["nestlight:ibl_smc_reprojected"] = std::to_string(s[IBL_STAT_REPROJECTED]);
@@ -289,9 +306,11 @@ class IblExtension : public RasterExtension {
       mf.attributes["nestlight:ibl_smc_accepted"] = std::to_string(s[IBL_STAT_ACCEPTED]);
       mf.attributes["nestlight:ibl_smc_bridges"] = std::to_string(bridges_);
       std::snprintf(line, sizeof line,
-                    "; smc: %d bridges, %u carried, %u reinitialised on a jump, %u started afresh, %u resampled, %u of %u moves accepted",
-                    bridges_, s[IBL_STAT_REPROJECTED], s[IBL_STAT_REINIT_JUMP], s[IBL_STAT_REINIT_NEW], s[IBL_STAT_RESAMPLED],
-                    s[IBL_STAT_ACCEPTED], s[IBL_STAT_MOVES]);
+                    "; smc: %d bridges, %u carried, %u reinitialised on a jump, %u started afresh, "
+                    "%u resampled, %u of %u moves accepted",
+                    bridges_, s[IBL_STAT_REPROJECTED], s[IBL_STAT_REINIT_JUMP],
+                    s[IBL_STAT_REINIT_NEW], s[IBL_STAT_RESAMPLED], s[IBL_STAT_ACCEPTED],
+                    s[IBL_STAT_MOVES]);
       mf.summary += line;
       if (params_.smcStatistics) {
         // The carried normalising constants Z_t of the frame just rendered (afterFrame, before
@@ -304,7 +323,8 @@ class IblExtension : public RasterExtension {
         for (int y = 0; y < stateH_; ++y)
           for (int x = 0; x < stateW_; ++x) {
             const size_t base = size_t(y) * rowWords + size_t(x) * stride;
-            if (base + 5 < words.size() && words[base + 5] == 1u) z.push_back(std::bit_cast<float>(words[base + 3]));
+            if (base + 5 < words.size() && words[base + 5] == 1u)
+              z.push_back(std::bit_cast<float>(words[base + 3]));
           }
         double mean = 0;
         for (float v : z) mean += v;
@@ -312,7 +332,8 @@ class IblExtension : public RasterExtension {
         std::nth_element(z.begin(), z.begin() + std::ptrdiff_t(z.size() / 2), z.end());
         mf.attributes["nestlight:ibl_smc_z_pixels"] = std::to_string(z.size());
         mf.attributes["nestlight:ibl_smc_z_mean"] = std::to_string(mean);
-        mf.attributes["nestlight:ibl_smc_z_median"] = std::to_string(z.empty() ? 0.0f : z[z.size() / 2]);
+        mf.attributes["nestlight:ibl_smc_z_median"] =
+            std::to_string(z.empty() ? 0.0f : z[z.size() / 2]);
       }
     }
   }
@@ -332,7 +353,8 @@ class IblExtension : public RasterExtension {
     const int w = std::max(img.width, 1), h = std::max(img.height, 1);
     std::vector<float> rgba = img.rgba();
     rgba.resize(size_t(w) * size_t(h) * 4, 0.0f);  // no environment: one black texel
-    if (prevTexture_.width() != w || prevTexture_.height() != h) prevTexture_ = gl::Texture(GL_RGBA32F, w, h);
+    if (prevTexture_.width() != w || prevTexture_.height() != h)
+      prevTexture_ = gl::Texture(GL_RGBA32F, w, h);
     glTextureSubImage2D(prevTexture_.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
   }
 
@@ -345,7 +367,8 @@ class IblExtension : public RasterExtension {
     ctx.bindTexture("normal", 2);
     ctx.bindTexture("material", 3);
     ctx.bindTexture("radiance", 4);
-    glBindImageTexture(0, ctx.target("radiance_ibl").id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    glBindImageTexture(0, ctx.target("radiance_ibl").id(), 0, GL_FALSE, 0, GL_READ_WRITE,
+                       GL_RGBA32F);
     program_.use();
     f.bindEnvironment(program_);
     envTable_.bindBase(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_ENV);
@@ -396,7 +419,8 @@ class IblExtension : public RasterExtension {
     frameClip_ = true;
     glBindTextureUnit(6, prevTexture_.id());
     glUniform1f(program_.uniform("uPrevEnvScale"), prevEnvScale_);
-    glUniformMatrix4fv(program_.uniform("uPrevClipFromWorld"), 1, GL_FALSE, &prevClipFromWorld_[0][0]);
+    glUniformMatrix4fv(program_.uniform("uPrevClipFromWorld"), 1, GL_FALSE,
+                       &prevClipFromWorld_[0][0]);
     glUniform1i(program_.uniform("uHasPrevious"), hasPrevious_ ? 1 : 0);
     const int bandRows = allocateState(tile.fullWidth, tile.fullHeight);
     for (int r0 = 0; r0 < tile.height; r0 += bandRows) {
@@ -416,12 +440,15 @@ class IblExtension : public RasterExtension {
     switch (params_.estimator) {
       case IblParameters::Estimator::Mis:
         return std::max(1, ceilDiv(params_.brdfSamples + params_.envSamples, IBL_PASS_SAMPLES));
-      case IblParameters::Estimator::Environment: return std::max(1, ceilDiv(params_.envSamples, IBL_PASS_SAMPLES));
-      case IblParameters::Estimator::Brdf: return std::max(1, ceilDiv(params_.brdfSamples, IBL_PASS_SAMPLES));
+      case IblParameters::Estimator::Environment:
+        return std::max(1, ceilDiv(params_.envSamples, IBL_PASS_SAMPLES));
+      case IblParameters::Estimator::Brdf:
+        return std::max(1, ceilDiv(params_.brdfSamples, IBL_PASS_SAMPLES));
       case IblParameters::Estimator::Bis:
         // Each pass resamples at least one of the N.
         return std::clamp(ceilDiv(params_.bisProposals, IBL_PASS_PROPOSALS), 1, params_.bisSamples);
-      case IblParameters::Estimator::Smc: return 1;
+      case IblParameters::Estimator::Smc:
+        return 1;
     }
     return 1;
   }
@@ -460,7 +487,8 @@ class IblExtension : public RasterExtension {
       inFirst = std::max(outFirst - margin, 0);
       inRows = std::min(maxRows_, H - inFirst);
     }
-    stateIn_.bindRange(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_IN, size_t(inFirst) * rowBytes, size_t(inRows) * rowBytes);
+    stateIn_.bindRange(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_IN, size_t(inFirst) * rowBytes,
+                       size_t(inRows) * rowBytes);
     stateOut_.bindRange(GL_SHADER_STORAGE_BUFFER, IBL_SSBO_STATE_OUT, size_t(outFirst) * rowBytes,
                         size_t(outRows) * rowBytes);
     glUniform1i(program_.uniform("uStateRowIn"), inFirst);
@@ -477,7 +505,8 @@ class IblExtension : public RasterExtension {
   gl::ShaderProgram program_;
   gl::Buffer envTable_, bvh_, triangles_, stats_, stateIn_, stateOut_;
   gl::Texture prevTexture_;
-  std::shared_ptr<const EnvironmentMap> tableMap_, lastMap_, prevTextureMap_, bridgesMap_, bridgesPrev_;
+  std::shared_ptr<const EnvironmentMap> tableMap_, lastMap_, prevTextureMap_, bridgesMap_,
+      bridgesPrev_;
   int bridges_ = 3;  // SMC: bridges from the last frame's map to this one's (smcBridges)
   float prevEnvScale_ = 1;
   double tableMs_ = 0, bvhMs_ = 0;
@@ -493,21 +522,26 @@ class IblExtension : public RasterExtension {
 
 const char* estimatorName(IblParameters::Estimator e) {
   switch (e) {
-    case IblParameters::Estimator::Mis: return "mis";
-    case IblParameters::Estimator::Bis: return "bis";
-    case IblParameters::Estimator::Smc: return "smc";
-    case IblParameters::Estimator::Environment: return "env";
-    case IblParameters::Estimator::Brdf: return "brdf";
+    case IblParameters::Estimator::Mis:
+      return "mis";
+    case IblParameters::Estimator::Bis:
+      return "bis";
+    case IblParameters::Estimator::Smc:
+      return "smc";
+    case IblParameters::Estimator::Environment:
+      return "env";
+    case IblParameters::Estimator::Brdf:
+      return "brdf";
   }
   return "?";
 }
 
 const std::vector<std::string>& iblParameterKeys() {
   static const std::vector<std::string> keys = {
-      "estimator",        "brdf_samples",          "env_samples",        "bis_proposals",
-      "bis_samples",      "smc_particles",         "smc_intermediate",   "smc_local_probability",
-      "smc_local_degrees", "smc_reinit_ratio",     "visibility",         "smc_statistics",
-      "smc_band_rows",    "smc_reinit_on_drop"};
+      "estimator",         "brdf_samples",      "env_samples",      "bis_proposals",
+      "bis_samples",       "smc_particles",     "smc_intermediate", "smc_local_probability",
+      "smc_local_degrees", "smc_reinit_ratio",  "visibility",       "smc_statistics",
+      "smc_band_rows",     "smc_reinit_on_drop"};
   return keys;
 }
 
@@ -529,8 +563,10 @@ IblParameters iblParameters(const Scene& scene) {
   if (f.has("bis_samples")) p.bisSamples = int(f.at("bis_samples").integer(1, kBisMax));
   if (f.has("smc_particles")) p.smcParticles = int(f.at("smc_particles").integer(1, kSmcMax));
   if (f.has("smc_intermediate")) p.smcIntermediate = int(f.at("smc_intermediate").integer(1, 16));
-  if (f.has("smc_local_probability")) p.smcLocalProbability = float(f.at("smc_local_probability").number(0, 1));
-  if (f.has("smc_local_degrees")) p.smcLocalDegrees = float(f.at("smc_local_degrees").number(0.01, 90));
+  if (f.has("smc_local_probability"))
+    p.smcLocalProbability = float(f.at("smc_local_probability").number(0, 1));
+  if (f.has("smc_local_degrees"))
+    p.smcLocalDegrees = float(f.at("smc_local_degrees").number(0.01, 90));
   if (f.has("smc_reinit_ratio")) p.smcReinitRatio = float(f.at("smc_reinit_ratio").number(1, 1e30));
   if (f.has("visibility")) p.visibility = f.at("visibility").boolean();
   if (f.has("smc_statistics")) p.smcStatistics = f.at("smc_statistics").boolean();

@@ -32,12 +32,14 @@ void* createNode(RTCThreadLocalAllocator alloc, unsigned int childCount, void*) 
   return new (rtcThreadLocalAlloc(alloc, sizeof(InnerNode), 16)) InnerNode;
 }
 void setNodeChildren(void* node, void** children, unsigned int childCount, void*) {
-  for (unsigned i = 0; i < childCount; ++i) static_cast<InnerNode*>(node)->child[i] = static_cast<BuildNode*>(children[i]);
+  for (unsigned i = 0; i < childCount; ++i)
+    static_cast<InnerNode*>(node)->child[i] = static_cast<BuildNode*>(children[i]);
 }
 void setNodeBounds(void* node, const RTCBounds** bounds, unsigned int childCount, void*) {
   for (unsigned i = 0; i < childCount; ++i) static_cast<InnerNode*>(node)->bounds[i] = *bounds[i];
 }
-void* createLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t numPrims, void*) {
+void* createLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t numPrims,
+                 void*) {
   NL_CHECK(numPrims >= 1 && numPrims <= 4);
   auto* leaf = new (rtcThreadLocalAlloc(alloc, sizeof(LeafNode), 16)) LeafNode;
   leaf->count = unsigned(numPrims);
@@ -45,8 +47,12 @@ void* createLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, 
   return leaf;
 }
 
-float bits(uint32_t u) { return std::bit_cast<float>(u); }
-uint32_t ubits(float f) { return std::bit_cast<uint32_t>(f); }
+float bits(uint32_t u) {
+  return std::bit_cast<float>(u);
+}
+uint32_t ubits(float f) {
+  return std::bit_cast<uint32_t>(f);
+}
 
 struct Flattener {
   const std::vector<BvhTriangle>& source;
@@ -95,7 +101,8 @@ TriangleBvh buildTriangleBvh(const std::vector<glm::vec3>& positions) {
     const glm::vec3 a = positions[i], b = positions[i + 1], c = positions[i + 2];
     const glm::vec3 e1 = b - a, e2 = c - a;
     const float area2 = glm::length(glm::cross(e1, e2));
-    if (!(area2 > 0) || !std::isfinite(area2) || !std::isfinite(a.x + a.y + a.z + b.x + b.y + b.z + c.x + c.y + c.z)) {
+    if (!(area2 > 0) || !std::isfinite(area2) ||
+        !std::isfinite(a.x + a.y + a.z + b.x + b.y + b.z + c.x + c.y + c.z)) {
       out.degenerate++;
       continue;
     }
@@ -186,7 +193,8 @@ float hitTriangle(const BvhTriangle& t, const glm::vec3& o, const glm::vec3& d) 
 
 }  // namespace
 
-float traceTriangleBvh(const TriangleBvh& bvh, const glm::vec3& o, const glm::vec3& d, float tMin, float tMax) {
+float traceTriangleBvh(const TriangleBvh& bvh, const glm::vec3& o, const glm::vec3& d, float tMin,
+                       float tMax) {
   if (bvh.nodes.empty()) return -1;
   const glm::vec3 inv = 1.0f / d;
   uint32_t stack[IBL_BVH_STACK];

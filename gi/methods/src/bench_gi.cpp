@@ -1,4 +1,3 @@
-#include "nestlight/gi/environment_sequence.h"
 #include "nestlight/gi/bench_gi.h"
 
 #include <tbb/info.h>
@@ -9,6 +8,7 @@
 #include <fstream>
 #include <functional>
 
+#include "nestlight/gi/environment_sequence.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/plot.h"
 #include "nestlight/gi/reference/reference_scene.h"
@@ -37,7 +37,8 @@ std::string assetStamp(const Scene& s) {
     std::error_code ec;
     auto size = fs::file_size(p, ec);
     auto time = fs::last_write_time(p, ec).time_since_epoch().count();
-    stamp += p.string() + "=" + std::to_string(ec ? 0 : size) + "@" + std::to_string(ec ? 0 : time) + ";";
+    stamp += p.string() + "=" + std::to_string(ec ? 0 : size) + "@" +
+             std::to_string(ec ? 0 : time) + ";";
   };
   for (const auto& o : s.octrees) {
     add(o.path / "metadata.json");
@@ -72,18 +73,21 @@ json timeToError(const std::vector<const BenchGiRow*>& rows, double target, bool
       if (i == 0) return {{"ms", rows[0]->medianMs}, {"how", "reached at the lowest setting"}};
       const BenchGiRow &a = *rows[i - 1], &b = *rows[i];
       double t = (std::log(target) - std::log(err(a))) / (std::log(err(b)) - std::log(err(a)));
-      return {{"ms", std::exp(std::log(a.medianMs) + t * (std::log(b.medianMs) - std::log(a.medianMs)))},
-              {"how", "interpolated between " + std::to_string(a.quality) + " and " + std::to_string(b.quality) + " " +
-                          a.qualityName}};
+      return {{"ms",
+               std::exp(std::log(a.medianMs) + t * (std::log(b.medianMs) - std::log(a.medianMs)))},
+              {"how", "interpolated between " + std::to_string(a.quality) + " and " +
+                          std::to_string(b.quality) + " " + a.qualityName}};
     }
   }
   if (rows.empty() || !(err(*rows.back()) > 0)) return {{"ms", nullptr}, {"how", "no data"}};
   const BenchGiRow& b = *rows.back();
   if (b.qualityName != "samples per pixel")
-    return {{"ms", nullptr}, {"how", "not reached (" + std::to_string(err(b)) + " at the best setting)"}};
+    return {{"ms", nullptr},
+            {"how", "not reached (" + std::to_string(err(b)) + " at the best setting)"}};
   // Monte Carlo error falls as 1/sqrt(time): extrapolate from the best setting.
   double ms = b.medianMs * std::pow(err(b) / target, 2);
-  return {{"ms", ms}, {"how", "extrapolated as error ~ time^-1/2 from " + std::to_string(b.quality) + " spp"}};
+  return {{"ms", ms},
+          {"how", "extrapolated as error ~ time^-1/2 from " + std::to_string(b.quality) + " spp"}};
 }
 
 }  // namespace
@@ -114,7 +118,9 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     methods.push_back(m);
   }
   for (const auto& [name, levels] : o.qualities) {
-    if (!findMethod(name)) throw Error("bench gi: quality levels for unknown method '" + name + "' (" + methodList() + ")");
+    if (!findMethod(name))
+      throw Error("bench gi: quality levels for unknown method '" + name + "' (" + methodList() +
+                  ")");
     if (levels.empty()) throw Error("bench gi: no quality levels for '" + name + "'");
   }
   if (o.runs < 1) throw Error("bench gi: --runs must be at least 1");
@@ -127,7 +133,8 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   const fs::path& dir = report.dir;
   fs::create_directories(dir);
   Scene probe = loadScene(sceneFile);
-  const int W = o.width ? o.width : probe.camera.width, H = o.height ? o.height : probe.camera.height;
+  const int W = o.width ? o.width : probe.camera.width,
+            H = o.height ? o.height : probe.camera.height;
   auto prepared = [&](const std::string& method) {
     Scene s = probe;
     s.gi.method = method;
@@ -139,15 +146,18 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   };
 
   if (!sceneHasLight(prepared("reference"), prepared("reference").gi.mode))
-    throw Error(sceneFile.string(), "lights",
-                "nothing lights this scene in albedo mode (scan colours are reflectances there, and it has no "
-                "lights, no environment and no emissive mesh): every method would render black. Use "
-                "--mode radiance_cache, or add a light");
+    throw Error(
+        sceneFile.string(), "lights",
+        "nothing lights this scene in albedo mode (scan colours are reflectances there, and it has "
+        "no "
+        "lights, no environment and no emissive mesh): every method would render black. Use "
+        "--mode radiance_cache, or add a light");
 
   // The reference, cached under a key of everything that changes it.
-  const std::string key = "model" + std::to_string(kReferenceModelVersion) + ":" + fileHash(sceneFile) + ":" +
-                          assetStamp(probe) + ":" + std::to_string(W) + "x" + std::to_string(H) + ":" +
-                          std::to_string(o.referenceError) + ":" + o.mode;
+  const std::string key = "model" + std::to_string(kReferenceModelVersion) + ":" +
+                          fileHash(sceneFile) + ":" + assetStamp(probe) + ":" + std::to_string(W) +
+                          "x" + std::to_string(H) + ":" + std::to_string(o.referenceError) + ":" +
+                          o.mode;
   const fs::path refPath = dir / "reference.exr";
   HdrImage reference;
   json refInfo;
@@ -158,13 +168,15 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     if (attrs["nestlight:cache_key"] == key) {
       reference = std::move(img);
       cached = true;
-      refInfo = {{"cached", true}, {"samples", attrs["nestlight:samples"]},
-                 {"relative_error_estimate", attrs["nestlight:relative_error_estimate"]}, {"seconds", attrs["nestlight:seconds"]}};
+      refInfo = {{"cached", true},
+                 {"samples", attrs["nestlight:samples"]},
+                 {"relative_error_estimate", attrs["nestlight:relative_error_estimate"]},
+                 {"seconds", attrs["nestlight:seconds"]}};
     }
   }
   if (!cached) {
-    say("bench gi: rendering the reference to %.4g relative error (at most %.0f s, %d spp)...\n", o.referenceError,
-        o.referenceTimeLimit, o.referenceSpp);
+    say("bench gi: rendering the reference to %.4g relative error (at most %.0f s, %d spp)...\n",
+        o.referenceError, o.referenceTimeLimit, o.referenceSpp);
     Scene s = prepared("reference");
     s.gi.targetRelativeError = o.referenceError;
     s.gi.timeLimitSeconds = o.referenceTimeLimit;
@@ -174,24 +186,31 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     reference = r.image;
     // One that stopped short of the error target (time or sample limit) is kept for this run
     // but not reused: the next run tries again.
-    ImageAttributes attrs{{"nestlight:cache_key", r.stopReason == "error target" ? key : "incomplete"},
-                          {"nestlight:samples", std::to_string(r.samplesPerPixel)},
-                          {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
-                          {"nestlight:seconds", std::to_string(r.seconds)},
-                          {"nestlight:stop", r.stopReason}};
+    ImageAttributes attrs{
+        {"nestlight:cache_key", r.stopReason == "error target" ? key : "incomplete"},
+        {"nestlight:samples", std::to_string(r.samplesPerPixel)},
+        {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
+        {"nestlight:seconds", std::to_string(r.seconds)},
+        {"nestlight:stop", r.stopReason}};
     writeExr(refPath.string(), reference, attrs);
-    refInfo = {{"cached", false}, {"samples", r.samplesPerPixel}, {"relative_error_estimate", r.relativeError},
-               {"seconds", r.seconds}, {"stop", r.stopReason}, {"rays_per_second", r.raysPerSecond()},
+    refInfo = {{"cached", false},
+               {"samples", r.samplesPerPixel},
+               {"relative_error_estimate", r.relativeError},
+               {"seconds", r.seconds},
+               {"stop", r.stopReason},
+               {"rays_per_second", r.raysPerSecond()},
                {"samples_per_second", r.samplesPerSecond()}};
-    say("  reference: %d spp, estimated error %.4f, %.1f s (%s)\n", r.samplesPerPixel, r.relativeError, r.seconds,
-        r.stopReason.c_str());
+    say("  reference: %d spp, estimated error %.4f, %.1f s (%s)\n", r.samplesPerPixel,
+        r.relativeError, r.seconds, r.stopReason.c_str());
     if (r.stopReason != "error target")
-      say("  warning: the reference stopped before %.4g error; errors below its own are not meaningful\n", o.referenceError);
+      say("  warning: the reference stopped before %.4g error; errors below its own are not "
+          "meaningful\n",
+          o.referenceError);
   }
   writeToneMappedPng((dir / "reference.png").string(), reference, probe.output.exposure);
 
-  say("%-10s %8s %10s %12s %10s %10s %9s %7s %11s\n", "method", "quality", "median ms", "rays/s", "rel L2", "RMSE",
-      "PSNR dB", "SSIM", "SSIM (tm)");
+  say("%-10s %8s %10s %12s %10s %10s %9s %7s %11s\n", "method", "quality", "median ms", "rays/s",
+      "rel L2", "RMSE", "PSNR dB", "SSIM", "SSIM (tm)");
   for (const MethodInfo* m : methods) {
     if (!m->albedoMode && prepared(m->name).gi.mode == RadianceMode::Albedo) {
       say("%s: skipped (it renders the radiance-cache mode only so far)\n", m->name.c_str());
@@ -202,45 +221,47 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     std::vector<MethodInfo::Variant> variants = {{"", [](GiSettings&) {}}};
     if (o.variants) variants.insert(variants.end(), m->variants.begin(), m->variants.end());
     for (const auto& variant : variants)
-    for (int level : levels) {
-      Scene s = prepared(m->name);
-      s.gi.seed = 1;
-      // The variant first: a quality level may mean different settings under it (ibl's estimators).
-      variant.apply(s.gi);
-      m->applyQuality(s.gi, level);
-      std::unique_ptr<Method> method = createMethod(s, {true, false, true});
-      BenchGiRow row;
-      row.method = m->name;
-      row.variant = variant.name;
-      row.qualityName = m->qualityName;
-      row.quality = level;
-      MethodFrame first;
-      for (int run = 0; run < o.runs; ++run) {
-        MethodFrame f = method->render(s.camera);
-        row.ms.push_back(f.seconds * 1e3);
-        if (run == 0) first = std::move(f);
+      for (int level : levels) {
+        Scene s = prepared(m->name);
+        s.gi.seed = 1;
+        // The variant first: a quality level may mean different settings under it (ibl's
+        // estimators).
+        variant.apply(s.gi);
+        m->applyQuality(s.gi, level);
+        std::unique_ptr<Method> method = createMethod(s, {true, false, true});
+        BenchGiRow row;
+        row.method = m->name;
+        row.variant = variant.name;
+        row.qualityName = m->qualityName;
+        row.quality = level;
+        MethodFrame first;
+        for (int run = 0; run < o.runs; ++run) {
+          MethodFrame f = method->render(s.camera);
+          row.ms.push_back(f.seconds * 1e3);
+          if (run == 0) first = std::move(f);
+        }
+        row.medianMs = medianOf(row.ms);
+        row.raysPerSecond = first.raysPerSecond();
+        row.samplesPerSecond = first.samplesPerSecond();
+        row.passMs = first.passMs;
+        row.attributes = first.attributes;
+        std::string stem = m->name + (variant.name.empty() ? "" : "_" + variant.name) + "_" +
+                           std::to_string(level);
+        std::replace(stem.begin(), stem.end(), ' ', '_');
+        writeExr((dir / (stem + ".exr")).string(), first.image, first.attributes);
+        CompareOptions co;
+        co.testName = m->name + " " + std::to_string(level);
+        co.referenceName = refPath.string();
+        co.exposureStops = probe.output.exposure;
+        row.cmp = compareImages(first.image, reference, co);
+        row.relativeL2 = relativeL2(first.image, reference);
+        row.relativeL2Box4 = relativeL2(boxFilter(first.image, 4), boxFilter(reference, 4));
+        const std::string label = m->name + (variant.name.empty() ? "" : " (" + variant.name + ")");
+        say("%-10s %8d %10.1f %12.3g %10.4f %10.4g %9.2f %7.4f %11.4f\n", label.c_str(), level,
+            row.medianMs, row.raysPerSecond, row.relativeL2, row.cmp.linear.rmse,
+            row.cmp.linear.psnr, row.cmp.linear.ssim, row.cmp.toneMapped.ssim);
+        report.rows.push_back(std::move(row));
       }
-      row.medianMs = medianOf(row.ms);
-      row.raysPerSecond = first.raysPerSecond();
-      row.samplesPerSecond = first.samplesPerSecond();
-      row.passMs = first.passMs;
-      row.attributes = first.attributes;
-      std::string stem = m->name + (variant.name.empty() ? "" : "_" + variant.name) + "_" + std::to_string(level);
-      std::replace(stem.begin(), stem.end(), ' ', '_');
-      writeExr((dir / (stem + ".exr")).string(), first.image, first.attributes);
-      CompareOptions co;
-      co.testName = m->name + " " + std::to_string(level);
-      co.referenceName = refPath.string();
-      co.exposureStops = probe.output.exposure;
-      row.cmp = compareImages(first.image, reference, co);
-      row.relativeL2 = relativeL2(first.image, reference);
-      row.relativeL2Box4 = relativeL2(boxFilter(first.image, 4), boxFilter(reference, 4));
-      const std::string label = m->name + (variant.name.empty() ? "" : " (" + variant.name + ")");
-      say("%-10s %8d %10.1f %12.3g %10.4f %10.4g %9.2f %7.4f %11.4f\n", label.c_str(), level, row.medianMs,
-          row.raysPerSecond, row.relativeL2, row.cmp.linear.rmse, row.cmp.linear.psnr, row.cmp.linear.ssim,
-          row.cmp.toneMapped.ssim);
-      report.rows.push_back(std::move(row));
-    }
   }
 
   // Files: CSV, JSON, SVG.
@@ -248,8 +269,10 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
                              std::to_string(tbb::info::default_concurrency()) +
                              " threads (CPU methods: Embree 3; GL methods: the context's device)";
   std::ofstream csv(dir / "bench_gi.csv");
-  csv << "method,variant,quality,quality_name,runs,median_ms,min_ms,max_ms,rays_per_second,samples_per_second,relative_l2,"
-         "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels\n";
+  csv << "method,variant,quality,quality_name,runs,median_ms,min_ms,max_ms,rays_per_second,samples_"
+         "per_second,relative_l2,"
+         "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,"
+         "nonfinite_pixels\n";
   json jrows = json::array();
   std::vector<PlotSeries> series;
   json timeTo1, timeTo10, timeTo10Box4;
@@ -267,20 +290,31 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
       mine.push_back(&r);
       auto [lo, hi] = std::minmax_element(r.ms.begin(), r.ms.end());
       char line[640];
-      std::snprintf(line, sizeof line, "%s,%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,%.6f,%llu\n",
-                    r.method.c_str(), r.variant.c_str(), r.quality, r.qualityName.c_str(), r.ms.size(), r.medianMs, *lo, *hi, r.raysPerSecond,
-                    r.samplesPerSecond, r.relativeL2, r.cmp.linear.rmse, r.cmp.linear.relativeMse, r.cmp.linear.psnr,
-                    r.cmp.linear.ssim, r.cmp.toneMapped.rmse, r.cmp.toneMapped.psnr, r.cmp.toneMapped.ssim,
-                    (unsigned long long)r.cmp.test.pixels);
+      std::snprintf(
+          line, sizeof line,
+          "%s,%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,%.6f,%llu\n",
+          r.method.c_str(), r.variant.c_str(), r.quality, r.qualityName.c_str(), r.ms.size(),
+          r.medianMs, *lo, *hi, r.raysPerSecond, r.samplesPerSecond, r.relativeL2,
+          r.cmp.linear.rmse, r.cmp.linear.relativeMse, r.cmp.linear.psnr, r.cmp.linear.ssim,
+          r.cmp.toneMapped.rmse, r.cmp.toneMapped.psnr, r.cmp.toneMapped.ssim,
+          (unsigned long long)r.cmp.test.pixels);
       csv << line;
       json passes = json::object();
       for (const auto& [name, ms] : r.passMs) passes[name] = ms;
       json attrs = json::object();
       for (const auto& [k, v] : r.attributes) attrs[k] = v;
-      jrows.push_back({{"method", r.method}, {"variant", r.variant}, {"attributes", attrs}, {"quality", r.quality}, {"quality_name", r.qualityName}, {"runs_ms", r.ms},
-                       {"median_ms", r.medianMs}, {"rays_per_second", r.raysPerSecond},
-                       {"samples_per_second", r.samplesPerSecond}, {"gpu_pass_ms", passes},
-                       {"relative_l2", r.relativeL2}, {"relative_l2_box4", r.relativeL2Box4},
+      jrows.push_back({{"method", r.method},
+                       {"variant", r.variant},
+                       {"attributes", attrs},
+                       {"quality", r.quality},
+                       {"quality_name", r.qualityName},
+                       {"runs_ms", r.ms},
+                       {"median_ms", r.medianMs},
+                       {"rays_per_second", r.raysPerSecond},
+                       {"samples_per_second", r.samplesPerSecond},
+                       {"gpu_pass_ms", passes},
+                       {"relative_l2", r.relativeL2},
+                       {"relative_l2_box4", r.relativeL2Box4},
                        {"comparison", toJson(r.cmp)}});
       ps.points.push_back({r.medianMs, r.relativeL2, std::to_string(r.quality)});
     }
@@ -289,12 +323,24 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
     timeTo10Box4[ps.name] = timeToError(mine, 0.1, true);
     series.push_back(std::move(ps));
   }
-  report.json = {{"scene", sceneFile.string()}, {"device", device}, {"mode", prepared("reference").gi.mode == RadianceMode::Albedo ? "albedo" : "radiance_cache"}, {"width", W}, {"height", H}, {"runs", o.runs},
-                 {"reference", refInfo}, {"rows", jrows}, {"time_to_1_percent", timeTo1}, {"time_to_10_percent", timeTo10}, {"time_to_10_percent_box4", timeTo10Box4},
-                 {"error_measure", "relative L2: sqrt(sum (t - r)^2 / sum r^2) over pixels and channels"}};
+  report.json = {
+      {"scene", sceneFile.string()},
+      {"device", device},
+      {"mode", prepared("reference").gi.mode == RadianceMode::Albedo ? "albedo" : "radiance_cache"},
+      {"width", W},
+      {"height", H},
+      {"runs", o.runs},
+      {"reference", refInfo},
+      {"rows", jrows},
+      {"time_to_1_percent", timeTo1},
+      {"time_to_10_percent", timeTo10},
+      {"time_to_10_percent_box4", timeTo10Box4},
+      {"error_measure", "relative L2: sqrt(sum (t - r)^2 / sum r^2) over pixels and channels"}};
   std::ofstream(dir / "bench_gi.json") << report.json.dump(2) << "\n";
-  writeSvgPlot((dir / "bench_gi.svg").string(), "GI speed against error: " + sceneFile.parent_path().filename().string(),
-               "time per frame (ms, " + device + ")", "relative L2 error against the reference", series, true, true);
+  writeSvgPlot((dir / "bench_gi.svg").string(),
+               "GI speed against error: " + sceneFile.parent_path().filename().string(),
+               "time per frame (ms, " + device + ")", "relative L2 error against the reference",
+               series, true, true);
   for (const auto& [name, t] : timeTo10Box4.items()) {
     say("time to 10%% relative error of 4x4-pixel means, %s: %s ms (%s)\n", name.c_str(),
         t["ms"].is_null() ? "-" : std::to_string(int64_t(t["ms"].get<double>())).c_str(),

@@ -30,15 +30,18 @@ void writeSphereObj(const fs::path& path, int rings = 32, int segments = 64) {
   for (int r = 0; r <= rings; ++r)
     for (int s = 0; s < segments; ++s) {
       const double th = kPiD * r / rings, ph = 2 * kPiD * s / segments;
-      const double x = std::sin(th) * std::cos(ph), y = std::sin(th) * std::sin(ph), z = std::cos(th);
+      const double x = std::sin(th) * std::cos(ph), y = std::sin(th) * std::sin(ph),
+                   z = std::cos(th);
       f << "v " << x << " " << y << " " << z << "\nvn " << x << " " << y << " " << z << "\n";
     }
   auto id = [&](int r, int s) { return r * segments + (s % segments) + 1; };
   for (int r = 0; r < rings; ++r)
     for (int s = 0; s < segments; ++s) {
       const int a = id(r, s), b = id(r + 1, s), c = id(r + 1, s + 1), d = id(r, s + 1);
-      if (r > 0) f << "f " << a << "//" << a << " " << b << "//" << b << " " << d << "//" << d << "\n";
-      if (r < rings - 1) f << "f " << d << "//" << d << " " << b << "//" << b << " " << c << "//" << c << "\n";
+      if (r > 0)
+        f << "f " << a << "//" << a << " " << b << "//" << b << " " << d << "//" << d << "\n";
+      if (r < rings - 1)
+        f << "f " << d << "//" << d << " " << b << "//" << b << " " << c << "//" << c << "\n";
     }
 }
 
@@ -57,7 +60,8 @@ HdrImage movingSunFrame(int frame) {
       const double a = std::acos(std::clamp(glm::dot(d, sun), -1.0, 1.0));
       const double sky = d.z > 0 ? 0.1 + 0.4 * d.z : 0.05;
       const double s = 2000 * std::exp(-a * a / (2 * sigma * sigma));
-      img.set(x, y, Rgb(float(sky * 0.8 + s), float(sky * 0.9 + s * 0.95), float(sky * 1.2 + s * 0.85)));
+      img.set(x, y,
+              Rgb(float(sky * 0.8 + s), float(sky * 0.9 + s * 0.95), float(sky * 1.2 + s * 0.85)));
     }
   return img;
 }
@@ -89,7 +93,8 @@ std::vector<uint8_t> interiorMask(const Scene& s, const ReferenceScene& rs, int 
       glm::vec3 o, d;
       cameraRay(cam, s.origin, x + 0.5f, y + 0.5f, &o, &d);
       SurfaceHit hit;
-      if (rs.intersect(o, d, 1e30f, &hit)) id[size_t(y) * W + x] = hit.kind == SurfaceHit::Kind::Disc ? -2 : int(hit.material);
+      if (rs.intersect(o, d, 1e30f, &hit))
+        id[size_t(y) * W + x] = hit.kind == SurfaceHit::Kind::Disc ? -2 : int(hit.material);
     }
   std::vector<uint8_t> mask(id.size(), 0);
   for (int y = 1; y + 1 < H; ++y)
@@ -141,7 +146,8 @@ BlockStats blockStats(const HdrImage& a, const HdrImage& r, const std::vector<ui
         }
       if (2 * n < 16) continue;
       for (int k = 0; k < 3; ++k) {
-        if (std::isfinite(ba[k])) err2 += (ba[k] - br[k]) * (ba[k] - br[k]) / (n * n), sumA += ba[k];
+        if (std::isfinite(ba[k]))
+          err2 += (ba[k] - br[k]) * (ba[k] - br[k]) / (n * n), sumA += ba[k];
         ref2 += br[k] * br[k] / (n * n), sumR += br[k];
       }
     }
@@ -156,13 +162,16 @@ json timeTo(const std::vector<std::pair<double, double>>& curve, double target) 
     if (i == 0) return {{"ms", curve[0].first}, {"how", "reached at the fewest samples"}};
     const auto& a = curve[i - 1];
     const auto& b = curve[i];
-    const double t = (std::log(target) - std::log(a.second)) / (std::log(b.second) - std::log(a.second));
-    return {{"ms", std::exp(std::log(a.first) + t * (std::log(b.first) - std::log(a.first)))}, {"how", "interpolated"}};
+    const double t =
+        (std::log(target) - std::log(a.second)) / (std::log(b.second) - std::log(a.second));
+    return {{"ms", std::exp(std::log(a.first) + t * (std::log(b.first) - std::log(a.first)))},
+            {"how", "interpolated"}};
   }
   if (curve.size() >= 2 && curve.back().second < curve[curve.size() - 2].second) {
     const auto& a = curve[curve.size() - 2];
     const auto& b = curve.back();
-    const double t = (std::log(target) - std::log(a.second)) / (std::log(b.second) - std::log(a.second));
+    const double t =
+        (std::log(target) - std::log(a.second)) / (std::log(b.second) - std::log(a.second));
     return {{"ms", std::exp(std::log(a.first) + t * (std::log(b.first) - std::log(a.first)))},
             {"how", "extrapolated beyond the most samples"}};
   }
@@ -177,7 +186,8 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
     std::fprintf(log, fmt, args...);
     std::fflush(log);
   };
-  if (o.frames < 2) throw Error("--frames", "", "give at least 2 frames (flicker compares consecutive frames)");
+  if (o.frames < 2)
+    throw Error("--frames", "", "give at least 2 frames (flicker compares consecutive frames)");
   const MethodInfo* ibl = findMethod("ibl");
   NL_CHECK(ibl);
   for (const auto& e : o.estimators)
@@ -186,11 +196,17 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
   BenchIblReport report;
   report.dir = o.out;
   fs::create_directories(o.out);
-  json all = {{"device", o.device}, {"frames", o.frames}, {"size", o.size}, {"timing_size", o.timingSize},
+  json all = {{"device", o.device},
+              {"frames", o.frames},
+              {"size", o.size},
+              {"timing_size", o.timingSize},
               {"time_to_error_at", o.timingSize > 0 ? o.timingSize : o.size},
-              {"reference_spp", o.referenceSpp}, {"roughness", o.roughness}, {"scenes", json::array()}};
+              {"reference_spp", o.referenceSpp},
+              {"roughness", o.roughness},
+              {"scenes", json::array()}};
   std::ofstream csv(o.out / "bench_ibl.csv");
-  csv << "scene,estimator,samples,frame,ms,relative_l2,relative_l2_net,relative_variance,flicker,relative_l2_4x4,"
+  csv << "scene,estimator,samples,frame,ms,relative_l2,relative_l2_net,relative_variance,flicker,"
+         "relative_l2_4x4,"
          "mean_ratio\n";
   for (const std::string& sceneName : o.scenes) {
     const fs::path dir = o.out / sceneName;
@@ -203,7 +219,9 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
         writeExr((dir / name).string(), movingSunFrame(f));
       }
     } else if (sceneName == "shared" || sceneName == "outdoor") {
-      const fs::path map = o.sharedData / "hdr" / (sceneName == "shared" ? "stage_env_latlong.exr" : "royal_esplanade_1k.hdr");
+      const fs::path map =
+          o.sharedData / "hdr" /
+          (sceneName == "shared" ? "stage_env_latlong.exr" : "royal_esplanade_1k.hdr");
       if (!fs::exists(map)) {
         say("bench ibl: %s not found: the shared scene is skipped\n", map.c_str());
         continue;
@@ -215,7 +233,8 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
         writeExr((dir / name).string(), turned(base, int(std::lround(base.width * 4.0 * f / 360))));
       }
     } else {
-      throw Error("--scenes", "", "unknown scene '" + sceneName + "' (moving-sun, scanned, shared, outdoor)");
+      throw Error("--scenes", "",
+                  "unknown scene '" + sceneName + "' (moving-sun, scanned, shared, outdoor)");
     }
     json sceneJson;
     if (sceneName == "scanned") {
@@ -226,7 +245,8 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
       to.points = 200000;
       to.width = to.height = o.size;
       to.quiet = true;
-      sceneJson = json::parse(std::ifstream(makeTestScene(TestSceneKind::Object, dir / "town", to)));
+      sceneJson =
+          json::parse(std::ifstream(makeTestScene(TestSceneKind::Object, dir / "town", to)));
       for (auto& t : sceneJson["octrees"]) t["path"] = "town/" + t["path"].get<std::string>();
       for (auto& m : sceneJson["meshes"]) m["path"] = "town/" + m["path"].get<std::string>();
       sceneJson.erase("lights");
@@ -241,14 +261,27 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
           {"version", 1},
           {"materials",
            {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}},
-            {"glossy", {{"type", "ggx"}, {"base_color", {0.95, 0.8, 0.5}}, {"roughness", o.roughness}, {"metallic", 1.0}}}}},
-          {"meshes", json::array({json{{"path", "box.obj"},
-                                       {"transform", {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
-                                       {"material", "floor"}},
-                                  json{{"path", "sphere.obj"}, {"transform", {{"translate", {0.0, 0.0, 1.0}}}}, {"material", "glossy"}}})},
+            {"glossy",
+             {{"type", "ggx"},
+              {"base_color", {0.95, 0.8, 0.5}},
+              {"roughness", o.roughness},
+              {"metallic", 1.0}}}}},
+          {"meshes",
+           json::array({json{{"path", "box.obj"},
+                             {"transform",
+                              {{"translate", {-5.0, -5.0, -0.1}}, {"scale", {10.0, 10.0, 0.1}}}},
+                             {"material", "floor"}},
+                        json{{"path", "sphere.obj"},
+                             {"transform", {{"translate", {0.0, 0.0, 1.0}}}},
+                             {"material", "glossy"}}})},
           {"environment", {{"sequence", "probe_%04d.exr"}, {"fps", 1}}},
-          {"camera", {{"eye", {0.0, -4.2, 2.4}}, {"target", {0.0, 0.0, 0.8}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 42.0},
-                      {"width", o.size}, {"height", o.size}}},
+          {"camera",
+           {{"eye", {0.0, -4.2, 2.4}},
+            {"target", {0.0, 0.0, 0.8}},
+            {"up", {0.0, 0.0, 1.0}},
+            {"fov", 42.0},
+            {"width", o.size},
+            {"height", o.size}}},
           {"gi", {{"method", "direct"}, {"mode", "radiance_cache"}, {"seed", 1}}}};
     }
     std::ofstream(dir / "scene.json") << sceneJson.dump(2);
@@ -260,7 +293,8 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
       char name[64];
       std::snprintf(name, sizeof name, "probe_%04d.exr", f);
       std::ifstream in(dir / name, std::ios::binary);
-      stampText += std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      stampText +=
+          std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     }
     char stamp[32];
     std::snprintf(stamp, sizeof stamp, "%016zx", std::hash<std::string>{}(stampText));
@@ -287,7 +321,8 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
         HdrImage half[2];
         for (int k = 0; k < 2; ++k) {
           char name[128];
-          std::snprintf(name, sizeof name, "reference_%s_%dspp_%04d_%c.exr", stamp, o.referenceSpp, f, "ab"[k]);
+          std::snprintf(name, sizeof name, "reference_%s_%dspp_%04d_%c.exr", stamp, o.referenceSpp,
+                        f, "ab"[k]);
           const fs::path file = dir / name;
           if (fs::exists(file)) {
             half[k] = readHdrImage(file.string());
@@ -297,34 +332,39 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
           rs->setEnvironment(probe->at(cameras[size_t(f)].time));
           ro.seed = 2 * uint64_t(f) + uint64_t(k) + 1;
           ro.maxSamplesPerPixel = std::max(o.referenceSpp / 2, 1);
-          const ReferenceResult r =
-              renderReference(*rs, cameras[size_t(f)], ro, [](const ReferenceProgress&) { return true; });
+          const ReferenceResult r = renderReference(*rs, cameras[size_t(f)], ro,
+                                                    [](const ReferenceProgress&) { return true; });
           writeExr(file.string(), r.image,
-                   {{"nestlight:method", "direct"}, {"nestlight:samples", std::to_string(r.samplesPerPixel)},
+                   {{"nestlight:method", "direct"},
+                    {"nestlight:samples", std::to_string(r.samplesPerPixel)},
                     {"nestlight:pixel_centres", "1"}});
           half[k] = r.image;
-          say("bench ibl: %s reference frame %d (%c): %d spp in %.1f s\n", sceneName.c_str(), f, "ab"[k],
-              r.samplesPerPixel, r.seconds);
+          say("bench ibl: %s reference frame %d (%c): %d spp in %.1f s\n", sceneName.c_str(), f,
+              "ab"[k], r.samplesPerPixel, r.seconds);
         }
         HdrImage mean = half[0];
-        for (size_t i = 0; i < mean.rgb.size(); ++i) mean.rgb[i] = 0.5f * (half[0].rgb[i] + half[1].rgb[i]);
+        for (size_t i = 0; i < mean.rgb.size(); ++i)
+          mean.rgb[i] = 0.5f * (half[0].rgb[i] + half[1].rgb[i]);
         // The mean of two halves: its variance is a quarter of E (a - b)^2.
         const Sums d = maskedSums(half[0], half[1], mask);
         const Sums m = maskedSums(mean, mean, mask);
         refNoise2.push_back(m.ref2 > 0 ? d.err2 / 4 / m.ref2 : 0);
         refs.push_back(std::move(mean));
       }
-      say("bench ibl: %s reference: %d spp, its own relative error %.4f (median over frames)\n", sceneName.c_str(),
-          o.referenceSpp, std::sqrt(medianOf(refNoise2)));
+      say("bench ibl: %s reference: %d spp, its own relative error %.4f (median over frames)\n",
+          sceneName.c_str(), o.referenceSpp, std::sqrt(medianOf(refNoise2)));
     }
     std::vector<double> refNoise;
     for (double v : refNoise2) refNoise.push_back(std::sqrt(v));
-    json sceneOut = {{"scene", sceneName}, {"reference_relative_error_per_frame", refNoise}, {"estimators", json::array()}};
+    json sceneOut = {{"scene", sceneName},
+                     {"reference_relative_error_per_frame", refNoise},
+                     {"estimators", json::array()}};
     std::vector<PlotSeries> speedSeries, frameSeries;
     json envBaseline;
     std::map<std::string, json> timeTos;
     for (const std::string& est : o.estimators) {
-      std::vector<std::pair<double, double>> curve;  // (median ms, median relative L2) per sample count
+      std::vector<std::pair<double, double>>
+          curve;  // (median ms, median relative L2) per sample count
       PlotSeries speed{est, {}};
       json estOut = {{"estimator", est}, {"levels", json::array()}};
       for (int q : o.samples) {
@@ -357,7 +397,8 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
           double var = 0;
           if (o.variance) {
             const Sums d = maskedSums(a[size_t(f)].image, b[size_t(f)].image, mask);
-            var = e.ref2 > 0 ? d.err2 / 2 / e.ref2 : 0;  // E (a - b)^2 = 2 var, relative to mean r^2
+            var =
+                e.ref2 > 0 ? d.err2 / 2 / e.ref2 : 0;  // E (a - b)^2 = 2 var, relative to mean r^2
           }
           double fl = 0;
           if (f > 0) {
@@ -371,8 +412,9 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
           errs.push_back(rel), vars.push_back(var), ms.push_back(a[size_t(f)].seconds * 1e3);
           const BlockStats bs = blockStats(a[size_t(f)].image, refs[size_t(f)], mask);
           blockErrs.push_back(bs.relativeL2), meanRatios.push_back(bs.meanRatio);
-          csv << sceneName << "," << est << "," << q << "," << f << "," << ms.back() << "," << rel << "," << errsNet.back() << "," << var << ","
-              << (f > 0 ? std::to_string(fl) : "") << "," << bs.relativeL2 << "," << bs.meanRatio << "\n";
+          csv << sceneName << "," << est << "," << q << "," << f << "," << ms.back() << "," << rel
+              << "," << errsNet.back() << "," << var << "," << (f > 0 ? std::to_string(fl) : "")
+              << "," << bs.relativeL2 << "," << bs.meanRatio << "\n";
         }
         double timingMs = 0;
         if (o.timingSize > 0) {
@@ -390,11 +432,14 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
           for (int f = 0; f < o.frames; ++f) fs.points.push_back({double(f), errsNet[size_t(f)]});
           frameSeries.push_back(fs);
         }
-        say("bench ibl: %-10s %-4s %3d spp: %8.1f ms/frame at %d^2 (%8.1f ms at %d^2), relative L2 %.4f (%.4f without "
-            "the reference's noise; median of %d frames), relative variance %.2e, flicker %.4f; 4x4 blocks: relative L2 "
+        say("bench ibl: %-10s %-4s %3d spp: %8.1f ms/frame at %d^2 (%8.1f ms at %d^2), relative L2 "
+            "%.4f (%.4f without "
+            "the reference's noise; median of %d frames), relative variance %.2e, flicker %.4f; "
+            "4x4 blocks: relative L2 "
             "%.4f, mean %.4f of the reference's\n",
-            sceneName.c_str(), est.c_str(), q, medMs, o.size, timingMs, o.timingSize, medianOf(errs), medErr, o.frames,
-            medianOf(vars), medianOf(flick), medianOf(blockErrs), medianOf(meanRatios));
+            sceneName.c_str(), est.c_str(), q, medMs, o.size, timingMs, o.timingSize,
+            medianOf(errs), medErr, o.frames, medianOf(vars), medianOf(flick), medianOf(blockErrs),
+            medianOf(meanRatios));
         estOut["levels"].push_back({{"samples", q},
                                     {"median_ms", medMs},
                                     {"timing_ms", timingMs},
@@ -423,20 +468,25 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
       std::string best;
       double bestMs = INFINITY;
       for (const auto& [e, t] : timeTos)
-        if (e != "env" && t["ms"].is_number() && t["ms"].get<double>() < bestMs) bestMs = t["ms"].get<double>(), best = e;
+        if (e != "env" && t["ms"].is_number() && t["ms"].get<double>() < bestMs)
+          bestMs = t["ms"].get<double>(), best = e;
       if (!best.empty()) {
         const double speedup = timeTos["env"]["ms"].get<double>() / bestMs;
         sceneOut["best_to_5pct"] = {{"estimator", best}, {"speedup_over_env", speedup}};
-        say("bench ibl: %s: %s reaches 5%% in %.1f ms a frame (%d^2), %.2fx faster than environment sampling alone\n",
-            sceneName.c_str(), best.c_str(), bestMs, o.timingSize > 0 ? o.timingSize : o.size, speedup);
+        say("bench ibl: %s: %s reaches 5%% in %.1f ms a frame (%d^2), %.2fx faster than "
+            "environment sampling alone\n",
+            sceneName.c_str(), best.c_str(), bestMs, o.timingSize > 0 ? o.timingSize : o.size,
+            speedup);
       }
     }
     const int timeSize = o.timingSize > 0 ? o.timingSize : o.size;
-    writeSvgPlot((o.out / (sceneName + "_speed.svg")).string(), "ibl on " + sceneName + ": time against error",
-                 "ms per frame (" + std::to_string(timeSize) + "^2)", "relative L2 error (median over frames, net)",
-                 speedSeries, true, true);
-    writeSvgPlot((o.out / (sceneName + "_frames.svg")).string(), "ibl on " + sceneName + ": error per frame",
-                 "frame", "relative L2 error (the reference's noise taken out)", frameSeries, false, true);
+    writeSvgPlot((o.out / (sceneName + "_speed.svg")).string(),
+                 "ibl on " + sceneName + ": time against error",
+                 "ms per frame (" + std::to_string(timeSize) + "^2)",
+                 "relative L2 error (median over frames, net)", speedSeries, true, true);
+    writeSvgPlot((o.out / (sceneName + "_frames.svg")).string(),
+                 "ibl on " + sceneName + ": error per frame", "frame",
+                 "relative L2 error (the reference's noise taken out)", frameSeries, false, true);
     all["scenes"].push_back(sceneOut);
   }
   std::ofstream(o.out / "bench_ibl.json") << all.dump(2);

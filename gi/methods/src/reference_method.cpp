@@ -14,7 +14,9 @@ namespace nestlight::gi {
 
 namespace {
 
-void logLine(const std::string& line) { std::fprintf(stderr, "  %s\n", line.c_str()); }
+void logLine(const std::string& line) {
+  std::fprintf(stderr, "  %s\n", line.c_str());
+}
 
 class ReferenceMethod : public Method {
  public:
@@ -31,9 +33,11 @@ class ReferenceMethod : public Method {
   MethodFrame render(const SceneCamera& camera) override {
     int lastReported = 0;
     auto progress = [&](const ReferenceProgress& p) {
-      if (!quiet_ && (p.samplesPerPixel >= 2 * lastReported || p.samplesPerPixel == options_.maxSamplesPerPixel)) {
+      if (!quiet_ && (p.samplesPerPixel >= 2 * lastReported ||
+                      p.samplesPerPixel == options_.maxSamplesPerPixel)) {
         lastReported = p.samplesPerPixel;
-        std::fprintf(stderr, "  %5d spp  %7.2f s  estimated error %.4f\n", p.samplesPerPixel, p.seconds, p.relativeError);
+        std::fprintf(stderr, "  %5d spp  %7.2f s  estimated error %.4f\n", p.samplesPerPixel,
+                     p.seconds, p.relativeError);
       }
       return true;
     };
@@ -59,11 +63,14 @@ class ReferenceMethod : public Method {
                     {"nestlight:stop", r.stopReason}};
     if (environment_) f.attributes["nestlight:environment_frame"] = std::to_string(envFrame);
     char line[256];
-    std::snprintf(line, sizeof line, "%d samples/pixel in %.2f s (%s), estimated relative error %.4f, %.2f M rays/s, %.0f k samples/s",
-                  f.samplesPerPixel, f.seconds, f.stopReason.c_str(), f.relativeError, f.raysPerSecond() / 1e6,
-                  f.samplesPerSecond() / 1e3);
+    std::snprintf(line, sizeof line,
+                  "%d samples/pixel in %.2f s (%s), estimated relative error %.4f, %.2f M rays/s, "
+                  "%.0f k samples/s",
+                  f.samplesPerPixel, f.seconds, f.stopReason.c_str(), f.relativeError,
+                  f.raysPerSecond() / 1e6, f.samplesPerSecond() / 1e3);
     f.summary = line;
-    if (f.nonFiniteSamples) f.summary += ", " + std::to_string(f.nonFiniteSamples) + " non-finite samples dropped";
+    if (f.nonFiniteSamples)
+      f.summary += ", " + std::to_string(f.nonFiniteSamples) + " non-finite samples dropped";
     return f;
   }
 

@@ -31,27 +31,32 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
     scene.gi.parameters.update(ov.parameters);
   }
   if (!ov.output.empty()) scene.output.exr = ov.output;
-  if (scene.output.exr.empty()) scene.output.exr = file.parent_path() / (file.stem().string() + ".exr");
+  if (scene.output.exr.empty())
+    scene.output.exr = file.parent_path() / (file.stem().string() + ".exr");
   if (scene.output.exr.extension() != ".exr")
-    throw Error(scene.output.exr.string(), "", "the scene renderer writes linear HDR: give a .exr file");
+    throw Error(scene.output.exr.string(), "",
+                "the scene renderer writes linear HDR: give a .exr file");
   if (!ov.quiet) std::fprintf(stderr, "render: loading %s\n", file.c_str());
   if (!sceneHasLight(scene, scene.gi.mode))
-    std::fprintf(stderr,
-                 "render: warning: %s: nothing lights this scene in albedo mode (no lights, environment or "
-                 "emissive mesh; scan colours are reflectances there): the image will be black\n",
-                 file.c_str());
+    std::fprintf(
+        stderr,
+        "render: warning: %s: nothing lights this scene in albedo mode (no lights, environment or "
+        "emissive mesh; scan colours are reflectances there): the image will be black\n",
+        file.c_str());
   MethodContext mc;
   mc.quiet = ov.quiet;
   std::unique_ptr<Method> method = createMethod(scene, mc);
-  const double loadSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double loadSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!ov.quiet)
     std::fprintf(stderr, "render: %s, %s mode, %dx%d (loaded in %.1f s)\n", scene.gi.method.c_str(),
-                 scene.gi.mode == RadianceMode::Albedo ? "albedo" : "radiance-cache", scene.camera.width,
-                 scene.camera.height, loadSeconds);
+                 scene.gi.mode == RadianceMode::Albedo ? "albedo" : "radiance-cache",
+                 scene.camera.width, scene.camera.height, loadSeconds);
   // A camera path renders one image per frame, named base_0000.exr, base_0001.exr, ...
   const std::vector<SceneCamera> cameras = sceneCameras(scene, ov.still);
   // With -o the PNG (when the scene asks for one) goes beside the EXR under the same name.
-  if (!scene.output.png.empty() && !ov.output.empty()) scene.output.png = fs::path(ov.output).replace_extension(".png");
+  if (!scene.output.png.empty() && !ov.output.empty())
+    scene.output.png = fs::path(ov.output).replace_extension(".png");
   auto numbered = [&](const fs::path& p, size_t f) {
     if (cameras.size() == 1 || p.empty()) return p;
     char suffix[16];
@@ -62,7 +67,8 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
   MethodFrame r;
   fs::path exr;
   for (size_t f = 0; f < cameras.size(); ++f) {
-    if (!ov.quiet && cameras.size() > 1) std::fprintf(stderr, "render: frame %zu of %zu\n", f + 1, cameras.size());
+    if (!ov.quiet && cameras.size() > 1)
+      std::fprintf(stderr, "render: frame %zu of %zu\n", f + 1, cameras.size());
     r = method->render(cameras[f]);
     ImageAttributes attrs = r.attributes;
     attrs["nestlight:method"] = scene.gi.method;

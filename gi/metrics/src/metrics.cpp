@@ -409,7 +409,8 @@ HdrImage boxFilter(const HdrImage& img, int k) {
             if (std::isfinite(v)) sum[c] += v, ++n[c];
           }
       for (int c = 0; c < 3; ++c)
-        out.rgb[3 * (size_t(by) * w + bx) + c] = n[c] ? float(sum[c] / n[c]) : std::numeric_limits<float>::quiet_NaN();
+        out.rgb[3 * (size_t(by) * w + bx) + c] =
+            n[c] ? float(sum[c] / n[c]) : std::numeric_limits<float>::quiet_NaN();
     }
   return out;
 }

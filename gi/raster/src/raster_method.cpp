@@ -6,16 +6,14 @@
 // Representation for Irradiance Environment Maps").
 #include "nestlight/gi/raster/raster_method.h"
 
-#include <unordered_map>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <thread>
-
 #include <glm/gtc/matrix_transform.hpp>
+#include <thread>
+#include <unordered_map>
 
 #include "nestlight/frame/draw_tree.h"
 #include "nestlight/frame/frame_graph.h"
@@ -42,7 +40,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr double kPiD = 3.14159265358979323846;
 
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // A box in the scene's local frame.
 struct LocalBox {
@@ -67,25 +67,35 @@ std::array<glm::vec3, 9> irradianceSh(const EnvironmentMap& env) {
   // (a constant sky is one texel, which a single sample would put all on the equator's -x
   // point: irradiance 6.7 times too high on a face looking that way), each weighted by its
   // exact solid angle (cos theta0 - cos theta1) dphi.
-  const int sx = std::max(1, (128 + img.width - 1) / img.width), sy = std::max(1, (64 + img.height - 1) / img.height);
+  const int sx = std::max(1, (128 + img.width - 1) / img.width),
+            sy = std::max(1, (64 + img.height - 1) / img.height);
   const int W = img.width * sx, H = img.height * sy;
   for (int y = 0; y < H; ++y) {
     const double t0 = kPiD * y / H, t1 = kPiD * (y + 1) / H, theta = 0.5 * (t0 + t1);
     const double dOmega = (2 * kPiD / W) * (std::cos(t0) - std::cos(t1));
     for (int x = 0; x < W; ++x) {
       const double phi = 2 * kPiD * (x + 0.5) / W + rot;
-      const double dx = std::sin(theta) * std::cos(phi), dy = std::sin(theta) * std::sin(phi), dz = std::cos(theta);
+      const double dx = std::sin(theta) * std::cos(phi), dy = std::sin(theta) * std::sin(phi),
+                   dz = std::cos(theta);
       const Rgb c = img.get(x / sx, y / sy);
       const glm::dvec3 v = glm::dvec3(c.r, c.g, c.b) * double(env.scale()) * dOmega;
       if (!std::isfinite(v.x + v.y + v.z)) continue;
-      const double Y[9] = {0.282095, 0.488603 * dy, 0.488603 * dz, 0.488603 * dx, 1.092548 * dx * dy,
-                           1.092548 * dy * dz, 0.315392 * (3 * dz * dz - 1), 1.092548 * dx * dz,
+      const double Y[9] = {0.282095,
+                           0.488603 * dy,
+                           0.488603 * dz,
+                           0.488603 * dx,
+                           1.092548 * dx * dy,
+                           1.092548 * dy * dz,
+                           0.315392 * (3 * dz * dz - 1),
+                           1.092548 * dx * dz,
                            0.546274 * (dx * dx - dy * dy)};
       for (int k = 0; k < 9; ++k) L[k] += v * Y[k];
     }
   }
-  const double A[9] = {kPiD, 2 * kPiD / 3, 2 * kPiD / 3, 2 * kPiD / 3, kPiD / 4, kPiD / 4, kPiD / 4, kPiD / 4, kPiD / 4};
-  const double C[9] = {0.282095, 0.488603, 0.488603, 0.488603, 1.092548, 1.092548, 0.315392, 1.092548, 0.546274};
+  const double A[9] = {kPiD,     2 * kPiD / 3, 2 * kPiD / 3, 2 * kPiD / 3, kPiD / 4,
+                       kPiD / 4, kPiD / 4,     kPiD / 4,     kPiD / 4};
+  const double C[9] = {0.282095, 0.488603, 0.488603, 0.488603, 1.092548,
+                       1.092548, 0.315392, 1.092548, 0.546274};
   std::array<glm::vec3, 9> out;
   for (int k = 0; k < 9; ++k) out[k] = glm::vec3(L[k] * A[k] * C[k]);
   return out;
@@ -110,15 +120,18 @@ struct GpuScan {
   frame::DrawTree shadowTree;
   streaming::View shadowView;
   float colourScale = 1;
-  std::shared_ptr<const ScanColours> colours;  // the scene's octrees[].colour (a layer: drawn as HDR)
+  std::shared_ptr<const ScanColours>
+      colours;  // the scene's octrees[].colour (a layer: drawn as HDR)
 };
 
 class RasterMethod : public Method, public RasterFrame {
  public:
-  RasterMethod(const Scene& scene, const MethodContext& mc, std::unique_ptr<RasterExtension> extension)
+  RasterMethod(const Scene& scene, const MethodContext& mc,
+               std::unique_ptr<RasterExtension> extension)
       : scene_(scene), quiet_(mc.quiet), extension_(std::move(extension)) {
     graph_.setSyncTiming(mc.syncPassTiming);
-    params_ = parseRasterParameters(scene, extension_ ? extension_->parameterKeys() : std::vector<std::string>{});
+    params_ = parseRasterParameters(
+        scene, extension_ ? extension_->parameterKeys() : std::vector<std::string>{});
     if (!mc.glContextCurrent) {
       context_ = gl::createHeadlessContext();
       if (!quiet_) std::fprintf(stderr, "raster: %s\n", context_->description().c_str());
@@ -127,10 +140,13 @@ class RasterMethod : public Method, public RasterFrame {
     if (params_.computeRasteriser)
       for (const auto& o : scene_.octrees)
         if (o.colourScale != scene_.octrees.front().colourScale ||
-            (o.colour == ScanColours::kRecorded) != (scene_.octrees.front().colour == ScanColours::kRecorded))
+            (o.colour == ScanColours::kRecorded) !=
+                (scene_.octrees.front().colour == ScanColours::kRecorded))
           throw Error(scene_.file.string(), "gi.parameters.rasteriser",
-                      "the compute rasteriser averages the scans' colours before scaling them: give every octree the "
-                      "same colour_scale and the same kind of colour (recorded or a layer), or use \"points\"");
+                      "the compute rasteriser averages the scans' colours before scaling them: "
+                      "give every octree the "
+                      "same colour_scale and the same kind of colour (recorded or a layer), or use "
+                      "\"points\"");
     loadMeshes();
     setUpLights();
     setUpEnvironment();
@@ -198,7 +214,8 @@ class RasterMethod : public Method, public RasterFrame {
     if (context_) context_->makeCurrent();
     setOutput(radianceTarget_);
     const int W = camera.width, H = camera.height;
-    if (W <= 0 || H <= 0) throw Error(scene_.file.string(), "camera", "the image size must be positive");
+    if (W <= 0 || H <= 0)
+      throw Error(scene_.file.string(), "camera", "the image size must be positive");
     selectEnvironment(camera);
     const auto tStream = Clock::now();
     const uint64_t drawPoints = stream(camera, true);
@@ -211,7 +228,8 @@ class RasterMethod : public Method, public RasterFrame {
       while (tile > 64 && size_t(tile + 2) * size_t(tile + 2) * 16 > gl::kMaxSsboRange) tile /= 2;
     std::vector<float> rgba = graph_.execute(W, H, tile);
     // An extension tuning itself to a time budget may ask for the still again.
-    for (int again = 0; again < 4 && extension_ && extension_->afterFrame(secondsSince(t0), true); ++again) {
+    for (int again = 0; again < 4 && extension_ && extension_->afterFrame(secondsSince(t0), true);
+         ++again) {
       const auto tAgain = Clock::now();
       rgba = graph_.execute(W, H, tile);
       t0 = tAgain;
@@ -226,12 +244,14 @@ class RasterMethod : public Method, public RasterFrame {
     return f;
   }
 
-  unsigned renderInteractive(const SceneCamera& camera, float exposureStops, MethodFrame* stats) override {
+  unsigned renderInteractive(const SceneCamera& camera, float exposureStops,
+                             MethodFrame* stats) override {
     if (context_) context_->makeCurrent();
     if (params_.computeRasteriser && size_t(camera.width) * camera.height * 16 > gl::kMaxSsboRange)
       throw Error(scene_.file.string(), "gi.parameters.rasteriser",
                   "a " + std::to_string(camera.width) + "x" + std::to_string(camera.height) +
-                      " window is too large for the compute rasteriser's per-pixel buffers (128 MiB); use \"points\"");
+                      " window is too large for the compute rasteriser's per-pixel buffers (128 "
+                      "MiB); use \"points\"");
     setOutput("display");
     *exposure_ = exposureStops;
     selectEnvironment(camera);
@@ -247,13 +267,14 @@ class RasterMethod : public Method, public RasterFrame {
   }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
-    std::vector<std::pair<std::string, std::string>> p = {{"shadow_map_size", std::to_string(params_.shadowMapSize)},
-            {"rasteriser", params_.computeRasteriser ? "compute" : "points"},
-            {"splatting", params_.hqs ? "hqs" : "basic"},
-            {"splat_scale", std::to_string(params_.splatScale).substr(0, 4)},
-            {"point_budget", std::to_string(params_.pointBudget)},
-            {"gpu_budget_mb", std::to_string(params_.gpuBytes >> 20)},
-            {"max_tile", std::to_string(params_.maxTile)}};
+    std::vector<std::pair<std::string, std::string>> p = {
+        {"shadow_map_size", std::to_string(params_.shadowMapSize)},
+        {"rasteriser", params_.computeRasteriser ? "compute" : "points"},
+        {"splatting", params_.hqs ? "hqs" : "basic"},
+        {"splat_scale", std::to_string(params_.splatScale).substr(0, 4)},
+        {"point_budget", std::to_string(params_.pointBudget)},
+        {"gpu_budget_mb", std::to_string(params_.gpuBytes >> 20)},
+        {"max_tile", std::to_string(params_.maxTile)}};
     if (extension_)
       for (auto& kv : extension_->parameters()) p.push_back(kv);
     return p;
@@ -279,7 +300,8 @@ class RasterMethod : public Method, public RasterFrame {
     for (const LocalBox& b : objectBounds_) {
       float objectFar = 0;
       for (int c = 0; c < 8; ++c) {
-        const glm::vec3 p((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+        const glm::vec3 p((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y,
+                          (c & 4) ? b.hi.z : b.lo.z);
         objectFar = std::max(objectFar, glm::length(p - eye));
       }
       const float objectNear = glm::length(glm::clamp(eye, b.lo, b.hi) - eye);
@@ -293,13 +315,14 @@ class RasterMethod : public Method, public RasterFrame {
     const auto tStream = Clock::now();
     uint64_t drawPoints = 0;
     for (auto& s : scans_) {
-      const streaming::View view = streaming::perspectiveView(camera.eye, camera.target, camera.up, fovY, W, H,
-                                                              double(nearZ), double(farZ));
+      const streaming::View view = streaming::perspectiveView(
+          camera.eye, camera.target, camera.up, fovY, W, H, double(nearZ), double(farZ));
       streaming::FrameStats st = s.streamer->update(view);
       while (complete && !st.complete) {
         if (secondsSince(tStream) > params_.streamTimeoutSeconds)
-          throw Error(s.reader->dir().string(), "", "the view's cut did not load within " +
-                                                        std::to_string(params_.streamTimeoutSeconds) + " s");
+          throw Error(s.reader->dir().string(), "",
+                      "the view's cut did not load within " +
+                          std::to_string(params_.streamTimeoutSeconds) + " s");
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
         st = s.streamer->update(view);
       }
@@ -308,8 +331,9 @@ class RasterMethod : public Method, public RasterFrame {
       streaming::FrameStats sst = s.shadowStreamer->update(s.shadowView);
       while (complete && !sst.complete) {
         if (secondsSince(tStream) > params_.streamTimeoutSeconds)
-          throw Error(s.reader->dir().string(), "", "the lights' cut did not load within " +
-                                                        std::to_string(params_.streamTimeoutSeconds) + " s");
+          throw Error(s.reader->dir().string(), "",
+                      "the lights' cut did not load within " +
+                          std::to_string(params_.streamTimeoutSeconds) + " s");
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
         sst = s.shadowStreamer->update(s.shadowView);
       }
@@ -321,12 +345,14 @@ class RasterMethod : public Method, public RasterFrame {
     u.viewFromWorld = glm::lookAt(eye, target, up);
     u.clipFromView = glm::perspective(float(fovY), float(W) / float(H), nearZ, farZ);
     u.eye = glm::vec4(eye, float(H) / (2.0f * std::tan(float(fovY) / 2)));
-    const ShadowFitCamera fitCamera{u.viewFromWorld, std::tan(float(fovY) / 2), float(W) / float(H), nearZ, farZ};
+    const ShadowFitCamera fitCamera{u.viewFromWorld, std::tan(float(fovY) / 2), float(W) / float(H),
+                                    nearZ, farZ};
     if (fitShadowsToCamera_)
       fitShadowsToCamera(fitCamera);
     else if (clusters_.boxes.size() > 1)
       fitLightViewsToClusters(fitCamera);
-    u.counts = glm::ivec4(int(lightRecords_.size()), scene_.gi.mode == RadianceMode::Albedo ? 1 : 0, frameNumber_++, 0);
+    u.counts = glm::ivec4(int(lightRecords_.size()), scene_.gi.mode == RadianceMode::Albedo ? 1 : 0,
+                          frameNumber_++, 0);
     beforeFrameSeconds_ = 0;
     if (extension_) {
       // Per-frame preparation (hierarchies joined, an environment's sampling table) is the
@@ -366,8 +392,11 @@ class RasterMethod : public Method, public RasterFrame {
         cut.push_back(c);
       }
     }
-    auto same = [](const CutNode& a, const CutNode& b) { return a.buffer == b.buffer && a.numPoints == b.numPoints; };
-    if (cut.size() != lightsCut_.size() || !std::equal(cut.begin(), cut.end(), lightsCut_.begin(), same)) {
+    auto same = [](const CutNode& a, const CutNode& b) {
+      return a.buffer == b.buffer && a.numPoints == b.numPoints;
+    };
+    if (cut.size() != lightsCut_.size() ||
+        !std::equal(cut.begin(), cut.end(), lightsCut_.begin(), same)) {
       lightsCut_ = std::move(cut);
       ++cutGeneration_;
     }
@@ -381,11 +410,13 @@ class RasterMethod : public Method, public RasterFrame {
                     {"nestlight:splat_scale", std::to_string(params_.splatScale)},
                     {"nestlight:points", std::to_string(drawPoints)},
                     {"nestlight:seconds", std::to_string(f.seconds)}};
-    if (envSource_ && envSource_->isSequence()) f.attributes["nestlight:environment_frame"] = std::to_string(envFrame_);
+    if (envSource_ && envSource_->isSequence())
+      f.attributes["nestlight:environment_frame"] = std::to_string(envFrame_);
     // Directional maps' texels follow the camera (world units).
     for (size_t i = 0; i < lightRecords_.size(); ++i)
       if (int(lightRecords_[i].position.w) == NL_LIGHT_DIRECTIONAL)
-        f.attributes["nestlight:shadow_texel:" + std::to_string(i)] = std::to_string(lightRecords_[i].shadow.y);
+        f.attributes["nestlight:shadow_texel:" + std::to_string(i)] =
+            std::to_string(lightRecords_[i].shadow.y);
     std::string passes;
     for (const auto& [name, ms] : f.passMs) {
       passes += (passes.empty() ? "" : ", ") + name + " " + std::to_string(ms).substr(0, 6) + " ms";
@@ -396,13 +427,15 @@ class RasterMethod : public Method, public RasterFrame {
     if (extension_) f.attributes["nestlight:method"] = extension_->name();
     // Nodes evicted so far (both cuts): streaming tests assert that eviction really happened.
     uint64_t evicted = 0, lightsEvicted = 0;
-    for (const auto& s : scans_) evicted += s.streamer->totals().evicted, lightsEvicted += s.shadowStreamer->totals().evicted;
+    for (const auto& s : scans_)
+      evicted += s.streamer->totals().evicted, lightsEvicted += s.shadowStreamer->totals().evicted;
     f.attributes["nestlight:evicted_nodes"] = std::to_string(evicted);
     f.attributes["nestlight:lights_cut_evicted_nodes"] = std::to_string(lightsEvicted);
     char line[256];
-    std::snprintf(line, sizeof line, "%llu points, %zu lights, %d px shadow maps, %.1f ms (stream %.2f s)",
-                  (unsigned long long)drawPoints, lightRecords_.size(), params_.shadowMapSize, f.seconds * 1e3,
-                  streamSeconds);
+    std::snprintf(line, sizeof line,
+                  "%llu points, %zu lights, %d px shadow maps, %.1f ms (stream %.2f s)",
+                  (unsigned long long)drawPoints, lightRecords_.size(), params_.shadowMapSize,
+                  f.seconds * 1e3, streamSeconds);
     f.summary = std::string(line) + "; GPU: " + passes;
     if (extension_) extension_->describe(*this, f);
   }
@@ -413,7 +446,7 @@ class RasterMethod : public Method, public RasterFrame {
       s.reader = std::make_unique<OctreeReader>(o.path);
       const Metadata& meta = s.reader->metadata();
       s.colours = std::make_shared<const ScanColours>(o.path, meta, o.colour);
-      const frame::ColourMode mode = s.colours->layer()              ? frame::ColourMode::Hdr
+      const frame::ColourMode mode = s.colours->layer()            ? frame::ColourMode::Hdr
                                      : meta.layout.has(attr::kRgb) ? frame::ColourMode::Rgb
                                                                    : frame::ColourMode::Elevation;
       if (!s.colours->hasColour() && !quiet_)
@@ -433,8 +466,9 @@ class RasterMethod : public Method, public RasterFrame {
       const glm::dvec3 centre = 0.5 * (lo + hi);
       const double radius = std::max(0.5 * glm::length(hi - lo), 1e-3);
       const glm::dvec3 eye = centre + glm::normalize(glm::dvec3(1, 0.7, 1.3)) * (2.0 * radius);
-      s.shadowView = streaming::perspectiveView(eye, centre, {0, 0, 1}, glm::radians(60.0), params_.shadowMapSize,
-                                                params_.shadowMapSize, radius * 0.5, radius * 3.5);
+      s.shadowView = streaming::perspectiveView(eye, centre, {0, 0, 1}, glm::radians(60.0),
+                                                params_.shadowMapSize, params_.shadowMapSize,
+                                                radius * 0.5, radius * 3.5);
       streaming::Budgets sb = b;
       sb.points = std::max<uint64_t>(params_.pointBudget / 2, 1);
       sb.gpuBytes = std::max<uint64_t>(params_.gpuBytes / 2, 1 << 20);
@@ -503,21 +537,28 @@ class RasterMethod : public Method, public RasterFrame {
     litClusters_.assign(clusters_.boxes.size(), true);
     litBounds_ = bounds_;
     if (scene_.lights.size() > NL_MAX_LIGHTS)
-      throw Error(scene_.file.string(), "lights", "the raster method takes at most " + std::to_string(NL_MAX_LIGHTS) +
-                                                      " lights; the scene has " + std::to_string(scene_.lights.size()));
+      throw Error(scene_.file.string(), "lights",
+                  "the raster method takes at most " + std::to_string(NL_MAX_LIGHTS) +
+                      " lights; the scene has " + std::to_string(scene_.lights.size()));
     const glm::vec3 centre = bounds_.centre();
     const float R = std::max(bounds_.radius(), 1e-3f);
     const int S = params_.shadowMapSize;
     for (const Light& l : scene_.lights) {
       frame::LightRecord r{};
       const glm::vec3 pos = scene_.local(l.position);
-      const glm::vec3 dir = glm::length(l.direction) > 0 ? glm::normalize(l.direction) : glm::vec3(0, 0, -1);
-      const int type = l.type == LightType::Point ? NL_LIGHT_POINT : l.type == LightType::Spot ? NL_LIGHT_SPOT : NL_LIGHT_DIRECTIONAL;
+      const glm::vec3 dir =
+          glm::length(l.direction) > 0 ? glm::normalize(l.direction) : glm::vec3(0, 0, -1);
+      const int type = l.type == LightType::Point  ? NL_LIGHT_POINT
+                       : l.type == LightType::Spot ? NL_LIGHT_SPOT
+                                                   : NL_LIGHT_DIRECTIONAL;
       r.position = glm::vec4(pos, float(type));
       r.direction = glm::vec4(dir, 0.0f);
       r.intensity = glm::vec4(l.intensity.r, l.intensity.g, l.intensity.b, 0.0f);
-      r.cone = glm::vec4(std::cos(glm::radians(l.outerAngleDegrees)), std::cos(glm::radians(l.innerAngleDegrees)), 0, 0);
-      auto upFor = [](const glm::vec3& d) { return std::abs(d.z) < 0.9f ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0); };
+      r.cone = glm::vec4(std::cos(glm::radians(l.outerAngleDegrees)),
+                         std::cos(glm::radians(l.innerAngleDegrees)), 0, 0);
+      auto upFor = [](const glm::vec3& d) {
+        return std::abs(d.z) < 0.9f ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
+      };
       const float farL = glm::length(pos - centre) + R * 1.01f;
       const float nearL = std::max(farL * 1e-4f, 1e-4f);
       r.shadow = glm::vec4(float(shadowViews_.size()), 0.0f, nearL, farL);
@@ -529,7 +570,8 @@ class RasterMethod : public Method, public RasterFrame {
         r.shadow.y = fit.texel;
         r.shadow.z = fit.nearZ, r.shadow.w = fit.farZ;
       } else if (type == NL_LIGHT_DIRECTIONAL) {
-        const DirectionalShadowFit fit = fitDirectionalToBox(dir, {bounds_.lo, bounds_.hi}, shadowBoxes_, S);
+        const DirectionalShadowFit fit =
+            fitDirectionalToBox(dir, {bounds_.lo, bounds_.hi}, shadowBoxes_, S);
         shadowViews_.push_back(fit.clipFromWorld);
         shadowViewFromWorld_.push_back(fit.viewFromWorld);
         r.shadow.y = fit.texel;
@@ -543,7 +585,8 @@ class RasterMethod : public Method, public RasterFrame {
         shadowViewFromWorld_.push_back(view);
         r.shadow.y = 2 * std::tan(half) / float(S);
       } else {
-        const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        const glm::vec3 axes[6] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                   {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
         for (const auto& a : axes) {
           const glm::mat4 view = glm::lookAt(pos, pos + a, upFor(a));
           shadowViews_.push_back(glm::perspective(glm::radians(90.0f), 1.0f, nearL, farL) * view);
@@ -553,8 +596,9 @@ class RasterMethod : public Method, public RasterFrame {
       }
       lightRecords_.push_back(r);
     }
-    lightsBuffer_ = gl::Buffer(std::max<size_t>(lightRecords_.size(), 1) * sizeof(frame::LightRecord),
-                               lightRecords_.empty() ? nullptr : lightRecords_.data());
+    lightsBuffer_ =
+        gl::Buffer(std::max<size_t>(lightRecords_.size(), 1) * sizeof(frame::LightRecord),
+                   lightRecords_.empty() ? nullptr : lightRecords_.data());
     std::vector<glm::mat4> views = shadowViews_;
     if (views.empty()) views.emplace_back(1.0f);
     shadowViewsBuffer_ = gl::Buffer(views.size() * sizeof(glm::mat4), views.data());
@@ -567,8 +611,8 @@ class RasterMethod : public Method, public RasterFrame {
     for (frame::LightRecord& r : lightRecords_) {
       if (int(r.position.w) != NL_LIGHT_DIRECTIONAL) continue;
       const size_t layer = size_t(r.shadow.x);
-      const DirectionalShadowFit fit =
-          fitDirectionalShadow(glm::vec3(r.direction), shadowBoxes_, &camera, params_.shadowMapSize);
+      const DirectionalShadowFit fit = fitDirectionalShadow(glm::vec3(r.direction), shadowBoxes_,
+                                                            &camera, params_.shadowMapSize);
       if (fit.clipFromWorld == shadowViews_[layer] && fit.texel == r.shadow.y) continue;
       shadowViews_[layer] = fit.clipFromWorld;
       shadowViewFromWorld_[layer] = fit.viewFromWorld;
@@ -590,7 +634,8 @@ class RasterMethod : public Method, public RasterFrame {
   void fitLightViewsToClusters(const ShadowFitCamera& camera) {
     std::vector<bool> seen(clusters_.boxes.size(), false);
     for (size_t i = 0; i < shadowBoxes_.size(); ++i)
-      if (!seen[size_t(clusters_.of[i])] && meetsFrustum(shadowBoxes_[i], camera)) seen[size_t(clusters_.of[i])] = true;
+      if (!seen[size_t(clusters_.of[i])] && meetsFrustum(shadowBoxes_[i], camera))
+        seen[size_t(clusters_.of[i])] = true;
     if (seen == litClusters_ || std::find(seen.begin(), seen.end(), true) == seen.end()) return;
     litClusters_ = seen;
     litBounds_ = LocalBox{};
@@ -599,8 +644,9 @@ class RasterMethod : public Method, public RasterFrame {
     for (frame::LightRecord& r : lightRecords_) {
       if (int(r.position.w) != NL_LIGHT_DIRECTIONAL) continue;
       const size_t layer = size_t(r.shadow.x);
-      const DirectionalShadowFit fit = fitDirectionalToBox(glm::vec3(r.direction), {litBounds_.lo, litBounds_.hi},
-                                                           shadowBoxes_, params_.shadowMapSize);
+      const DirectionalShadowFit fit =
+          fitDirectionalToBox(glm::vec3(r.direction), {litBounds_.lo, litBounds_.hi}, shadowBoxes_,
+                              params_.shadowMapSize);
       shadowViews_[layer] = fit.clipFromWorld;
       shadowViewFromWorld_[layer] = fit.viewFromWorld;
       r.shadow.y = fit.texel;
@@ -636,8 +682,11 @@ class RasterMethod : public Method, public RasterFrame {
     if ((env.invalidTexels() || (env.black() && env.image().pixels() > 0)) && scene_.environment) {
       const auto& e = *scene_.environment;
       std::string what = (e.sequence.empty() ? e.path : e.sequence).string() + ": environment";
-      if (env.invalidTexels()) what += ": " + std::to_string(env.invalidTexels()) + " NaN, infinite or negative texels set to 0";
-      if (env.black()) what += std::string(env.invalidTexels() ? ";" : ":") + " all black, it adds no light";
+      if (env.invalidTexels())
+        what += ": " + std::to_string(env.invalidTexels()) +
+                " NaN, infinite or negative texels set to 0";
+      if (env.black())
+        what += std::string(env.invalidTexels() ? ";" : ":") + " all black, it adds no light";
       if (what != lastEnvWarning_) std::fprintf(stderr, "nestlight: warning: %s\n", what.c_str());
       lastEnvWarning_ = what;
     }
@@ -656,7 +705,8 @@ class RasterMethod : public Method, public RasterFrame {
       environment_ = gl::Texture(GL_RGBA32F, img.width, img.height, levels);
       environment_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
     }
-    glTextureSubImage2D(environment_.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT, rgba.data());
+    glTextureSubImage2D(environment_.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT,
+                        rgba.data());
     glGenerateTextureMipmap(environment_.id());
   }
 
@@ -664,7 +714,9 @@ class RasterMethod : public Method, public RasterFrame {
     std::vector<frame::MaterialRecord> recs;
     for (const Material& m : scene_.materials) {
       frame::MaterialRecord r{};
-      const int type = m.type == MaterialType::Lambert ? NL_MATERIAL_LAMBERT : m.type == MaterialType::GGX ? NL_MATERIAL_GGX : NL_MATERIAL_PRINCIPLED;
+      const int type = m.type == MaterialType::Lambert ? NL_MATERIAL_LAMBERT
+                       : m.type == MaterialType::GGX   ? NL_MATERIAL_GGX
+                                                       : NL_MATERIAL_PRINCIPLED;
       r.baseColor = glm::vec4(m.baseColor.r, m.baseColor.g, m.baseColor.b, float(type));
       r.params = glm::vec4(m.roughness, m.metallic, m.specular, m.specularTint);
       r.params2 = glm::vec4(m.sheen, m.sheenTint, m.clearcoat, m.clearcoatGloss);
@@ -676,8 +728,9 @@ class RasterMethod : public Method, public RasterFrame {
   }
 
   // Draws every scan's drawn nodes with `program` (shaders/gi/raster/scan.vert).
-  void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
-                 float pixelsPerUnit, bool orthographic, bool lightsCut = false) override {
+  void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
+                 const glm::mat4& viewFromWorld, float pixelsPerUnit, bool orthographic,
+                 bool lightsCut = false) override {
     program.use();
     glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
     glUniformMatrix4fv(program.uniform("uViewFromWorld"), 1, GL_FALSE, &viewFromWorld[0][0]);
@@ -691,18 +744,23 @@ class RasterMethod : public Method, public RasterFrame {
     // Up to 64 px as the viewer; at least 1 px (shadow maps of far scans still occlude).
     glUniform2f(program.uniform("uSizeRange"), 1.0f, kMaxSplatPixels);
     glBindVertexArray(emptyVao_.id());
-    forEachNode(program, [](const streaming::DrawNode& n) { glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints)); },
-                lightsCut);
+    forEachNode(
+        program,
+        [](const streaming::DrawNode& n) { glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints)); },
+        lightsCut);
   }
 
   // Every drawn node of every scan with `program` current: its points bound at
   // NL_SSBO_NODE_POINTS, its uniforms (origin, place in the draw tree, cube size, point count,
   // the scan's colour scale) set; `draw` issues the draw or dispatch.
-  void forEachNode(const gl::ShaderProgram& program, const std::function<void(const streaming::DrawNode&)>& draw,
+  void forEachNode(const gl::ShaderProgram& program,
+                   const std::function<void(const streaming::DrawNode&)>& draw,
                    bool lightsCut = false) {
-    const GLint nodeOrigin = program.uniform("uNodeOrigin"), nodeIndex = program.uniform("uNodeIndex"),
-                nodeSize = program.uniform("uNodeSize"), numPoints = program.uniform("uNumPoints"),
-                colourScale = program.uniform("uColourScale"), hdrColour = program.uniform("uHdrColour");
+    const GLint nodeOrigin = program.uniform("uNodeOrigin"),
+                nodeIndex = program.uniform("uNodeIndex"), nodeSize = program.uniform("uNodeSize"),
+                numPoints = program.uniform("uNumPoints"),
+                colourScale = program.uniform("uColourScale"),
+                hdrColour = program.uniform("uHdrColour");
     for (auto& s : scans_) {
       (lightsCut ? s.shadowTree : s.tree).bind();
       glUniform1f(colourScale, s.colourScale);
@@ -711,9 +769,10 @@ class RasterMethod : public Method, public RasterFrame {
       for (size_t k = 0; k < nodes.size(); ++k) {
         const auto& n = nodes[k];
         if (n.numPoints == 0) continue;
-        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, s.store->buffer(n.handle), 0,
-                          GLsizeiptr(size_t(n.numPoints) * frame::kGpuPointBytes));
-        const glm::vec3 origin = scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, s.store->buffer(n.handle),
+                          0, GLsizeiptr(size_t(n.numPoints) * frame::kGpuPointBytes));
+        const glm::vec3 origin =
+            scene_.local({n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z});
         glUniform3f(nodeOrigin, origin.x, origin.y, origin.z);
         glUniform1i(nodeIndex, int(k));
         glUniform1f(nodeSize, float(n.worldBounds.max.x - n.worldBounds.min.x));
@@ -723,16 +782,19 @@ class RasterMethod : public Method, public RasterFrame {
     }
   }
 
-  void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, bool materials) override {
+  void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
+                  bool materials) override {
     program.use();
     glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
     for (const auto& m : meshes_) {
       if (materials) {
         const Material& mat = scene_.materials.at(m.material);
-        glUniform3f(program.uniform("uBaseColor"), mat.baseColor.r, mat.baseColor.g, mat.baseColor.b);
-        glUniform1i(program.uniform("uMaterialType"), mat.type == MaterialType::Lambert ? NL_MATERIAL_LAMBERT
-                                                      : mat.type == MaterialType::GGX   ? NL_MATERIAL_GGX
-                                                                                        : NL_MATERIAL_PRINCIPLED);
+        glUniform3f(program.uniform("uBaseColor"), mat.baseColor.r, mat.baseColor.g,
+                    mat.baseColor.b);
+        glUniform1i(program.uniform("uMaterialType"),
+                    mat.type == MaterialType::Lambert ? NL_MATERIAL_LAMBERT
+                    : mat.type == MaterialType::GGX   ? NL_MATERIAL_GGX
+                                                      : NL_MATERIAL_PRINCIPLED);
         glUniform1f(program.uniform("uRoughness"), mat.roughness);
         glUniform1f(program.uniform("uMetallic"), mat.metallic);
         glUniform1ui(program.uniform("uMaterialIndex"), m.material);
@@ -775,8 +837,9 @@ class RasterMethod : public Method, public RasterFrame {
     const frame::Tile& tile = ctx.tile();
     const auto& u = ctx.uniforms();
     // The splats' depth starts as the meshes' so that splats behind a mesh take no part.
-    glCopyImageSubData(ctx.target("depth").id(), GL_TEXTURE_2D, 0, 0, 0, 0, ctx.target("scan_depth").id(), GL_TEXTURE_2D,
-                       0, 0, 0, 0, tile.width, tile.height, 1);
+    glCopyImageSubData(ctx.target("depth").id(), GL_TEXTURE_2D, 0, 0, 0, 0,
+                       ctx.target("scan_depth").id(), GL_TEXTURE_2D, 0, 0, 0, 0, tile.width,
+                       tile.height, 1);
     hqsDepthFbo_.attach(GL_DEPTH_ATTACHMENT, ctx.target("scan_depth"));
     hqsDepthFbo_.finish(0, "HQS depth");
     hqsSumFbo_.attach(GL_COLOR_ATTACHMENT0, ctx.target("scan_sum_colour"));
@@ -829,10 +892,14 @@ class RasterMethod : public Method, public RasterFrame {
       scanRadius_ = gl::Buffer(scanDepth_.bytes());
     }
     const uint32_t far = 0xffffffffu, zero = 0;
-    glClearNamedBufferSubData(scanDepth_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &far);
-    glClearNamedBufferSubData(scanAccum_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    glClearNamedBufferSubData(scanNormal_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    glClearNamedBufferSubData(scanRadius_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(scanDepth_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &far);
+    glClearNamedBufferSubData(scanAccum_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(scanNormal_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(scanRadius_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
     scanDepth_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_DEPTH, 0, pixels * 4);
     scanAccum_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_ACCUM, 0, pixels * 16);
     scanNormal_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_NORMAL, 0, pixels * 4);
@@ -844,7 +911,9 @@ class RasterMethod : public Method, public RasterFrame {
       glUniformMatrix4fv(prog.uniform("uViewFromWorld"), 1, GL_FALSE, &u.viewFromWorld[0][0]);
       glUniform2i(prog.uniform("uViewport"), tile.width, tile.height);
       glUniform1f(prog.uniform("uSizeScale"), params_.splatScale);
-      forEachNode(prog, [](const streaming::DrawNode& n) { glDispatchCompute((n.numPoints + 127) / 128, 1, 1); });
+      forEachNode(prog, [](const streaming::DrawNode& n) {
+        glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
+      });
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     };
     dispatch(computeDepth_);
@@ -854,22 +923,32 @@ class RasterMethod : public Method, public RasterFrame {
     glDepthFunc(GL_LESS);
     computeResolve_.use();
     glUniform2i(computeResolve_.uniform("uViewport"), tile.width, tile.height);
-    glUniformMatrix4fv(computeResolve_.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
-    glUniform1f(computeResolve_.uniform("uColourScale"), scans_.empty() ? 1.0f : scans_.front().colourScale);
-    glUniform1i(computeResolve_.uniform("uHdrColour"), !scans_.empty() && scans_.front().store->hdrColour());
+    glUniformMatrix4fv(computeResolve_.uniform("uClipFromView"), 1, GL_FALSE,
+                       &u.clipFromView[0][0]);
+    glUniform1f(computeResolve_.uniform("uColourScale"),
+                scans_.empty() ? 1.0f : scans_.front().colourScale);
+    glUniform1i(computeResolve_.uniform("uHdrColour"),
+                !scans_.empty() && scans_.front().store->hdrColour());
     glBindVertexArray(emptyVao_.id());
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }
 
   void buildGraph() {
     using gl::ShaderProgram;
-    meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
-    scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
-    meshShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
-    scanShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}});
-    directLight_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/direct_light.frag"}});
-    hqsDepth_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_depth.frag"}});
-    hqsAccum_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"}, {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_accum.frag"}});
+    meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
+                                  {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
+    scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
+                                  {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
+    meshShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
+                                 {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
+    scanShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
+                                 {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}});
+    directLight_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                                  {GL_FRAGMENT_SHADER, "gi/raster/direct_light.frag"}});
+    hqsDepth_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
+                               {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_depth.frag"}});
+    hqsAccum_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
+                               {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_accum.frag"}});
     hqsResolve_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
                                  {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_resolve.frag"}});
     hqsDepthFbo_ = gl::Framebuffer::create();
@@ -878,8 +957,9 @@ class RasterMethod : public Method, public RasterFrame {
     if (params_.computeRasteriser) {
       computeDepth_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_depth.comp"}});
       computeColour_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_colour.comp"}});
-      computeResolve_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
-                                       {GL_FRAGMENT_SHADER, "gi/raster/scan_compute_resolve.frag"}});
+      computeResolve_ =
+          ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                         {GL_FRAGMENT_SHADER, "gi/raster/scan_compute_resolve.frag"}});
     }
     emptyVao_ = gl::VertexArray::create();
     shadowFbo_ = gl::Framebuffer::create();
@@ -927,7 +1007,8 @@ class RasterMethod : public Method, public RasterFrame {
             NL_CHECK(owner != nullptr);
             const bool ortho = int(owner->position.w) == NL_LIGHT_DIRECTIONAL;
             // Texels per world unit (orthographic) or per unit at distance 1 (perspective).
-            drawScans(scanShadow_, clip, shadowViewFromWorld_[layer], 1.0f / owner->shadow.y, ortho, true);
+            drawScans(scanShadow_, clip, shadowViewFromWorld_[layer], 1.0f / owner->shadow.y, ortho,
+                      true);
           }
           glDisable(GL_POLYGON_OFFSET_FILL);
         });
@@ -940,37 +1021,41 @@ class RasterMethod : public Method, public RasterFrame {
     };
     auto scanWrites = [gbufferWrites](frame::PassBuilder& b) {
       gbufferWrites(b);
-      for (const char* t : {"scan_depth", "scan_sum_colour", "scan_sum_normal", "scan_sum_radius"}) b.write(t);
+      for (const char* t : {"scan_depth", "scan_sum_colour", "scan_sum_normal", "scan_sum_radius"})
+        b.write(t);
     };
-    graph_.addPass("gbuffer_meshes", frame::Scope::Tile, gbufferWrites, [this](const frame::PassContext& ctx) {
-      ctx.bindFramebuffer();
-      glEnable(GL_DEPTH_TEST);
-      glDepthFunc(GL_LESS);
-      glDisable(GL_BLEND);
-      glDisable(GL_CULL_FACE);
-      frame::clearGBuffer();
-      drawMeshes(meshGBuffer_, ctx.uniforms().clipFromWorld, true);
-    });
-    graph_.addPass("gbuffer_scans", frame::Scope::Tile, scanWrites, [this](const frame::PassContext& ctx) {
-      const auto& u = ctx.uniforms();
-      if (params_.computeRasteriser) {
-        computeScans(ctx);
-        return;
-      }
-      if (params_.hqs) {
-        hqsScans(ctx);
-        return;
-      }
-      bindGBuffer(ctx);
-      glEnable(GL_DEPTH_TEST);
-      glEnable(GL_PROGRAM_POINT_SIZE);
-      drawScans(scanGBuffer_, guardBand(ctx), u.viewFromWorld, u.eye.w, false);
-      glViewport(0, 0, ctx.tile().width, ctx.tile().height);
-    });
+    graph_.addPass("gbuffer_meshes", frame::Scope::Tile, gbufferWrites,
+                   [this](const frame::PassContext& ctx) {
+                     ctx.bindFramebuffer();
+                     glEnable(GL_DEPTH_TEST);
+                     glDepthFunc(GL_LESS);
+                     glDisable(GL_BLEND);
+                     glDisable(GL_CULL_FACE);
+                     frame::clearGBuffer();
+                     drawMeshes(meshGBuffer_, ctx.uniforms().clipFromWorld, true);
+                   });
+    graph_.addPass("gbuffer_scans", frame::Scope::Tile, scanWrites,
+                   [this](const frame::PassContext& ctx) {
+                     const auto& u = ctx.uniforms();
+                     if (params_.computeRasteriser) {
+                       computeScans(ctx);
+                       return;
+                     }
+                     if (params_.hqs) {
+                       hqsScans(ctx);
+                       return;
+                     }
+                     bindGBuffer(ctx);
+                     glEnable(GL_DEPTH_TEST);
+                     glEnable(GL_PROGRAM_POINT_SIZE);
+                     drawScans(scanGBuffer_, guardBand(ctx), u.viewFromWorld, u.eye.w, false);
+                     glViewport(0, 0, ctx.tile().width, ctx.tile().height);
+                   });
     graph_.addPass(
         "direct_light", frame::Scope::Tile,
         [](frame::PassBuilder& b) {
-          for (const char* t : {"depth", "base_colour", "normal", "material", "shadow_maps"}) b.read(t);
+          for (const char* t : {"depth", "base_colour", "normal", "material", "shadow_maps"})
+            b.read(t);
           b.write("radiance");
           b.margin(1);  // pin-hole filling reads the 3 x 3 neighbourhood
         },
@@ -1008,7 +1093,8 @@ class RasterMethod : public Method, public RasterFrame {
   RasterParameters params_;
   std::unique_ptr<gl::GlContext> context_;
   LocalBox bounds_;
-  std::vector<LocalBox> objectBounds_;  // each scan's and mesh's: the near plane follows the nearest
+  std::vector<LocalBox>
+      objectBounds_;  // each scan's and mesh's: the near plane follows the nearest
   std::vector<ShadowBox> shadowBoxes_;  // the same, as directional shadow maps fit them
   // Directional shadow maps cover the camera's view (raster alone, or an extension that reads
   // them only for the camera's pixels), else the whole scene.
@@ -1023,7 +1109,7 @@ class RasterMethod : public Method, public RasterFrame {
   std::vector<GpuMesh> meshes_;
   std::vector<TriangleMesh> cpuMeshes_;  // the files' meshes, until the extension's setUp is done
   std::vector<frame::LightRecord> lightRecords_;
-  std::vector<glm::mat4> shadowViews_;         // clip from world, per shadow-map layer
+  std::vector<glm::mat4> shadowViews_;          // clip from world, per shadow-map layer
   std::vector<glm::mat4> shadowViewFromWorld_;  // the view alone (splat sizes)
   gl::Buffer lightsBuffer_, shadowViewsBuffer_, materialsBuffer_;
   gl::Texture environment_;
@@ -1039,7 +1125,7 @@ class RasterMethod : public Method, public RasterFrame {
   gl::ShaderProgram computeDepth_, computeColour_, computeResolve_;  // rasteriser "compute"
   gl::ShaderProgram hqsDepth_, hqsAccum_, hqsResolve_;               // splatting "hqs"
   gl::Framebuffer hqsDepthFbo_, hqsSumFbo_, gbufferFbo_;
-  gl::Buffer scanDepth_, scanAccum_, scanNormal_, scanRadius_;          // its per-pixel buffers
+  gl::Buffer scanDepth_, scanAccum_, scanNormal_, scanRadius_;  // its per-pixel buffers
   gl::VertexArray emptyVao_;
   gl::Framebuffer shadowFbo_;
   frame::FrameGraph graph_;
@@ -1052,17 +1138,20 @@ class RasterMethod : public Method, public RasterFrame {
 
 }  // namespace
 
-RasterParameters parseRasterParameters(const Scene& scene, const std::vector<std::string>& otherKeys) {
+RasterParameters parseRasterParameters(const Scene& scene,
+                                       const std::vector<std::string>& otherKeys) {
   RasterParameters p;
   if (scene.gi.parameters.is_null()) return p;
   // The project's one validator: errors name the scene file and "scene.gi.parameters.<key>".
   const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
-  std::vector<std::string> keys = {"shadow_map_size", "rasteriser", "splatting", "splat_scale", "point_budget",
-                                   "gpu_budget_mb", "max_tile", "stream_timeout"};
+  std::vector<std::string> keys = {"shadow_map_size", "rasteriser",    "splatting",
+                                   "splat_scale",     "point_budget",  "gpu_budget_mb",
+                                   "max_tile",        "stream_timeout"};
   keys.insert(keys.end(), otherKeys.begin(), otherKeys.end());
   f.expectObject(keys);
   if (f.has("shadow_map_size")) p.shadowMapSize = int(f.at("shadow_map_size").integer(16, 16384));
-  if (f.has("rasteriser")) p.computeRasteriser = f.at("rasteriser").choice({"points", "compute"}) == "compute";
+  if (f.has("rasteriser"))
+    p.computeRasteriser = f.at("rasteriser").choice({"points", "compute"}) == "compute";
   if (f.has("splatting")) p.hqs = f.at("splatting").choice({"hqs", "basic"}) == "hqs";
   if (f.has("splat_scale")) p.splatScale = float(f.at("splat_scale").number(0.1, 16));
   if (f.has("point_budget")) p.pointBudget = uint64_t(f.at("point_budget").number(1, 1e10));
@@ -1074,7 +1163,9 @@ RasterParameters parseRasterParameters(const Scene& scene, const std::vector<std
   return p;
 }
 
-RasterParameters rasterParameters(const Scene& scene) { return parseRasterParameters(scene, {}); }
+RasterParameters rasterParameters(const Scene& scene) {
+  return parseRasterParameters(scene, {});
+}
 
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx) {
   return std::make_unique<RasterMethod>(scene, ctx, nullptr);

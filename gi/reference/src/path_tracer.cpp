@@ -7,8 +7,8 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include <atomic>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -19,8 +19,12 @@ namespace {
 
 constexpr int kTile = 16;
 
-bool finite(const Rgb& c) { return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b); }
-float maxComponent(const Rgb& c) { return std::max({c.r, c.g, c.b}); }
+bool finite(const Rgb& c) {
+  return std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b);
+}
+float maxComponent(const Rgb& c) {
+  return std::max({c.r, c.g, c.b});
+}
 
 uint64_t mix64(uint64_t x) {
   // splitmix64's finaliser: decorrelates the per-pixel seeds.
@@ -44,7 +48,8 @@ glm::vec3 offsetOrigin(const SurfaceHit& h, const glm::vec3& dir, float sceneExt
 // Spot falloff: 1 inside the inner cone, 0 outside the outer one, smoothstep between.
 float spotFalloff(const Light& l, const glm::vec3& fromLight) {
   float cosTheta = glm::dot(fromLight, glm::normalize(l.direction));
-  float cosInner = std::cos(glm::radians(l.innerAngleDegrees)), cosOuter = std::cos(glm::radians(l.outerAngleDegrees));
+  float cosInner = std::cos(glm::radians(l.innerAngleDegrees)),
+        cosOuter = std::cos(glm::radians(l.outerAngleDegrees));
   if (cosTheta >= cosInner) return 1;
   if (cosTheta <= cosOuter) return 0;
   float t = (cosTheta - cosOuter) / std::max(cosInner - cosOuter, 1e-6f);
@@ -53,7 +58,8 @@ float spotFalloff(const Light& l, const glm::vec3& fromLight) {
 
 }  // namespace
 
-void cameraRay(const SceneCamera& c, const glm::dvec3& origin, float x, float y, glm::vec3* ro, glm::vec3* rd) {
+void cameraRay(const SceneCamera& c, const glm::dvec3& origin, float x, float y, glm::vec3* ro,
+               glm::vec3* rd) {
   glm::dvec3 f = glm::normalize(c.target - c.eye);
   glm::dvec3 r = glm::normalize(glm::cross(f, c.up));
   glm::dvec3 u = glm::cross(r, f);
@@ -65,8 +71,8 @@ void cameraRay(const SceneCamera& c, const glm::dvec3& origin, float x, float y,
   *rd = glm::vec3(glm::normalize(f + sx * r + sy * u));
 }
 
-Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const glm::vec3& direction, Rng& rng,
-                  const ReferenceOptions& opt, uint64_t* raysOut) {
+Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const glm::vec3& direction,
+                  Rng& rng, const ReferenceOptions& opt, uint64_t* raysOut) {
   Rgb L(0.0f), beta(1.0f);
   glm::vec3 o = origin, d = direction;
   float prevBsdfPdf = 0;  // 0: the previous vertex was the camera (no MIS weight)
@@ -100,7 +106,8 @@ Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const gl
     } else {
       mat = &scene.materials()[hit.material];
       // Emitters are found by BSDF sampling only (no NEE to emissive meshes): weight 1.
-      if (maxComponent(mat->emission) > 0 && glm::dot(hit.geometricNormal, wo) > 0) L += beta * mat->emission;
+      if (maxComponent(mat->emission) > 0 && glm::dot(hit.geometricNormal, wo) > 0)
+        L += beta * mat->emission;
     }
     if (depth >= opt.maxBounces) break;
 
@@ -166,7 +173,8 @@ Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const gl
     auto bs = sampleBsdf(*mat, woLocal, rng.uniform2(), rng.uniform());
     if (!bs || !(bs->pdf > 0)) break;
     glm::vec3 wi = frame.toWorld(bs->wi);
-    if (glm::dot(wi, ng) <= 0) break;  // below the geometric surface: light leak through shading normals
+    if (glm::dot(wi, ng) <= 0)
+      break;  // below the geometric surface: light leak through shading normals
     beta *= bs->f * (bs->wi.z / bs->pdf);
     if (!finite(beta) || maxComponent(beta) <= 0) break;
     prevBsdfPdf = bs->pdf;
@@ -207,7 +215,8 @@ ReferenceOptions referenceOptionsFrom(const GiSettings& gi) {
   return o;
 }
 
-ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& camera, const ReferenceOptions& opt,
+ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& camera,
+                                const ReferenceOptions& opt,
                                 const std::function<bool(const ReferenceProgress&)>& progress) {
   NL_CHECK(camera.width > 0 && camera.height > 0 && opt.maxSamplesPerPixel > 0);
   const int W = camera.width, H = camera.height;
@@ -217,36 +226,41 @@ ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& 
   ReferenceResult res;
   std::atomic<uint64_t> rays{0}, nonFinite{0};
   auto t0 = std::chrono::steady_clock::now();
-  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
   HdrImage meanA(W, H), meanB(W, H);
   double relErr = NAN;
   res.stopReason = "samples";
   for (int pass = 0; pass < opt.maxSamplesPerPixel; ++pass) {
     HdrImage& target = (pass % 2 == 0) ? sumA : sumB;
-    tbb::parallel_for(tbb::blocked_range2d<int>(0, H, kTile, 0, W, kTile), [&](const tbb::blocked_range2d<int>& r) {
-      uint64_t localRays = 0, localBad = 0;
-      for (int y = r.rows().begin(); y < r.rows().end(); ++y)
-        for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
-          // The sample of pixel (x, y) in pass p is the same whatever the threads do.
-          // Pass and pixel both enter the seed: PCG streams that differ only in their increment
-          // are correlated, and the two half images must be independent for the error estimate.
-          const uint64_t pixel = uint64_t(y) * W + x;
-          Rng rng(mix64(mix64(opt.seed * 0x9E3779B97F4A7C15ULL + pixel) ^ (uint64_t(pass) * 0xD1B54A32D192ED03ULL)),
-                  mix64(pixel));
-          const glm::vec2 j = opt.pixelCentres ? glm::vec2(0.5f) : rng.uniform2();
-          glm::vec3 ro, rd;
-          cameraRay(camera, scene.origin(), x + j.x, y + j.y, &ro, &rd);
-          Rgb c = traceRadiance(scene, ro, rd, rng, opt, &localRays);
-          if (!finite(c)) {
-            ++localBad;
-            c = Rgb(0.0f);  // counted, reported; a NaN must not poison the pixel
-          }
-          float* p = &target.rgb[3 * (size_t(y) * W + x)];
-          p[0] += c.r, p[1] += c.g, p[2] += c.b;
-        }
-      rays += localRays;
-      nonFinite += localBad;
-    });
+    tbb::parallel_for(tbb::blocked_range2d<int>(0, H, kTile, 0, W, kTile),
+                      [&](const tbb::blocked_range2d<int>& r) {
+                        uint64_t localRays = 0, localBad = 0;
+                        for (int y = r.rows().begin(); y < r.rows().end(); ++y)
+                          for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
+                            // The sample of pixel (x, y) in pass p is the same whatever the threads
+                            // do. Pass and pixel both enter the seed: PCG streams that differ only
+                            // in their increment are correlated, and the two half images must be
+                            // independent for the error estimate.
+                            const uint64_t pixel = uint64_t(y) * W + x;
+                            Rng rng(mix64(mix64(opt.seed * 0x9E3779B97F4A7C15ULL + pixel) ^
+                                          (uint64_t(pass) * 0xD1B54A32D192ED03ULL)),
+                                    mix64(pixel));
+                            const glm::vec2 j = opt.pixelCentres ? glm::vec2(0.5f) : rng.uniform2();
+                            glm::vec3 ro, rd;
+                            cameraRay(camera, scene.origin(), x + j.x, y + j.y, &ro, &rd);
+                            Rgb c = traceRadiance(scene, ro, rd, rng, opt, &localRays);
+                            if (!finite(c)) {
+                              ++localBad;
+                              c = Rgb(0.0f);  // counted, reported; a NaN must not poison the pixel
+                            }
+                            float* p = &target.rgb[3 * (size_t(y) * W + x)];
+                            p[0] += c.r, p[1] += c.g, p[2] += c.b;
+                          }
+                        rays += localRays;
+                        nonFinite += localBad;
+                      });
     (pass % 2 == 0 ? nA : nB)++;
     ReferenceProgress pr;
     pr.samplesPerPixel = nA + nB;
@@ -276,7 +290,8 @@ ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& 
   }
   res.samplesPerPixel = nA + nB;
   res.image = HdrImage(W, H);
-  for (size_t i = 0; i < sumA.rgb.size(); ++i) res.image.rgb[i] = (sumA.rgb[i] + sumB.rgb[i]) / float(res.samplesPerPixel);
+  for (size_t i = 0; i < sumA.rgb.size(); ++i)
+    res.image.rgb[i] = (sumA.rgb[i] + sumB.rgb[i]) / float(res.samplesPerPixel);
   res.relativeError = relErr;
   res.seconds = elapsed();
   res.rays = rays;

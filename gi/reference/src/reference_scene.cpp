@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <tuple>
 #include <nanoflann.hpp>
+#include <tuple>
 
 #include "nestlight/gi/scan_colour.h"
 #include "nestlight/octree/error.h"
@@ -19,7 +19,8 @@
 namespace nestlight::gi {
 namespace {
 
-constexpr size_t kBytesPerDisc = sizeof(glm::vec4) + sizeof(glm::vec3) + sizeof(Rgb) + sizeof(float);
+constexpr size_t kBytesPerDisc =
+    sizeof(glm::vec4) + sizeof(glm::vec3) + sizeof(Rgb) + sizeof(float);
 constexpr int kRadiusNeighbours = 8;
 // Discs must close an evenly sampled surface, or rays leak through it and the reference renders
 // too dark (a Poisson-disk sampled room: 1 to 3% darker than the same room as meshes, up to 8% on
@@ -40,9 +41,13 @@ struct DiscAdaptor {
   size_t kdtree_get_point_count() const { return d.size(); }
   float kdtree_get_pt(size_t i, size_t dim) const { return d[i][int(dim)]; }
   template <class B>
-  bool kdtree_get_bbox(B&) const { return false; }
+  bool kdtree_get_bbox(B&) const {
+    return false;
+  }
 };
-using DiscTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, DiscAdaptor>, DiscAdaptor, 3, uint32_t>;
+using DiscTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, DiscAdaptor>,
+                                        DiscAdaptor, 3, uint32_t>;
 
 // Distinct positions of `discs` (a k-d tree's queries turn quadratic on a leaf of identical
 // points), which one each disc is, and the first disc at each.
@@ -58,7 +63,8 @@ DistinctPositions distinctPositions(const std::vector<glm::vec4>& discs) {
   DistinctPositions d;
   d.uniqueOf.resize(discs.size());
   for (size_t j = 0; j < order.size(); ++j) {
-    if (j == 0 || key(order[j]) != key(order[j - 1])) d.unique.push_back(discs[order[j]]), d.firstOf.push_back(order[j]);
+    if (j == 0 || key(order[j]) != key(order[j - 1]))
+      d.unique.push_back(discs[order[j]]), d.firstOf.push_back(order[j]);
     d.uniqueOf[order[j]] = uint32_t(d.unique.size() - 1);
   }
   return d;
@@ -66,12 +72,15 @@ DistinctPositions distinctPositions(const std::vector<glm::vec4>& discs) {
 
 void embreeError(void*, RTCError code, const char* message) {
   // Embree reports misuse here; it is a programming error (bad buffers), never user input.
-  nestlight::checkFailed("Embree", __FILE__, __LINE__, std::string("error ") + std::to_string(int(code)) + ": " + (message ? message : ""));
+  nestlight::checkFailed(
+      "Embree", __FILE__, __LINE__,
+      std::string("error ") + std::to_string(int(code)) + ": " + (message ? message : ""));
 }
 
 }  // namespace
 
-void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std::vector<float>* maxRadius) {
+void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale,
+                     const std::vector<float>* maxRadius) {
   NL_CHECK(!maxRadius || maxRadius->size() == discs.size());
   if (discs.empty()) return;
   // Spacing is measured between distinct positions: coincident copies (merged scans, a
@@ -83,16 +92,17 @@ void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std
   DiscTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
   const size_t k = std::min<size_t>(kRadiusNeighbours + 1, unique.size());  // +1: the point itself
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, unique.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<uint32_t> idx(k);
-    std::vector<float> d2(k);
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      float q[3] = {unique[i].x, unique[i].y, unique[i].z};
-      size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
-      float dk = found > 1 ? std::sqrt(d2[found - 1]) : 0.0f;
-      unique[i].w = radiusScale * kDiscCoverage * 0.5f * dk;
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, unique.size(), 4096),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      std::vector<uint32_t> idx(k);
+                      std::vector<float> d2(k);
+                      for (size_t i = r.begin(); i < r.end(); ++i) {
+                        float q[3] = {unique[i].x, unique[i].y, unique[i].z};
+                        size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
+                        float dk = found > 1 ? std::sqrt(d2[found - 1]) : 0.0f;
+                        unique[i].w = radiusScale * kDiscCoverage * 0.5f * dk;
+                      }
+                    });
   for (size_t i = 0; i < discs.size(); ++i) {
     discs[i].w = unique[uniqueOf[i]].w;
     if (maxRadius) discs[i].w = std::min(discs[i].w, (*maxRadius)[i]);
@@ -113,41 +123,48 @@ void assignDiscThickness(DiscCloud& c) {
   // Neighbours further than 30 degrees off belong to another surface (a crease, a thin wall's
   // far side): their extent is geometry, not noise.
   const float sameSurface = 0.8660254f;  // cos 30 degrees
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, c.discs.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    std::vector<uint32_t> idx(k);
-    std::vector<float> d2(k);
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const glm::vec3 p(c.discs[i]), n = c.normals[i];
-      float q[3] = {p.x, p.y, p.z};
-      size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
-      // Heights above (+) and below (-) the plane, as sums for mean and variance.
-      double s[2] = {0, 0}, s2[2] = {0, 0};
-      int m = 0;
-      for (size_t jj = 0; jj < found; ++jj) {
-        if (idx[jj] == distinct.uniqueOf[i]) continue;
-        const uint32_t j = distinct.firstOf[idx[jj]];
-        const glm::vec3 nj = c.normals[j];
-        float cosA = glm::dot(nj, n);
-        if (cosA < sameSurface) continue;
-        float along = glm::dot(glm::vec3(c.discs[j]) - p, n);
-        float reach = c.discs[j].w * std::sqrt(std::max(0.0f, 1 - cosA * cosA));
-        float h[2] = {along + reach, -along + reach};
-        for (int side = 0; side < 2; ++side) s[side] += h[side], s2[side] += double(h[side]) * h[side];
-        ++m;
-      }
-      if (m < 2) continue;  // isolated: nothing of its own surface around to shadow it
-      float t = 0;
-      for (int side = 0; side < 2; ++side) {
-        double mean = s[side] / m, var = std::max(0.0, s2[side] / m - mean * mean);
-        t = std::max(t, float(mean + 3 * std::sqrt(var)));
-      }
-      float cap = c.discs[i].w;
-      c.thickness[i] = std::isfinite(t) ? std::clamp(t, 0.0f, std::isfinite(cap) ? std::max(cap, 0.0f) : 0.0f) : 0.0f;
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, c.discs.size(), 4096),
+      [&](const tbb::blocked_range<size_t>& r) {
+        std::vector<uint32_t> idx(k);
+        std::vector<float> d2(k);
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const glm::vec3 p(c.discs[i]), n = c.normals[i];
+          float q[3] = {p.x, p.y, p.z};
+          size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
+          // Heights above (+) and below (-) the plane, as sums for mean and variance.
+          double s[2] = {0, 0}, s2[2] = {0, 0};
+          int m = 0;
+          for (size_t jj = 0; jj < found; ++jj) {
+            if (idx[jj] == distinct.uniqueOf[i]) continue;
+            const uint32_t j = distinct.firstOf[idx[jj]];
+            const glm::vec3 nj = c.normals[j];
+            float cosA = glm::dot(nj, n);
+            if (cosA < sameSurface) continue;
+            float along = glm::dot(glm::vec3(c.discs[j]) - p, n);
+            float reach = c.discs[j].w * std::sqrt(std::max(0.0f, 1 - cosA * cosA));
+            float h[2] = {along + reach, -along + reach};
+            for (int side = 0; side < 2; ++side)
+              s[side] += h[side], s2[side] += double(h[side]) * h[side];
+            ++m;
+          }
+          if (m < 2) continue;  // isolated: nothing of its own surface around to shadow it
+          float t = 0;
+          for (int side = 0; side < 2; ++side) {
+            double mean = s[side] / m, var = std::max(0.0, s2[side] / m - mean * mean);
+            t = std::max(t, float(mean + 3 * std::sqrt(var)));
+          }
+          float cap = c.discs[i].w;
+          c.thickness[i] =
+              std::isfinite(t)
+                  ? std::clamp(t, 0.0f, std::isfinite(cap) ? std::max(cap, 0.0f) : 0.0f)
+                  : 0.0f;
+        }
+      });
 }
 
-DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, DiscCloudStats* statsOut) {
+DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin,
+                        DiscCloudStats* statsOut) {
   OctreeReader reader(octree.path);
   const Metadata& meta = reader.metadata();
   DiscCloudStats stats;
@@ -169,9 +186,10 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
     level = l;
   }
   if (level < 0)
-    throw Error(octree.path.string(), "", "the root node's " + std::to_string(perLevel[0]) +
-                                              " points do not fit the memory budget of " +
-                                              std::to_string(octree.memoryBudget) + " bytes");
+    throw Error(octree.path.string(), "",
+                "the root node's " + std::to_string(perLevel[0]) +
+                    " points do not fit the memory budget of " +
+                    std::to_string(octree.memoryBudget) + " bytes");
   stats.deepestLevel = level;
   const ScanColours colours(octree.path, meta, octree.colour);
   std::vector<float> rgb;
@@ -191,10 +209,12 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, Dis
     stats.nodes++;
     // A node's sample keeps points at least its spacing apart, so it leaves no surface point
     // farther than that from a sample: no disc needs to be wider (with the same margin).
-    const float nodeSpacing = float(meta.levelSpacing(key.level)) * octree.radiusScale * kDiscCoverage;
+    const float nodeSpacing =
+        float(meta.levelSpacing(key.level)) * octree.radiusScale * kDiscCoverage;
     for (size_t i = 0; i < pts.size(); ++i) {
       const uint32_t* p = &pts.pos[3 * i];
-      glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) * glm::dvec3(meta.scale.x, meta.scale.y, meta.scale.z);
+      glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) *
+                                    glm::dvec3(meta.scale.x, meta.scale.y, meta.scale.z);
       cloud.discs.emplace_back(glm::vec3(local), 0.0f);
       maxRadius.push_back(nodeSpacing);
       const uint8_t* a = pts.attrsOf(i);
@@ -224,7 +244,8 @@ struct ReferenceScene::Embree {
   }
 };
 
-std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene, void (*log)(const std::string&)) {
+std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene,
+                                                     void (*log)(const std::string&)) {
   std::vector<DiscCloud> clouds;
   std::vector<DiscCloudStats> stats;
   for (const auto& o : scene.octrees) {
@@ -232,11 +253,14 @@ std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene, void (*
     clouds.push_back(loadDiscCloud(o, scene.origin, &st));
     stats.push_back(st);
     if (log) {
-      std::string line = o.path.string() + ": " + std::to_string(st.points) + " discs from levels 0-" +
-                         std::to_string(st.deepestLevel) + " of 0-" + std::to_string(st.octreeDepth);
+      std::string line = o.path.string() + ": " + std::to_string(st.points) +
+                         " discs from levels 0-" + std::to_string(st.deepestLevel) + " of 0-" +
+                         std::to_string(st.octreeDepth);
       if (st.limitedByBudget) line += " (memory budget)";
-      if (clouds.back().normals.empty()) line += "; no normals: discs face each ray (convert with --estimate-normals)";
-      if (st.zeroRadius) line += "; " + std::to_string(st.zeroRadius) + " coincident points get no extent";
+      if (clouds.back().normals.empty())
+        line += "; no normals: discs face each ray (convert with --estimate-normals)";
+      if (st.zeroRadius)
+        line += "; " + std::to_string(st.zeroRadius) + " coincident points get no extent";
       log(line);
     }
   }
@@ -256,7 +280,9 @@ std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene, void (*
     }
     if (log) {
       log(m.path.string() + ": " + std::to_string(mesh.triangles()) + " triangles" +
-          (report.degenerateDropped ? " (" + std::to_string(report.degenerateDropped) + " degenerate dropped)" : ""));
+          (report.degenerateDropped
+               ? " (" + std::to_string(report.degenerateDropped) + " degenerate dropped)"
+               : ""));
       for (const auto& w : report.warnings) log(m.path.string() + ": warning: " + w);
     }
     meshes.push_back(std::move(mesh));
@@ -271,16 +297,20 @@ std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene, void (*
     } else {
       env = loadEnvironmentAt(e);
       if (log) {
-        std::string line = (e.sequence.empty() ? e.path : e.sequence).string() + ": environment " + std::to_string(env.image().width) + "x" +
+        std::string line = (e.sequence.empty() ? e.path : e.sequence).string() + ": environment " +
+                           std::to_string(env.image().width) + "x" +
                            std::to_string(env.image().height);
-        if (env.invalidTexels()) line += "; " + std::to_string(env.invalidTexels()) + " non-finite or negative texels set to 0";
+        if (env.invalidTexels())
+          line += "; " + std::to_string(env.invalidTexels()) +
+                  " non-finite or negative texels set to 0";
         if (env.black()) line += "; all black: it adds no light";
         log(line);
       }
     }
   }
-  auto rs = std::make_unique<ReferenceScene>(std::move(clouds), std::move(meshes), std::move(meshMaterial),
-                                             scene.materials, scene.lights, std::move(env), scene.origin);
+  auto rs = std::make_unique<ReferenceScene>(std::move(clouds), std::move(meshes),
+                                             std::move(meshMaterial), scene.materials, scene.lights,
+                                             std::move(env), scene.origin);
   rs->cloudStats_ = std::move(stats);
   rs->meshReports_ = std::move(reports);
   return rs;
@@ -288,7 +318,8 @@ std::unique_ptr<ReferenceScene> ReferenceScene::load(const Scene& scene, void (*
 
 ReferenceScene::ReferenceScene(std::vector<DiscCloud> clouds, std::vector<TriangleMesh> meshes,
                                std::vector<uint32_t> meshMaterial, std::vector<Material> materials,
-                               std::vector<Light> lights, EnvironmentMap environment, glm::dvec3 origin)
+                               std::vector<Light> lights, EnvironmentMap environment,
+                               glm::dvec3 origin)
     : clouds_(std::move(clouds)),
       meshes_(std::move(meshes)),
       meshMaterial_(std::move(meshMaterial)),
@@ -306,7 +337,9 @@ ReferenceScene::~ReferenceScene() = default;
 void ReferenceScene::build() {
   rtc_ = std::make_unique<Embree>();
   rtc_->device = rtcNewDevice(nullptr);
-  if (!rtc_->device) throw Error("Embree: cannot create a device (error " + std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
+  if (!rtc_->device)
+    throw Error("Embree: cannot create a device (error " +
+                std::to_string(int(rtcGetDeviceError(nullptr))) + ")");
   rtcSetDeviceErrorFunction(rtc_->device, embreeError, nullptr);
   rtc_->scene = rtcNewScene(rtc_->device);
   rtcSetSceneBuildQuality(rtc_->scene, RTC_BUILD_QUALITY_HIGH);
@@ -322,12 +355,15 @@ void ReferenceScene::build() {
     }
     bool oriented = !c.normals.empty();
     if (oriented && c.thickness.size() != c.discs.size()) assignDiscThickness(c);
-    RTCGeometry g = rtcNewGeometry(rtc_->device, oriented ? RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT : RTC_GEOMETRY_TYPE_DISC_POINT);
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, c.discs.data(), 0, sizeof(glm::vec4), c.discs.size());
+    RTCGeometry g = rtcNewGeometry(rtc_->device, oriented ? RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT
+                                                          : RTC_GEOMETRY_TYPE_DISC_POINT);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, c.discs.data(), 0,
+                               sizeof(glm::vec4), c.discs.size());
     // Embree may read 16 bytes at the last FLOAT3 element: one element of padding.
     if (oriented) c.normals.reserve(c.normals.size() + 1);
     if (oriented)
-      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, c.normals.data(), 0, sizeof(glm::vec3), c.normals.size());
+      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, c.normals.data(),
+                                 0, sizeof(glm::vec3), c.normals.size());
     rtcCommitGeometry(g);
     unsigned id = rtcAttachGeometry(rtc_->scene, g);
     rtcReleaseGeometry(g);
@@ -337,12 +373,15 @@ void ReferenceScene::build() {
   for (uint32_t mi = 0; mi < meshes_.size(); ++mi) {
     TriangleMesh& m = meshes_[mi];
     if (m.indices.empty()) continue;
-    for (const auto& p : m.positions) maxCoord = std::max({maxCoord, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    for (const auto& p : m.positions)
+      maxCoord = std::max({maxCoord, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
     RTCGeometry g = rtcNewGeometry(rtc_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     // Embree reads 16 bytes at the last vertex: the shared buffer gets one padding vertex.
     m.positions.reserve(m.positions.size() + 1);
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, m.positions.data(), 0, sizeof(glm::vec3), m.positions.size());
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m.indices.data(), 0, 3 * sizeof(uint32_t), m.triangles());
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, m.positions.data(),
+                               0, sizeof(glm::vec3), m.positions.size());
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m.indices.data(), 0,
+                               3 * sizeof(uint32_t), m.triangles());
     rtcCommitGeometry(g);
     unsigned id = rtcAttachGeometry(rtc_->scene, g);
     rtcReleaseGeometry(g);
@@ -365,7 +404,8 @@ uint64_t ReferenceScene::triangles() const {
   return n;
 }
 
-bool ReferenceScene::intersect(const glm::vec3& o, const glm::vec3& d, float tMax, SurfaceHit* hit) const {
+bool ReferenceScene::intersect(const glm::vec3& o, const glm::vec3& d, float tMax,
+                               SurfaceHit* hit) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -411,7 +451,9 @@ bool ReferenceScene::intersect(const glm::vec3& o, const glm::vec3& d, float tMa
       float nl = glm::length(n);
       if (nl > 0 && std::isfinite(nl)) hit->shadingNormal = n / nl;
     }
-    hit->colour = m.colors.empty() ? Rgb(1.0f) : w * m.colors[tri[0]] + u * m.colors[tri[1]] + v * m.colors[tri[2]];
+    hit->colour = m.colors.empty()
+                      ? Rgb(1.0f)
+                      : w * m.colors[tri[0]] + u * m.colors[tri[1]] + v * m.colors[tri[2]];
   }
   return true;
 }

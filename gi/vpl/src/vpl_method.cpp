@@ -329,7 +329,8 @@ class VplExtension : public RasterExtension {
       importance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_importance.comp"}});
       generate_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_generate.comp"}});
       lightFbo_ = gl::Framebuffer::create();
-      pyramid_ = gl::Buffer(pyramidLayerFloats(params_.lightResolution) * size_t(std::max(layers_, 1)) * 4);
+      pyramid_ = gl::Buffer(pyramidLayerFloats(params_.lightResolution) *
+                            size_t(std::max(layers_, 1)) * 4);
     }
     bounce_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_bounce.comp"}});
     gather_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_gather.comp"}});

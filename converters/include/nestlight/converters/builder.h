@@ -29,16 +29,16 @@ struct BuildOptions {
   unsigned threads = 0;                      // 0: all cores
   Sampling sampling = Sampling::Poisson;
   Codec codec = Codec::Zstd;
-  double precision = 0;                      // world units; 0: from the inputs (LAS scale) or 1 mm
-  bool dedup = false;                        // merge exact duplicates (position and attributes)
+  double precision = 0;  // world units; 0: from the inputs (LAS scale) or 1 mm
+  bool dedup = false;    // merge exact duplicates (position and attributes)
   bool estimateNormals = false;
   unsigned normalNeighbours = 16;
   NormalOrientation normalOrientation = NormalOrientation::Outward;
   bool overwrite = false;
-  uint32_t maxNodePoints = 20000;            // leaf size and cap on an inner node's sample
-  bool inMemory = false;                     // one chunk: the reference the chunked build must equal
+  uint32_t maxNodePoints = 20000;  // leaf size and cap on an inner node's sample
+  bool inMemory = false;           // one chunk: the reference the chunked build must equal
   ProgressMode progress = ProgressMode::Auto;
-  nlohmann::json commandLine;                // recorded in metadata.build
+  nlohmann::json commandLine;  // recorded in metadata.build
 };
 
 struct BuildReport {
@@ -47,12 +47,13 @@ struct BuildReport {
   double pointsPerSecond = 0;
   uint64_t peakRssBytes = 0;
   uint64_t chunks = 0;
-  nlohmann::json phases;  // seconds per phase
+  nlohmann::json phases;              // seconds per phase
   std::vector<std::string> warnings;  // about the build itself (sources' warnings are in metadata)
 };
 
 // Builds the octree of every point of `sources`. Throws nestlight::Error on bad input.
-BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources, const BuildOptions& options);
+BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources,
+                        const BuildOptions& options);
 
 // Peak resident set size of this process so far, in bytes.
 uint64_t peakRssBytes();

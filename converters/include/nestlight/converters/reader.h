@@ -23,15 +23,15 @@ namespace nestlight {
 
 struct SourceHeader {
   std::string path;
-  std::string format;  // "las", "laz", "ply", "pcd", "xyz"
+  std::string format;                      // "las", "laz", "ply", "pcd", "xyz"
   std::optional<uint64_t> declaredPoints;  // what the header claims, if it claims anything
   std::optional<Box3d> declaredBounds;     // LAS header bounds
   std::optional<Vec3d> scale;              // the source's quantisation (LAS)
   std::optional<Vec3d> offset;
-  PointLayout layout;                      // attributes this source provides, in batch order
-  int rgbBits = 0;                         // 8 or 16 when the source has "rgb"; else 0
-  nlohmann::json crs;                      // {"wkt": "..."} and/or {"geotiff": {...}}; null if none
-  nlohmann::json details;                  // format facts (version, point format, encoding, ...)
+  PointLayout layout;      // attributes this source provides, in batch order
+  int rgbBits = 0;         // 8 or 16 when the source has "rgb"; else 0
+  nlohmann::json crs;      // {"wkt": "..."} and/or {"geotiff": {...}}; null if none
+  nlohmann::json details;  // format facts (version, point format, encoding, ...)
 };
 
 struct PointBatch {
@@ -106,9 +106,9 @@ std::unique_ptr<PointReader> openReader(const std::string& path, const ReadOptio
 std::unique_ptr<PointReader> openLas(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
 std::unique_ptr<PointReader> openPly(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
 std::unique_ptr<PointReader> openXyz(std::shared_ptr<ByteSource> src, const ReadOptions& o = {});
-// LAS or LAZ: calls `sink(records, n, recordLength)` with every point record exactly as the uncompressed file
-// stores it (LAZ chunks decoded on all cores), in file order. Returns the record length. For
-// byte-for-byte tests and decode benchmarks.
+// LAS or LAZ: calls `sink(records, n, recordLength)` with every point record exactly as the
+// uncompressed file stores it (LAZ chunks decoded on all cores), in file order. Returns the record
+// length. For byte-for-byte tests and decode benchmarks.
 size_t readLasRecords(std::shared_ptr<ByteSource> src, const ReadOptions& options,
                       const std::function<void(const uint8_t*, size_t, size_t)>& sink,
                       SourceHeader* header = nullptr, std::vector<std::string>* warnings = nullptr);

@@ -27,14 +27,16 @@ struct TestSceneOptions {
 };
 
 // Writes dir/scan.octree, dir/*.obj and dir/scene.json; returns the scene file.
-std::filesystem::path makeTestScene(TestSceneKind kind, const std::filesystem::path& dir, const TestSceneOptions& options);
+std::filesystem::path makeTestScene(TestSceneKind kind, const std::filesystem::path& dir,
+                                    const TestSceneOptions& options);
 
 std::optional<TestSceneKind> parseTestSceneKind(const std::string& name);
 const char* testSceneKindName(TestSceneKind kind);
 
 // Simple meshes written as OBJ (for inserted objects without shipping files).
 void writeIcosphereObj(const std::filesystem::path& path, int subdivisions);
-void writeTorusObj(const std::filesystem::path& path, double majorRadius, double minorRadius, int segments, int sides);
+void writeTorusObj(const std::filesystem::path& path, double majorRadius, double minorRadius,
+                   int segments, int sides);
 void writeBoxObj(const std::filesystem::path& path);
 
 }  // namespace nestlight

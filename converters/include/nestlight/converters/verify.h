@@ -19,8 +19,8 @@ struct VerifyReport {
   uint64_t nodes = 0;
   uint64_t points = 0;
   uint64_t payloadBytes = 0;
-  uint64_t layers = 0;               // attribute layers checked (every node's colours)
-  std::vector<std::string> notes;    // not failures: files a killed layer write left behind
+  uint64_t layers = 0;             // attribute layers checked (every node's colours)
+  std::vector<std::string> notes;  // not failures: files a killed layer write left behind
   bool ok() const { return failures.empty(); }
 };
 

@@ -19,12 +19,11 @@
 #include <epoxy/gl.h>
 
 #include <functional>
+#include <glm/glm.hpp>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "nestlight/frame/interface.h"
 #include "nestlight/gl/resources.h"
@@ -100,7 +99,7 @@ struct PassTiming {
   // tiles. A CPU rasteriser (llvmpipe) runs compute dispatches at the next synchronisation, so
   // its timer queries charge them to a later pass; this charges every pass its own work.
   double wallMs = 0;
-  int runs = 0;      // 1 for frame passes, the number of tiles for tile passes
+  int runs = 0;  // 1 for frame passes, the number of tiles for tile passes
 };
 
 class FrameGraph {

@@ -16,7 +16,6 @@
 #include <epoxy/gl.h>
 
 #include <glm/glm.hpp>
-
 #include <memory>
 #include <mutex>
 #include <string>
@@ -37,8 +36,8 @@ class NodeLayer {
  public:
   virtual ~NodeLayer() = default;
   virtual std::string name() const = 0;
-  virtual void prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
-                       std::vector<uint8_t>& out) const = 0;
+  virtual void prepare(const NodeKey& key, const PointBuffer& points,
+                       const std::vector<uint8_t>& gpuPoints, std::vector<uint8_t>& out) const = 0;
 };
 
 // A unit normal in the GPU point format's word (octahedral, 2 x 16 bits; 0 for a zero or
@@ -54,18 +53,22 @@ const char* colourModeName(ColourMode m);
 ColourMode parseColourMode(const std::string& name);
 // The modes this scan can show (elevation always; the rest when it has the attribute, hdr when
 // it has the colour layer `hdrLayer`).
-inline constexpr const char* kHdrLayerName = "hdr";  // the layer ColourMode::Hdr reads unless told otherwise
-std::vector<ColourMode> availableColourModes(const Metadata& meta, const std::string& hdrLayer = kHdrLayerName);
+inline constexpr const char* kHdrLayerName =
+    "hdr";  // the layer ColourMode::Hdr reads unless told otherwise
+std::vector<ColourMode> availableColourModes(const Metadata& meta,
+                                             const std::string& hdrLayer = kHdrLayerName);
 
 class GlNodeStore : public streaming::NodeStore {
  public:
   // `layer`: what ColourMode::Hdr draws (required for it).
-  GlNodeStore(const Metadata& meta, ColourMode mode, std::shared_ptr<const ColourLayerReader> layer = nullptr);
+  GlNodeStore(const Metadata& meta, ColourMode mode,
+              std::shared_ptr<const ColourLayerReader> layer = nullptr);
   ~GlNodeStore() override;
   GlNodeStore(const GlNodeStore&) = delete;
   GlNodeStore& operator=(const GlNodeStore&) = delete;
 
-  void prepare(const NodeKey& key, PointBuffer&& points, streaming::PreparedNode& out) const override;
+  void prepare(const NodeKey& key, PointBuffer&& points,
+               streaming::PreparedNode& out) const override;
   uint64_t upload(const streaming::PreparedNode& node) override;
   void release(uint64_t handle) override;
 

@@ -15,8 +15,8 @@
 namespace nestlight::gi::hdr::expand {
 
 bool Expansion::projectPoint(const ScanNode& n, size_t i, double y,
-                             std::vector<std::pair<glm::dvec3, double>>& candidates,
-                             glm::dvec3& c, bool& seen) const {
+                             std::vector<std::pair<glm::dvec3, double>>& candidates, glm::dvec3& c,
+                             bool& seen) const {
   const glm::vec3 l = n.ldr[i];
   double weights = 0;
   seen = false;

@@ -106,19 +106,19 @@ class Expansion {
   ExpandReport run();
 
   // Stages, in the order run() calls them.
-  void statistics();             // statistics.cpp: pass A
-  void photographExposure();     // photo_exposure.cpp: range and histogram search
-  void chooseViews();            // views.cpp
-  void render();                 // views.cpp: pass B
-  void photoViewExposure();      // exposure_checks.cpp: registered
-  void preparePhotoCoverage();   // matching.cpp
-  void match(float exposure);    // matching.cpp
-  void settleExposure();         // exposure_checks.cpp: unregistered or forced
-  void rejectStrays();           // strays.cpp
-  void bound();                  // bound.cpp
-  void backProject();            // back_projection.cpp: pass C
-  void infill();                 // infill.cpp: pass D
-  void writeLayer();             // layer.cpp: pass E
+  void statistics();            // statistics.cpp: pass A
+  void photographExposure();    // photo_exposure.cpp: range and histogram search
+  void chooseViews();           // views.cpp
+  void render();                // views.cpp: pass B
+  void photoViewExposure();     // exposure_checks.cpp: registered
+  void preparePhotoCoverage();  // matching.cpp
+  void match(float exposure);   // matching.cpp
+  void settleExposure();        // exposure_checks.cpp: unregistered or forced
+  void rejectStrays();          // strays.cpp
+  void bound();                 // bound.cpp
+  void backProject();           // back_projection.cpp: pass C
+  void infill();                // infill.cpp: pass D
+  void writeLayer();            // layer.cpp: pass E
 
   // Helpers the stages share.
   void progress(const std::string& stage, double f) const {
@@ -161,8 +161,8 @@ class Expansion {
   std::vector<float> photoY;     // the photograph's non-zero luminances, where masked in
   std::vector<float> positiveY;  // those positive and finite
   double photoMax = 0;
-  HdrImage small;                   // the photograph as PatchMatch sees it
-  std::vector<uint8_t> smallMask;   // the mask at that size; empty: none
+  HdrImage small;                  // the photograph as PatchMatch sees it
+  std::vector<uint8_t> smallMask;  // the mask at that size; empty: none
 
   // Renderings and their matches.
   std::vector<Rendering> renderings;

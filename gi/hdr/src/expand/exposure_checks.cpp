@@ -102,8 +102,7 @@ PairEstimate Expansion::photoViewPairs() const {
     if (!renderings[0].covered(i) || (!smallMask.empty() && !smallMask[i])) continue;
     scanY.push_back(
         linearLuminance(ldr.get(int(i % size_t(ldr.width)), int(i / size_t(ldr.width)))));
-    photoYs.push_back(
-        luminance(Rgb(small.rgb[3 * i], small.rgb[3 * i + 1], small.rgb[3 * i + 2])));
+    photoYs.push_back(luminance(Rgb(small.rgb[3 * i], small.rgb[3 * i + 1], small.rgb[3 * i + 2])));
   }
   return estimateExposureFromPairs(scanY, photoYs, 0.02, o.overexposed, photoClip);
 }

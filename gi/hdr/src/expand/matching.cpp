@@ -15,7 +15,8 @@ namespace {
 
 // 1 where every covered pixel of the (2r+1)^2 patch around a covered pixel is over-exposed
 // (linear LDR luminance above t_l): a summed-area table of the pixels that are not.
-std::vector<uint8_t> blindPatches(const HdrImage& ldr, const std::vector<uint8_t>& covered, int r, double overexposed) {
+std::vector<uint8_t> blindPatches(const HdrImage& ldr, const std::vector<uint8_t>& covered, int r,
+                                  double overexposed) {
   const int w = ldr.width, h = ldr.height;
   std::vector<uint32_t> sat(size_t(w + 1) * size_t(h + 1), 0);
   for (int y = 0; y < h; ++y)
@@ -23,17 +24,22 @@ std::vector<uint8_t> blindPatches(const HdrImage& ldr, const std::vector<uint8_t
       const size_t i = size_t(y) * size_t(w) + size_t(x);
       const Rgb c = ldr.get(x, y);
       const bool informative =
-          covered[i] && !(luminance(Rgb(linearFromDisplay(c.r), linearFromDisplay(c.g), linearFromDisplay(c.b))) > overexposed);
-      sat[size_t(y + 1) * size_t(w + 1) + size_t(x + 1)] = uint32_t(informative) + sat[size_t(y) * size_t(w + 1) + size_t(x + 1)] +
-                                                           sat[size_t(y + 1) * size_t(w + 1) + size_t(x)] -
-                                                           sat[size_t(y) * size_t(w + 1) + size_t(x)];
+          covered[i] && !(luminance(Rgb(linearFromDisplay(c.r), linearFromDisplay(c.g),
+                                        linearFromDisplay(c.b))) > overexposed);
+      sat[size_t(y + 1) * size_t(w + 1) + size_t(x + 1)] =
+          uint32_t(informative) + sat[size_t(y) * size_t(w + 1) + size_t(x + 1)] +
+          sat[size_t(y + 1) * size_t(w + 1) + size_t(x)] -
+          sat[size_t(y) * size_t(w + 1) + size_t(x)];
     }
   std::vector<uint8_t> out(ldr.pixels(), 0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const int x0 = std::max(0, x - r), x1 = std::min(w, x + r + 1), y0 = std::max(0, y - r), y1 = std::min(h, y + r + 1);
-      const uint32_t n = sat[size_t(y1) * size_t(w + 1) + size_t(x1)] - sat[size_t(y0) * size_t(w + 1) + size_t(x1)] -
-                         sat[size_t(y1) * size_t(w + 1) + size_t(x0)] + sat[size_t(y0) * size_t(w + 1) + size_t(x0)];
+      const int x0 = std::max(0, x - r), x1 = std::min(w, x + r + 1), y0 = std::max(0, y - r),
+                y1 = std::min(h, y + r + 1);
+      const uint32_t n = sat[size_t(y1) * size_t(w + 1) + size_t(x1)] -
+                         sat[size_t(y0) * size_t(w + 1) + size_t(x1)] -
+                         sat[size_t(y1) * size_t(w + 1) + size_t(x0)] +
+                         sat[size_t(y0) * size_t(w + 1) + size_t(x0)];
       out[size_t(y) * size_t(w) + size_t(x)] = covered[size_t(y) * size_t(w) + size_t(x)] && n == 0;
     }
   return out;
@@ -73,7 +79,9 @@ void Expansion::match(float exposure) {
   // threshold, so PatchMatch looks for the region's match elsewhere instead of finding it there
   // and having it rejected afterwards.
   for (size_t i = 0; i < smallMask.size(); ++i)
-    if (!smallMask[i]) exposedDisplay.rgb[3 * i] = exposedDisplay.rgb[3 * i + 1] = exposedDisplay.rgb[3 * i + 2] = kMaskedOut;
+    if (!smallMask[i])
+      exposedDisplay.rgb[3 * i] = exposedDisplay.rgb[3 * i + 1] = exposedDisplay.rgb[3 * i + 2] =
+          kMaskedOut;
   for (size_t vi = 0; vi < renderings.size(); ++vi) {
     matchView(vi, exposure);
     progress("patchmatch", double(vi + 1) / double(renderings.size()));
@@ -100,10 +108,9 @@ void Expansion::matchView(size_t vi, float exposure) {
   e.hdr = fetch(field, small);
   for (float& v : e.hdr.rgb) v = std::isfinite(v) ? std::max(0.0f, v * exposure) : 0.0f;
   e.ssd = field.ssd;
-  const std::vector<uint8_t> blind =
-      pm.identityStart || !o.rejectBlindPatches
-          ? std::vector<uint8_t>()
-          : blindPatches(ldr, mask, o.patchRadius, o.overexposed);
+  const std::vector<uint8_t> blind = pm.identityStart || !o.rejectBlindPatches
+                                         ? std::vector<uint8_t>()
+                                         : blindPatches(ldr, mask, o.patchRadius, o.overexposed);
   for (size_t i = 0; i < e.ssd.size(); ++i) {
     if (!mask[i]) {
       e.ssd[i] = INFINITY;

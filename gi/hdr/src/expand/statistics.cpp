@@ -57,8 +57,9 @@ void Expansion::statistics() {
     std::lock_guard<std::mutex> lock(mutex);
     for (int b = 0; b < kHistogramBins; ++b) counts[size_t(b)] += local[size_t(b)];
     for (size_t i : over)
-      sample.offer({Sample::hashOf(base[ni] + i), n.world[i], n.normal.empty() ? glm::vec3(0) : n.normal[i]},
-                   kSampleMax);
+      sample.offer(
+          {Sample::hashOf(base[ni] + i), n.world[i], n.normal.empty() ? glm::vec3(0) : n.normal[i]},
+          kSampleMax);
     progress("statistics", double(++nodesDone) / double(nodes.size()));
   });
   rep.overexposed = overexposed;

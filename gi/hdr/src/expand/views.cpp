@@ -59,13 +59,16 @@ void Expansion::chooseViews() {
     // Rendered at the matched photograph's size, so that its pixels are the photograph's and the
     // identity start is the identity.
     const View& v = *o.photoView;
-    const double aspect = double(v.width) / double(v.height), photoAspect = double(photo.width) / double(photo.height);
+    const double aspect = double(v.width) / double(v.height),
+                 photoAspect = double(photo.width) / double(photo.height);
     if (std::abs(aspect / photoAspect - 1.0) > 0.01)
       throw Error("", "photo view",
-                  "is " + std::to_string(v.width) + " x " + std::to_string(v.height) + ", the photograph " +
-                      std::to_string(photo.width) + " x " + std::to_string(photo.height) +
+                  "is " + std::to_string(v.width) + " x " + std::to_string(v.height) +
+                      ", the photograph " + std::to_string(photo.width) + " x " +
+                      std::to_string(photo.height) +
                       ": a registered camera has the photograph's aspect");
-    View sized = lookAt(v.position, v.position + v.forward, v.up, v.fovYDegrees, small.width, small.height);
+    View sized =
+        lookAt(v.position, v.position + v.forward, v.up, v.fovYDegrees, small.width, small.height);
     sized.name = v.name.empty() ? "photo" : v.name;
     rep.views.insert(rep.views.begin(), sized);
   }

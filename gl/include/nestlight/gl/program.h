@@ -21,8 +21,8 @@ struct PreprocessedSource {
 
 // `defines` are inserted after #version as `#define NAME VALUE`. Throws nestlight::Error for a
 // missing file or an include cycle, naming the including file and line.
-PreprocessedSource preprocessShader(const std::string& path,
-                                    const std::vector<std::pair<std::string, std::string>>& defines = {});
+PreprocessedSource preprocessShader(
+    const std::string& path, const std::vector<std::pair<std::string, std::string>>& defines = {});
 
 // Replaces source-string numbers in a driver's info log by file names.
 std::string mapShaderLog(const std::string& log, const std::vector<std::string>& files);

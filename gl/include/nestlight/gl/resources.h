@@ -94,7 +94,8 @@ class Texture : public Object<TextureDeleter> {
   void setDepthCompare(bool on) const;
 
  private:
-  static Texture make(GLenum target, GLenum internalFormat, int width, int height, int depth, int levels);
+  static Texture make(GLenum target, GLenum internalFormat, int width, int height, int depth,
+                      int levels);
   int width_ = 0, height_ = 0;
   GLenum format_ = 0;
 };

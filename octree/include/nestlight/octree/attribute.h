@@ -29,9 +29,9 @@ void storeFromDouble(ScalarType t, double v, uint8_t* p);
 
 // Names with a fixed meaning; other attributes keep the name the source gave them.
 namespace attr {
-inline constexpr std::string_view kRgb = "rgb";                  // uint16 x3, full 16-bit range
-inline constexpr std::string_view kNormal = "normal";            // float x3, unit length
-inline constexpr std::string_view kIntensity = "intensity";      // uint16
+inline constexpr std::string_view kRgb = "rgb";              // uint16 x3, full 16-bit range
+inline constexpr std::string_view kNormal = "normal";        // float x3, unit length
+inline constexpr std::string_view kIntensity = "intensity";  // uint16
 inline constexpr std::string_view kClassification = "classification";  // uint8
 }  // namespace attr
 

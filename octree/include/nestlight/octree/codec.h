@@ -26,7 +26,8 @@ const char* codecName(Codec c);
 std::optional<Codec> parseCodecName(std::string_view name);
 
 // `points.pos` holds node-relative coordinates.
-std::vector<uint8_t> encodePayload(Codec codec, const PointLayout& layout, const PointBuffer& points);
+std::vector<uint8_t> encodePayload(Codec codec, const PointLayout& layout,
+                                   const PointBuffer& points);
 
 // Decodes exactly `count` points into `out` (node-relative positions). Returns an empty string on
 // success, else the reason.

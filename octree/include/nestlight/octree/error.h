@@ -42,11 +42,11 @@ class Error : public std::runtime_error {
 
 }  // namespace nestlight
 
-#define NL_CHECK(cond)                                                             \
-  do {                                                                             \
+#define NL_CHECK(cond)                                                               \
+  do {                                                                               \
     if (!(cond)) ::nestlight::checkFailed(#cond, __FILE__, __LINE__, std::string()); \
   } while (0)
-#define NL_CHECK_MSG(cond, msg)                                          \
-  do {                                                                   \
+#define NL_CHECK_MSG(cond, msg)                                              \
+  do {                                                                       \
     if (!(cond)) ::nestlight::checkFailed(#cond, __FILE__, __LINE__, (msg)); \
   } while (0)

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <cstdint>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -62,41 +61,41 @@ struct SourceRecord {
 // colour never overwrites the scan's LDR colour). `file` holds one checksummed payload per node
 // and, at `indexOffset`, the index of those payloads (colour_layer.h; docs/FORMAT.md).
 struct LayerRecord {
-  std::string name;       // "hdr"
-  std::string kind;       // "colour": linear RGB
-  std::string encoding;   // "half_rgb_zstd": 3 half floats per point, zstd per node
+  std::string name;      // "hdr"
+  std::string kind;      // "colour": linear RGB
+  std::string encoding;  // "half_rgb_zstd": 3 half floats per point, zstd per node
   std::string file;
-  uint64_t bytes = 0;     // the file's size
+  uint64_t bytes = 0;  // the file's size
   uint64_t indexOffset = 0, indexBytes = 0, indexChecksum = 0;
   uint64_t nodes = 0, points = 0;
-  double scale = 1;       // linear value = stored half * scale (keeps values beyond 65504)
-  nlohmann::json build;   // how it was made: parameters, statistics, timings
+  double scale = 1;      // linear value = stored half * scale (keeps values beyond 65504)
+  nlohmann::json build;  // how it was made: parameters, statistics, timings
 };
 
 struct Metadata {
   int version = kFormatVersion;
   std::string generator;
-  Box3d bounds;            // tight bounds of the stored points (world units)
-  Vec3d offset;            // world position of integer coordinate 0 (the root cube's min corner)
+  Box3d bounds;  // tight bounds of the stored points (world units)
+  Vec3d offset;  // world position of integer coordinate 0 (the root cube's min corner)
   // World units per integer step of each axis: a LAS file's own per-axis scales survive the
   // octree and every export (the integer cube is a cube; in world units a box when they differ).
   Vec3d scale{0.001, 0.001, 0.001};
   // The LAS offset of the inputs (the first one's): exports write it back, so that a LAS file's
   // integer coordinates come out as they went in. Absent for inputs without one.
   std::optional<Vec3d> sourceOffset;
-  uint32_t cubeSize = 1;   // root cube edge in integer units, a power of two
-  uint32_t depth = 0;      // deepest level that holds points
-  double spacing = 0;      // nominal sample spacing of the root (world units); level l: /2^l
-  uint64_t points = 0;     // points stored
+  uint32_t cubeSize = 1;  // root cube edge in integer units, a power of two
+  uint32_t depth = 0;     // deepest level that holds points
+  double spacing = 0;     // nominal sample spacing of the root (world units); level l: /2^l
+  uint64_t points = 0;    // points stored
   uint64_t nodes = 0;
-  PointLayout layout;      // attributes besides position
-  int rgbSourceBits = 0;   // 8 when every source gave 8-bit colour, 16 otherwise, 0 without rgb
+  PointLayout layout;     // attributes besides position
+  int rgbSourceBits = 0;  // 8 when every source gave 8-bit colour, 16 otherwise, 0 without rgb
   bool normalsEstimated = false;
   nlohmann::json normalEstimation;  // parameters when estimated
   Accounting accounting;
   nlohmann::json crs;
   std::vector<SourceRecord> sources;
-  nlohmann::json build;    // parameters and timings of the conversion
+  nlohmann::json build;  // parameters and timings of the conversion
 
   std::string payloadFile = "octree.bin";
   uint64_t payloadBytes = 0;
@@ -121,7 +120,9 @@ struct Metadata {
   // World position of integer coordinate `q` on axis `a`.
   double world(int a, double q) const { return offset[a] + q * scale[a]; }
   // The nominal sample spacing of a level: the root's `spacing` halved per level.
-  double levelSpacing(uint32_t level) const { return std::ldexp(spacing, -static_cast<int>(level)); }
+  double levelSpacing(uint32_t level) const {
+    return std::ldexp(spacing, -static_cast<int>(level));
+  }
   // World bounds of a node's cube.
   Box3d nodeBounds(uint32_t level, uint32_t x, uint32_t y, uint32_t z) const;
 

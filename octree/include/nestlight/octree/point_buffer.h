@@ -32,7 +32,9 @@ struct PointBuffer {
     pos.insert(pos.end(), p, p + 3);
     attrs.insert(attrs.end(), a, a + stride);
   }
-  void pushFrom(const PointBuffer& o, size_t i) { push(&o.pos[i * 3], o.attrs.data() + i * stride); }
+  void pushFrom(const PointBuffer& o, size_t i) {
+    push(&o.pos[i * 3], o.attrs.data() + i * stride);
+  }
   const uint8_t* attrsOf(size_t i) const { return attrs.data() + i * stride; }
   // Bytes in memory per point.
   size_t bytesPerPoint() const { return 12 + stride; }

@@ -35,7 +35,7 @@ inline constexpr int kSpacingNeighbours = 6;
 // it was not measured (format version 1, whose byte 3 was reserved, or too few points).
 double measuredSpacing(const Metadata& meta, uint32_t level, const HierarchyEntry& e);
 
-double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size_t n, size_t maxQueries = 128,
-                              size_t window = 32);
+double medianNeighbourSpacing(const uint32_t* xyz, const uint32_t* indices, size_t n,
+                              size_t maxQueries = 128, size_t window = 32);
 
 }  // namespace nestlight

@@ -35,8 +35,8 @@ class OctreeReader;
 namespace nestlight::streaming {
 
 struct Budgets {
-  uint64_t points = 5'000'000;               // points in the cut
-  uint64_t gpuBytes = 512ull << 20;          // resident bytes (NodeStore sizes), never exceeded
+  uint64_t points = 5'000'000;       // points in the cut
+  uint64_t gpuBytes = 512ull << 20;  // resident bytes (NodeStore sizes), never exceeded
   uint64_t uploadBytesPerFrame = 32ull << 20;
   int loaderThreads = 2;
   // A node's children are wanted while its point spacing projects to more than this many
@@ -46,34 +46,34 @@ struct Budgets {
 
 struct FrameStats {
   uint64_t frame = 0;
-  uint32_t cutNodes = 0;          // nodes the view wants (within budgets)
+  uint32_t cutNodes = 0;  // nodes the view wants (within budgets)
   uint64_t cutPoints = 0;
-  uint32_t drawNodes = 0;         // resident cut nodes with all ancestors resident
+  uint32_t drawNodes = 0;  // resident cut nodes with all ancestors resident
   uint64_t drawPoints = 0;
   uint32_t residentNodes = 0;
   uint64_t residentBytes = 0;
-  uint32_t uploads = 0;           // this frame
+  uint32_t uploads = 0;  // this frame
   uint64_t uploadBytes = 0;
   uint32_t evictions = 0;
-  uint32_t cancelled = 0;         // requests dropped from the queue this frame
-  uint32_t queueLength = 0;       // requests waiting for a loader
-  uint32_t inFlight = 0;          // taken by a loader, not yet finished
-  uint32_t readyWaiting = 0;      // loaded, waiting for upload budget
-  uint64_t bytesRead = 0;         // payload + hierarchy bytes read by loaders this frame
-  uint32_t badNodes = 0;          // total so far
-  bool complete = false;          // every cut node drawn, nothing pending for the cut
+  uint32_t cancelled = 0;     // requests dropped from the queue this frame
+  uint32_t queueLength = 0;   // requests waiting for a loader
+  uint32_t inFlight = 0;      // taken by a loader, not yet finished
+  uint32_t readyWaiting = 0;  // loaded, waiting for upload budget
+  uint64_t bytesRead = 0;     // payload + hierarchy bytes read by loaders this frame
+  uint32_t badNodes = 0;      // total so far
+  bool complete = false;      // every cut node drawn, nothing pending for the cut
   double msCutSelection = 0;
   double msUpload = 0;
-  double msUpdate = 0;            // the whole update()
+  double msUpdate = 0;  // the whole update()
 };
 
 // One node to draw this frame.
 struct DrawNode {
   NodeKey key;
-  uint64_t handle = 0;            // from NodeStore::upload
+  uint64_t handle = 0;  // from NodeStore::upload
   uint32_t numPoints = 0;
-  Box3d worldBounds;              // the node's cube in world units
-  double spacing = 0;             // the node's nominal point spacing, world units
+  Box3d worldBounds;   // the node's cube in world units
+  double spacing = 0;  // the node's nominal point spacing, world units
   // The measured spacing of the points drawn where this node is the finest drawn node (its own
   // and its ancestors' points in its cube), world units; the nominal spacing for octrees that
   // did not record it (format version 1). Splats are sized by it.
@@ -82,7 +82,7 @@ struct DrawNode {
 
 struct BadNode {
   NodeKey key;
-  std::string message;            // names the node and the file
+  std::string message;  // names the node and the file
 };
 
 class Streamer {
@@ -96,7 +96,7 @@ class Streamer {
   const FrameStats& update(const View& view);
   const std::vector<DrawNode>& drawList() const;  // of the last update(), parents first
   const FrameStats& stats() const;
-  void setBudgets(const Budgets& b);              // takes effect at the next update()
+  void setBudgets(const Budgets& b);  // takes effect at the next update()
   const Budgets& budgets() const;
   std::vector<BadNode> badNodes() const;
   // Called once per bad node, from the loader thread that found it (from update() for a

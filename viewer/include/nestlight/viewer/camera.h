@@ -24,14 +24,14 @@ struct Camera {
   // keeps the box's 8 corners inside the frame of aspect `aspect` (width / height) shrunk by
   // `margin` on each side (a fraction of the half-frame): the scan's bounds fill the frame. Near
   // and far follow the box.
-  static Camera framing(const Box3d& box, double fovYDegrees = 60, double aspect = 16.0 / 9.0, double azimuth = 35,
-                        double elevation = 30, double margin = 0.05);
+  static Camera framing(const Box3d& box, double fovYDegrees = 60, double aspect = 16.0 / 9.0,
+                        double azimuth = 35, double elevation = 30, double margin = 0.05);
   // Fits near/far to the box as seen from the current eye.
   void fitClipPlanes(const Box3d& box);
 
-  glm::dmat4 viewRotation() const;                  // eye at the origin
-  glm::dmat4 projection(double aspect) const;       // OpenGL clip conventions
-  glm::dmat4 clipFromWorld(double aspect) const;    // projection * full view (double)
+  glm::dmat4 viewRotation() const;                // eye at the origin
+  glm::dmat4 projection(double aspect) const;     // OpenGL clip conventions
+  glm::dmat4 clipFromWorld(double aspect) const;  // projection * full view (double)
   streaming::View view(int widthPx, int heightPx) const;
 };
 
@@ -43,8 +43,9 @@ struct CameraController {
   glm::dvec3 target{0};
   double yaw = 0, pitch = 0, distance = 1;  // degrees, degrees, world units
   double fov = 60;
-  double speed = 1;                         // fly speed, world units per second
-  glm::dvec3 up{0, 0, 1}, side{1, 0, 0}, front{0, 1, 0};  // yaw 0 looks from `side`, yaw 90 from `front`
+  double speed = 1;  // fly speed, world units per second
+  glm::dvec3 up{0, 0, 1}, side{1, 0, 0},
+      front{0, 1, 0};  // yaw 0 looks from `side`, yaw 90 from `front`
 
   // Takes `c`'s target, eye and up (an up of zero length or along the view: z).
   void from(const Camera& c);

@@ -1,26 +1,25 @@
-// The point view: the resident cut drawn through the GI frame's graph (nestlight/frame/frame_graph.h)
-// as two tile passes: "points" (either rasteriser into a linear G-buffer: colour, view-space
-// normal, depth) and "eye_dome_lighting" (with a margin so tiles see their neighbours; it encodes
-// for display itself, the point view's tone map being an exposure and the sRGB curve, or writes
-// linear values for HDR files). The graph
-// renders large images in tiles and owns the targets.
+// The point view: the resident cut drawn through the GI frame's graph
+// (nestlight/frame/frame_graph.h) as two tile passes: "points" (either rasteriser into a linear
+// G-buffer: colour, view-space normal, depth) and "eye_dome_lighting" (with a margin so tiles see
+// their neighbours; it encodes for display itself, the point view's tone map being an exposure and
+// the sRGB curve, or writes linear values for HDR files). The graph renders large images in tiles
+// and owns the targets.
 #pragma once
 
 #include <epoxy/gl.h>
 
+#include <glm/glm.hpp>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include <glm/glm.hpp>
-
-#include "nestlight/streaming/streamer.h"
-#include "nestlight/viewer/camera.h"
 #include "nestlight/frame/draw_tree.h"
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
-#include "nestlight/viewer/image.h"
 #include "nestlight/gl/program.h"
+#include "nestlight/streaming/streamer.h"
+#include "nestlight/viewer/camera.h"
+#include "nestlight/viewer/image.h"
 
 namespace nestlight::viewer {
 
@@ -46,12 +45,14 @@ struct RenderSettings {
   float sizeScale = kDefaultSizeScale;
   static constexpr float kDefaultSizeScale = 2.25f;
   float hqsDepthEpsilon = 1.0f;  // HQS: blend splats within this many splat radii of the front
-  float minPointSize = 2.0f;     // pixels: below 2 a round splat covers fewer pixels than a spacing (holes)
-  float maxPointSize = 64.0f;    // pixels: close to a sparse scan splats grow this far before holes open
-  float fixedPointSize = 0.0f;   // > 0: every splat this many pixels (the compute path draws 1)
+  float minPointSize =
+      2.0f;  // pixels: below 2 a round splat covers fewer pixels than a spacing (holes)
+  float maxPointSize =
+      64.0f;  // pixels: close to a sparse scan splats grow this far before holes open
+  float fixedPointSize = 0.0f;  // > 0: every splat this many pixels (the compute path draws 1)
   bool roundPoints = true;
-  float edlStrength = 1.0f;      // 0 disables eye-dome lighting
-  float edlRadius = 1.4f;        // pixels, at most kMaxEdlRadius (tiles overlap by that much)
+  float edlStrength = 1.0f;  // 0 disables eye-dome lighting
+  float edlRadius = 1.4f;    // pixels, at most kMaxEdlRadius (tiles overlap by that much)
   static constexpr float kMaxEdlRadius = 6.0f;
   glm::vec3 background{0.08f, 0.08f, 0.10f};  // display-referred
   // The colour times 2^exposureStops before display (an HDR colour layer's highlights lie above 1).
@@ -59,13 +60,13 @@ struct RenderSettings {
   // The output holds linear colour (times the exposure and the eye-dome shading) instead of the
   // sRGB-encoded display value: for EXR files of an HDR colour layer. Background in linear too.
   bool linearOutput = false;
-  int maxTile = 2048;            // larger images render in tiles (SSBO and FBO limits)
-  bool allowAtomic64 = true;     // compute path: one 64-bit pass where the GPU has 64-bit atomics
+  int maxTile = 2048;         // larger images render in tiles (SSBO and FBO limits)
+  bool allowAtomic64 = true;  // compute path: one 64-bit pass where the GPU has 64-bit atomics
 };
 
 struct DrawTimings {
-  double msDraw = 0;     // CPU-side wall time of the frame's GL work, finished (glFinish)
-  uint64_t points = 0;   // points submitted
+  double msDraw = 0;    // CPU-side wall time of the frame's GL work, finished (glFinish)
+  uint64_t points = 0;  // points submitted
 };
 
 class FrameRenderer {
@@ -76,12 +77,14 @@ class FrameRenderer {
   FrameRenderer& operator=(const FrameRenderer&) = delete;
 
   // Renders width x height (tiled when larger than settings.maxTile) and reads it back.
-  Image render(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store, const Camera& camera,
-               int width, int height, const RenderSettings& settings, DrawTimings* timings = nullptr);
+  Image render(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
+               const Camera& camera, int width, int height, const RenderSettings& settings,
+               DrawTimings* timings = nullptr);
 
   // Renders into the output texture (no read-back, no tiling): for the window.
-  GLuint renderToTexture(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
-                         const Camera& camera, int width, int height, const RenderSettings& settings,
+  GLuint renderToTexture(const std::vector<streaming::DrawNode>& nodes,
+                         const frame::GlNodeStore& store, const Camera& camera, int width,
+                         int height, const RenderSettings& settings,
                          DrawTimings* timings = nullptr);
   // A framebuffer with the output texture attached (the window blits from it).
   GLuint outputFramebuffer();
@@ -92,17 +95,20 @@ class FrameRenderer {
   // The "points" pass: every node of nodes_ into the tile's G-buffer with settings_.
   void rasterise(const frame::PassContext& ctx);
   void ensureSsbos(size_t pixels);
-  void begin(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store, const Camera& camera,
-             const RenderSettings& settings, DrawTimings* timings);
+  void begin(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
+             const Camera& camera, const RenderSettings& settings, DrawTimings* timings);
 
-  gl::ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_, edl_;
+  gl::ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_,
+      edl_;
   std::unique_ptr<gl::ShaderProgram> atomic64_, resolve64_;  // only with 64-bit atomics
   frame::FrameGraph graph_;
   gl::VertexArray vao_;
-  gl::Framebuffer gbufferFbo_, hqsFbo_, outputFbo_;  // attachments set from the graph's targets per run
+  gl::Framebuffer gbufferFbo_, hqsFbo_,
+      outputFbo_;             // attachments set from the graph's targets per run
   frame::DrawTree drawTree_;  // the vertex shader's finest-node lookup (splat_size.glsl)
   gl::Buffer depthSsbo_, accumSsbo_, normalSsbo_;  // compute path, 32-bit: per pixel of a tile
-  gl::Buffer packedSsbo_, packedNormalSsbo_;       // compute path, 64-bit: min(depth << 32 | colour, normal)
+  gl::Buffer packedSsbo_,
+      packedNormalSsbo_;  // compute path, 64-bit: min(depth << 32 | colour, normal)
   size_t ssboPixels_ = 0;
   // What the passes draw this frame (set by render()/renderToTexture() before the graph runs).
   const std::vector<streaming::DrawNode>* nodes_ = nullptr;

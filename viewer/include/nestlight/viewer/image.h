@@ -26,9 +26,9 @@ Image readImage(const std::string& path);
 // `channelTolerance` (0..1). The diff image shows differing pixels in red over a dimmed `a`.
 struct ImageDiff {
   uint64_t differing = 0;
-  double fraction = 0;     // differing / pixels
+  double fraction = 0;  // differing / pixels
   double maxChannel = 0;
-  double rmse = 0;         // over all pixels and RGB channels
+  double rmse = 0;  // over all pixels and RGB channels
   Image diff;
 };
 ImageDiff compareImages(const Image& a, const Image& b, float channelTolerance);

@@ -7,7 +7,6 @@
 #include <string>
 
 #include "nestlight/gi/scene.h"
-
 #include "nestlight/viewer/headless.h"
 
 namespace nestlight::viewer {
@@ -15,7 +14,7 @@ namespace nestlight::viewer {
 struct ViewerOptions {
   std::filesystem::path octree;
   int width = 1280, height = 800;
-  std::optional<Camera> camera;       // none: framing the scan from azimuth/elevation
+  std::optional<Camera> camera;  // none: framing the scan from azimuth/elevation
   double azimuth = 35, elevation = 30, fovYDegrees = 60;
   RenderSettings settings;
   streaming::Budgets budgets;

@@ -4,10 +4,9 @@
 #pragma once
 
 #include <filesystem>
+#include <glm/glm.hpp>
 #include <optional>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace nestlight {
 class JsonField;
@@ -26,7 +25,8 @@ struct CameraPath {
   std::vector<CameraKey> keys;        // times increase
 
   bool empty() const { return keys.empty(); }
-  // 1 + floor((last - first) * fps): a path of one key, or of keys closer than a frame, is one frame.
+  // 1 + floor((last - first) * fps): a path of one key, or of keys closer than a frame, is one
+  // frame.
   int frames() const;
   // Eye and target at frame `frame` (time first + frame / fps), clamped to the last key.
   CameraKey at(int frame) const;

@@ -28,7 +28,7 @@ class EnvironmentMap {
   struct Sample {
     glm::vec3 direction{0.0f};  // towards the environment
     Rgb radiance{0.0f};
-    float pdf = 0;              // per solid angle; 0 when the map is black
+    float pdf = 0;  // per solid angle; 0 when the map is black
   };
   Sample sample(glm::vec2 u) const;
   float pdf(const glm::vec3& direction) const;

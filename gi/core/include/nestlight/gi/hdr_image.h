@@ -46,7 +46,8 @@ using ImageAttributes = std::map<std::string, std::string>;
 HdrImage readHdrImage(const std::string& path, ImageAttributes* attributes = nullptr);
 // 32-bit float RGB EXR (ZIP): full range, values above half-float's 65504 survive. Written to a
 // temporary name and renamed, so a killed render leaves no file that looks complete.
-void writeExr(const std::string& path, const HdrImage& image, const ImageAttributes& attributes = {});
+void writeExr(const std::string& path, const HdrImage& image,
+              const ImageAttributes& attributes = {});
 
 // 8-bit RGB PNG of display-referred values in [0, 1] (clamped), rounded to nearest. A pixel with a
 // NaN channel is written magenta (255, 0, 255) so that it shows instead of turning silently

@@ -23,27 +23,28 @@ struct Material {
   Rgb baseColor{0.8f};
   float roughness = 0.5f;  // perceptual roughness; GGX alpha = roughness^2, clamped >= 1e-3
   float metallic = 0;
-  float specular = 0.5f;   // Principled: F0 of dielectrics = 0.08 * specular
+  float specular = 0.5f;  // Principled: F0 of dielectrics = 0.08 * specular
   float specularTint = 0;
   float sheen = 0;
   float sheenTint = 0.5f;
   float clearcoat = 0;
   float clearcoatGloss = 1;
-  Rgb emission{0.0f};      // emitted radiance (W sr^-1 m^-2 per channel)
+  Rgb emission{0.0f};  // emitted radiance (W sr^-1 m^-2 per channel)
   std::string name;
 };
 
 struct BsdfSample {
   glm::vec3 wi{0.0f};
-  Rgb f{0.0f};      // eval(wo, wi)
-  float pdf = 0;    // pdf(wo, wi), solid angle
+  Rgb f{0.0f};    // eval(wo, wi)
+  float pdf = 0;  // pdf(wo, wi), solid angle
 };
 
 Rgb evalBsdf(const Material& m, const glm::vec3& wo, const glm::vec3& wi);
 float pdfBsdf(const Material& m, const glm::vec3& wo, const glm::vec3& wi);
 // `u` picks the direction, `uLobe` the lobe. Returns nothing when wo is below the surface or
 // the sampled direction is.
-std::optional<BsdfSample> sampleBsdf(const Material& m, const glm::vec3& wo, glm::vec2 u, float uLobe);
+std::optional<BsdfSample> sampleBsdf(const Material& m, const glm::vec3& wo, glm::vec2 u,
+                                     float uLobe);
 
 // The directional albedo: integral of f cos over the hemisphere for `wo` (Monte Carlo with
 // `samples` BSDF samples, seeded). <= 1 for an energy-conserving BSDF; the white-furnace test.

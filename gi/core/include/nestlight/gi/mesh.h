@@ -27,13 +27,13 @@ struct TriangleMesh {
 };
 
 struct MeshReadReport {
-  uint64_t facesRead = 0;            // polygons in the file
-  uint64_t trianglesKept = 0;        // after fan triangulation and cleaning
+  uint64_t facesRead = 0;      // polygons in the file
+  uint64_t trianglesKept = 0;  // after fan triangulation and cleaning
   // Zero-area triangles (a repeated index, collinear corners), triangles with a non-finite
   // corner, and faces of fewer than three vertices (one each): not rendered, counted.
   uint64_t degenerateDropped = 0;
-  uint64_t polygonsTriangulated = 0; // faces with more than three vertices
-  uint64_t nonFiniteVertices = 0;    // vertices with NaN/Inf coordinates
+  uint64_t polygonsTriangulated = 0;  // faces with more than three vertices
+  uint64_t nonFiniteVertices = 0;     // vertices with NaN/Inf coordinates
   // What was read differently from what the file says, without losing a triangle: colours of a
   // type that is not a colour, normals that cannot be normalised, OBJ corners without a normal
   // beside corners with one, bytes after the last element.
@@ -62,14 +62,15 @@ struct Surfels {
 
 struct SurfelOptions {
   SurfelSampling method = SurfelSampling::AreaUniform;
-  size_t count = 10000;          // points wanted (Poisson-disk may return slightly fewer)
+  size_t count = 10000;  // points wanted (Poisson-disk may return slightly fewer)
   uint64_t seed = 1;
   uint32_t material = 0;
   Rgb baseColor{1.0f};
 };
 
 // Samples `mesh` transformed by worldFromObject. Degenerate triangles get no points.
-Surfels sampleSurfels(const TriangleMesh& mesh, const glm::mat4& worldFromObject, const SurfelOptions& options);
+Surfels sampleSurfels(const TriangleMesh& mesh, const glm::mat4& worldFromObject,
+                      const SurfelOptions& options);
 
 double meshArea(const TriangleMesh& mesh, const glm::mat4& worldFromObject);
 

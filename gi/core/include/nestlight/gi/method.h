@@ -29,7 +29,9 @@ struct MethodFrame {
   uint64_t nonFiniteSamples = 0;
   std::string stopReason;
   double raysPerSecond() const { return seconds > 0 ? double(rays) / seconds : 0; }
-  double samplesPerSecond() const { return seconds > 0 ? double(samplesPerPixel) * double(image.pixels()) / seconds : 0; }
+  double samplesPerSecond() const {
+    return seconds > 0 ? double(samplesPerPixel) * double(image.pixels()) / seconds : 0;
+  }
 };
 
 class Method {
@@ -43,7 +45,8 @@ class Method {
   // context with whatever is resident (streaming goes on, nothing waits) and returns the GL name
   // of an RGBA8 texture holding the tone-mapped frame (gi/metrics' tone map at exposureStops);
   // `stats` receives the pass timings and summary. 0: the method has no interactive mode.
-  virtual unsigned renderInteractive(const SceneCamera& camera, float exposureStops, MethodFrame* stats) {
+  virtual unsigned renderInteractive(const SceneCamera& camera, float exposureStops,
+                                     MethodFrame* stats) {
     (void)camera, (void)exposureStops, (void)stats;
     return 0;
   }
@@ -54,7 +57,8 @@ class Method {
 // How a method was asked for: progress lines (stderr) unless quiet; GL methods make a headless
 // context of their own unless the caller (the viewer's window) has one current.
 struct MethodContext {
-  MethodContext(bool quietArg = false, bool glContextCurrentArg = false, bool syncPassTimingArg = false)
+  MethodContext(bool quietArg = false, bool glContextCurrentArg = false,
+                bool syncPassTimingArg = false)
       : quiet(quietArg), glContextCurrent(glContextCurrentArg), syncPassTiming(syncPassTimingArg) {}
   bool quiet = false;
   bool glContextCurrent = false;

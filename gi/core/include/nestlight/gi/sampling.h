@@ -17,7 +17,9 @@ inline constexpr float kInvPi = 0.31830988618379067154f;
 // The largest float below 1: u in [0, kOneMinusEpsilon] keeps inverse-CDF lookups in range.
 inline constexpr float kOneMinusEpsilon = 0x1.fffffep-1f;
 
-inline float luminance(const Rgb& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+inline float luminance(const Rgb& c) {
+  return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+}
 
 // PCG32 (O'Neill 2014). Written here because it is ten lines and the path tracer needs a
 // generator it can seed per pixel and sample cheaply; <random>'s engines are larger and slower.
@@ -52,15 +54,19 @@ class Rng {
 struct Frame {
   glm::vec3 s, t, n;
   static Frame fromNormal(const glm::vec3& n);
-  glm::vec3 toLocal(const glm::vec3& v) const { return {glm::dot(v, s), glm::dot(v, t), glm::dot(v, n)}; }
+  glm::vec3 toLocal(const glm::vec3& v) const {
+    return {glm::dot(v, s), glm::dot(v, t), glm::dot(v, n)};
+  }
   glm::vec3 toWorld(const glm::vec3& v) const { return s * v.x + t * v.y + n * v.z; }
 };
 
 glm::vec3 sampleCosineHemisphere(glm::vec2 u);  // local frame, z up; pdf = cos/pi
-inline float cosineHemispherePdf(float cosTheta) { return cosTheta > 0 ? cosTheta * kInvPi : 0; }
+inline float cosineHemispherePdf(float cosTheta) {
+  return cosTheta > 0 ? cosTheta * kInvPi : 0;
+}
 glm::vec3 sampleUniformSphere(glm::vec2 u);  // pdf = 1/(4 pi)
 inline constexpr float kUniformSpherePdf = 0.25f * kInvPi;
-glm::vec2 sampleUniformDisk(glm::vec2 u);  // concentric map (Shirley-Chiu), unit disk
+glm::vec2 sampleUniformDisk(glm::vec2 u);      // concentric map (Shirley-Chiu), unit disk
 glm::vec3 sampleUniformTriangle(glm::vec2 u);  // barycentrics (b0, b1, b2)
 
 // Veach's power heuristic (beta = 2) for combining two strategies.

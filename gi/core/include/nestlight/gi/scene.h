@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/gi/camera_path.h"
 #include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/environment_sequence.h"
-#include "nestlight/gi/camera_path.h"
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/sampling.h"
@@ -26,10 +26,10 @@ namespace nestlight::gi {
 
 struct SceneOctree {
   std::filesystem::path path;
-  std::optional<int> maxLevel;       // deepest level loaded (none: all, within the budget)
+  std::optional<int> maxLevel;         // deepest level loaded (none: all, within the budget)
   uint64_t memoryBudget = 2ull << 30;  // bytes of points the reference may hold
-  float radiusScale = 1.0f;          // disc radius = radiusScale * local spacing
-  float colourScale = 1.0f;          // radiance (or albedo) per unit of recorded colour
+  float radiusScale = 1.0f;            // disc radius = radiusScale * local spacing
+  float colourScale = 1.0f;            // radiance (or albedo) per unit of recorded colour
   // Where its colour comes from: "rgb" (recorded, sRGB decoded) or a colour layer ("hdr": the
   // HDR colour nestlight expand-hdr writes; nestlight/gi/scan_colour.h).
   std::string colour = "rgb";
@@ -38,7 +38,7 @@ struct SceneOctree {
 struct SceneMesh {
   std::filesystem::path path;
   glm::dmat4 worldFromObject{1.0};
-  uint32_t material = 0;             // index into Scene::materials
+  uint32_t material = 0;  // index into Scene::materials
   SurfelSampling surfelMethod = SurfelSampling::AreaUniform;
   size_t surfelCount = 20000;
 };
@@ -48,14 +48,14 @@ enum class LightType { Point, Spot, Directional };
 struct Light {
   LightType type = LightType::Point;
   glm::dvec3 position{0.0};
-  glm::vec3 direction{0, 0, -1};     // spot axis, or the direction light travels (directional)
-  Rgb intensity{1.0f};               // point/spot: W/sr; directional: irradiance W/m^2 (normal)
-  float innerAngleDegrees = 30;      // spot: full intensity inside
-  float outerAngleDegrees = 45;      // spot: zero outside (smoothstep between)
+  glm::vec3 direction{0, 0, -1};  // spot axis, or the direction light travels (directional)
+  Rgb intensity{1.0f};            // point/spot: W/sr; directional: irradiance W/m^2 (normal)
+  float innerAngleDegrees = 30;   // spot: full intensity inside
+  float outerAngleDegrees = 45;   // spot: zero outside (smoothstep between)
 };
 
 struct SceneEnvironment {
-  std::filesystem::path path;        // empty with `constant` or `sequence`
+  std::filesystem::path path;  // empty with `constant` or `sequence`
   std::optional<Rgb> constant;
   // A video light probe (nestlight/gi/environment_sequence.h): a frame pattern or a folder, its
   // frame rate, and whether a bad frame is an error or plays the previous one again.
@@ -75,37 +75,38 @@ struct SceneCamera {
   double time = 0;
 };
 
-
 enum class RadianceMode { RadianceCache, Albedo };
 
 struct GiSettings {
   std::string method = "reference";  // one of methodNames() (nestlight/gi/method.h)
   RadianceMode mode = RadianceMode::RadianceCache;
-  int maxBounces = 4;                // path length in bounces after the camera hit
-  int samplesPerPixel = 256;         // upper bound on samples
-  double targetRelativeError = 0;    // stop when the estimated relative error falls below (0: off)
-  double timeLimitSeconds = 0;       // stop after this long (0: off)
+  int maxBounces = 4;              // path length in bounces after the camera hit
+  int samplesPerPixel = 256;       // upper bound on samples
+  double targetRelativeError = 0;  // stop when the estimated relative error falls below (0: off)
+  double timeLimitSeconds = 0;     // stop after this long (0: off)
   uint64_t seed = 1;
-  nlohmann::json parameters;         // method-specific, validated by the method
+  nlohmann::json parameters;  // method-specific, validated by the method
 };
 
 struct SceneOutput {
-  std::filesystem::path exr;         // linear HDR
-  std::filesystem::path png;         // tone-mapped, optional
-  double exposure = 0;               // stops, for the PNG
+  std::filesystem::path exr;  // linear HDR
+  std::filesystem::path png;  // tone-mapped, optional
+  double exposure = 0;        // stops, for the PNG
 };
 
 // How `nestlight view scene.json` draws the scene's scans (the real-time point rendering; the
 // GI methods read `gi`). Names as `nestlight render` takes them.
 struct SceneDisplay {
   std::optional<std::string> rasteriser;  // points | compute (none: the viewer's default)
-  std::optional<std::string> splatting;   // hqs | basic, points rasteriser (none: the viewer's default)
-  std::optional<float> pointSize;     // splat diameter in measured spacings (none: the viewer's default)
-  std::optional<float> edlStrength;   // eye-dome lighting (0: off; none: the viewer's default)
+  std::optional<std::string>
+      splatting;  // hqs | basic, points rasteriser (none: the viewer's default)
+  std::optional<float>
+      pointSize;  // splat diameter in measured spacings (none: the viewer's default)
+  std::optional<float> edlStrength;  // eye-dome lighting (0: off; none: the viewer's default)
 };
 
 struct Scene {
-  std::filesystem::path file;        // where it was read from (relative paths resolve here)
+  std::filesystem::path file;  // where it was read from (relative paths resolve here)
   glm::dvec3 origin{0.0};
   bool originSet = false;
   std::vector<SceneOctree> octrees;
@@ -114,8 +115,8 @@ struct Scene {
   std::vector<Light> lights;
   std::optional<SceneEnvironment> environment;
   SceneCamera camera;
-  bool cameraSet = false;            // the file has "camera" (renders need it or a camera path)
-  CameraPath cameraPath;              // optional (empty: none); replaces `camera`'s eye/target per frame
+  bool cameraSet = false;  // the file has "camera" (renders need it or a camera path)
+  CameraPath cameraPath;   // optional (empty: none); replaces `camera`'s eye/target per frame
   GiSettings gi;
   SceneDisplay display;
   SceneOutput output;
@@ -128,8 +129,9 @@ struct Scene {
 // The cameras a render of `scene` draws: one per frame of its camera path (CameraPath::at, at
 // time f / fps); without a path, one per frame of its environment sequence (the scene's camera at
 // each frame's time), so every frame of a video light probe has its image; its camera alone when
-// it has neither or `still` (time 0: a sequence's first frame). Throws nestlight::Error naming the scene file and field when there
-// is no camera, the path asks for more than a million frames, or a frame's view is degenerate.
+// it has neither or `still` (time 0: a sequence's first frame). Throws nestlight::Error naming the
+// scene file and field when there is no camera, the path asks for more than a million frames, or a
+// frame's view is degenerate.
 std::vector<SceneCamera> sceneCameras(const Scene& scene, bool still = false);
 
 // What `e`'s sequence plays (its source, rate, rotation, scale, bad-frame rule).

@@ -8,10 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "nestlight/gi/metrics.h"
 
@@ -19,40 +18,40 @@ namespace nestlight::gi {
 
 struct BenchGiOptions {
   std::filesystem::path scene;
-  std::filesystem::path out;           // empty: bench-gi beside the scene
+  std::filesystem::path out;  // empty: bench-gi beside the scene
   int runs = 3;
   double referenceError = 0.004;
   double referenceTimeLimit = 1800;
   int referenceSpp = 1 << 16;
   bool forceReference = false;
-  std::vector<std::string> methods;    // empty: every registered method
+  std::vector<std::string> methods;  // empty: every registered method
   // Quality levels per method (samples per pixel, shadow-map texels, ...); a method not listed
   // takes its registered defaults.
   std::map<std::string, std::vector<int>> qualities;
-  bool variants = true;                // also each method's variants (MethodInfo::variants)
-  std::string mode;                    // "albedo" or "radiance_cache": overrides the scene's
-  int width = 0, height = 0;           // 0: the scene camera's
-  std::string device;                  // the CPU's name, for the report (the CLI reads /proc/cpuinfo)
+  bool variants = true;       // also each method's variants (MethodInfo::variants)
+  std::string mode;           // "albedo" or "radiance_cache": overrides the scene's
+  int width = 0, height = 0;  // 0: the scene camera's
+  std::string device;         // the CPU's name, for the report (the CLI reads /proc/cpuinfo)
 };
 
 struct BenchGiRow {
   std::string method;
-  std::string variant;                  // "" : the method as the scene sets it
+  std::string variant;  // "" : the method as the scene sets it
   std::string qualityName;
   int quality = 0;
-  std::vector<double> ms;               // per run, the method's frame time
+  std::vector<double> ms;  // per run, the method's frame time
   double medianMs = 0;
   double raysPerSecond = 0, samplesPerSecond = 0;
   std::vector<std::pair<std::string, double>> passMs;  // GL methods: GPU time per pass, first run
   ImageComparison cmp;
   double relativeL2 = 0;
-  double relativeL2Box4 = 0;            // of 4 x 4-pixel block means (shading, not pixel sampling)
-  ImageAttributes attributes;           // the first run's (clamp loss, ISM agreement, ...)
+  double relativeL2Box4 = 0;   // of 4 x 4-pixel block means (shading, not pixel sampling)
+  ImageAttributes attributes;  // the first run's (clamp loss, ISM agreement, ...)
 };
 
 struct BenchGiReport {
   std::vector<BenchGiRow> rows;
-  nlohmann::json json;                  // what bench_gi.json holds
+  nlohmann::json json;  // what bench_gi.json holds
   std::filesystem::path dir;
 };
 
@@ -60,8 +59,8 @@ struct BenchGiReport {
 // the relative L2 error the reference's stop rule estimates.
 double relativeL2(const HdrImage& test, const HdrImage& reference);
 
-// Throws nestlight::Error for unknown methods (before any rendering), bad scenes and failed renders.
-// Progress and the table go to `log` (nullptr: silent).
+// Throws nestlight::Error for unknown methods (before any rendering), bad scenes and failed
+// renders. Progress and the table go to `log` (nullptr: silent).
 BenchGiReport runBenchGi(const BenchGiOptions& options, std::FILE* log = stdout);
 
 }  // namespace nestlight::gi

@@ -12,10 +12,9 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace nestlight::gi {
 
@@ -29,8 +28,8 @@ struct BenchIblOptions {
   std::vector<std::string> estimators = {"mis", "bis", "smc", "env"};
   std::vector<int> samples = {4, 16, 64};  // the ibl method's quality levels (samples per pixel)
   int frames = 8;
-  int size = 128;          // the error study's image side
-  int timingSize = 512;    // frame times are also measured at this side (0: not)
+  int size = 128;        // the error study's image side
+  int timingSize = 512;  // frame times are also measured at this side (0: not)
   int timingFrames = 3;
   int referenceSpp = 4096;
   float roughness = 0.2f;  // the sphere's GGX roughness

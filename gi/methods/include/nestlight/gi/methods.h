@@ -14,10 +14,10 @@ namespace nestlight::gi {
 
 struct MethodInfo {
   std::string name;
-  std::string summary;          // one line for --help
-  bool gpu = false;             // needs an OpenGL 4.5 context
+  std::string summary;  // one line for --help
+  bool gpu = false;     // needs an OpenGL 4.5 context
   // What `bench gi` varies to trade speed for error, and the values it tries by default.
-  std::string qualityName;      // "samples per pixel", "shadow-map texels"
+  std::string qualityName;  // "samples per pixel", "shadow-map texels"
   std::vector<int> defaultQualities;
   // Sets one quality level in a scene's settings before the method is made.
   std::function<void(GiSettings&, int quality)> applyQuality;

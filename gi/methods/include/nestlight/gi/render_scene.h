@@ -3,10 +3,9 @@
 #pragma once
 
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/scene.h"
@@ -24,21 +23,22 @@ struct SceneRenderOverrides {
   nlohmann::json parameters;     // merged into the scene's gi.parameters (method options)
   std::filesystem::path output;  // .exr; empty: the scene's output
   bool quiet = false;
-  bool still = false;            // ignore the scene's camera path: one image from its camera
+  bool still = false;  // ignore the scene's camera path: one image from its camera
 };
 
 struct SceneRenderReport {
   Scene scene;
-  MethodFrame result;           // the last frame's
-  std::filesystem::path exr;    // the last frame's
+  MethodFrame result;         // the last frame's
+  std::filesystem::path exr;  // the last frame's
   int frames = 1;
-  double loadSeconds = 0;       // reading the scene and making the method
+  double loadSeconds = 0;  // reading the scene and making the method
 };
 
 // Loads `file`, applies `overrides`, renders every frame (the camera, or each frame of the
 // camera path) with the method the scene names and writes linear EXR (plus the scene's PNG).
 // Progress and load lines go to stderr unless overrides.quiet. Throws nestlight::Error naming
 // the file and the field at fault.
-SceneRenderReport renderSceneFile(const std::filesystem::path& file, const SceneRenderOverrides& overrides);
+SceneRenderReport renderSceneFile(const std::filesystem::path& file,
+                                  const SceneRenderOverrides& overrides);
 
 }  // namespace nestlight::gi

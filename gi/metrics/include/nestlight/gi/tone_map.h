@@ -16,7 +16,6 @@
 
 namespace nestlight::gi {
 
-
 // 2^stops as a float multiplier.
 float exposureScale(double stops);
 

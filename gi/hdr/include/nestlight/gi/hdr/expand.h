@@ -23,8 +23,8 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,7 +38,7 @@ const char* expansionModeName(ExpansionMode m);
 
 struct ExpandOptions {
   ExpansionMode mode = ExpansionMode::Rgb;
-  std::vector<View> views;   // given views; empty: automatic
+  std::vector<View> views;  // given views; empty: automatic
   // The photograph's own camera, when it is registered with the scan: the scan is also rendered
   // from it, PatchMatch starts that rendering from the identity (PatchMatchOptions::identityStart)
   // and the points it matched take their colour from it alone (the photograph is direct evidence
@@ -50,7 +50,8 @@ struct ExpandOptions {
   // by row; empty: all of them. Masked-out pixels count for nothing: not in the exposure's
   // histogram or pairs, not in its plausible range or the bound, and no match may land on them.
   std::vector<uint8_t> photoMask;
-  int photoSearchRadius = 0;  // pixels: how far the photo view's matches may move from the identity (0: anywhere)
+  int photoSearchRadius =
+      0;  // pixels: how far the photo view's matches may move from the identity (0: anywhere)
   // Deviation from the paper, measured (docs/HDR.md): a match whose source patch is over-exposed
   // in every pixel says nothing (inside a clipped region every white patch of the photograph
   // matches with SSD 0: a sunlit floor takes a lamp's values), so it is rejected and its points

@@ -40,7 +40,7 @@ Histogram exposedHistogram(const std::vector<float>& hdrLuminance, double exposu
 double wasserstein(const Histogram& a, const Histogram& b);
 
 struct ExposureSearchOptions {
-  int samples = 100;     // per iteration, uniform in log2 exposure
+  int samples = 100;  // per iteration, uniform in log2 exposure
   int maxIterations = 10;
   // The first log2 range; when lo >= hi, the photograph's own (see above).
   double log2Lo = 0, log2Hi = 0;

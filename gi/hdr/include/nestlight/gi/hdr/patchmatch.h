@@ -40,7 +40,7 @@ struct PatchMatchOptions {
   // resolution, halved per coarser level), for a source registered with the target that only
   // needs local refinement; 0: the whole target (the algorithm's own search).
   float searchRadius = 0;
-  uint64_t seed = 1;     // the same seed gives the same field, whatever the thread count
+  uint64_t seed = 1;  // the same seed gives the same field, whatever the thread count
 };
 
 // One entry per SOURCE pixel, top row first. Pixel coordinates put pixel (i, j)'s centre at

@@ -19,7 +19,8 @@ namespace nestlight::gi::hdr {
 // other colour source: "ldr" (the scan's colour linearised by gamma 2.2, as expansion leaves the
 // points it does not touch) and "landis" (LANDIS-PC: a global inverse tone mapping of it reaching
 // `landisMax`, the largest luminance the photograph shows, exposed).
-void writeBaselineLayers(const std::filesystem::path& octree, double clipThreshold, double landisMax);
+void writeBaselineLayers(const std::filesystem::path& octree, double clipThreshold,
+                         double landisMax);
 
 struct RelitOptions {
   std::string method = "pbgi";  // the paper relights with its X-PBGI
@@ -31,8 +32,8 @@ struct RelitOptions {
 // part of the floor (a Lambert one, albedo 0.7, and a GGX one, roughness 0.25), the camera on
 // them, radiance-cache mode (the scan's colour is its light, nothing else lights). Returns the
 // file's path.
-std::filesystem::path writeRelitScene(const std::filesystem::path& protocolDir, const std::string& colour,
-                                      const RelitOptions& options);
+std::filesystem::path writeRelitScene(const std::filesystem::path& protocolDir,
+                                      const std::string& colour, const RelitOptions& options);
 
 // 1 where the scene camera's pixel centre sees one of the inserted boxes.
 std::vector<uint8_t> relitObjectMask(const Scene& scene);
@@ -42,6 +43,7 @@ struct RelitError {
   double relativeRms = 0;  // rms / the truth render's mean over the same pixels and channels
   uint64_t pixels = 0;
 };
-RelitError compareRelit(const HdrImage& render, const HdrImage& truth, const std::vector<uint8_t>& mask);
+RelitError compareRelit(const HdrImage& render, const HdrImage& truth,
+                        const std::vector<uint8_t>& mask);
 
 }  // namespace nestlight::gi::hdr

@@ -26,7 +26,9 @@
 namespace nestlight::gi::hdr {
 
 // The octree's RGB9E5 (nestlight/octree/rgb9e5.h) on glm vectors.
-inline uint32_t packRgb9e5(glm::vec3 rgb) { return nestlight::packRgb9e5(rgb.r, rgb.g, rgb.b); }
+inline uint32_t packRgb9e5(glm::vec3 rgb) {
+  return nestlight::packRgb9e5(rgb.r, rgb.g, rgb.b);
+}
 inline glm::vec3 unpackRgb9e5(uint32_t v) {
   glm::vec3 c;
   nestlight::unpackRgb9e5(v, &c.x);

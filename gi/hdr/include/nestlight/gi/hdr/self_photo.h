@@ -5,9 +5,8 @@
 #pragma once
 
 #include <filesystem>
-#include <string>
-
 #include <glm/glm.hpp>
+#include <string>
 
 #include "nestlight/gi/hdr/views.h"
 #include "nestlight/gi/hdr_image.h"
@@ -31,7 +30,7 @@ HdrImage renderSelfPhoto(const std::filesystem::path& octree, const View& view);
 // Renders colour layer `layer` ("ldr": the scan's own colour) from `view` and writes
 // `stem`.exr and PNGs tone-mapped at exposures 1 and 1/8 (`stem`-e1.png, `stem`-e1_8.png: values
 // beyond 1 keep their shape in the second).
-void writeBeforeAfter(const std::filesystem::path& octree, const View& view, const std::string& layer,
-                      const std::filesystem::path& stem);
+void writeBeforeAfter(const std::filesystem::path& octree, const View& view,
+                      const std::string& layer, const std::filesystem::path& stem);
 
 }  // namespace nestlight::gi::hdr

@@ -20,17 +20,17 @@ struct IblParameters {
   // mis | bis | smc, and the benchmark's baselines: environment-map sampling alone ("env", with
   // env_samples samples) and BSDF sampling alone ("brdf", with brdf_samples).
   enum class Estimator { Mis, Bis, Smc, Environment, Brdf } estimator = Estimator::Mis;
-  int brdfSamples = 15;      // MIS: N_rho (the paper's Fig. 3: 15 and 15)
-  int envSamples = 15;       // MIS: N_L
-  int bisProposals = 400;    // BIS (and SMC's initialisation): M BSDF proposals (the paper: 400)...
-  int bisSamples = 20;       // ...resampled to N (the paper: 20; at most 64)
-  int smcParticles = 8;      // SMC: N samples per pixel carried between frames (the paper: 8; 1 to 32)
-  int smcIntermediate = 3;   // SMC: intermediate distributions per frame (the paper: 3)
+  int brdfSamples = 15;    // MIS: N_rho (the paper's Fig. 3: 15 and 15)
+  int envSamples = 15;     // MIS: N_L
+  int bisProposals = 400;  // BIS (and SMC's initialisation): M BSDF proposals (the paper: 400)...
+  int bisSamples = 20;     // ...resampled to N (the paper: 20; at most 64)
+  int smcParticles = 8;  // SMC: N samples per pixel carried between frames (the paper: 8; 1 to 32)
+  int smcIntermediate = 3;           // SMC: intermediate distributions per frame (the paper: 3)
   float smcLocalProbability = 0.5f;  // SMC: nu, the share of local Metropolis-Hastings moves
   float smcLocalDegrees = 3;         // SMC: a local move's largest angle ("a few degrees")
   float smcReinitRatio = 4;          // SMC: reinitialise where Z_t / Z_t-1 exceeds this...
   bool smcReinitOnDrop = false;      // ...or falls below its inverse (docs/IBL.md)
-  bool visibility = true;    // trace V(w) against the meshes (false: unshadowed)
+  bool visibility = true;            // trace V(w) against the meshes (false: unshadowed)
   // SMC: read the per-pixel normalising constants back after each frame and report their mean
   // and median (attributes nestlight:ibl_smc_z_*; tests and the benchmark's Z tracking).
   bool smcStatistics = false;

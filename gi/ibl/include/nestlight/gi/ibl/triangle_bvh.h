@@ -4,9 +4,8 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "nestlight/frame/interface.h"
 
@@ -26,7 +25,7 @@ struct TriangleBvh {
   std::vector<BvhNode> nodes;          // root first; empty without triangles
   std::vector<BvhTriangle> triangles;  // in leaf order
   int depth = 0;
-  uint64_t degenerate = 0;             // zero-area or non-finite triangles left out
+  uint64_t degenerate = 0;  // zero-area or non-finite triangles left out
 };
 
 // `positions`: three corners per triangle, in the frame rays will be traced in.
@@ -34,6 +33,7 @@ TriangleBvh buildTriangleBvh(const std::vector<glm::vec3>& positions);
 
 // The nearest hit along o + t d for t in (tMin, tMax) by the same traversal the shader runs
 // (tests compare it with brute force); < 0 when nothing is hit.
-float traceTriangleBvh(const TriangleBvh& bvh, const glm::vec3& o, const glm::vec3& d, float tMin, float tMax);
+float traceTriangleBvh(const TriangleBvh& bvh, const glm::vec3& o, const glm::vec3& d, float tMin,
+                       float tMax);
 
 }  // namespace nestlight::gi::ibl

@@ -7,12 +7,11 @@
 #pragma once
 
 #include <functional>
+#include <glm/glm.hpp>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
@@ -30,17 +29,17 @@ namespace nestlight::gi {
 // One drawn node of the lights' cut (the whole scan at about a shadow map's resolution, the
 // same for every camera): its points buffer in the GPU point layout (NL_POINT_WORDS words).
 struct CutNode {
-  unsigned buffer = 0;        // GL buffer name of its points
+  unsigned buffer = 0;  // GL buffer name of its points
   uint32_t numPoints = 0;
-  glm::vec3 origin{0.0f};     // the node's cube origin, scene-local
-  float size = 0;             // the cube's edge
-  float spacing = 0;          // nominal spacing of its level
-  int parent = -1;            // index of its parent in the same list (-1: a root)
-  float colourScale = 1;      // its scan's colour_scale
-  bool hdrColour = false;     // its colour words are RGB9E5 (shaders/common/colour_word.glsl)
-  int scan = 0;               // which scan (bindLightsCutTree)
-  int indexInScan = 0;        // its entry in that scan's lights'-cut draw tree
-  uint64_t handle = 0;        // its store handle (layerBuffer)
+  glm::vec3 origin{0.0f};  // the node's cube origin, scene-local
+  float size = 0;          // the cube's edge
+  float spacing = 0;       // nominal spacing of its level
+  int parent = -1;         // index of its parent in the same list (-1: a root)
+  float colourScale = 1;   // its scan's colour_scale
+  bool hdrColour = false;  // its colour words are RGB9E5 (shaders/common/colour_word.glsl)
+  int scan = 0;            // which scan (bindLightsCutTree)
+  int indexInScan = 0;     // its entry in that scan's lights'-cut draw tree
+  uint64_t handle = 0;     // its store handle (layerBuffer)
 };
 
 class RasterFrame {
@@ -83,10 +82,12 @@ class RasterFrame {
   virtual void setSkyOnDiffuseLobes(bool on) = 0;
   // Draws the scans' splats (shaders/gi/raster/scan.vert with `program`'s fragment stage): the
   // camera's cut or the lights' cut.
-  virtual void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, const glm::mat4& viewFromWorld,
-                         float pixelsPerUnit, bool orthographic, bool lightsCut) = 0;
+  virtual void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
+                         const glm::mat4& viewFromWorld, float pixelsPerUnit, bool orthographic,
+                         bool lightsCut) = 0;
   // Draws the meshes (shaders/gi/raster/mesh.vert), with their materials' uniforms or without.
-  virtual void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld, bool materials) = 0;
+  virtual void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
+                          bool materials) = 0;
   // The lights' cut of every scan, parents before children; changes only when the cut does
   // (cutGeneration() counts the changes).
   virtual const std::vector<CutNode>& lightsCut() const = 0;
@@ -95,11 +96,12 @@ class RasterFrame {
   // finestSpacing() then works for that scan's CutNodes).
   virtual void bindLightsCutTree(int scan) const = 0;
   // Adds a per-node layer (a hierarchy over the node's points) to every scan's store, made for
-  // that scan's metadata and colour source (the scene's octrees[].colour): from then on loader threads build it with each node, it is uploaded
-  // and freed with the node and counted in the budgets. Call in setUp, before the first frame
-  // streams anything. Returns the layer's index (the same for every scan).
-  using NodeLayerFactory =
-      std::function<std::shared_ptr<const frame::NodeLayer>(const Metadata&, std::shared_ptr<const ScanColours>)>;
+  // that scan's metadata and colour source (the scene's octrees[].colour): from then on loader
+  // threads build it with each node, it is uploaded and freed with the node and counted in the
+  // budgets. Call in setUp, before the first frame streams anything. Returns the layer's index (the
+  // same for every scan).
+  using NodeLayerFactory = std::function<std::shared_ptr<const frame::NodeLayer>(
+      const Metadata&, std::shared_ptr<const ScanColours>)>;
   virtual size_t addNodeLayer(const NodeLayerFactory& make) = 0;
   // A cut node's layer buffer (GL name; 0 when it has none) and its bytes.
   virtual unsigned layerBuffer(const CutNode& node, size_t layer) const = 0;
@@ -126,11 +128,16 @@ class RasterExtension {
   // After each frame: attributes and a summary of the extension's own (appended to raster's).
   virtual void describe(const RasterFrame& frame, MethodFrame& f) const { (void)frame, (void)f; }
   // After a still's read-back (`rgba`: the output target's pixels, alpha included).
-  virtual void afterReadBack(const std::vector<float>& rgba, MethodFrame& f) { (void)rgba, (void)f; }
+  virtual void afterReadBack(const std::vector<float>& rgba, MethodFrame& f) {
+    (void)rgba, (void)f;
+  }
   // After every frame, still or interactive, with its wall time (GPU work finished for stills).
   // A still is rendered again while this returns true (an extension tuning itself, at most 4
   // times).
-  virtual bool afterFrame(double seconds, bool still) { (void)seconds, (void)still; return false; }
+  virtual bool afterFrame(double seconds, bool still) {
+    (void)seconds, (void)still;
+    return false;
+  }
   virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
   // True when the extension reads the shadow maps only at the camera's pixels (as raster's direct
   // light does): directional lights' maps are then fitted to the camera's view each frame

@@ -17,7 +17,7 @@
 namespace nestlight::gi {
 
 struct RasterParameters {
-  int shadowMapSize = 2048;    // texels per side of each shadow-map layer
+  int shadowMapSize = 2048;  // texels per side of each shadow-map layer
   // The scans' G-buffer: GL_POINTS splats sized by the measured spacing, or the compute
   // rasteriser (one pixel per point, the points within 1% of the nearest depth averaged). Shadow
   // maps always take splats: a light's view needs closed surfaces.
@@ -26,12 +26,12 @@ struct RasterParameters {
   // splats within a splat radius of the front surface, Botsch et al. 2005) or basic (the nearest
   // splat wins). HQS averages a pixel's points as the reference's discs average its area.
   bool hqs = true;
-  float hqsDepthEpsilon = 1.0f;  // blend splats within this many splat radii of the front
-  float splatScale = 2.25f;    // splat diameter in measured spacings (the viewer's default)
-  int maxTile = 2048;          // larger images render in tiles
-  uint64_t pointBudget = 5'000'000;  // points of each scan's resident cut
-  uint64_t gpuBytes = 1ull << 30;    // resident bytes of each scan
-  double streamTimeoutSeconds = 300; // waiting for a view's cut to load completely
+  float hqsDepthEpsilon = 1.0f;       // blend splats within this many splat radii of the front
+  float splatScale = 2.25f;           // splat diameter in measured spacings (the viewer's default)
+  int maxTile = 2048;                 // larger images render in tiles
+  uint64_t pointBudget = 5'000'000;   // points of each scan's resident cut
+  uint64_t gpuBytes = 1ull << 30;     // resident bytes of each scan
+  double streamTimeoutSeconds = 300;  // waiting for a view's cut to load completely
 };
 
 // From the scene's gi.parameters ("shadow_map_size", "rasteriser", "splat_scale",
@@ -39,7 +39,8 @@ struct RasterParameters {
 // the scene file and the field.
 RasterParameters rasterParameters(const Scene& scene);
 // The same, accepting `otherKeys` too (a method built on the raster frame reads those).
-RasterParameters parseRasterParameters(const Scene& scene, const std::vector<std::string>& otherKeys);
+RasterParameters parseRasterParameters(const Scene& scene,
+                                       const std::vector<std::string>& otherKeys);
 
 // Opens the scene's scans and meshes and, unless ctx says one is current, a headless GL context.
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx);

@@ -22,12 +22,12 @@ namespace nestlight::gi {
 
 struct ReferenceOptions {
   RadianceMode mode = RadianceMode::RadianceCache;
-  int maxBounces = 4;              // scattering events; 1 = direct lighting only
+  int maxBounces = 4;  // scattering events; 1 = direct lighting only
   int maxSamplesPerPixel = 256;
   double targetRelativeError = 0;  // relative L2 error estimate to stop at (0: off)
   double timeLimitSeconds = 0;     // 0: off
   uint64_t seed = 1;
-  int minSamplesPerPixel = 4;      // before the error estimate is trusted
+  int minSamplesPerPixel = 4;  // before the error estimate is trusted
   // Camera rays through pixel centres only (no anti-aliasing): the ground truth of a method that
   // shades pixel centres (the GL methods), so that an error measures shading, not the spread of
   // radiance across a pixel (a sharp highlight's pixel mean differs from its centre's value).
@@ -36,7 +36,7 @@ struct ReferenceOptions {
 
 struct ReferenceProgress {
   int samplesPerPixel = 0;
-  double relativeError = 0;        // NaN until both halves have samples
+  double relativeError = 0;  // NaN until both halves have samples
   double seconds = 0;
   uint64_t rays = 0;
 };
@@ -44,11 +44,11 @@ struct ReferenceProgress {
 struct ReferenceResult {
   HdrImage image;
   int samplesPerPixel = 0;
-  double relativeError = 0;        // the half-buffer estimate at the end
+  double relativeError = 0;  // the half-buffer estimate at the end
   double seconds = 0;
-  uint64_t rays = 0;               // camera, extension and shadow rays
-  uint64_t nonFiniteSamples = 0;   // samples dropped as NaN/Inf (should stay 0)
-  std::string stopReason;          // "error target", "time limit", "samples", "cancelled"
+  uint64_t rays = 0;              // camera, extension and shadow rays
+  uint64_t nonFiniteSamples = 0;  // samples dropped as NaN/Inf (should stay 0)
+  std::string stopReason;         // "error target", "time limit", "samples", "cancelled"
   double raysPerSecond() const { return seconds > 0 ? rays / seconds : 0; }
   double samplesPerSecond() const {
     return seconds > 0 ? double(samplesPerPixel) * image.pixels() / seconds : 0;
@@ -61,16 +61,17 @@ struct ReferenceResult {
 double halfBufferRelativeError(const HdrImage& a, const HdrImage& b);
 
 // `progress` is called after every pass; returning false stops the render ("cancelled").
-ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& camera, const ReferenceOptions& options,
+ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& camera,
+                                const ReferenceOptions& options,
                                 const std::function<bool(const ReferenceProgress&)>& progress = {});
 
 // One path's radiance along a ray (local frame). For tests and other integrators.
-Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const glm::vec3& direction, Rng& rng,
-                  const ReferenceOptions& options, uint64_t* rays = nullptr);
+Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const glm::vec3& direction,
+                  Rng& rng, const ReferenceOptions& options, uint64_t* rays = nullptr);
 
 // The camera ray through image position (x, y) in pixels (top row first, x to the right).
-void cameraRay(const SceneCamera& camera, const glm::dvec3& origin, float x, float y, glm::vec3* rayOrigin,
-               glm::vec3* rayDirection);
+void cameraRay(const SceneCamera& camera, const glm::dvec3& origin, float x, float y,
+               glm::vec3* rayOrigin, glm::vec3* rayDirection);
 
 ReferenceOptions referenceOptionsFrom(const GiSettings& gi);
 

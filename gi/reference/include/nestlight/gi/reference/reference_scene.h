@@ -28,10 +28,10 @@ struct DiscCloud {
 
 struct DiscCloudStats {
   uint64_t nodes = 0, points = 0, bytes = 0;
-  int deepestLevel = -1;          // deepest level loaded
-  int octreeDepth = 0;            // deepest level the octree has
-  bool limitedByBudget = false;   // stopped above maxLevel (or the octree's depth) for memory
-  uint64_t zeroRadius = 0;        // discs with no extent (coincident points): never hit
+  int deepestLevel = -1;         // deepest level loaded
+  int octreeDepth = 0;           // deepest level the octree has
+  bool limitedByBudget = false;  // stopped above maxLevel (or the octree's depth) for memory
+  uint64_t zeroRadius = 0;       // discs with no extent (coincident points): never hit
 };
 
 // Loads whole levels of an octree, from the root down to `octree.maxLevel` or the deepest level
@@ -40,12 +40,14 @@ struct DiscCloudStats {
 // neighbour, r = radiusScale * 1.5 * d8 / 2, which closes an evenly sampled surface (Poisson
 // disk or grid: the derivation is at kDiscCoverage in reference_scene.cpp); discs then cover
 // about 4.5 times the surface on average.
-DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin, DiscCloudStats* stats = nullptr);
+DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin,
+                        DiscCloudStats* stats = nullptr);
 // Radii for `discs` from their neighbours as above (positions in .xyz; writes .w). With
 // `maxRadius` (one per disc), a radius never exceeds it: the loader passes the spacing of the
 // node a point came from, so an isolated outlier, whose neighbours are far, does not become a
 // disc metres wide.
-void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale, const std::vector<float>* maxRadius = nullptr);
+void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale,
+                     const std::vector<float>* maxRadius = nullptr);
 // The thickness of a scanned surface at each oriented disc (radii assigned): over its 8 nearest
 // neighbours that lie on the same surface (normals within 30 degrees), the height each one's
 // disc reaches above (and below) this disc's plane, h = |n . (p_j - p_i)| + r_j sin(angle), as
@@ -79,17 +81,20 @@ class ReferenceScene {
  public:
   // Loads octrees, meshes and the environment map named by `scene`. `log` gets one line per
   // loaded part (may be null).
-  static std::unique_ptr<ReferenceScene> load(const Scene& scene, void (*log)(const std::string&) = nullptr);
+  static std::unique_ptr<ReferenceScene> load(const Scene& scene,
+                                              void (*log)(const std::string&) = nullptr);
   // From data already in the local frame (tests build analytic scenes this way). `meshes` are
   // already transformed; meshMaterial[i] indexes `materials`.
-  ReferenceScene(std::vector<DiscCloud> clouds, std::vector<TriangleMesh> meshes, std::vector<uint32_t> meshMaterial,
-                 std::vector<Material> materials, std::vector<Light> lights, EnvironmentMap environment,
+  ReferenceScene(std::vector<DiscCloud> clouds, std::vector<TriangleMesh> meshes,
+                 std::vector<uint32_t> meshMaterial, std::vector<Material> materials,
+                 std::vector<Light> lights, EnvironmentMap environment,
                  glm::dvec3 origin = glm::dvec3(0.0));
   ~ReferenceScene();
   ReferenceScene(const ReferenceScene&) = delete;
   ReferenceScene& operator=(const ReferenceScene&) = delete;
 
-  bool intersect(const glm::vec3& origin, const glm::vec3& direction, float tMax, SurfaceHit* hit) const;
+  bool intersect(const glm::vec3& origin, const glm::vec3& direction, float tMax,
+                 SurfaceHit* hit) const;
   bool occluded(const glm::vec3& origin, const glm::vec3& direction, float tMax) const;
 
   const std::vector<Material>& materials() const { return materials_; }

@@ -7,11 +7,10 @@
 #pragma once
 
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/scene.h"
@@ -19,7 +18,7 @@
 namespace nestlight::gi {
 
 struct VplParameters {
-  int count = 1024;             // VPLs per generation ("vpls")
+  int count = 1024;  // VPLs per generation ("vpls")
   // "vpls": "auto": the count is picked to fit target_ms per frame (stills: from two probe frames
   // fitted as a + b x count; interactive: halved or doubled when the frame time leaves
   // [0.5, 1.25] x target), a power of two from 16 to the most the ISM atlas holds.
@@ -55,6 +54,7 @@ struct WarpedSample {
   bool valid = false;
   float probability = 0;
 };
-std::vector<WarpedSample> warpImportanceOnGpu(const std::vector<float>& importance, int size, int layers, int count);
+std::vector<WarpedSample> warpImportanceOnGpu(const std::vector<float>& importance, int size,
+                                              int layers, int count);
 
 }  // namespace nestlight::gi
