@@ -31,6 +31,12 @@ std::vector<MeshTree> buildMeshTrees(const Scene& scene, const std::vector<Trian
     glm::vec3 lo(INFINITY);
     for (size_t i = 0; i < s.positions.size(); ++i) area += s.area[i], lo = glm::min(lo, s.positions[i]);
     t.origin = lo;
+    const glm::mat4 localFromObject = scene.localFromObject(m);
+    t.lo = glm::vec3(INFINITY), t.hi = glm::vec3(-INFINITY);
+    for (uint32_t v : mesh.indices) {
+      const glm::vec3 p(localFromObject * glm::vec4(mesh.positions[v], 1.0f));
+      t.lo = glm::min(t.lo, p), t.hi = glm::max(t.hi, p);
+    }
     BshPoints in;
     in.position.reserve(s.positions.size());
     in.colour.reserve(s.positions.size());

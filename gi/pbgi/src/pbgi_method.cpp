@@ -87,11 +87,24 @@ class PbgiExtension : public RasterExtension {
       return layer;
     });
     if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene, f.meshes());
-    for (const auto& t : meshTrees_) {
+    // The coarsest meshes lift only the receivers in their own bounds (pbgi_common.glsl): a mesh
+    // of few surfels has discs as wide as itself.
+    std::vector<size_t> byDisc(meshTrees_.size());
+    for (size_t k = 0; k < byDisc.size(); ++k) byDisc[k] = k;
+    std::stable_sort(byDisc.begin(), byDisc.end(),
+                     [&](size_t a, size_t b) { return meshTrees_[a].discRadius > meshTrees_[b].discRadius; });
+    liftBoxes_.clear();
+    for (size_t k : byDisc) {
+      const pbgi::MeshTree& t = meshTrees_[k];
+      if (liftBoxes_.size() < 2 * PBGI_LIFT_BOXES && t.lo.x <= t.hi.x) {
+        liftBoxes_.push_back(glm::vec4(t.lo, t.discRadius));
+        liftBoxes_.push_back(glm::vec4(t.hi, float(t.material)));
+        continue;
+      }
       meshLiftMax_ = std::max(meshLiftMax_, t.discRadius);
       if (t.material < meshLift_.size()) meshLift_[t.material] = std::max(meshLift_[t.material], t.discRadius);
-      meshSurfels_ += t.surfels;
     }
+    for (const auto& t : meshTrees_) meshSurfels_ += t.surfels;
     hier_.setMeshTrees(meshTrees_);
     // The gather reads lit copies of the hierarchies when anything needs lighting: every node in
     // the albedo mode, the meshes' surfels in both.
@@ -587,10 +600,15 @@ class PbgiExtension : public RasterExtension {
   bool lit_ = false;  // the gather reads lit copies (albedo mode, or meshes' surfels)
   std::vector<pbgi::MeshTree> meshTrees_;
   uint64_t meshSurfels_ = 0;
-  // Mesh receivers leave from this far above their surface, per material (pbgi_common.glsl).
+  // Mesh receivers leave from this far above their surface (pbgi_common.glsl): per box, else per
+  // material.
   std::array<float, PBGI_LIFTS> meshLift_{};
   float meshLiftMax_ = 0;
+  std::vector<glm::vec4> liftBoxes_;  // per mesh lifting its own receivers: (lo, lift), (hi, material)
   void setLift(const gl::ShaderProgram& p) const {
+    glUniform1i(p.uniform("uLiftBoxes"), int(liftBoxes_.size() / 2));
+    if (!liftBoxes_.empty())
+      glUniform4fv(p.uniform("uLiftBox[0]"), GLsizei(liftBoxes_.size()), &liftBoxes_[0].x);
     glUniform1fv(p.uniform("uMeshLift[0]"), PBGI_LIFTS, meshLift_.data());
     glUniform1f(p.uniform("uMeshLiftMax"), meshLiftMax_);
   }

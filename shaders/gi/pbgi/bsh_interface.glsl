@@ -46,6 +46,7 @@ NL_STRUCT(BshNode) {
                                                 // (rgb: irradiance / pi at the node's receiver, w: 1 where set);
                                                 // node-layer slot 3, which no GI pass binds
 #define PBGI_LIFTS 16                              // materials with a receiver lift of their own (pbgi_common.glsl)
+#define PBGI_LIFT_BOXES 32                         // meshes whose receivers take their own lift (pbgi_common.glsl)
 #define PBGI_END 0xffffffffu                       // the end of a receiver's list
 #define PBGI_STACK (2 * BSH_MAX_DEPTH + 8)      // a top tree and a node's tree, each at most BSH_MAX_DEPTH deep
 #define PBGI_DONE 0xffffffffu                   // PbgiTraversal.header.x of a finished receiver

@@ -15,12 +15,31 @@ layout(binding = 3) uniform usampler2D uMaterial;
 layout(binding = 4) uniform sampler2D uDirect;
 layout(std430, binding = PBGI_SSBO_RECEIVERS) buffer Receivers { uint receivers[]; };
 layout(rgba32f, binding = 0) uniform writeonly image2D uOut;
-// How far above its surface a mesh pixel receives, per material (the first PBGI_LIFTS; the rest
-// take the largest): the surfel disc radius of the meshes made of it when their surfels join the
-// gather (a convex surface's neighbouring discs, tangent a little way off, rise above its tangent
-// plane by up to that much), else 0.
+// How far above its surface a mesh pixel receives: the surfel disc radius of its own mesh when
+// the meshes' surfels join the gather (a convex surface's neighbouring discs, tangent a little way
+// off, rise above its tangent plane by up to that much), else 0. The G-buffer does not say which
+// mesh a pixel is on: the PBGI_LIFT_BOXES meshes of the largest discs each give theirs to the
+// pixels of their material inside their bounding box (xyz: lo, hi; lo.w: the lift, hi.w: the
+// material). A lift per material alone let one coarse mesh lift every receiver of its material:
+// a 20 m box of one surfel (a disc of 49 m radius) 1000 km away lifted the floor beside the camera
+// 49 m, above everything that lit it. The other meshes' largest disc, per material (the first
+// PBGI_LIFTS; the rest take the largest of all), lifts every pixel of their material.
+uniform vec4 uLiftBox[2 * PBGI_LIFT_BOXES];
+uniform int uLiftBoxes;
 uniform float uMeshLift[PBGI_LIFTS];
 uniform float uMeshLiftMax;
+
+float meshLiftAt(vec3 x, uint material) {
+  float lift = material < uint(PBGI_LIFTS) ? uMeshLift[material] : uMeshLiftMax;
+  // The position comes back from depth: its error grows with distance.
+  float pad = 1e-3 * max(length(x - frame.eye.xyz), 1e-3) + 1e-6 * max(max(abs(x.x), abs(x.y)), abs(x.z));
+  for (int i = 0; i < uLiftBoxes; ++i) {
+    vec4 lo = uLiftBox[2 * i], hi = uLiftBox[2 * i + 1];
+    if (uint(hi.w) == material && all(greaterThanEqual(x, lo.xyz - pad)) && all(lessThanEqual(x, hi.xyz + pad)))
+      lift = max(lift, lo.w);
+  }
+  return lift;
+}
 
 // In the radiance-cache mode a scan point's colour is all its light: only inserted objects
 // gather. In the albedo mode (frame.counts.y 1) scan points gather too.
@@ -54,9 +73,9 @@ Receiver receiverAt(ivec2 px) {
   // disc a few millimetres higher covers every ray but the most grazing, and the micro-buffer
   // sees the surface itself instead of the room (the cornell room's gathered bounce was 23% dark).
   // It leaves from 1.5 splat radii above its surface (base.a: its splat radius; 0 on meshes,
-  // which leave from uMeshLift, or by a hair).
+  // which leave from meshLiftAt, or by a hair).
   uint material = texelFetch(uMaterial, px, 0).w;
-  float meshLift = material < uint(PBGI_LIFTS) ? uMeshLift[material] : uMeshLiftMax;
+  float meshLift = base.a > 0.0 ? 0.0 : meshLiftAt(R.x, material);
   R.x += R.n * max(1e-4 * max(length(R.x - frame.eye.xyz), 1e-3), base.a > 0.0 ? 1.5 * base.a : meshLift);
   return R;
 }

@@ -33,6 +33,7 @@ struct MeshTree {
   uint32_t material = 0;       // index into the scene's materials (emission, at light time)
   uint64_t surfels = 0;
   float discRadius = 0;        // the leaves' disc radius: the surfels' mean spacing
+  glm::vec3 lo{0.0f}, hi{0.0f};  // scene (local) frame: the bounding box of the mesh's triangles
 };
 
 // One hierarchy per mesh with at least one surfel, in scene order (a mesh whose triangles are
