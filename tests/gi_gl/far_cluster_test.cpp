@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "floor_scene.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/tone_map.h"
-#include "floor_scene.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -46,15 +46,18 @@ TEST_P(FarCluster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
   const std::string method = GetParam();
   test::TempDir t;
   json j = floorSceneJson(t, 64);
-  j["meshes"].push_back(json{{"path", "box.obj"},
-                             {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-                             {"material", "floor"}});
-  j["meshes"].push_back(json{{"path", "box.obj"},
-                             {"transform", {{"translate", {-3.2, -9.0, 0.0}}, {"scale", {0.2, 18.0, 2.0}}}},
-                             {"material", "floor"}});
+  j["meshes"].push_back(
+      json{{"path", "box.obj"},
+           {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+           {"material", "floor"}});
+  j["meshes"].push_back(
+      json{{"path", "box.obj"},
+           {"transform", {{"translate", {-3.2, -9.0, 0.0}}, {"scale", {0.2, 18.0, 2.0}}}},
+           {"material", "floor"}});
   j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
   const float E = 2.0f;
-  j["lights"] = json::array({json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  j["lights"] = json::array(
+      {json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
   json p = {{"shadow_map_size", 512}};
   if (method == "vpl") p.update(json{{"vpls", 64}, {"light_resolution", 64}, {"ism_size", 16}});
   j["gi"] = {{"method", method}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", p}};
@@ -73,13 +76,16 @@ TEST_P(FarCluster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
     ASSERT_EQ(m->name(), method);
     f[k] = m->render(s.camera);
     if (const char* keep = std::getenv("NESTLIGHT_TEST_KEEP"))
-      writeToneMappedPng(std::string(keep) + "/" + method + (k ? "_sun_far.png" : "_sun_near.png"), f[k].image, 0);
+      writeToneMappedPng(std::string(keep) + "/" + method + (k ? "_sun_far.png" : "_sun_near.png"),
+                         f[k].image, 0);
     int umbra = 0, clear = 0, badUmbra = 0, badClear = 0;
     for (int y = 0; y < 64; ++y)
       for (int x = 0; x < 64; ++x) {
         glm::vec3 q;
-        if (!floorPoint(s, x, y, &q) || (std::abs(q.x) < 0.7f && std::abs(q.y) < 0.7f) || q.x < -2.9f) {
-          dark[k].push_back(-1);  // not the floor, under the plate or the wall as the camera sees them
+        if (!floorPoint(s, x, y, &q) || (std::abs(q.x) < 0.7f && std::abs(q.y) < 0.7f) ||
+            q.x < -2.9f) {
+          dark[k].push_back(
+              -1);  // not the floor, under the plate or the wall as the camera sees them
           continue;
         }
         const float got = f[k].image.get(x, y).r;
@@ -97,8 +103,10 @@ TEST_P(FarCluster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
       }
     ASSERT_GT(umbra, 40);
     ASSERT_GT(clear, 2000);
-    EXPECT_EQ(badUmbra, 0) << method << (k ? " far" : " near") << ": umbra pixels lit, of " << umbra;
-    EXPECT_EQ(badClear, 0) << method << (k ? " far" : " near") << ": clear pixels dark, of " << clear;
+    EXPECT_EQ(badUmbra, 0) << method << (k ? " far" : " near") << ": umbra pixels lit, of "
+                           << umbra;
+    EXPECT_EQ(badClear, 0) << method << (k ? " far" : " near") << ": clear pixels dark, of "
+                           << clear;
     umbraMean[k] /= umbra;
     clearMean[k] /= clear;
   }
@@ -108,16 +116,21 @@ TEST_P(FarCluster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
     ++floorPixels;
     changed += dark[0][i] != dark[1][i];
   }
-  std::printf("%s sun: umbra %.5f -> %.5f, lit %.5f -> %.5f (direct %.5f); %d of %d floor pixels changed side\n",
-              method.c_str(), umbraMean[0], umbraMean[1], clearMean[0], clearMean[1], double(lit), changed,
-              floorPixels);
+  std::printf(
+      "%s sun: umbra %.5f -> %.5f, lit %.5f -> %.5f (direct %.5f); %d of %d floor pixels changed "
+      "side\n",
+      method.c_str(), umbraMean[0], umbraMean[1], clearMean[0], clearMean[1], double(lit), changed,
+      floorPixels);
   EXPECT_NEAR(umbraMean[1], umbraMean[0], 0.01 * lit) << method << ": the umbra's mean";
   EXPECT_NEAR(clearMean[1], clearMean[0], 0.01 * lit) << method << ": the lit floor's mean";
-  EXPECT_LE(changed, floorPixels / 100) << method << ": pixels whose shadow changed with the far box";
+  EXPECT_LE(changed, floorPixels / 100)
+      << method << ": pixels whose shadow changed with the far box";
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, FarCluster, ::testing::Values("vpl", "pbgi"),
-                         [](const ::testing::TestParamInfo<const char*>& i) { return std::string(i.param); });
+                         [](const ::testing::TestParamInfo<const char*>& i) {
+                           return std::string(i.param);
+                         });
 
 }  // namespace
 }  // namespace nestlight::gi
@@ -142,16 +155,19 @@ void renderFewSurfels(const std::string& variant) {
   SCOPED_TRACE(variant);
   test::TempDir t;
   json j = floorSceneJson(t, 64);
-  j["meshes"].push_back(json{{"path", "box.obj"},
-                             {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-                             {"material", "floor"}});
-  j["meshes"].push_back(json{{"path", "box.obj"},
-                             {"transform", {{"translate", {-3.2, -9.0, 0.0}}, {"scale", {0.2, 18.0, 2.0}}}},
-                             {"material", "floor"}});
+  j["meshes"].push_back(
+      json{{"path", "box.obj"},
+           {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+           {"material", "floor"}});
+  j["meshes"].push_back(
+      json{{"path", "box.obj"},
+           {"transform", {{"translate", {-3.2, -9.0, 0.0}}, {"scale", {0.2, 18.0, 2.0}}}},
+           {"material", "floor"}});
   for (auto& m : j["meshes"]) m["surfels"] = {{"count", 5000}};
   j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
   const float E = 2.0f;
-  j["lights"] = json::array({json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  j["lights"] = json::array(
+      {json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
   json p = {{"shadow_map_size", 256}, {"micro_buffer", 8}, {"variant", variant}};
   j["gi"] = {{"method", "pbgi"}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", p}};
   std::ofstream(t.file("alone.json")) << j.dump(1);
@@ -170,12 +186,14 @@ void renderFewSurfels(const std::string& variant) {
     auto m = createMethod(s, {true, false});
     f[k] = m->render(s.camera);
     if (const char* keep = std::getenv("NESTLIGHT_TEST_KEEP"))
-      writeToneMappedPng(std::string(keep) + "/pbgi_" + variant + "_few_" + names[k] + ".png", f[k].image, 0);
+      writeToneMappedPng(std::string(keep) + "/pbgi_" + variant + "_few_" + names[k] + ".png",
+                         f[k].image, 0);
     int umbra = 0;
     for (int y = 0; y < 64; ++y)
       for (int x = 0; x < 64; ++x) {
         glm::vec3 q;
-        if (!floorPoint(s, x, y, &q) || !(q.x > -1.6f && q.x < -0.75f && std::abs(q.y) < 0.4f)) continue;
+        if (!floorPoint(s, x, y, &q) || !(q.x > -1.6f && q.x < -0.75f && std::abs(q.y) < 0.4f))
+          continue;
         ++umbra;
         umbraMean[k] += f[k].image.get(x, y).r;
       }
@@ -192,15 +210,20 @@ void renderFewSurfels(const std::string& variant) {
     for (int y = 0; y < 64; ++y)
       for (int x = 0; x < 64; ++x) {
         glm::vec3 q;
-        if (!floorPoint(s, x, y, &q) || (std::abs(q.x) < 0.7f && std::abs(q.y) < 0.7f) || q.x < -2.9f) continue;
+        if (!floorPoint(s, x, y, &q) || (std::abs(q.x) < 0.7f && std::abs(q.y) < 0.7f) ||
+            q.x < -2.9f)
+          continue;
         ++floorPixels;
         diff += std::abs(f[k].image.get(x, y).r - f[0].image.get(x, y).r);
       }
     diff /= floorPixels;
-    std::printf("pbgi %s, %s box: umbra %.5f -> %.5f, floor's mean |difference| %.5f (direct %.5f)\n", variant.c_str(),
-                names[k], umbraMean[0], umbraMean[k], diff, double(lit));
-    EXPECT_NEAR(umbraMean[k], umbraMean[0], 0.01 * lit) << variant << ", " << names[k] << " box: the umbra's mean";
-    EXPECT_LE(diff, 0.01 * lit) << variant << ", " << names[k] << " box: the floor's mean difference";
+    std::printf(
+        "pbgi %s, %s box: umbra %.5f -> %.5f, floor's mean |difference| %.5f (direct %.5f)\n",
+        variant.c_str(), names[k], umbraMean[0], umbraMean[k], diff, double(lit));
+    EXPECT_NEAR(umbraMean[k], umbraMean[0], 0.01 * lit)
+        << variant << ", " << names[k] << " box: the umbra's mean";
+    EXPECT_LE(diff, 0.01 * lit) << variant << ", " << names[k]
+                                << " box: the floor's mean difference";
   }
 }
 

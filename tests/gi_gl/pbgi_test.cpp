@@ -5,14 +5,14 @@
 
 #include <cmath>
 #include <cstdio>
-#include <set>
 #include <fstream>
+#include <set>
 
 #include "gi_gl/sphere_scan.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/method.h"
-#include "nestlight/gi/metrics.h"
 #include "nestlight/gi/methods.h"
+#include "nestlight/gi/metrics.h"
 #include "nestlight/gi/pbgi/pbgi_method.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/srgb.h"
@@ -53,7 +53,8 @@ TEST(Pbgi, UniformSphereOfEmittersLightsAnObjectAsTheFurnace) {
       Scene s = furnaceScene(t, rho, {{"micro_buffer", m}, {"empty", empty}});
       MethodFrame f = createMethod(s, {true, false})->render(s.camera);
       const double ratio = boxMean(f.image) / (rho * L);
-      std::printf("pbgi %dx%d, empty %s: box / (rho L) = %.4f; %s\n", m, m, empty, ratio, f.summary.c_str());
+      std::printf("pbgi %dx%d, empty %s: box / (rho L) = %.4f; %s\n", m, m, empty, ratio,
+                  f.summary.c_str());
       if (std::string(empty) == "average") {
         EXPECT_NEAR(ratio, 1.0, 0.02) << m;
       } else {
@@ -81,11 +82,13 @@ TEST(Pbgi, HalfASphereOfEmittersLightsHalfTheHemisphere) {
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
   for (bool prune : {false, true})
     for (const char* empty : {"black", "average"}) {
-      Scene s = furnaceScene(t, rho, {{"micro_buffer", 16}, {"empty", empty}, {"prune", prune}, {"variant", "classic"}});
+      Scene s = furnaceScene(
+          t, rho,
+          {{"micro_buffer", 16}, {"empty", empty}, {"prune", prune}, {"variant", "classic"}});
       MethodFrame f = createMethod(s, {true, false})->render(s.camera);
       const double ratio = boxMean(f.image) / (rho * L);
-      std::printf("pbgi 16x16, upper half emitting, empty %s, prune %d: box / (rho L) = %.4f; %s\n", empty, prune,
-                  ratio, f.summary.c_str());
+      std::printf("pbgi 16x16, upper half emitting, empty %s, prune %d: box / (rho L) = %.4f; %s\n",
+                  empty, prune, ratio, f.summary.c_str());
       if (std::string(empty) == "average") {
         EXPECT_NEAR(ratio, 1.0, 0.02);
       } else if (!prune) {
@@ -115,8 +118,10 @@ TEST(Pbgi, EnvironmentFillsWhatTheScanDoesNotCover) {
     MethodFrame f = createMethod(s, {true, false})->render(s.camera);
     const double got = boxMean(f.image);
     const double want = std::string(empty) == "average" ? rho * (L + Le) : rho * (L + Le) / 2;
-    std::printf("pbgi, upper half emitting over a sky, empty %s: box %.4f, expected %.4f (ratio %.4f); %s\n", empty,
-                got, want, got / want, f.attributes.at("nestlight:pbgi_empty").c_str());
+    std::printf(
+        "pbgi, upper half emitting over a sky, empty %s: box %.4f, expected %.4f (ratio %.4f); "
+        "%s\n",
+        empty, got, want, got / want, f.attributes.at("nestlight:pbgi_empty").c_str());
     EXPECT_NEAR(got / want, 1.0, 0.03) << empty;
   }
   // Raster alone gives the face the unshadowed sky over its whole hemisphere: rho Le (a constant
@@ -149,21 +154,24 @@ TEST(Pbgi, MeshSurfelsOccludeEmitAndReflect) {
   const double fov = 12.0, R = 6.0, slabX0 = 0.2005, slabX1 = 6.4, slabZ = 6.5;
   // The face's receivers: the boxMean pixels' rays onto x = 0.2.
   auto slabShare = [&](bool sphere) {
-    const glm::dvec3 fwd = glm::normalize(target - eye), right = glm::normalize(glm::cross(fwd, glm::dvec3(0, 0, 1)));
+    const glm::dvec3 fwd = glm::normalize(target - eye),
+                     right = glm::normalize(glm::cross(fwd, glm::dvec3(0, 0, 1)));
     const glm::dvec3 up = glm::cross(right, fwd);
     const double th = std::tan(glm::radians(fov) / 2);
     double sum = 0;
     int n = 0;
     for (int y = 10; y < 22; ++y)
       for (int x = 10; x < 22; ++x) {
-        const glm::dvec3 d = glm::normalize(fwd + ((x + 0.5) / 16 - 1) * th * right + ((y + 0.5) / 16 - 1) * th * up);
+        const glm::dvec3 d = glm::normalize(fwd + ((x + 0.5) / 16 - 1) * th * right +
+                                            ((y + 0.5) / 16 - 1) * th * up);
         const glm::dvec3 p = eye + d * ((0.2 - eye.x) / d.x);
         int blocked = 0;
         const int k = 400;
         for (int i = 0; i < k; ++i)
           for (int j = 0; j < k; ++j) {  // cosine-weighted about +x
             const double r = std::sqrt((i + 0.5) / k), phi = 2 * kPi * (j + 0.5) / k;
-            const glm::dvec3 w(std::sqrt(std::max(0.0, 1 - r * r)), r * std::cos(phi), r * std::sin(phi));
+            const glm::dvec3 w(std::sqrt(std::max(0.0, 1 - r * r)), r * std::cos(phi),
+                               r * std::sin(phi));
             if (w.y <= 0) continue;
             const double t = -p.y / w.y;
             const glm::dvec3 h = p + t * w;
@@ -180,24 +188,37 @@ TEST(Pbgi, MeshSurfelsOccludeEmitAndReflect) {
     return sum / n;
   };
   const double fSphere = slabShare(true), fOpen = slabShare(false);
-  auto scene = [&](const nestlight::test::TempDir& t, const json& slabMaterial, const json& lights) {
+  auto scene = [&](const nestlight::test::TempDir& t, const json& slabMaterial,
+                   const json& lights) {
     writeBoxObj(t.path() / "box.obj");
-    json j = {{"version", 1},
-              {"octrees", {{{"path", "sphere.octree"}}}},
-              {"materials", {{"grey", {{"type", "lambert"}, {"base_color", rho}}}, {"slab", slabMaterial}}},
-              {"meshes", json::array({json{{"path", "box.obj"},
-                                           {"transform", {{"translate", {-0.2, -0.2, -0.2}}, {"scale", {0.4, 0.4, 0.4}}}},
-                                           {"material", "grey"}},
-                                      json{{"path", "box.obj"},
-                                           {"transform", {{"translate", {slabX0, 0.0, -slabZ}},
-                                                          {"scale", {slabX1 - slabX0, 0.02, 2 * slabZ}}}},
-                                           {"material", "slab"},
-                                           {"surfels", {{"count", 200000}}}}})},
-              {"lights", lights},
-              {"camera", {{"eye", {eye.x, eye.y, eye.z}}, {"target", {target.x, target.y, target.z}}, {"up", {0, 0, 1}},
-                          {"fov", fov}, {"width", 32}, {"height", 32}}},
-              {"gi", {{"method", "pbgi"}, {"mode", "radiance_cache"},
-                      {"parameters", {{"micro_buffer", 16}, {"empty", "black"}, {"variant", "classic"}}}}}};
+    json j = {
+        {"version", 1},
+        {"octrees", {{{"path", "sphere.octree"}}}},
+        {"materials",
+         {{"grey", {{"type", "lambert"}, {"base_color", rho}}}, {"slab", slabMaterial}}},
+        {"meshes",
+         json::array(
+             {json{{"path", "box.obj"},
+                   {"transform", {{"translate", {-0.2, -0.2, -0.2}}, {"scale", {0.4, 0.4, 0.4}}}},
+                   {"material", "grey"}},
+              json{{"path", "box.obj"},
+                   {"transform",
+                    {{"translate", {slabX0, 0.0, -slabZ}},
+                     {"scale", {slabX1 - slabX0, 0.02, 2 * slabZ}}}},
+                   {"material", "slab"},
+                   {"surfels", {{"count", 200000}}}}})},
+        {"lights", lights},
+        {"camera",
+         {{"eye", {eye.x, eye.y, eye.z}},
+          {"target", {target.x, target.y, target.z}},
+          {"up", {0, 0, 1}},
+          {"fov", fov},
+          {"width", 32},
+          {"height", 32}}},
+        {"gi",
+         {{"method", "pbgi"},
+          {"mode", "radiance_cache"},
+          {"parameters", {{"micro_buffer", 16}, {"empty", "black"}, {"variant", "classic"}}}}}};
     std::ofstream(t.file("scene.json")) << j.dump(2);
     return loadScene(t.file("scene.json"));
   };
@@ -212,17 +233,22 @@ TEST(Pbgi, MeshSurfelsOccludeEmitAndReflect) {
   };
   std::vector<Case> cases;
   cases.push_back({"black slab", scene(t, black, json::array()), rho * L0 * (1 - fSphere)});
-  cases.push_back({"emitting slab", scene(t, emitting, json::array()), rho * (L0 * (1 - fSphere) + Le * fSphere)});
-  nestlight::test::TempDir open;  // only a black cap of scan far above: nothing between the sun and the slab
+  cases.push_back({"emitting slab", scene(t, emitting, json::array()),
+                   rho * (L0 * (1 - fSphere) + Le * fSphere)});
+  nestlight::test::TempDir
+      open;  // only a black cap of scan far above: nothing between the sun and the slab
   buildSphereScan(open, 60000, float(R), 0, 0.95f);
   const json white = {{"type", "lambert"}, {"base_color", 1.0}};
-  const json sunAlongY = json::array({json{{"type", "directional"}, {"direction", {0, 1, 0}}, {"irradiance", sun}}});
+  const json sunAlongY =
+      json::array({json{{"type", "directional"}, {"direction", {0, 1, 0}}, {"irradiance", sun}}});
   cases.push_back({"sunlit white slab", scene(open, white, sunAlongY), rho * sun / kPi * fOpen});
   for (auto& c : cases) {
     MethodFrame f = createMethod(c.s, {true, false})->render(c.s.camera);
     const double got = boxMean(f.image);
-    std::printf("%s: face %.4f, expected %.4f (ratio %.4f; slab covers %.4f / %.4f of the hemisphere); %s\n", c.name,
-                got, c.want, got / c.want, fSphere, fOpen, f.summary.c_str());
+    std::printf(
+        "%s: face %.4f, expected %.4f (ratio %.4f; slab covers %.4f / %.4f of the hemisphere); "
+        "%s\n",
+        c.name, got, c.want, got / c.want, fSphere, fOpen, f.summary.c_str());
     EXPECT_EQ(f.attributes.at("nestlight:pbgi_mesh_trees"), "2");
     EXPECT_NEAR(got / c.want, 1.0, 0.03) << c.name;
   }
@@ -244,18 +270,28 @@ TEST(Pbgi, ConvexMeshDoesNotShadowItself) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 60000, 2.0f, 150);
   writeIcosphereObj(t.path() / "ball.obj", 3);
-  for (const json& material : {json{{"type", "lambert"}, {"base_color", 0.5}},
-                               json{{"type", "ggx"}, {"base_color", 0.5}, {"roughness", 0.35}, {"metallic", 0.0}}}) {
+  for (const json& material :
+       {json{{"type", "lambert"}, {"base_color", 0.5}},
+        json{{"type", "ggx"}, {"base_color", 0.5}, {"roughness", 0.35}, {"metallic", 0.0}}}) {
     auto render = [&](bool meshes) {
-      json j = {{"version", 1},
-                {"octrees", {{{"path", "sphere.octree"}}}},
-                {"materials", {{"m", material}}},
-                {"meshes", json::array({json{{"path", "ball.obj"}, {"transform", {{"scale", {0.3, 0.3, 0.3}}}},
-                                             {"material", "m"}}})},
-                {"camera", {{"eye", {-1.2, 0.0, 0.0}}, {"target", {0.0, 0.0, 0.0}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 30.0},
-                            {"width", 32}, {"height", 32}}},
-                {"gi", {{"method", "pbgi"}, {"mode", "radiance_cache"},
-                        {"parameters", {{"micro_buffer", 16}, {"variant", "classic"}, {"meshes", meshes}}}}}};
+      json j = {
+          {"version", 1},
+          {"octrees", {{{"path", "sphere.octree"}}}},
+          {"materials", {{"m", material}}},
+          {"meshes", json::array({json{{"path", "ball.obj"},
+                                       {"transform", {{"scale", {0.3, 0.3, 0.3}}}},
+                                       {"material", "m"}}})},
+          {"camera",
+           {{"eye", {-1.2, 0.0, 0.0}},
+            {"target", {0.0, 0.0, 0.0}},
+            {"up", {0.0, 0.0, 1.0}},
+            {"fov", 30.0},
+            {"width", 32},
+            {"height", 32}}},
+          {"gi",
+           {{"method", "pbgi"},
+            {"mode", "radiance_cache"},
+            {"parameters", {{"micro_buffer", 16}, {"variant", "classic"}, {"meshes", meshes}}}}}};
       std::ofstream(t.file("ball.json")) << j.dump(2);
       const Scene s = loadScene(t.file("ball.json"));
       MethodFrame f = createMethod(s, {true, false})->render(s.camera);
@@ -271,8 +307,8 @@ TEST(Pbgi, ConvexMeshDoesNotShadowItself) {
         if (a != b) ++ballPixels;  // scan pixels are identical; only the ball's gather
         worst = std::max(worst, std::abs(a - b) / std::max(b, 1e-3));
       }
-    std::printf("%s ball: %d pixels differ, worst by %.4f\n", material["type"].get<std::string>().c_str(), ballPixels,
-                worst);
+    std::printf("%s ball: %d pixels differ, worst by %.4f\n",
+                material["type"].get<std::string>().c_str(), ballPixels, worst);
     double ball = 0;  // the ball fills the centre and gathers the furnace's light
     for (int y = 12; y < 20; ++y)
       for (int x = 12; x < 20; ++x) ball += with.get(x, y).r / 64;
@@ -290,11 +326,14 @@ TEST(Pbgi, ConvexMeshDoesNotShadowItself) {
 TEST(Pbgi, MipAndXAgreeWithClassic) {
   auto render = [](Scene s, const char* variant) {
     s.gi.method = "pbgi";
-    // "black": coverage differences show (with the cloud's average, empty m-pixels would hide them).
+    // "black": coverage differences show (with the cloud's average, empty m-pixels would hide
+    // them).
     s.gi.parameters = json{{"variant", variant}, {"micro_buffer", 16}, {"empty", "black"}};
     return createMethod(s, {true, false})->render(s.camera);
   };
-  auto psnr = [](const MethodFrame& a, const MethodFrame& b) { return compareImages(a.image, b.image).linear.psnr; };
+  auto psnr = [](const MethodFrame& a, const MethodFrame& b) {
+    return compareImages(a.image, b.image).linear.psnr;
+  };
   std::vector<std::pair<std::string, Scene>> scenes;
   nestlight::test::TempDir t;
   for (TestSceneKind kind : {TestSceneKind::Cornell, TestSceneKind::Nave, TestSceneKind::Object}) {
@@ -313,8 +352,9 @@ TEST(Pbgi, MipAndXAgreeWithClassic) {
   scenes.emplace_back("half sphere", furnaceScene(h, 0.5, json::object()));
   for (const auto& [name, s] : scenes) {
     const MethodFrame classic = render(s, "classic"), x = render(s, "x"), mip = render(s, "mip");
-    std::printf("%s: PSNR x/classic %.1f dB, mip/classic %.1f dB; x: %s; mip: %s\n", name.c_str(), psnr(x, classic),
-                psnr(mip, classic), x.attributes.at("nestlight:pbgi_pair_bytes").c_str(),
+    std::printf("%s: PSNR x/classic %.1f dB, mip/classic %.1f dB; x: %s; mip: %s\n", name.c_str(),
+                psnr(x, classic), psnr(mip, classic),
+                x.attributes.at("nestlight:pbgi_pair_bytes").c_str(),
                 mip.attributes.at("nestlight:pbgi_pair_bytes").c_str());
     EXPECT_GE(psnr(x, classic), 46.0) << name;
     EXPECT_GE(psnr(mip, classic), 46.0) << name;
@@ -352,7 +392,8 @@ TEST(Pbgi, StreamingCutIsGatheredOnlyWhileResident) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 300000, 2.0f, 150, -1.0f, true, 2000);
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
-  Scene s = furnaceScene(t, rho, {{"micro_buffer", 8}, {"point_budget", 60000}, {"gpu_budget_mb", 1}});
+  Scene s =
+      furnaceScene(t, rho, {{"micro_buffer", 8}, {"point_budget", 60000}, {"gpu_budget_mb", 1}});
   s.camera.fovYDegrees = 5.0;
   auto method = createMethod(s, {true, false});
   std::set<std::string> sizes;
@@ -368,8 +409,9 @@ TEST(Pbgi, StreamingCutIsGatheredOnlyWhileResident) {
   const MethodFrame still = method->render(s.camera);
   const uint64_t builds = std::stoull(still.attributes.at("nestlight:pbgi_bsh_builds"));
   const uint64_t evicted = std::stoull(still.attributes.at("nestlight:evicted_nodes"));
-  std::printf("%zu different cuts gathered over 24 frames; %llu hierarchies built; %llu nodes evicted\n", sizes.size(),
-              (unsigned long long)builds, (unsigned long long)evicted);
+  std::printf(
+      "%zu different cuts gathered over 24 frames; %llu hierarchies built; %llu nodes evicted\n",
+      sizes.size(), (unsigned long long)builds, (unsigned long long)evicted);
   EXPECT_GT(evicted, 0u);
   EXPECT_GT(sizes.size(), 1u);
   for (int y = 0; y < still.image.height; ++y)
@@ -393,8 +435,8 @@ TEST(Pbgi, HdrColourAndScansWithoutNormalsKeepTheFurnace) {
   buildSphereScan(u, 60000, 2.0f, 150, -1.0f, /*normals=*/false);
   Scene bare = furnaceScene(u, rho, {{"micro_buffer", 8}, {"empty", "black"}});
   MethodFrame g = createMethod(bare, {true, false})->render(bare.camera);
-  std::printf("colour x 1e6: %.4f of rho L 1e6; no normals: %.4f of rho L\n", boxMean(f.image) / (rho * L * 1e6),
-              boxMean(g.image) / (rho * L));
+  std::printf("colour x 1e6: %.4f of rho L 1e6; no normals: %.4f of rho L\n",
+              boxMean(f.image) / (rho * L * 1e6), boxMean(g.image) / (rho * L));
   EXPECT_NEAR(boxMean(g.image) / (rho * L), 1.0, 0.02);
 }
 
@@ -415,9 +457,18 @@ TEST(Pbgi, AlbedoModeClosedSphereGathersEveryBounce) {
   json j = {{"version", 1},
             {"octrees", {{{"path", "sphere.octree"}}}},
             {"lights", {{{"type", "point"}, {"position", {0.0, 0.0, 0.0}}, {"intensity", I}}}},
-            {"camera", {{"eye", {-0.3, 0.0, 0.1}}, {"target", {1.0, 0.2, 0.3}}, {"up", {0.0, 0.0, 1.0}}, {"fov", 60.0},
-                        {"width", 32}, {"height", 32}}},
-            {"gi", {{"method", "pbgi"}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", {{"micro_buffer", 8}}}}}};
+            {"camera",
+             {{"eye", {-0.3, 0.0, 0.1}},
+              {"target", {1.0, 0.2, 0.3}},
+              {"up", {0.0, 0.0, 1.0}},
+              {"fov", 60.0},
+              {"width", 32},
+              {"height", 32}}},
+            {"gi",
+             {{"method", "pbgi"},
+              {"mode", "albedo"},
+              {"max_bounces", 2},
+              {"parameters", {{"micro_buffer", 8}}}}}};
   std::ofstream(t.file("scene.json")) << j.dump(2);
   Scene s = loadScene(t.file("scene.json"));
   for (int bounces : {1, 2, 3, 4}) {
@@ -433,8 +484,8 @@ TEST(Pbgi, AlbedoModeClosedSphereGathersEveryBounce) {
     if (bounces >= 3) {
       EXPECT_NE(f.attributes.at("nestlight:pbgi_bounce_receivers"), "0");
     }
-    std::printf("pbgi albedo, %d bounce(s): %.5f, closed form %.5f (ratio %.4f); %s\n", bounces, got, want, got / want,
-                f.summary.c_str());
+    std::printf("pbgi albedo, %d bounce(s): %.5f, closed form %.5f (ratio %.4f); %s\n", bounces,
+                got, want, got / want, f.summary.c_str());
     EXPECT_NEAR(got / want, 1.0, 0.03) << bounces;
   }
 }
@@ -446,7 +497,8 @@ TEST(Pbgi, ResumedTraversalsGiveTheSameImage) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 20000, 2.0f, 150, -0.3f);
   Scene whole = furnaceScene(t, 0.5, {{"micro_buffer", 16}, {"prune", false}});
-  Scene pieces = furnaceScene(t, 0.5, {{"micro_buffer", 16}, {"prune", false}, {"steps_per_dispatch", 300}});
+  Scene pieces =
+      furnaceScene(t, 0.5, {{"micro_buffer", 16}, {"prune", false}, {"steps_per_dispatch", 300}});
   const MethodFrame a = createMethod(whole, {true, false})->render(whole.camera);
   const MethodFrame b = createMethod(pieces, {true, false})->render(pieces.camera);
   const int dispatchesA = std::stoi(a.attributes.at("nestlight:pbgi_dispatches"));
@@ -480,7 +532,8 @@ TEST(Pbgi, ParametersAndModesOutOfReachNameTheField) {
   EXPECT_NE(fieldOf({{"pair_capacity", 0}}).find("gi.parameters.pair_capacity"), std::string::npos);
   EXPECT_NE(fieldOf({{"variant", "fast"}}).find("gi.parameters.variant"), std::string::npos);
   EXPECT_NE(fieldOf({{"empty", "grey"}}).find("gi.parameters.empty"), std::string::npos);
-  EXPECT_NE(fieldOf({{"steps_per_dispatch", 0}}).find("gi.parameters.steps_per_dispatch"), std::string::npos);
+  EXPECT_NE(fieldOf({{"steps_per_dispatch", 0}}).find("gi.parameters.steps_per_dispatch"),
+            std::string::npos);
   EXPECT_NE(fieldOf({{"vpls", 4}}).find("vpls"), std::string::npos);  // another method's key
 }
 

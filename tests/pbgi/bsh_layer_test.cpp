@@ -2,6 +2,8 @@
 // coordinates, normals, colour) gets a hierarchy in its own frame that accounts for each of its
 // points, with leaves as wide as the level's spacing; and the layer travels with the node
 // through the store's prepare (the loader threads' path).
+#include "nestlight/gi/pbgi/bsh_layer.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,7 +11,6 @@
 #include <cstring>
 
 #include "nestlight/frame/gl_node_store.h"
-#include "nestlight/gi/pbgi/bsh_layer.h"
 #include "nestlight/octree/octree_reader.h"
 #include "streaming/streaming_support.h"
 #include "test_support.h"
@@ -83,8 +84,10 @@ TEST(BshLayer, EveryNodeOfANationalGridScanAccountsForItsPoints) {
   EXPECT_EQ(points, meta.points);
   EXPECT_GT(nodes, 5u);
   EXPECT_GT(pruned, 0u);  // the synthetic surfaces are flat and evenly coloured in places
-  std::printf("root sphere / (cube half diagonal + leaf radius): %.3f at worst, %.3f on average over %llu nodes\n",
-              worstRoot, sumRoot / double(nodes), (unsigned long long)nodes);
+  std::printf(
+      "root sphere / (cube half diagonal + leaf radius): %.3f at worst, %.3f on average over %llu "
+      "nodes\n",
+      worstRoot, sumRoot / double(nodes), (unsigned long long)nodes);
 }
 
 }  // namespace

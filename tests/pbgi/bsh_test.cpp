@@ -1,6 +1,8 @@
 // The bounding-sphere hierarchy's invariants (every child inside its parent's sphere, every
 // normal inside its node's cone, the pruning thresholds respected, every point accounted for) on
 // random and degenerate point sets; Morton codes and their radix sort; normal cones.
+#include "nestlight/gi/pbgi/bsh.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,7 +12,6 @@
 #include <random>
 
 #include "nestlight/frame/gl_node_store.h"
-#include "nestlight/gi/pbgi/bsh.h"
 #include "nestlight/gi/pbgi/morton.h"
 #include "nestlight/gi/pbgi/normal_cone.h"
 
@@ -50,12 +51,14 @@ TEST(Morton, RadixSortMatchesStableSortWithDuplicates) {
   std::mt19937_64 rng(7);
   for (size_t n : {0, 1, 2, 1000, 100000}) {
     std::vector<uint64_t> keys(n);
-    for (auto& k : keys) k = rng() % 3 == 0 ? (rng() & 0xff) : rng() >> (rng() % 40);  // many equal keys
+    for (auto& k : keys)
+      k = rng() % 3 == 0 ? (rng() & 0xff) : rng() >> (rng() % 40);  // many equal keys
     std::vector<uint32_t> values(n);
     std::iota(values.begin(), values.end(), 0u);
     std::vector<std::pair<uint64_t, uint32_t>> expected;
     for (size_t i = 0; i < n; ++i) expected.emplace_back(keys[i], values[i]);
-    std::stable_sort(expected.begin(), expected.end(), [](auto& a, auto& b) { return a.first < b.first; });
+    std::stable_sort(expected.begin(), expected.end(),
+                     [](auto& a, auto& b) { return a.first < b.first; });
     radixSortPairs(keys, values);
     for (size_t i = 0; i < n; ++i) {
       ASSERT_EQ(keys[i], expected[i].first) << i;
@@ -125,9 +128,11 @@ void checkInvariants(const BshPoints& pts, const BshOptions& opt, const Bsh& bsh
   // leaf without being a pruned cluster.
   glm::vec3 lo(INFINITY), hi(-INFINITY);
   for (uint32_t i = 0; i < bsh.leafOf.size(); ++i)
-    if (bsh.leafOf[i] != BSH_LEAF) lo = glm::min(lo, pts.position[i]), hi = glm::max(hi, pts.position[i]);
+    if (bsh.leafOf[i] != BSH_LEAF)
+      lo = glm::min(lo, pts.position[i]), hi = glm::max(hi, pts.position[i]);
   const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  const float cellDiagonal = 2.0f * std::sqrt(3.0f) * extent / float(kMortonAxisMax) + 1e-6f * glm::length(hi);
+  const float cellDiagonal =
+      2.0f * std::sqrt(3.0f) * extent / float(kMortonAxisMax) + 1e-6f * glm::length(hi);
   std::vector<uint32_t> end(nodes.size());
   std::function<uint32_t(uint32_t, int)> walk = [&](uint32_t i, int depth) -> uint32_t {
     EXPECT_LE(depth, BSH_MAX_DEPTH);
@@ -150,9 +155,12 @@ void checkInvariants(const BshPoints& pts, const BshOptions& opt, const Bsh& bsh
       for (uint32_t ch : {n.links.x, n.links.y}) {
         const BshNode& k = nodes[ch];
         // Child inside parent: sphere and cone.
-        EXPECT_LE(glm::length(glm::vec3(k.sphere) - c) + k.sphere.w, r * (1 + kSphereRel) + 1e-30f) << i << "->" << ch;
+        EXPECT_LE(glm::length(glm::vec3(k.sphere) - c) + k.sphere.w, r * (1 + kSphereRel) + 1e-30f)
+            << i << "->" << ch;
         const NormalCone kc{coneAxis(k), k.colour.w};
-        if (!cone.boundsNothing()) { EXPECT_TRUE(cone.contains(kc, kConeSlack)) << i << "->" << ch; }
+        if (!cone.boundsNothing()) {
+          EXPECT_TRUE(cone.contains(kc, kConeSlack)) << i << "->" << ch;
+        }
         count += k.links.z;
       }
       EXPECT_EQ(count, n.links.z);
@@ -160,12 +168,14 @@ void checkInvariants(const BshPoints& pts, const BshOptions& opt, const Bsh& bsh
     // The points below: their discs inside the sphere, normals inside the cone, colour the mean;
     // and the pruning decision matches the thresholds.
     std::vector<uint32_t> below;
-    for (uint32_t j = i; j < end[i]; ++j) below.insert(below.end(), ofLeaf[j].begin(), ofLeaf[j].end());
+    for (uint32_t j = i; j < end[i]; ++j)
+      below.insert(below.end(), ofLeaf[j].begin(), ofLeaf[j].end());
     ASSERT_EQ(below.size(), n.links.z) << i;
     glm::dvec3 sum(0), sum2(0), nsum(0);
     double withNormal = 0;
     for (uint32_t p : below) {
-      EXPECT_LE(glm::length(pts.position[p] - c) + opt.leafRadius, r * (1 + kSphereRel) + 1e-30f) << i;
+      EXPECT_LE(glm::length(pts.position[p] - c) + opt.leafRadius, r * (1 + kSphereRel) + 1e-30f)
+          << i;
       if (!pts.normal.empty()) {
         const NormalCone pc = NormalCone::of(pts.normal[p]);
         if (!pc.boundsNothing()) {
@@ -181,15 +191,18 @@ void checkInvariants(const BshPoints& pts, const BshOptions& opt, const Bsh& bsh
     }
     const double k = double(below.size());
     const glm::dvec3 mean = sum / k;
-    for (int ch = 0; ch < 3; ++ch) EXPECT_NEAR(n.colour[ch], mean[ch], 1e-5 * std::max(1.0, mean[ch])) << i;
+    for (int ch = 0; ch < 3; ++ch)
+      EXPECT_NEAR(n.colour[ch], mean[ch], 1e-5 * std::max(1.0, mean[ch])) << i;
     if (!opt.prune) continue;
     const glm::dvec3 var = sum2 / k - mean * mean;
     const bool colourSimilar = std::max({var.r, var.g, var.b}) < opt.colourVariance;
-    const bool normalSimilar = withNormal == 0 ? !(withNormal < k && !pts.normal.empty() && withNormal > 0)
-                                               : withNormal == k && glm::length(nsum) / k > opt.normalAgreement;
+    const bool normalSimilar = withNormal == 0
+                                   ? !(withNormal < k && !pts.normal.empty() && withNormal > 0)
+                                   : withNormal == k && glm::length(nsum) / k > opt.normalAgreement;
     // Within float and summation-order noise at the thresholds themselves.
-    const bool nearThreshold = std::fabs(std::max({var.r, var.g, var.b}) - opt.colourVariance) < 1e-6 ||
-                               (withNormal > 0 && std::fabs(glm::length(nsum) / k - opt.normalAgreement) < 1e-6);
+    const bool nearThreshold =
+        std::fabs(std::max({var.r, var.g, var.b}) - opt.colourVariance) < 1e-6 ||
+        (withNormal > 0 && std::fabs(glm::length(nsum) / k - opt.normalAgreement) < 1e-6);
     if (nearThreshold) continue;
     if (isLeaf(n) && bsh.leafOf.size() && below.size() > 1) {
       // A leaf of several points is a Morton cell (points closer than 2^-21 of the extent) or a
@@ -199,9 +212,14 @@ void checkInvariants(const BshPoints& pts, const BshOptions& opt, const Bsh& bsh
           if (glm::length(pts.position[p] - pts.position[below[0]]) > cellDiagonal) return false;
         return true;
       }();
-      if (!cell) { EXPECT_TRUE(colourSimilar && normalSimilar) << "cluster " << i << " var " << var.r; }
+      if (!cell) {
+        EXPECT_TRUE(colourSimilar && normalSimilar) << "cluster " << i << " var " << var.r;
+      }
     }
-    if (!isLeaf(n)) { EXPECT_FALSE(colourSimilar && normalSimilar) << "inner node " << i << " should have been pruned"; }
+    if (!isLeaf(n)) {
+      EXPECT_FALSE(colourSimilar && normalSimilar)
+          << "inner node " << i << " should have been pruned";
+    }
   }
 }
 
@@ -235,7 +253,9 @@ TEST(Bsh, InvariantsOnRandomPointsWithAndWithoutPruning) {
       const Bsh bsh = buildChecked(pts, opt);
       EXPECT_EQ(bsh.stats.leaves, 3000u);
       EXPECT_EQ(bsh.stats.nodesBeforePruning, 5999u);
-      if (!prune) { EXPECT_EQ(bsh.nodes.size(), 5999u); }
+      if (!prune) {
+        EXPECT_EQ(bsh.nodes.size(), 5999u);
+      }
     }
 }
 
@@ -283,7 +303,8 @@ TEST(Bsh, FlatUniformPlaneIsOneLeafAndTwoColoursAreNot) {
   EXPECT_LT(one.nodes[0].colour.w, 1e-3f);
   EXPECT_NEAR(glm::dot(coneAxis(one.nodes[0]), glm::vec3(0, 0, 1)), 1, 1e-6);
   // Half red, half green: variance 0.25 per channel, far above 0.01.
-  for (size_t i = 0; i < pts.colour.size(); ++i) pts.colour[i] = pts.position[i].x < 0.5f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+  for (size_t i = 0; i < pts.colour.size(); ++i)
+    pts.colour[i] = pts.position[i].x < 0.5f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
   Bsh two = buildChecked(pts, opt);
   EXPECT_FALSE(isLeaf(two.nodes[0]));
   // Noise just below the threshold (uniform +-0.17: variance 0.0096) still collapses.
@@ -371,8 +392,8 @@ TEST(Bsh, BadPointsAreRejectedAndCountedAndHdrSurvives) {
   pts.position[4].y = INFINITY;
   pts.colour[5].g = NAN;
   pts.colour[6].b = -1;
-  pts.normal[7] = glm::vec3(NAN);    // unknown normal: kept, its cone bounds nothing
-  pts.colour[8] = glm::vec3(1e6f);   // beyond half float's 65504
+  pts.normal[7] = glm::vec3(NAN);   // unknown normal: kept, its cone bounds nothing
+  pts.colour[8] = glm::vec3(1e6f);  // beyond half float's 65504
   BshOptions opt;
   opt.leafRadius = 0.01f;
   const Bsh bsh = buildChecked(pts, opt);
@@ -426,7 +447,8 @@ TEST(TopTree, JoinsRootsIntoOneHierarchy) {
     const NormalCone cone{coneAxis(n), n.colour.w};
     for (uint32_t ch : {n.links.x, n.links.y}) {
       const BshNode& k = top.nodes[ch];
-      EXPECT_LE(glm::length(glm::vec3(k.sphere) - glm::vec3(n.sphere)) + k.sphere.w, n.sphere.w * (1 + kSphereRel));
+      EXPECT_LE(glm::length(glm::vec3(k.sphere) - glm::vec3(n.sphere)) + k.sphere.w,
+                n.sphere.w * (1 + kSphereRel));
       if (!cone.boundsNothing()) {
         EXPECT_NE(k.links.w, 0u);
         EXPECT_TRUE(cone.contains(NormalCone{coneAxis(k), k.colour.w}, kConeSlack));

@@ -1,11 +1,11 @@
 // Micro-buffer geometry: the paraboloid map's round trip, and m-pixel solid angles that make the
 // eq. 7 quadrature exact for a uniform hemisphere (sum 2 pi; cosine-weighted sum pi).
+#include "nestlight/gi/pbgi/micro_buffer.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
-
-#include "nestlight/gi/pbgi/micro_buffer.h"
 
 namespace nestlight::gi::pbgi {
 namespace {

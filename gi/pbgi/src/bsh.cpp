@@ -18,11 +18,11 @@ struct Aggregate {
   glm::dvec3 centre{0};
   double radius = 0;
   NormalCone cone;
-  double count = 0;            // points
+  double count = 0;  // points
   glm::dvec3 sumColour{0}, sumColour2{0};
-  glm::dvec3 sumNormal{0};     // of the points' unit normals
+  glm::dvec3 sumNormal{0};  // of the points' unit normals
   glm::dvec3 sumPosition{0};
-  double withNormal = 0;       // points that have one
+  double withNormal = 0;  // points that have one
 };
 
 // A child of a Karras inner node: a leaf (Morton cell) or another inner node.
@@ -71,8 +71,9 @@ class Builder {
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
     for (size_t i = 0; i < n; ++i) {
       const glm::vec3 &p = pts_.position[i], &c = pts_.colour[i];
-      const bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(c.r) &&
-                      std::isfinite(c.g) && std::isfinite(c.b) && c.r >= 0 && c.g >= 0 && c.b >= 0;
+      const bool ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
+                      std::isfinite(c.r) && std::isfinite(c.g) && std::isfinite(c.b) && c.r >= 0 &&
+                      c.g >= 0 && c.b >= 0;
       if (!ok) {
         st.rejected++;
         continue;
@@ -106,7 +107,8 @@ class Builder {
         a.centre += glm::dvec3(pts_.position[i]);
         a.sumColour += c;
         a.sumColour2 += c * c;
-        const NormalCone nc = pts_.normal.empty() ? NormalCone::everything() : NormalCone::of(pts_.normal[i]);
+        const NormalCone nc =
+            pts_.normal.empty() ? NormalCone::everything() : NormalCone::of(pts_.normal[i]);
         a.cone = j == k ? nc : merge(a.cone, nc);
         if (!nc.boundsNothing()) {
           a.sumNormal += glm::dvec3(nc.axis);
@@ -117,7 +119,8 @@ class Builder {
       a.sumPosition = a.centre;
       a.centre /= a.count;
       double spread = 0;
-      for (size_t j = k; j < e; ++j) spread = std::max(spread, glm::length(glm::dvec3(pts_.position[valid[j]]) - a.centre));
+      for (size_t j = k; j < e; ++j)
+        spread = std::max(spread, glm::length(glm::dvec3(pts_.position[valid[j]]) - a.centre));
       a.radius = double(opt_.leafRadius) + spread;
       if (e - k > 1) st.sharedCells += e - k;
       cellCode.push_back(codes[k]);
@@ -158,13 +161,15 @@ class Builder {
     top_ = true;
     topRoots_ = &roots;
     glm::vec3 lo(INFINITY), hi(-INFINITY);
-    for (const auto& r : roots) lo = glm::min(lo, glm::vec3(r.sphere)), hi = glm::max(hi, glm::vec3(r.sphere));
+    for (const auto& r : roots)
+      lo = glm::min(lo, glm::vec3(r.sphere)), hi = glm::max(hi, glm::vec3(r.sphere));
     const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
     const float toGrid = extent > 0 ? 16383.0f / extent : 0.0f;
     std::vector<uint64_t> codes(n);
     std::vector<uint32_t> order(n);
     for (uint32_t i = 0; i < n; ++i) {
-      const glm::vec3 q = glm::clamp((glm::vec3(roots[i].sphere) - lo) * toGrid, glm::vec3(0), glm::vec3(16383));
+      const glm::vec3 q =
+          glm::clamp((glm::vec3(roots[i].sphere) - lo) * toGrid, glm::vec3(0), glm::vec3(16383));
       // 14 bits per axis, then the index: unique codes even for nodes with one centre.
       codes[i] = mortonCode(uint32_t(q.x), uint32_t(q.y), uint32_t(q.z)) << 22 | i;
       order[i] = i;
@@ -285,7 +290,8 @@ class Builder {
       while (!first.leaf) first = innerLinks_[first.index].left;
       while (!last.leaf) last = innerLinks_[last.index].right;
       if (sorted_)
-        for (uint32_t k = cellFirst_[first.index]; k < cellFirst_[last.index + 1]; ++k) out.leafOf[(*sorted_)[k]] = index;
+        for (uint32_t k = cellFirst_[first.index]; k < cellFirst_[last.index + 1]; ++k)
+          out.leafOf[(*sorted_)[k]] = index;
       BshNode& n = out.nodes[index];
       float disc = float(a.radius);
       if (collapse) {
@@ -297,7 +303,8 @@ class Builder {
         double reach = 0;
         for (uint32_t c = first.index; c <= last.index; ++c)
           reach = std::max(reach, glm::length(cells_[c].centre - centroid) + cells_[c].radius);
-        const double mag = std::max({std::fabs(centroid.x), std::fabs(centroid.y), std::fabs(centroid.z), reach});
+        const double mag =
+            std::max({std::fabs(centroid.x), std::fabs(centroid.y), std::fabs(centroid.z), reach});
         n.sphere = glm::vec4(glm::vec3(centroid), float(reach + 8.0 * mag * 1.2e-7));
         disc = float(reach);
       }
@@ -325,7 +332,8 @@ class Builder {
         continue;
       }
       const glm::vec3 pa = frame::unpackNormal(p.links.w), ca = frame::unpackNormal(c.links.w);
-      const float need = std::atan2(glm::length(glm::cross(pa, ca)), glm::dot(pa, ca)) + c.colour.w + 1e-6f;
+      const float need =
+          std::atan2(glm::length(glm::cross(pa, ca)), glm::dot(pa, ca)) + c.colour.w + 1e-6f;
       if (need >= float(BSH_CONE_NONE)) {
         p.links.w = 0;
         p.colour.w = float(BSH_CONE_NONE);
@@ -341,7 +349,8 @@ class Builder {
     const glm::vec3 c(a.centre);
     // Float rounding of the centre and radius must not let a child's sphere poke out of its
     // parent's: widen by a few ulps of the coordinates' magnitude.
-    const double mag = std::max({std::fabs(a.centre.x), std::fabs(a.centre.y), std::fabs(a.centre.z), a.radius});
+    const double mag =
+        std::max({std::fabs(a.centre.x), std::fabs(a.centre.y), std::fabs(a.centre.z), a.radius});
     n.sphere = glm::vec4(c, float(a.radius + 8.0 * mag * 1.2e-7));
     n.colour = glm::vec4(glm::vec3(a.sumColour / a.count), 0.0f);
     if (a.cone.boundsNothing()) {
@@ -353,7 +362,8 @@ class Builder {
       // (emit() then widens parents to contain their children's stored cones).
       const uint32_t word = frame::packNormal(a.cone.axis.x, a.cone.axis.y, a.cone.axis.z);
       const glm::vec3 back = frame::unpackNormal(word);
-      const float err = std::atan2(glm::length(glm::cross(back, a.cone.axis)), glm::dot(back, a.cone.axis));
+      const float err =
+          std::atan2(glm::length(glm::cross(back, a.cone.axis)), glm::dot(back, a.cone.axis));
       const float half = a.cone.halfAngle + err + 1e-5f;
       if (word == 0 || half >= float(BSH_CONE_NONE)) {
         n.colour.w = float(BSH_CONE_NONE);
@@ -371,8 +381,9 @@ class Builder {
   const BshOptions& opt_;
   std::vector<Aggregate> cells_, inner_;
   std::vector<InnerNode> innerLinks_;
-  std::vector<uint32_t> cellFirst_;               // per cell, its first point in sorted order; + end
-  const std::vector<uint32_t>* sorted_ = nullptr; // the valid points in Morton order (recordLeaves)
+  std::vector<uint32_t> cellFirst_;  // per cell, its first point in sorted order; + end
+  const std::vector<uint32_t>* sorted_ =
+      nullptr;  // the valid points in Morton order (recordLeaves)
   uint64_t clusters_ = 0;
   int depth_ = 0;
   bool top_ = false;
@@ -382,7 +393,9 @@ class Builder {
 
 }  // namespace
 
-Bsh buildBsh(const BshPoints& points, const BshOptions& options) { return Builder(points, options).build(); }
+Bsh buildBsh(const BshPoints& points, const BshOptions& options) {
+  return Builder(points, options).build();
+}
 
 Bsh buildTopTree(const std::vector<BshNode>& roots) {
   const BshPoints none;
@@ -390,6 +403,8 @@ Bsh buildTopTree(const std::vector<BshNode>& roots) {
   return Builder(none, opt).buildTop(roots);
 }
 
-glm::vec3 coneAxis(const BshNode& n) { return n.links.w ? frame::unpackNormal(n.links.w) : glm::vec3(0); }
+glm::vec3 coneAxis(const BshNode& n) {
+  return n.links.w ? frame::unpackNormal(n.links.w) : glm::vec3(0);
+}
 
 }  // namespace nestlight::gi::pbgi

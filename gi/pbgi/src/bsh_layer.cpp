@@ -7,14 +7,18 @@
 
 namespace nestlight::gi::pbgi {
 
-BshLayer::BshLayer(const Metadata& meta, BshOptions options, std::shared_ptr<const ScanColours> colours)
+BshLayer::BshLayer(const Metadata& meta, BshOptions options,
+                   std::shared_ptr<const ScanColours> colours)
     : meta_(meta), options_(options), colours_(std::move(colours)) {
   // The recorded colour needs no octree path (only a layer is read from the folder).
-  if (!colours_) colours_ = std::make_shared<const ScanColours>(std::filesystem::path(), meta_, ScanColours::kRecorded);
+  if (!colours_)
+    colours_ =
+        std::make_shared<const ScanColours>(std::filesystem::path(), meta_, ScanColours::kRecorded);
   normal_ = meta.layout.find(attr::kNormal);
 }
 
-Bsh BshLayer::build(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints) const {
+Bsh BshLayer::build(const NodeKey& key, const PointBuffer& points,
+                    const std::vector<uint8_t>& gpuPoints) const {
   const size_t n = points.size();
   NL_CHECK(gpuPoints.size() == n * frame::kGpuPointBytes);
   BshPoints in;
@@ -35,11 +39,13 @@ Bsh BshLayer::build(const NodeKey& key, const PointBuffer& points, const std::ve
   return buildBsh(in, opt);
 }
 
-void BshLayer::prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
-                       std::vector<uint8_t>& out) const {
+void BshLayer::prepare(const NodeKey& key, const PointBuffer& points,
+                       const std::vector<uint8_t>& gpuPoints, std::vector<uint8_t>& out) const {
   const auto t0 = std::chrono::steady_clock::now();
   const Bsh bsh = build(key, points, gpuPoints);
-  nanoseconds_ += uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+  nanoseconds_ += uint64_t(
+      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0)
+          .count());
   builds_++;
   points_ += points.size();
   nodes_ += bsh.nodes.size();
@@ -47,6 +53,8 @@ void BshLayer::prepare(const NodeKey& key, const PointBuffer& points, const std:
   if (!out.empty()) std::memcpy(out.data(), bsh.nodes.data(), out.size());
 }
 
-BshLayer::Totals BshLayer::totals() const { return {builds_.load(), points_.load(), nodes_.load(), nanoseconds_.load()}; }
+BshLayer::Totals BshLayer::totals() const {
+  return {builds_.load(), points_.load(), nodes_.load(), nanoseconds_.load()};
+}
 
 }  // namespace nestlight::gi::pbgi

@@ -36,7 +36,8 @@ void CutHierarchies::assemble(RasterFrame& f, size_t layer) {
     }
     PbgiNode e{};
     e.origin = glm::vec4(cut[i].origin, cut[i].colourScale);
-    e.range = glm::uvec4(uint32_t(total), uint32_t(count), 0, std::bit_cast<uint32_t>(cut[i].spacing));
+    e.range =
+        glm::uvec4(uint32_t(total), uint32_t(count), 0, std::bit_cast<uint32_t>(cut[i].spacing));
     table.push_back(e);
     included.push_back(i);
     total += count;
@@ -67,13 +68,16 @@ void CutHierarchies::assemble(RasterFrame& f, size_t layer) {
   for (size_t k = 0; k < included.size(); ++k) {
     const GLuint src = f.layerBuffer(cut[included[k]], layer);
     const size_t bytes = size_t(table[k].range.y) * sizeof(BshNode);
-    glCopyNamedBufferSubData(src, nodes_.id(), 0, GLintptr(size_t(table[k].range.x) * sizeof(BshNode)),
+    glCopyNamedBufferSubData(src, nodes_.id(), 0,
+                             GLintptr(size_t(table[k].range.x) * sizeof(BshNode)),
                              GLsizeiptr(bytes));
-    glCopyNamedBufferSubData(src, rootsStaging_.id(), 0, GLintptr(k * sizeof(BshNode)), sizeof(BshNode));
+    glCopyNamedBufferSubData(src, rootsStaging_.id(), 0, GLintptr(k * sizeof(BshNode)),
+                             sizeof(BshNode));
   }
   if (!included.empty()) {
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    glGetNamedBufferSubData(rootsStaging_.id(), 0, GLsizeiptr(roots.size() * sizeof(BshNode)), roots.data());
+    glGetNamedBufferSubData(rootsStaging_.id(), 0, GLsizeiptr(roots.size() * sizeof(BshNode)),
+                            roots.data());
   }
   for (size_t k = 0; k < included.size(); ++k) {
     const CutNode& n = cut[included[k]];
@@ -83,8 +87,10 @@ void CutHierarchies::assemble(RasterFrame& f, size_t layer) {
   for (size_t j = 0; j < meshIncluded.size(); ++j) {
     const MeshTree& t = meshTrees_[meshIncluded[j]];
     const PbgiNode& e = table[scanTrees_ + j];
-    glCopyNamedBufferSubData(meshNodes_.id(), nodes_.id(), GLintptr(meshOffsets_[meshIncluded[j]] * sizeof(BshNode)),
-                             GLintptr(size_t(e.range.x) * sizeof(BshNode)), GLsizeiptr(t.nodes.size() * sizeof(BshNode)));
+    glCopyNamedBufferSubData(meshNodes_.id(), nodes_.id(),
+                             GLintptr(meshOffsets_[meshIncluded[j]] * sizeof(BshNode)),
+                             GLintptr(size_t(e.range.x) * sizeof(BshNode)),
+                             GLsizeiptr(t.nodes.size() * sizeof(BshNode)));
     BshNode root = t.nodes[0];
     root.sphere = glm::vec4(glm::vec3(root.sphere) + t.origin, root.sphere.w);
     roots.push_back(root);

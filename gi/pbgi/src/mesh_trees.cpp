@@ -23,13 +23,15 @@ std::vector<MeshTree> buildMeshTrees(const Scene& scene, const std::vector<Trian
     if (s.positions.empty()) continue;
     const Material& mat = scene.materials.at(m.material);
     // 4096 BSDF samples: the albedo to about 1% (a Lambert material's is exact).
-    const Rgb rho = glm::clamp(directionalAlbedo(mat, glm::vec3(0, 0, 1), 4096), Rgb(0.0f), Rgb(1.0f));
+    const Rgb rho =
+        glm::clamp(directionalAlbedo(mat, glm::vec3(0, 0, 1), 4096), Rgb(0.0f), Rgb(1.0f));
     MeshTree t;
     t.material = m.material;
     t.surfels = s.positions.size();
     double area = 0;
     glm::vec3 lo(INFINITY);
-    for (size_t i = 0; i < s.positions.size(); ++i) area += s.area[i], lo = glm::min(lo, s.positions[i]);
+    for (size_t i = 0; i < s.positions.size(); ++i)
+      area += s.area[i], lo = glm::min(lo, s.positions[i]);
     t.origin = lo;
     const glm::mat4 localFromObject = scene.localFromObject(m);
     t.lo = glm::vec3(INFINITY), t.hi = glm::vec3(-INFINITY);

@@ -10,7 +10,9 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586;
 }
 
-glm::vec2 paraboloidFromDirection(const glm::vec3& w) { return glm::vec2(w.x, w.y) / (1.0f + w.z); }
+glm::vec2 paraboloidFromDirection(const glm::vec3& w) {
+  return glm::vec2(w.x, w.y) / (1.0f + w.z);
+}
 
 glm::vec3 directionFromParaboloid(const glm::vec2& st) {
   const float r2 = glm::dot(st, st);
@@ -38,7 +40,8 @@ MicroBufferTable microBufferTable(int size) {
           omega += dOmega;
           dir += dOmega * glm::dvec3(2 * s, 2 * u, 1 - r2) / (1 + r2);
         }
-      if (omega > 0) t.texels[size_t(j) * size + i] = glm::vec4(glm::vec3(dir / omega), float(omega));
+      if (omega > 0)
+        t.texels[size_t(j) * size + i] = glm::vec4(glm::vec3(dir / omega), float(omega));
     }
   return t;
 }
@@ -55,6 +58,8 @@ float MicroBufferTable::cosineWeightedSum() const {
   return float(s);
 }
 
-float mPixelSolidAngle(int size) { return float(kTwoPi / (double(size) * size)); }
+float mPixelSolidAngle(int size) {
+  return float(kTwoPi / (double(size) * size));
+}
 
 }  // namespace nestlight::gi::pbgi

@@ -52,19 +52,26 @@ class PbgiExtension : public RasterExtension {
 
   const char* variantName() const {
     switch (params_.variant) {
-      case PbgiParameters::Variant::Classic: return "classic";
-      case PbgiParameters::Variant::Mip: return "mip";
-      case PbgiParameters::Variant::X: return "x";
+      case PbgiParameters::Variant::Classic:
+        return "classic";
+      case PbgiParameters::Variant::Mip:
+        return "mip";
+      case PbgiParameters::Variant::X:
+        return "x";
     }
     return "?";
   }
 
   const char* emptyName() const {
     switch (params_.empty) {
-      case PbgiParameters::Empty::Auto: return "auto";
-      case PbgiParameters::Empty::Average: return "average";
-      case PbgiParameters::Empty::Environment: return "environment";
-      case PbgiParameters::Empty::Black: return "black";
+      case PbgiParameters::Empty::Auto:
+        return "auto";
+      case PbgiParameters::Empty::Average:
+        return "average";
+      case PbgiParameters::Empty::Environment:
+        return "environment";
+      case PbgiParameters::Empty::Black:
+        return "black";
     }
     return "?";
   }
@@ -72,27 +79,31 @@ class PbgiExtension : public RasterExtension {
   std::string setUp(RasterFrame& f) override {
     const Scene& scene = f.scene();
     if (params_.empty == PbgiParameters::Empty::Auto)
-      params_.empty = f.hasEnvironment() ? PbgiParameters::Empty::Environment : PbgiParameters::Empty::Average;
+      params_.empty =
+          f.hasEnvironment() ? PbgiParameters::Empty::Environment : PbgiParameters::Empty::Average;
     albedo_ = scene.gi.mode == RadianceMode::Albedo;
     bounces_ = std::max(scene.gi.maxBounces, 1);
     // Empty m-pixels that see the sky gather it occluded by the scan: direct light then leaves it
     // off the receivers' diffuse lobes (every pixel direct light shades is a receiver here).
-    skyOwned_ = params_.empty == PbgiParameters::Empty::Environment && f.hasEnvironment() && (!albedo_ || bounces_ >= 2);
+    skyOwned_ = params_.empty == PbgiParameters::Empty::Environment && f.hasEnvironment() &&
+                (!albedo_ || bounces_ >= 2);
     if (skyOwned_) f.setSkyOnDiffuseLobes(false);
     pbgi::BshOptions options;
     options.prune = params_.prune;
-    layer_ = f.addNodeLayer([options, this](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {
-      auto layer = std::make_shared<pbgi::BshLayer>(meta, options, std::move(colours));
-      layers_.push_back(layer);
-      return layer;
-    });
+    layer_ = f.addNodeLayer(
+        [options, this](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {
+          auto layer = std::make_shared<pbgi::BshLayer>(meta, options, std::move(colours));
+          layers_.push_back(layer);
+          return layer;
+        });
     if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene, f.meshes());
     // The coarsest meshes lift only the receivers in their own bounds (pbgi_common.glsl): a mesh
     // of few surfels has discs as wide as itself.
     std::vector<size_t> byDisc(meshTrees_.size());
     for (size_t k = 0; k < byDisc.size(); ++k) byDisc[k] = k;
-    std::stable_sort(byDisc.begin(), byDisc.end(),
-                     [&](size_t a, size_t b) { return meshTrees_[a].discRadius > meshTrees_[b].discRadius; });
+    std::stable_sort(byDisc.begin(), byDisc.end(), [&](size_t a, size_t b) {
+      return meshTrees_[a].discRadius > meshTrees_[b].discRadius;
+    });
     liftBoxes_.clear();
     for (size_t k : byDisc) {
       const pbgi::MeshTree& t = meshTrees_[k];
@@ -102,7 +113,8 @@ class PbgiExtension : public RasterExtension {
         continue;
       }
       meshLiftMax_ = std::max(meshLiftMax_, t.discRadius);
-      if (t.material < meshLift_.size()) meshLift_[t.material] = std::max(meshLift_[t.material], t.discRadius);
+      if (t.material < meshLift_.size())
+        meshLift_[t.material] = std::max(meshLift_[t.material], t.discRadius);
     }
     for (const auto& t : meshTrees_) meshSurfels_ += t.surfels;
     hier_.setMeshTrees(meshTrees_);
@@ -111,19 +123,25 @@ class PbgiExtension : public RasterExtension {
     lit_ = albedo_ || !meshTrees_.empty();
     const pbgi::MicroBufferTable table = pbgi::microBufferTable(params_.microBuffer);
     micro_ = gl::Buffer(table.texels.size() * sizeof(glm::vec4), table.texels.data(), 0);
-    const std::vector<std::pair<std::string, std::string>> defines = {{"PBGI_MB", std::to_string(params_.microBuffer)}};
-    receiversProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_receivers.comp"}}, defines);
+    const std::vector<std::pair<std::string, std::string>> defines = {
+        {"PBGI_MB", std::to_string(params_.microBuffer)}};
+    receiversProgram_ =
+        gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_receivers.comp"}}, defines);
     classic_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_classic.comp"}}, defines);
     if (lit_) {
       lightProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light.comp"}}, defines);
-      lightUpProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light_up.comp"}}, defines);
+      lightUpProgram_ =
+          gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_light_up.comp"}}, defines);
       if (albedo_ && bounces_ >= 3) {
-        selectProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_bounce_select.comp"}}, defines);
-        downProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_bounce_down.comp"}}, defines);
+        selectProgram_ =
+            gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_bounce_select.comp"}}, defines);
+        downProgram_ =
+            gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_bounce_down.comp"}}, defines);
       }
     }
     if (params_.variant != PbgiParameters::Variant::Classic) {
-      pyramidProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pyramid.comp"}}, defines);
+      pyramidProgram_ =
+          gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pyramid.comp"}}, defines);
       pairsProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/pbgi/pbgi_pairs.comp"}}, defines);
     }
     // llvmpipe ends a shader invocation's loops after 65,535 iterations in all (see
@@ -157,13 +175,15 @@ class PbgiExtension : public RasterExtension {
     f.attributes["nestlight:pbgi_top_nodes"] = std::to_string(topCount_);
     f.attributes["nestlight:pbgi_top_ms"] = std::to_string(topMs_);
     f.attributes["nestlight:pbgi_mesh_trees"] = std::to_string(meshTrees_.size());
-    f.attributes["nestlight:pbgi_bounces_gathered"] = std::to_string(albedo_ && bounces_ >= 2 ? 1 + gatheredBounces_ : 0);
+    f.attributes["nestlight:pbgi_bounces_gathered"] =
+        std::to_string(albedo_ && bounces_ >= 2 ? 1 + gatheredBounces_ : 0);
     f.attributes["nestlight:pbgi_bounce_receivers"] = std::to_string(bounceReceivers_);
     f.attributes["nestlight:pbgi_mesh_surfels"] = std::to_string(meshSurfels_);
     pbgi::BshLayer::Totals built;
     for (const auto& l : layers_) {
       const auto t = l->totals();
-      built.builds += t.builds, built.points += t.points, built.nodes += t.nodes, built.nanoseconds += t.nanoseconds;
+      built.builds += t.builds, built.points += t.points, built.nodes += t.nodes,
+          built.nanoseconds += t.nanoseconds;
     }
     f.attributes["nestlight:pbgi_bsh_builds"] = std::to_string(built.builds);
     f.attributes["nestlight:pbgi_bsh_points"] = std::to_string(built.points);
@@ -174,27 +194,33 @@ class PbgiExtension : public RasterExtension {
     f.attributes["nestlight:pbgi_traversal_bytes"] = std::to_string(stateBytes_);
     f.attributes["nestlight:pbgi_stack_overflows"] = std::to_string(stackOverflows_);
     char line[256];
-    std::snprintf(line, sizeof line, "; pbgi %s, %dx%d micro-buffers, %llu hierarchy nodes over %llu cut nodes",
-                  variantName(), params_.microBuffer, params_.microBuffer, (unsigned long long)bshNodes_,
-                  (unsigned long long)cutNodes_);
+    std::snprintf(line, sizeof line,
+                  "; pbgi %s, %dx%d micro-buffers, %llu hierarchy nodes over %llu cut nodes",
+                  variantName(), params_.microBuffer, params_.microBuffer,
+                  (unsigned long long)bshNodes_, (unsigned long long)cutNodes_);
     f.summary += line;
     if (!meshTrees_.empty())
-      f.summary += "; " + std::to_string(meshTrees_.size()) + " mesh hierarchies (" + std::to_string(meshSurfels_) +
-                   " surfels)";
+      f.summary += "; " + std::to_string(meshTrees_.size()) + " mesh hierarchies (" +
+                   std::to_string(meshSurfels_) + " surfels)";
     if (params_.variant != PbgiParameters::Variant::Classic)
-      f.summary += "; " + std::to_string(pairGenerations_) + " pair generations, " + std::to_string(pairBytes_ >> 10) +
-                   " KiB of pairs and lists";
+      f.summary += "; " + std::to_string(pairGenerations_) + " pair generations, " +
+                   std::to_string(pairBytes_ >> 10) + " KiB of pairs and lists";
     if (pairOverflows_)
       f.summary += "; pairs outgrew pair_capacity (" + std::to_string(pairOverflows_) +
                    " not written): gathered from the root instead";
-    f.summary += "; " + std::to_string(receiverCount_) + " receivers in " + std::to_string(dispatches_) + " dispatches";
+    f.summary += "; " + std::to_string(receiverCount_) + " receivers in " +
+                 std::to_string(dispatches_) + " dispatches";
     if (albedo_ && bounces_ > 2)
-      f.summary += "; albedo mode: " + std::to_string(gatheredBounces_) + " further bounce(s) gathered at " +
-                   std::to_string(bounceReceivers_) + " hierarchy nodes of at most " +
-                   std::to_string(params_.bouncePoints) + " points";
+      f.summary += "; albedo mode: " + std::to_string(gatheredBounces_) +
+                   " further bounce(s) gathered at " + std::to_string(bounceReceivers_) +
+                   " hierarchy nodes of at most " + std::to_string(params_.bouncePoints) +
+                   " points";
     if (leftOut_)
-      f.summary += "; " + std::to_string(leftOut_) + " cut nodes left out (their hierarchies exceed one 128 MiB range)";
-    if (stackOverflows_) f.summary += "; " + std::to_string(stackOverflows_) + " traversal stack overflows (nodes skipped)";
+      f.summary += "; " + std::to_string(leftOut_) +
+                   " cut nodes left out (their hierarchies exceed one 128 MiB range)";
+    if (stackOverflows_)
+      f.summary +=
+          "; " + std::to_string(stackOverflows_) + " traversal stack overflows (nodes skipped)";
   }
 
  private:
@@ -230,11 +256,13 @@ class PbgiExtension : public RasterExtension {
       // The radiance-cache mode lights only the meshes' surfels: the scan's nodes are copied once
       // per cut, not every frame.
       if (!albedo_ && bshNodes_ > 0)
-        glCopyNamedBufferSubData(hier_.nodes().id(), nodesLit_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
+        glCopyNamedBufferSubData(hier_.nodes().id(), nodesLit_.id(), 0, 0,
+                                 GLsizeiptr(bshNodes_ * sizeof(BshNode)));
     }
     meshRoots_.assign(hier_.roots().begin() + std::ptrdiff_t(scanTrees_), hier_.roots().end());
     average_ = topCount_ ? scanAverage(hier_.topRoot(), meshRoots_) : glm::vec3(0);
-    topMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    topMs_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
 
   void addPasses(RasterFrame& f) {
@@ -253,7 +281,8 @@ class PbgiExtension : public RasterExtension {
     g.addPass(
         "pbgi_gather", frame::Scope::Tile,
         [this](frame::PassBuilder& b) {
-          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"}) b.read(t);
+          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
+            b.read(t);
           if (lit_) b.read("pbgi_lit");
           b.write("radiance_gi");
         },
@@ -268,7 +297,8 @@ class PbgiExtension : public RasterExtension {
     if (topCount_ == 0) return;
     const size_t firstLit = albedo_ ? 0 : scanTrees_;  // the scan's were copied at rebuild()
     uint64_t litRange = 0;
-    for (size_t k = firstLit; k < treeSizes_.size(); ++k) litRange = std::max<uint64_t>(litRange, treeSizes_[k]);
+    for (size_t k = firstLit; k < treeSizes_.size(); ++k)
+      litRange = std::max<uint64_t>(litRange, treeSizes_[k]);
     const gl::Texture& maps = ctx.target("shadow_maps");
     maps.setFilter(GL_LINEAR, GL_LINEAR);
     maps.setDepthCompare(true);
@@ -287,7 +317,8 @@ class PbgiExtension : public RasterExtension {
     }
     receivers_.reserve(16);
     std::vector<uint32_t> start = treeSizes_;
-    std::fill(start.begin(), start.begin() + std::ptrdiff_t(firstLit), 0u);  // the scan's, copied as they were
+    std::fill(start.begin(), start.begin() + std::ptrdiff_t(firstLit),
+              0u);  // the scan's, copied as they were
     sweepUp(start);
     if (albedo_ && bounces_ >= 3) gatherBounces(f);
   }
@@ -301,7 +332,8 @@ class PbgiExtension : public RasterExtension {
     glUniform1i(lightUpProgram_.uniform("uTrees"), int(tableCount_));
     glUniform1i(lightUpProgram_.uniform("uTopCount"), int(topCount_));
     glUniform1i(lightUpProgram_.uniform("uBudget"), budget);
-    auto sweep = [&](bool topTree, const gl::Buffer& tree, size_t trees, const std::vector<uint32_t>& from) {
+    auto sweep = [&](bool topTree, const gl::Buffer& tree, size_t trees,
+                     const std::vector<uint32_t>& from) {
       cursors_.reserve(std::max<size_t>(trees, 1) * 4);
       cursors_.upload(from.data(), from.size() * 4);
       cursors_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_CURSORS);
@@ -314,7 +346,8 @@ class PbgiExtension : public RasterExtension {
     if (tableCount_ > 0) sweep(false, nodesLit_, tableCount_, start);
     // The top tree's leaves take their nodes' lit roots, scaled as the gather scales them.
     tableLit_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
-    glCopyNamedBufferSubData(hier_.top().id(), topLit_.id(), 0, 0, GLsizeiptr(topCount_ * sizeof(BshNode)));
+    glCopyNamedBufferSubData(hier_.top().id(), topLit_.id(), 0, 0,
+                             GLsizeiptr(topCount_ * sizeof(BshNode)));
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     sweep(true, topLit_, 1, {uint32_t(topCount_)});
     BshNode root;
@@ -350,7 +383,8 @@ class PbgiExtension : public RasterExtension {
   void gatherBounces(RasterFrame& f) {
     if (tableCount_ == 0 || bshNodes_ == 0) return;
     nodesDirect_.reserve(nodesLit_.bytes());
-    glCopyNamedBufferSubData(nodesLit_.id(), nodesDirect_.id(), 0, 0, GLsizeiptr(bshNodes_ * sizeof(BshNode)));
+    glCopyNamedBufferSubData(nodesLit_.id(), nodesDirect_.id(), 0, 0,
+                             GLsizeiptr(bshNodes_ * sizeof(BshNode)));
     receivers_.reserve((4 + 2 * bshNodes_) * 4);
     const uint32_t zeros[4] = {0, 0, 0, 0};
     receivers_.upload(zeros, sizeof zeros);
@@ -396,7 +430,8 @@ class PbgiExtension : public RasterExtension {
   static glm::vec3 scanAverage(const BshNode& root, const std::vector<BshNode>& meshRoots) {
     glm::dvec3 sum = glm::dvec3(glm::vec3(root.colour)) * double(root.links.z);
     double count = double(root.links.z);
-    for (const BshNode& m : meshRoots) sum -= glm::dvec3(glm::vec3(m.colour)) * double(m.links.z), count -= m.links.z;
+    for (const BshNode& m : meshRoots)
+      sum -= glm::dvec3(glm::vec3(m.colour)) * double(m.links.z), count -= m.links.z;
     return count > 0.5 ? glm::max(glm::vec3(sum / count), glm::vec3(0.0f)) : glm::vec3(0.0f);
   }
 
@@ -414,11 +449,13 @@ class PbgiExtension : public RasterExtension {
     ctx.bindTexture("normal", 2);
     ctx.bindTexture("material", 3);
     ctx.bindTexture("radiance", 4);
-    glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
     receivers_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_RECEIVERS);
     receiversProgram_.use();
     glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
+                    GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     uint32_t count = 0;
     glGetNamedBufferSubData(receivers_.id(), 0, 4, &count);
     receiverCount_ += count;
@@ -435,21 +472,23 @@ class PbgiExtension : public RasterExtension {
       lists = refinePairs(tile);
       receivers_.upload(zeros, sizeof zeros);  // the pairs' counters reused the receivers' header
     }
-    if (gathered_.bytes() == 0) gathered_.reserve(16);  // read only with nodes as receivers; bound all the same
+    if (gathered_.bytes() == 0)
+      gathered_.reserve(16);  // read only with nodes as receivers; bound all the same
     gathered_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_BOUNCE);
     if (listHead_.bytes() == 0) listHead_.reserve(16);
     if (list_.bytes() == 0) list_.reserve(16);
     listHead_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD);
     list_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST);
     // With nothing resident a receiver that owns the sky still gathers it (every m-pixel empty).
-    if (count > 0 && (topCount_ > 0 || skyOwned_)) traverse(f, count, false, lists, topIn, nodesIn, tableIn);
+    if (count > 0 && (topCount_ > 0 || skyOwned_))
+      traverse(f, count, false, lists, topIn, nodesIn, tableIn);
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT);
   }
 
   // The classic traversal for `count` receivers listed in receivers_ (pixels, or hierarchy nodes),
   // in chunks that fit one buffer range, each dispatched until every receiver has finished.
-  void traverse(RasterFrame& f, size_t count, bool nodeReceivers, bool lists, const gl::Buffer& topIn,
-                const gl::Buffer& nodesIn, const gl::Buffer& tableIn) {
+  void traverse(RasterFrame& f, size_t count, bool nodeReceivers, bool lists,
+                const gl::Buffer& topIn, const gl::Buffer& nodesIn, const gl::Buffer& tableIn) {
     const uint32_t zero = 0;
     const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);
     const size_t perReceiver = sizeof(pbgi::glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
@@ -475,7 +514,8 @@ class PbgiExtension : public RasterExtension {
     glUniform1f(classic_.uniform("uOmegaCut"),
                 pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f));
     const glm::vec3 average = lit_ ? averageLit_ : average_;
-    const glm::vec3 empty = params_.empty == PbgiParameters::Empty::Average ? average : glm::vec3(0);
+    const glm::vec3 empty =
+        params_.empty == PbgiParameters::Empty::Average ? average : glm::vec3(0);
     // Hierarchy nodes receiving (further bounces) have the sky in their direct light already.
     const glm::vec3 e = nodeReceivers ? glm::vec3(0) : empty;
     glUniform3f(classic_.uniform("uEmpty"), e.r, e.g, e.b);
@@ -497,7 +537,9 @@ class PbgiExtension : public RasterExtension {
         glGetNamedBufferSubData(receivers_.id(), 4, 4, &unfinished);
         if (unfinished == 0) break;
         if (dispatch > 1000000)
-          throw Error("pbgi: a traversal did not finish after a million dispatches (a cycle in a hierarchy?)");
+          throw Error(
+              "pbgi: a traversal did not finish after a million dispatches (a cycle in a "
+              "hierarchy?)");
       }
     }
     uint32_t overflow = 0;
@@ -525,10 +567,12 @@ class PbgiExtension : public RasterExtension {
       glUniform2i(pyramidProgram_.uniform("uSize"), sizes[size_t(l)].x, sizes[size_t(l)].y);
       glUniform1i(pyramidProgram_.uniform("uOffset"), offsets[size_t(l)]);
       if (l > 0) {
-        glUniform2i(pyramidProgram_.uniform("uChildSize"), sizes[size_t(l) - 1].x, sizes[size_t(l) - 1].y);
+        glUniform2i(pyramidProgram_.uniform("uChildSize"), sizes[size_t(l) - 1].x,
+                    sizes[size_t(l) - 1].y);
         glUniform1i(pyramidProgram_.uniform("uChildOffset"), offsets[size_t(l) - 1]);
       }
-      glDispatchCompute(GLuint((sizes[size_t(l)].x + 7) / 8), GLuint((sizes[size_t(l)].y + 7) / 8), 1);
+      glDispatchCompute(GLuint((sizes[size_t(l)].x + 7) / 8), GLuint((sizes[size_t(l)].y + 7) / 8),
+                        1);
       glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
     const size_t capacity = size_t(params_.pairCapacity);
@@ -546,10 +590,12 @@ class PbgiExtension : public RasterExtension {
     listHead_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST_HEAD);
     list_.bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_LIST);
     pairsProgram_.use();
-    const float omegaM = pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f);
+    const float omegaM =
+        pbgi::mPixelSolidAngle(params_.microBuffer) * (params_.conservative ? 4.0f : 1.0f);
     glUniform1f(pairsProgram_.uniform("uOmegaTr"),
-                params_.variant == PbgiParameters::Variant::X ? 32.0f * pbgi::mPixelSolidAngle(params_.microBuffer)
-                                                              : omegaM);
+                params_.variant == PbgiParameters::Variant::X
+                    ? 32.0f * pbgi::mPixelSolidAngle(params_.microBuffer)
+                    : omegaM);
     glUniform1ui(pairsProgram_.uniform("uPairCapacity"), GLuint(capacity));
     glUniform1ui(pairsProgram_.uniform("uListCapacity"), GLuint(capacity));
     glUniform1iv(pairsProgram_.uniform("uLevelOffset"), levels, offsets.data());
@@ -559,7 +605,8 @@ class PbgiExtension : public RasterExtension {
     gl::Buffer* out = &pairsB_;
     uint64_t peak = 1;
     for (int generation = 0; inCount > 0; ++generation) {
-      NL_CHECK_MSG(generation < 4096, "pbgi: pair refinement did not end (a cycle in a hierarchy?)");
+      NL_CHECK_MSG(generation < 4096,
+                   "pbgi: pair refinement did not end (a cycle in a hierarchy?)");
       receivers_.upload(zeros, 8);  // pairs written, pairs that did not fit
       in->bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_IN);
       out->bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_PAIRS_OUT);
@@ -578,19 +625,22 @@ class PbgiExtension : public RasterExtension {
       listEntries_ = c[2];
       std::swap(in, out);
     }
-    pairBytes_ = std::max<uint64_t>(pairBytes_, 2 * peak * 16 + listEntries_ * 16 + uint64_t(texels) * 32);
+    pairBytes_ =
+        std::max<uint64_t>(pairBytes_, 2 * peak * 16 + listEntries_ * 16 + uint64_t(texels) * 32);
     return true;
   }
 
   PbgiParameters params_;
   size_t layer_ = 0;
-  std::vector<std::shared_ptr<const pbgi::BshLayer>> layers_;  // one per scan, for their build totals
+  std::vector<std::shared_ptr<const pbgi::BshLayer>>
+      layers_;  // one per scan, for their build totals
   gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
   gl::Buffer micro_, receivers_, state_, stack_, mb_;
   pbgi::CutHierarchies hier_;
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
   gl::ShaderProgram lightProgram_, lightUpProgram_, selectProgram_, downProgram_;
-  gl::Buffer nodesDirect_, gathered_;  // further bounces: the leaves' direct light, each node's gathered light
+  gl::Buffer nodesDirect_,
+      gathered_;  // further bounces: the leaves' direct light, each node's gathered light
   uint64_t gatheredBounces_ = 0, bounceReceivers_ = 0;
   gl::Buffer cursors_;
   std::vector<uint32_t> treeSizes_, treeStart_;
@@ -604,7 +654,8 @@ class PbgiExtension : public RasterExtension {
   // material.
   std::array<float, PBGI_LIFTS> meshLift_{};
   float meshLiftMax_ = 0;
-  std::vector<glm::vec4> liftBoxes_;  // per mesh lifting its own receivers: (lo, lift), (hi, material)
+  std::vector<glm::vec4>
+      liftBoxes_;  // per mesh lifting its own receivers: (lo, lift), (hi, material)
   void setLift(const gl::ShaderProgram& p) const {
     glUniform1i(p.uniform("uLiftBoxes"), int(liftBoxes_.size() / 2));
     if (!liftBoxes_.empty())
@@ -612,7 +663,7 @@ class PbgiExtension : public RasterExtension {
     glUniform1fv(p.uniform("uMeshLift[0]"), PBGI_LIFTS, meshLift_.data());
     glUniform1f(p.uniform("uMeshLiftMax"), meshLiftMax_);
   }
-  size_t scanTrees_ = 0;  // the table's first entries are the cut's nodes, then the meshes' 
+  size_t scanTrees_ = 0;   // the table's first entries are the cut's nodes, then the meshes'
   bool skyOwned_ = false;  // the gather, not direct light, gives receivers the sky
   int bounces_ = 1;
   size_t tableCount_ = 0;
@@ -631,9 +682,9 @@ class PbgiExtension : public RasterExtension {
 }  // namespace
 
 const std::vector<std::string>& pbgiParameterKeys() {
-  static const std::vector<std::string> keys = {"variant", "micro_buffer", "conservative",  "empty",
-                                                "prune",   "meshes",       "bounce_points", "pair_capacity",
-                                                "steps_per_dispatch"};
+  static const std::vector<std::string> keys = {
+      "variant",       "micro_buffer",  "conservative",      "empty", "prune", "meshes",
+      "bounce_points", "pair_capacity", "steps_per_dispatch"};
   return keys;
 }
 
@@ -661,7 +712,8 @@ PbgiParameters pbgiParameters(const Scene& scene) {
   if (f.has("meshes")) p.meshes = f.at("meshes").boolean();
   if (f.has("bounce_points")) p.bouncePoints = int(f.at("bounce_points").integer(1, 1 << 24));
   if (f.has("pair_capacity")) p.pairCapacity = int(f.at("pair_capacity").integer(1, 1 << 23));
-  if (f.has("steps_per_dispatch")) p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
+  if (f.has("steps_per_dispatch"))
+    p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
   return p;
 }
 

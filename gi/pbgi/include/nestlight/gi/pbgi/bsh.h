@@ -15,9 +15,8 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "nestlight/frame/interface.h"
 
@@ -46,20 +45,21 @@ struct BshOptions {
   // a coarse level's points, which stand for more surface, make wider leaves.
   float leafRadius = 0;
   bool prune = true;
-  float colourVariance = 0.01f;   // t_c: largest channel's variance of linear colour, below which...
-  float normalAgreement = 0.98f;  // t_n: ...and mean n_i . n_mean above which a sub-tree is one leaf
-  bool recordLeaves = false;      // fill Bsh::leafOf (tests, tools)
+  float colourVariance = 0.01f;  // t_c: largest channel's variance of linear colour, below which...
+  float normalAgreement =
+      0.98f;                  // t_n: ...and mean n_i . n_mean above which a sub-tree is one leaf
+  bool recordLeaves = false;  // fill Bsh::leafOf (tests, tools)
 };
 
 struct BshStats {
-  uint64_t input = 0;             // points given
-  uint64_t rejected = 0;          // non-finite position or colour, or negative colour: not in the tree
-  uint64_t sharedCells = 0;       // points averaged into a Morton cell with another point
-  uint64_t leaves = 0;            // Morton cells: leaves before pruning
+  uint64_t input = 0;        // points given
+  uint64_t rejected = 0;     // non-finite position or colour, or negative colour: not in the tree
+  uint64_t sharedCells = 0;  // points averaged into a Morton cell with another point
+  uint64_t leaves = 0;       // Morton cells: leaves before pruning
   uint64_t nodesBeforePruning = 0;
-  uint64_t nodes = 0;             // after pruning (the paper's "N. Cluster")
-  uint64_t clusters = 0;          // leaves that replaced a pruned sub-tree
-  int depth = 0;                  // levels below the root
+  uint64_t nodes = 0;     // after pruning (the paper's "N. Cluster")
+  uint64_t clusters = 0;  // leaves that replaced a pruned sub-tree
+  int depth = 0;          // levels below the root
   // Accounting: input == rejected + points below the root (the root's links.z).
 };
 
@@ -82,6 +82,8 @@ Bsh buildTopTree(const std::vector<BshNode>& roots);
 
 // Decoded fields of a node, for tests and tools.
 glm::vec3 coneAxis(const BshNode& n);  // (0, 0, 0) when the node's cone bounds nothing
-inline bool isLeaf(const BshNode& n) { return n.links.x == BSH_LEAF; }
+inline bool isLeaf(const BshNode& n) {
+  return n.links.x == BSH_LEAF;
+}
 
 }  // namespace nestlight::gi::pbgi

@@ -14,20 +14,22 @@
 
 namespace nestlight::gi::pbgi {
 
-// Leaves: the node's points, linear colour from the scan's colour source (nestlight/gi/scan_colour.h:
-// the recorded 16-bit sRGB colour decoded, 0.8 grey without colour as the reference, or a colour
-// layer such as the HDR colour), the scan's normals, disc radius the node level's nominal spacing
-// (the distance a level's sample keeps between its points, so discs of that radius leave no
-// surface uncovered where this node is the finest drawn).
+// Leaves: the node's points, linear colour from the scan's colour source
+// (nestlight/gi/scan_colour.h: the recorded 16-bit sRGB colour decoded, 0.8 grey without colour as
+// the reference, or a colour layer such as the HDR colour), the scan's normals, disc radius the
+// node level's nominal spacing (the distance a level's sample keeps between its points, so discs of
+// that radius leave no surface uncovered where this node is the finest drawn).
 class BshLayer : public frame::NodeLayer {
  public:
   // `colours`: where leaves take their colour; none: the recorded colour.
-  explicit BshLayer(const Metadata& meta, BshOptions options = {}, std::shared_ptr<const ScanColours> colours = nullptr);
+  explicit BshLayer(const Metadata& meta, BshOptions options = {},
+                    std::shared_ptr<const ScanColours> colours = nullptr);
   std::string name() const override { return "pbgi_bsh"; }
   void prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
                std::vector<uint8_t>& out) const override;
   // The same build, returned whole (tests, tools).
-  Bsh build(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints) const;
+  Bsh build(const NodeKey& key, const PointBuffer& points,
+            const std::vector<uint8_t>& gpuPoints) const;
 
   // What the loader threads built so far: nodes, points, hierarchy nodes, and the thread time it
   // took (the paper's Table 1 times one build over a whole cloud; here builds run per node).

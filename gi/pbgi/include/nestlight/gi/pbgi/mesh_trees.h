@@ -17,9 +17,8 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/pbgi/bsh.h"
@@ -32,7 +31,7 @@ struct MeshTree {
   glm::vec3 origin{0.0f};      // scene (local) frame: the surfels' bounding-box minimum
   uint32_t material = 0;       // index into the scene's materials (emission, at light time)
   uint64_t surfels = 0;
-  float discRadius = 0;        // the leaves' disc radius: the surfels' mean spacing
+  float discRadius = 0;          // the leaves' disc radius: the surfels' mean spacing
   glm::vec3 lo{0.0f}, hi{0.0f};  // scene (local) frame: the bounding box of the mesh's triangles
 };
 

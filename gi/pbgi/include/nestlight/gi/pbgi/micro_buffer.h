@@ -13,9 +13,8 @@
 // m-pixel solid angle: the hemisphere's 2 pi over the M^2 m-pixels.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 namespace nestlight::gi::pbgi {
 

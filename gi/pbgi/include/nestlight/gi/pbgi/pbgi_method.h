@@ -20,15 +20,17 @@ struct PbgiParameters {
   // blocks refined in parallel down to m-pixel-sized nodes), "x" (pairs while nodes exceed 32
   // m-pixel solid angles, then classic per receiver: the paper's X-PBGI).
   enum class Variant { Classic, Mip, X } variant = Variant::X;
-  int pairCapacity = 1 << 21;    // pairs per pair buffer, and entries of the receivers' lists (MIP, X)
-  int microBuffer = 16;          // M: m-pixels per side of a micro-buffer ("micro_buffer", 4 to 64)
-  bool conservative = false;     // refine only above 4 m-pixel solid angles (the paper's option against holes)
+  int pairCapacity =
+      1 << 21;           // pairs per pair buffer, and entries of the receivers' lists (MIP, X)
+  int microBuffer = 16;  // M: m-pixels per side of a micro-buffer ("micro_buffer", 4 to 64)
+  bool conservative =
+      false;  // refine only above 4 m-pixel solid angles (the paper's option against holes)
   // What an m-pixel nothing covered holds: "average" (the paper: the cloud's average colour, for
   // holes), "environment" (its radiance in that direction: what no point covers is sky; the
   // gather then owns the environment's light on receivers), "black" (measures coverage), or
   // "auto": environment when the scene has one, else average.
   enum class Empty { Auto, Average, Environment, Black } empty = Empty::Auto;
-  bool prune = true;             // prune the scan's hierarchies at the paper's thresholds (meshes' never)
+  bool prune = true;  // prune the scan's hierarchies at the paper's thresholds (meshes' never)
   // Inserted meshes' surfels as hierarchies of their own (mesh_trees.h): they occlude, reflect
   // the lights and emit; false: meshes only receive (the paper's setting).
   bool meshes = true;
