@@ -46,25 +46,13 @@ TEST_P(FarCluster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
   const std::string method = GetParam();
   test::TempDir t;
   json j = floorSceneJson(t, 64);
-  j["meshes"].push_back(
-      json{{"path", "box.obj"},
-           {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-           {"material", "floor"}});
-  j["meshes"].push_back(
-      json{{"path", "box.obj"},
-           {"transform", {{"translate", {-3.2, -9.0, 0.0}}, {"scale", {0.2, 18.0, 2.0}}}},
-           {"material", "floor"}});
-  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
   const float E = 2.0f;
-  j["lights"] = json::array(
-      {json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  addPlateUnderSun(j, E, true);
   json p = {{"shadow_map_size", 512}};
   if (method == "vpl") p.update(json{{"vpls", 64}, {"light_resolution", 64}, {"ism_size", 16}});
   j["gi"] = {{"method", method}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", p}};
   std::ofstream(t.file("near.json")) << j.dump(1);
-  j["meshes"].push_back(json{{"path", "box.obj"},
-                             {"transform", {{"translate", {1.0e6, 0.0, 0.0}}, {"scale", 20.0}}},
-                             {"material", "floor"}});
+  j["meshes"].push_back(farBox());
   std::ofstream(t.file("far.json")) << j.dump(1);
   const float lit = 0.5f / kPi * E * std::sqrt(0.5f);  // direct: (rho / pi) E cos 45
   MethodFrame f[2];
@@ -155,26 +143,14 @@ void renderFewSurfels(const std::string& variant) {
   SCOPED_TRACE(variant);
   test::TempDir t;
   json j = floorSceneJson(t, 64);
-  j["meshes"].push_back(
-      json{{"path", "box.obj"},
-           {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-           {"material", "floor"}});
-  j["meshes"].push_back(
-      json{{"path", "box.obj"},
-           {"transform", {{"translate", {-3.2, -9.0, 0.0}}, {"scale", {0.2, 18.0, 2.0}}}},
-           {"material", "floor"}});
-  for (auto& m : j["meshes"]) m["surfels"] = {{"count", 5000}};
-  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
   const float E = 2.0f;
-  j["lights"] = json::array(
-      {json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  addPlateUnderSun(j, E, true);
+  for (auto& m : j["meshes"]) m["surfels"] = {{"count", 5000}};
   json p = {{"shadow_map_size", 256}, {"micro_buffer", 8}, {"variant", variant}};
   j["gi"] = {{"method", "pbgi"}, {"mode", "albedo"}, {"max_bounces", 2}, {"parameters", p}};
   std::ofstream(t.file("alone.json")) << j.dump(1);
-  const json far = {{"path", "box.obj"},
-                    {"transform", {{"translate", {1.0e6, 0.0, 0.0}}, {"scale", 20.0}}},
-                    {"material", "floor"},
-                    {"surfels", {{"count", 1}}}};
+  json far = farBox();
+  far["surfels"] = {{"count", 1}};
   j["meshes"].push_back(far);
   std::ofstream(t.file("far.json")) << j.dump(1);
   const float lit = 0.5f / kPi * E * std::sqrt(0.5f);  // direct: (rho / pi) E cos 45

@@ -32,6 +32,33 @@ inline nlohmann::json floorSceneJson(const test::TempDir& t, int size) {
             {"height", size}}}};
 }
 
+// The far-mesh shadow tests' scene on the floor: a 1 x 1 x 0.2 m plate 1 m up (its umbra spans
+// x in [-1.7, -0.5], |y| < 0.5), optionally a sunlit wall facing it at x = -3 (the floor's
+// indirect light), all of lambert material "floor" (albedo 0.5), under a sun of irradiance `E`
+// along (-1, 0, -1).
+inline void addPlateUnderSun(nlohmann::json& j, float E, bool wall) {
+  using json = nlohmann::json;
+  j["meshes"].push_back(
+      json{{"path", "box.obj"},
+           {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+           {"material", "floor"}});
+  if (wall)
+    j["meshes"].push_back(
+        json{{"path", "box.obj"},
+             {"transform", {{"translate", {-3.2, -9.0, 0.0}}, {"scale", {0.2, 18.0, 2.0}}}},
+             {"material", "floor"}});
+  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
+  j["lights"] = json::array(
+      {json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+}
+
+// A 20 m box 1000 km from the floor: out of every test camera's view.
+inline nlohmann::json farBox() {
+  return {{"path", "box.obj"},
+          {"transform", {{"translate", {1.0e6, 0.0, 0.0}}, {"scale", 20.0}}},
+          {"material", "floor"}};
+}
+
 // Where the ray through pixel (x + 0.5, y + 0.5) meets the plane z = 0 (the reference's camera),
 // when that is on the floor within `half` of its centre.
 inline bool floorPoint(const Scene& s, int x, int y, glm::vec3* p, float half = 9.5f) {

@@ -626,19 +626,11 @@ TEST(Raster, AFarMeshDoesNotClipTheScan) {
 TEST(Raster, AFarMeshLeavesDirectionalShadowsAsTheyWere) {
   test::TempDir t;
   json j = floorSceneJson(t, 64);
-  j["meshes"].push_back(
-      json{{"path", "box.obj"},
-           {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-           {"material", "floor"}});
-  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
   const float E = 2.0f;
-  j["lights"] = json::array(
-      {json{{"type", "directional"}, {"direction", {-1.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  addPlateUnderSun(j, E, false);
   j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 512}}}};
   std::ofstream(t.file("near.json")) << j.dump(1);
-  j["meshes"].push_back(json{{"path", "box.obj"},
-                             {"transform", {{"translate", {1.0e6, 0.0, 0.0}}, {"scale", 20.0}}},
-                             {"material", "floor"}});
+  j["meshes"].push_back(farBox());
   std::ofstream(t.file("far.json")) << j.dump(1);
   const float lit = 0.5f / kPi * E * std::sqrt(0.5f);  // (rho / pi) E cos 45
   MethodFrame f[2];
