@@ -1,6 +1,6 @@
 // The builder's counting and distribution passes: points counted on a coarse grid, cells merged
 // into chunks under the memory budget, points written to their chunk's file (Schütz, Ohrhallinger,
-// Wimmer, "Fast Out-of-Core Octree Generation for Massive Point Clouds", 2020, sections 4.1-4.2).
+// Wimmer, "Fast Out-of-Core Octree Generation for Massive Point Clouds", 2020).
 #include "builder_passes.h"
 
 namespace nestlight::build_passes {

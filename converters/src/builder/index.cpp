@@ -1,6 +1,6 @@
 // The builder's indexing of one chunk: its points sorted in Morton order, duplicates merged, the
 // nested octree of its subtree built bottom-up (Schütz, Ohrhallinger, Wimmer, "Fast Out-of-Core
-// Octree Generation for Massive Point Clouds", 2020, section 4.3; the nested octree of Wimmer and
+// Octree Generation for Massive Point Clouds", 2020; the nested octree of Wimmer and
 // Scheiblauer, "Instant Points", 2006).
 #include "builder_passes.h"
 

@@ -1,6 +1,6 @@
 // The builder's subsampling of an inner node: Poisson-disk sampling on a grid of cells of the
 // sample radius, or grid sampling, after Schütz, Ohrhallinger, Wimmer, "Fast Out-of-Core Octree
-// Generation for Massive Point Clouds", 2020, section 4.3.
+// Generation for Massive Point Clouds", 2020.
 #include "builder_passes.h"
 
 namespace nestlight::build_passes {
