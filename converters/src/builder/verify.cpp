@@ -15,6 +15,48 @@ namespace nestlight {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// One colour layer: it opens, covers every node, and holds one finite, non-negative colour per
+// point.
+template <class Fail>
+void verifyLayer(const fs::path& dir, const Metadata& m, const LayerRecord& l,
+                 const std::vector<std::pair<NodeKey, HierarchyEntry>>& nodes, uint64_t sum,
+                 Fail& fail, VerifyReport& rep) {
+  std::unique_ptr<ColourLayerReader> layer;
+  try {
+    layer = std::make_unique<ColourLayerReader>(dir, m, l.name);
+  } catch (const std::exception& ex) {
+    fail("layer '" + l.name + "': " + ex.what());
+    return;
+  }
+  rep.layers++;
+  if (layer->entries().size() != nodes.size())
+    fail("layer '" + l.name + "' has " + std::to_string(layer->entries().size()) +
+         " nodes, the octree " + std::to_string(nodes.size()));
+  uint64_t layerPoints = 0;
+  for (const auto& e : layer->entries()) layerPoints += e.points;
+  if (layerPoints != l.points || layerPoints != sum)
+    fail("layer '" + l.name + "' holds " + std::to_string(layerPoints) + " colours (metadata: " +
+         std::to_string(l.points) + ") for " + std::to_string(sum) + " points");
+  tbb::parallel_for(size_t(0), nodes.size(), [&](size_t i) {
+    const auto& [k, e] = nodes[i];
+    try {
+      const std::vector<float> rgb = layer->readNode(k, e.numPoints);
+      for (size_t v = 0; v < rgb.size(); ++v)
+        if (!(rgb[v] >= 0) || !std::isfinite(rgb[v])) {
+          fail("layer '" + l.name + "', node " + k.name() + ": point " + std::to_string(v / 3) +
+               " has a negative or non-finite colour");
+          return;
+        }
+    } catch (const std::exception& ex) {
+      fail("layer '" + l.name + "': " + ex.what());
+    }
+  });
+}
+
+}  // namespace
+
 VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
   VerifyReport rep;
   std::mutex mutex;
@@ -112,38 +154,7 @@ VerifyReport verifyOctree(const fs::path& dir, unsigned maxFailures) {
     fail("accounting does not balance: input " + std::to_string(a.input) + " != kept " +
          std::to_string(a.kept) + " + merged " + std::to_string(a.duplicatesMerged) +
          " + rejected " + std::to_string(a.rejectedTotal()));
-  for (const LayerRecord& l : m.layers) {
-    std::unique_ptr<ColourLayerReader> layer;
-    try {
-      layer = std::make_unique<ColourLayerReader>(dir, m, l.name);
-    } catch (const std::exception& ex) {
-      fail("layer '" + l.name + "': " + ex.what());
-      continue;
-    }
-    rep.layers++;
-    if (layer->entries().size() != nodes.size())
-      fail("layer '" + l.name + "' has " + std::to_string(layer->entries().size()) +
-           " nodes, the octree " + std::to_string(nodes.size()));
-    uint64_t layerPoints = 0;
-    for (const auto& e : layer->entries()) layerPoints += e.points;
-    if (layerPoints != l.points || layerPoints != sum)
-      fail("layer '" + l.name + "' holds " + std::to_string(layerPoints) + " colours (metadata: " +
-           std::to_string(l.points) + ") for " + std::to_string(sum) + " points");
-    tbb::parallel_for(size_t(0), nodes.size(), [&](size_t i) {
-      const auto& [k, e] = nodes[i];
-      try {
-        const std::vector<float> rgb = layer->readNode(k, e.numPoints);
-        for (size_t v = 0; v < rgb.size(); ++v)
-          if (!(rgb[v] >= 0) || !std::isfinite(rgb[v])) {
-            fail("layer '" + l.name + "', node " + k.name() + ": point " + std::to_string(v / 3) +
-                 " has a negative or non-finite colour");
-            return;
-          }
-      } catch (const std::exception& ex) {
-        fail("layer '" + l.name + "': " + ex.what());
-      }
-    });
-  }
+  for (const LayerRecord& l : m.layers) verifyLayer(dir, m, l, nodes, sum, fail, rep);
   for (const auto& n : orphanLayerFiles(dir, m))
     rep.notes.push_back(n +
                         ": a layer file metadata.json does not name (left by an interrupted run; "
