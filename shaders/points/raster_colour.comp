@@ -1,4 +1,12 @@
+// Pass 2 of the compute rasteriser (raster_common.glsl): the points within 1% of the nearest
+// depth add their colour; one of them leaves its normal (and, NL_SCENE_FRAME, its splat radius:
+// the finest drawn node's spacing, for shadow offsets); plain stores race benignly, any of the
+// nearest points will do.
 #include "raster_common.glsl"
+#if NL_SCENE_FRAME
+#include "splat_size.glsl"
+uniform float uSizeScale;
+#endif
 
 void main() {
   uint i = gl_GlobalInvocationID.x;
@@ -12,6 +20,8 @@ void main() {
   atomicAdd(acc.accum[4u * pixel + 1u], c8.g);
   atomicAdd(acc.accum[4u * pixel + 2u], c8.b);
   atomicAdd(acc.accum[4u * pixel + 3u], 1u);
-  // Any of the nearest points' normals will do; a plain store races benignly.
   nb.normal[pixel] = pointNormalWord(i);
+#if NL_SCENE_FRAME
+  sr.radius[pixel] = 0.5 * finestSpacing(pointLocal(i)) * uSizeScale;
+#endif
 }

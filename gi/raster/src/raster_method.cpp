@@ -20,6 +20,7 @@
 #include "nestlight/frame/gl_node_store.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/frame/passes.h"
+#include "nestlight/frame/point_splatting.h"
 #include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/environment_source.h"
 #include "nestlight/gi/mesh.h"
@@ -727,7 +728,7 @@ class RasterMethod : public Method, public RasterFrame {
     materialsBuffer_ = gl::Buffer(recs.size() * sizeof(frame::MaterialRecord), recs.data(), 0);
   }
 
-  // Draws every scan's drawn nodes with `program` (shaders/gi/raster/scan.vert).
+  // Draws every scan's drawn nodes with `program` (shaders/points/points.vert, NL_SCENE_FRAME 1).
   void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
                  const glm::mat4& viewFromWorld, float pixelsPerUnit, bool orthographic,
                  bool lightsCut = false) override {
@@ -832,7 +833,8 @@ class RasterMethod : public Method, public RasterFrame {
   static constexpr float kMaxSplatPixels = 64.0f;
   static constexpr int kGuardPixels = int(kMaxSplatPixels / 2) + 1;
 
-  // High-quality splatting's three passes for every scan, into the tile's G-buffer.
+  // High-quality splatting's three passes (frame::PointSplatting) for every scan, into the tile's
+  // G-buffer.
   void hqsScans(const frame::PassContext& ctx) {
     const frame::Tile& tile = ctx.tile();
     const auto& u = ctx.uniforms();
@@ -847,65 +849,35 @@ class RasterMethod : public Method, public RasterFrame {
     hqsSumFbo_.attach(GL_COLOR_ATTACHMENT2, ctx.target("scan_sum_radius"));
     hqsSumFbo_.attach(GL_DEPTH_ATTACHMENT, ctx.target("scan_depth"));
     hqsSumFbo_.finish(3, "HQS sums");
+    bindGBuffer(ctx);
     glEnable(GL_PROGRAM_POINT_SIZE);
     glEnable(GL_DEPTH_TEST);
-    // Pass 1: depth pushed back by epsilon splat radii.
-    glBindFramebuffer(GL_FRAMEBUFFER, hqsDepthFbo_.id());
     const glm::mat4 guarded = guardBand(ctx);
-    glDepthFunc(GL_LESS);
-    hqsDepth_.use();
-    glUniform1f(hqsDepth_.uniform("uDepthEpsilon"), params_.hqsDepthEpsilon);
-    drawScans(hqsDepth_, guarded, u.viewFromWorld, u.eye.w, false);
-    // Pass 2: weighted sums of what lies in front of it.
-    glBindFramebuffer(GL_FRAMEBUFFER, hqsSumFbo_.id());
-    const float zero[4] = {0, 0, 0, 0};
-    for (int k = 0; k < 3; ++k) glClearBufferfv(GL_COLOR, k, zero);
-    glDepthFunc(GL_LEQUAL);
-    glDepthMask(GL_FALSE);
-    glEnable(GL_BLEND);
-    glBlendFunc(GL_ONE, GL_ONE);
-    drawScans(hqsAccum_, guarded, u.viewFromWorld, u.eye.w, false);
-    glDisable(GL_BLEND);
-    glDepthMask(GL_TRUE);
-    // Pass 3: the means into the G-buffer, behind whatever mesh is nearer.
-    bindGBuffer(ctx);
-    glDepthFunc(GL_LESS);
-    hqsResolve_.use();
-    glUniformMatrix4fv(hqsResolve_.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
-    ctx.bindTexture("scan_sum_colour", 0);
-    ctx.bindTexture("scan_sum_normal", 1);
-    ctx.bindTexture("scan_sum_radius", 2);
-    glBindVertexArray(emptyVao_.id());
-    glDrawArrays(GL_TRIANGLES, 0, 3);
+    frame::PointSplatting::HqsTargets t;
+    t.depthFbo = hqsDepthFbo_.id();
+    t.sumFbo = hqsSumFbo_.id();
+    t.sums = 3;
+    t.sumTextures = {ctx.target("scan_sum_colour").id(), ctx.target("scan_sum_normal").id(),
+                     ctx.target("scan_sum_radius").id()};
+    t.gbufferFbo = gbufferFbo_.id();
+    t.resolveDepthFunc = GL_LESS;  // behind whatever mesh is nearer
+    t.width = tile.width, t.height = tile.height;
+    splatting_->hqs(t, params_.hqsDepthEpsilon, u.clipFromView,
+                    [&](const gl::ShaderProgram& program, bool) {
+                      drawScans(program, guarded, u.viewFromWorld, u.eye.w, false);
+                    });
   }
 
-  // The compute rasteriser's three passes for every scan, into the tile's G-buffer.
+  // The compute rasteriser's three passes (frame::PointSplatting) for every scan, into the tile's
+  // G-buffer.
   void computeScans(const frame::PassContext& ctx) {
     const frame::Tile& tile = ctx.tile();
     const size_t pixels = size_t(tile.width) * tile.height;
     if (pixels * 16 > gl::kMaxSsboRange)
       throw Error("raster: a " + std::to_string(tile.width) + "x" + std::to_string(tile.height) +
                   " tile is too large for the compute rasteriser's per-pixel buffers (128 MiB)");
-    if (scanDepth_.reserve(pixels * 4)) {
-      scanAccum_ = gl::Buffer(scanDepth_.bytes() * 4);
-      scanNormal_ = gl::Buffer(scanDepth_.bytes());
-      scanRadius_ = gl::Buffer(scanDepth_.bytes());
-    }
-    const uint32_t far = 0xffffffffu, zero = 0;
-    glClearNamedBufferSubData(scanDepth_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
-                              GL_UNSIGNED_INT, &far);
-    glClearNamedBufferSubData(scanAccum_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 16), GL_RED_INTEGER,
-                              GL_UNSIGNED_INT, &zero);
-    glClearNamedBufferSubData(scanNormal_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
-                              GL_UNSIGNED_INT, &zero);
-    glClearNamedBufferSubData(scanRadius_.id(), GL_R32UI, 0, GLsizeiptr(pixels * 4), GL_RED_INTEGER,
-                              GL_UNSIGNED_INT, &zero);
-    scanDepth_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_DEPTH, 0, pixels * 4);
-    scanAccum_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_ACCUM, 0, pixels * 16);
-    scanNormal_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_NORMAL, 0, pixels * 4);
-    scanRadius_.bindRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SCAN_RADIUS, 0, pixels * 4);
     const auto& u = ctx.uniforms();
-    auto dispatch = [&](const gl::ShaderProgram& prog) {
+    auto dispatch = [&](const gl::ShaderProgram& prog, bool) {
       prog.use();
       glUniformMatrix4fv(prog.uniform("uClipFromWorld"), 1, GL_FALSE, &u.clipFromWorld[0][0]);
       glUniformMatrix4fv(prog.uniform("uViewFromWorld"), 1, GL_FALSE, &u.viewFromWorld[0][0]);
@@ -914,53 +886,34 @@ class RasterMethod : public Method, public RasterFrame {
       forEachNode(prog, [](const streaming::DrawNode& n) {
         glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
       });
-      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     };
-    dispatch(computeDepth_);
-    dispatch(computeColour_);
+    auto resolveUniforms = [&](const gl::ShaderProgram& r) {
+      glUniform2i(r.uniform("uViewport"), tile.width, tile.height);
+      glUniformMatrix4fv(r.uniform("uClipFromView"), 1, GL_FALSE, &u.clipFromView[0][0]);
+      glUniform1f(r.uniform("uColourScale"), scans_.empty() ? 1.0f : scans_.front().colourScale);
+      glUniform1i(r.uniform("uHdrColour"), !scans_.empty() && scans_.front().store->hdrColour());
+    };
     bindGBuffer(ctx);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    computeResolve_.use();
-    glUniform2i(computeResolve_.uniform("uViewport"), tile.width, tile.height);
-    glUniformMatrix4fv(computeResolve_.uniform("uClipFromView"), 1, GL_FALSE,
-                       &u.clipFromView[0][0]);
-    glUniform1f(computeResolve_.uniform("uColourScale"),
-                scans_.empty() ? 1.0f : scans_.front().colourScale);
-    glUniform1i(computeResolve_.uniform("uHdrColour"),
-                !scans_.empty() && scans_.front().store->hdrColour());
-    glBindVertexArray(emptyVao_.id());
-    glDrawArrays(GL_TRIANGLES, 0, 3);
+    splatting_->compute(tile.width, tile.height, false, gbufferFbo_.id(), GL_LESS, dispatch,
+                        resolveUniforms);
   }
 
   void buildGraph() {
     using gl::ShaderProgram;
     meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
                                   {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
-    scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
-                                  {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
     meshShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
                                  {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
-    scanShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
-                                 {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}});
+    scanShadow_ = ShaderProgram({{GL_VERTEX_SHADER, "points/points.vert"},
+                                 {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}},
+                                {{"NL_SCENE_FRAME", "1"}});
     directLight_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
                                   {GL_FRAGMENT_SHADER, "gi/raster/direct_light.frag"}});
-    hqsDepth_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
-                               {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_depth.frag"}});
-    hqsAccum_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
-                               {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_accum.frag"}});
-    hqsResolve_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
-                                 {GL_FRAGMENT_SHADER, "gi/raster/scan_hqs_resolve.frag"}});
+    splatting_ = std::make_unique<frame::PointSplatting>(frame::SplatFrame::Scene,
+                                                         params_.computeRasteriser);
     hqsDepthFbo_ = gl::Framebuffer::create();
     hqsSumFbo_ = gl::Framebuffer::create();
     gbufferFbo_ = gl::Framebuffer::create();
-    if (params_.computeRasteriser) {
-      computeDepth_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_depth.comp"}});
-      computeColour_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/raster/scan_compute_colour.comp"}});
-      computeResolve_ =
-          ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
-                         {GL_FRAGMENT_SHADER, "gi/raster/scan_compute_resolve.frag"}});
-    }
     emptyVao_ = gl::VertexArray::create();
     shadowFbo_ = gl::Framebuffer::create();
 
@@ -1034,23 +987,23 @@ class RasterMethod : public Method, public RasterFrame {
                      frame::clearGBuffer();
                      drawMeshes(meshGBuffer_, ctx.uniforms().clipFromWorld, true);
                    });
-    graph_.addPass("gbuffer_scans", frame::Scope::Tile, scanWrites,
-                   [this](const frame::PassContext& ctx) {
-                     const auto& u = ctx.uniforms();
-                     if (params_.computeRasteriser) {
-                       computeScans(ctx);
-                       return;
-                     }
-                     if (params_.hqs) {
-                       hqsScans(ctx);
-                       return;
-                     }
-                     bindGBuffer(ctx);
-                     glEnable(GL_DEPTH_TEST);
-                     glEnable(GL_PROGRAM_POINT_SIZE);
-                     drawScans(scanGBuffer_, guardBand(ctx), u.viewFromWorld, u.eye.w, false);
-                     glViewport(0, 0, ctx.tile().width, ctx.tile().height);
-                   });
+    graph_.addPass(
+        "gbuffer_scans", frame::Scope::Tile, scanWrites, [this](const frame::PassContext& ctx) {
+          const auto& u = ctx.uniforms();
+          if (params_.computeRasteriser) {
+            computeScans(ctx);
+            return;
+          }
+          if (params_.hqs) {
+            hqsScans(ctx);
+            return;
+          }
+          bindGBuffer(ctx);
+          glEnable(GL_DEPTH_TEST);
+          glEnable(GL_PROGRAM_POINT_SIZE);
+          drawScans(splatting_->basic(), guardBand(ctx), u.viewFromWorld, u.eye.w, false);
+          glViewport(0, 0, ctx.tile().width, ctx.tile().height);
+        });
     graph_.addPass(
         "direct_light", frame::Scope::Tile,
         [](frame::PassBuilder& b) {
@@ -1121,11 +1074,9 @@ class RasterMethod : public Method, public RasterFrame {
   uint64_t envGeneration_ = 0;
   float envRotation_ = 0, envScale_ = 1;
   std::array<glm::vec3, 9> sh_{};
-  gl::ShaderProgram meshGBuffer_, scanGBuffer_, meshShadow_, scanShadow_, directLight_;
-  gl::ShaderProgram computeDepth_, computeColour_, computeResolve_;  // rasteriser "compute"
-  gl::ShaderProgram hqsDepth_, hqsAccum_, hqsResolve_;               // splatting "hqs"
+  gl::ShaderProgram meshGBuffer_, meshShadow_, scanShadow_, directLight_;
+  std::unique_ptr<frame::PointSplatting> splatting_;  // the scans' G-buffer passes
   gl::Framebuffer hqsDepthFbo_, hqsSumFbo_, gbufferFbo_;
-  gl::Buffer scanDepth_, scanAccum_, scanNormal_, scanRadius_;  // its per-pixel buffers
   gl::VertexArray emptyVao_;
   gl::Framebuffer shadowFbo_;
   frame::FrameGraph graph_;

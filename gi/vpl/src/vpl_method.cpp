@@ -322,8 +322,9 @@ class VplExtension : public RasterExtension {
       emitImportance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit_importance.comp"}});
       emit_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_emit.comp"}});
     } else {
-      scanGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/scan.vert"},
-                                    {GL_FRAGMENT_SHADER, "gi/raster/scan_gbuffer.frag"}});
+      scanGBuffer_ = ShaderProgram(
+          {{GL_VERTEX_SHADER, "points/points.vert"}, {GL_FRAGMENT_SHADER, "points/points.frag"}},
+          {{"NL_SCENE_FRAME", "1"}});
       meshGBuffer_ = ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
                                     {GL_FRAGMENT_SHADER, "gi/raster/mesh_gbuffer.frag"}});
       importance_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/vpl_importance.comp"}});

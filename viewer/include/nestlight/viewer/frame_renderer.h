@@ -16,6 +16,7 @@
 #include "nestlight/frame/draw_tree.h"
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
+#include "nestlight/frame/point_splatting.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/streaming/streamer.h"
 #include "nestlight/viewer/camera.h"
@@ -89,27 +90,27 @@ class FrameRenderer {
   // A framebuffer with the output texture attached (the window blits from it).
   GLuint outputFramebuffer();
   // "one-pass 64-bit" where GL_NV_shader_atomic_int64 compiled, else "two-pass 32-bit".
-  const char* computeVariant() const { return atomic64_ ? "one-pass 64-bit" : "two-pass 32-bit"; }
+  const char* computeVariant() const {
+    return splatting_.hasAtomic64() ? "one-pass 64-bit" : "two-pass 32-bit";
+  }
 
  private:
+  struct TileView;
   // The "points" pass: every node of nodes_ into the tile's G-buffer with settings_.
   void rasterise(const frame::PassContext& ctx);
-  void ensureSsbos(size_t pixels);
+  void splatPoints(const frame::PassContext& ctx, const TileView& view);
+  void computePoints(const TileView& view);
+  glm::vec3 nodeOffset(const streaming::DrawNode& n) const;
   void begin(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
              const Camera& camera, const RenderSettings& settings, DrawTimings* timings);
 
-  gl::ShaderProgram points_, hqsDepth_, hqsAccum_, hqsResolve_, depthPass_, colourPass_, resolve_,
-      edl_;
-  std::unique_ptr<gl::ShaderProgram> atomic64_, resolve64_;  // only with 64-bit atomics
+  frame::PointSplatting splatting_;  // the splatting passes, shared with the GI frame
+  gl::ShaderProgram edl_;
   frame::FrameGraph graph_;
   gl::VertexArray vao_;
   gl::Framebuffer gbufferFbo_, hqsFbo_,
       outputFbo_;             // attachments set from the graph's targets per run
   frame::DrawTree drawTree_;  // the vertex shader's finest-node lookup (splat_size.glsl)
-  gl::Buffer depthSsbo_, accumSsbo_, normalSsbo_;  // compute path, 32-bit: per pixel of a tile
-  gl::Buffer packedSsbo_,
-      packedNormalSsbo_;  // compute path, 64-bit: min(depth << 32 | colour, normal)
-  size_t ssboPixels_ = 0;
   // What the passes draw this frame (set by render()/renderToTexture() before the graph runs).
   const std::vector<streaming::DrawNode>* nodes_ = nullptr;
   const frame::GlNodeStore* store_ = nullptr;

@@ -80,8 +80,8 @@ class RasterFrame {
   // Whether direct light adds the sky's unshadowed irradiance to diffuse lobes (the default); an
   // extension that gathers the sky itself, occluded by the scene, turns it off in setUp.
   virtual void setSkyOnDiffuseLobes(bool on) = 0;
-  // Draws the scans' splats (shaders/gi/raster/scan.vert with `program`'s fragment stage): the
-  // camera's cut or the lights' cut.
+  // Draws the scans' splats (shaders/points/points.vert, compiled with NL_SCENE_FRAME 1, with
+  // `program`'s fragment stage): the camera's cut or the lights' cut.
   virtual void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
                          const glm::mat4& viewFromWorld, float pixelsPerUnit, bool orthographic,
                          bool lightsCut) = 0;
