@@ -1,6 +1,8 @@
 // `nestlight render`: headless images of an octree (EGL; llvmpipe on machines without a GPU).
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -187,6 +189,47 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   if (job.settings.rasteriser == viewer::Rasteriser::Compute) job.settings.fixedPointSize = 1;
 }
 
+namespace {
+
+// The flags the methods declare (gi::ParameterSpec::flag, e.g. pbgi's --variant, ibl's
+// --estimator): --<name> sets gi.parameters.<name>; methods declaring one name share its flag.
+void addParameterFlags(CLI::App* cmd, std::map<std::string, std::string>& values,
+                       const std::string& group) {
+  std::vector<std::pair<const gi::ParameterSpec*, std::string>> flags;  // with their methods
+  for (const auto& m : gi::registeredMethods())
+    for (const auto& p : m.parameters) {
+      if (!p.flag) continue;
+      auto same = std::find_if(flags.begin(), flags.end(),
+                               [&](const auto& f) { return f.first->name == p.name; });
+      if (same == flags.end())
+        flags.push_back({&p, "method " + m.name});
+      else
+        same->second = "methods " + same->second.substr(7) + ", " + m.name;
+    }
+  for (const auto& [spec, methods] : flags) {
+    std::string dashed = spec->name;
+    std::replace(dashed.begin(), dashed.end(), '_', '-');
+    auto* o = cmd->add_option(
+        "--" + dashed, values[spec->name],
+        "Scenes, " + methods + ": " + spec->help + " (gi.parameters." + spec->name + ")");
+    if (spec->type == gi::ParameterType::Choice) o->check(CLI::IsMember(spec->choices));
+    o->group(group);
+  }
+}
+
+// --param KEY=VALUE: VALUE is JSON (4, 0.5, true) or, failing that, a string (classic).
+void setParameterFromText(const std::string& text, gi::SceneRenderOverrides& sc) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw Error("--param: expected KEY=VALUE, got '" + text + "'");
+  const std::string value = text.substr(eq + 1);
+  nlohmann::json j = nlohmann::json::parse(value, nullptr, false);
+  if (j.is_discarded()) j = value;
+  sc.parameters[text.substr(0, eq)] = j;
+}
+
+}  // namespace
+
 void addRender(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
       "render",
@@ -239,17 +282,12 @@ void addRender(CLI::App& app, int& exitCode) {
                   "reflect with their colour as albedo)")
       ->check(CLI::IsMember({"radiance_cache", "albedo"}))
       ->group(group);
-  auto variant = std::make_shared<std::string>();
-  cmd->add_option("--variant", *variant,
-                  "Scenes, method pbgi: its traversal, x (X-PBGI, default), mip (MIP-PBGI) or "
-                  "classic (gi.parameters.variant)")
-      ->check(CLI::IsMember({"classic", "mip", "x"}))
-      ->group(group);
-  auto estimator = std::make_shared<std::string>();
-  cmd->add_option("--estimator", *estimator,
-                  "Scenes, method ibl: mis (default), bis, smc, or the baselines env "
-                  "(environment sampling alone) and brdf (gi.parameters.estimator; docs/IBL.md)")
-      ->check(CLI::IsMember({"mis", "bis", "smc", "env", "brdf"}))
+  auto parameterFlags = std::make_shared<std::map<std::string, std::string>>();
+  addParameterFlags(cmd, *parameterFlags, group);
+  auto parameterText = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--param", *parameterText,
+                  "Scenes: KEY=VALUE sets gi.parameters.KEY (VALUE as JSON, else a string); the "
+                  "method checks it as it checks the scene file's (docs/SCENE.md lists them)")
       ->group(group);
   cmd->add_option("--spp", sc->spp, "Scenes: samples per pixel at most")
       ->check(CLI::Range(1, 1 << 24))
@@ -282,8 +320,9 @@ void addRender(CLI::App& app, int& exitCode) {
       }
       if (!mode->empty())
         sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
-      if (!variant->empty()) sc->parameters["variant"] = *variant;
-      if (!estimator->empty()) sc->parameters["estimator"] = *estimator;
+      for (const auto& t : *parameterText) setParameterFromText(t, *sc);
+      for (const auto& [name, value] : *parameterFlags)
+        if (!value.empty()) sc->parameters[name] = value;
       applySceneScanOptions(*cmd, *octree, *job, *text, *sc);
       makeOutputFolder(job->output);
       sc->output = job->output;

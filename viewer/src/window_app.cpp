@@ -162,7 +162,17 @@ void pointsPanel(RenderSettings& settings, ScanColours& colours, OctreeReader& r
 void methodPanel(const gi::Method& method, float& exposure, const gi::MethodFrame& stats) {
   ImGui::SliderFloat("exposure (EV)", &exposure, -10.f, 10.f);
   if (ImGui::TreeNode("parameters")) {
-    for (const auto& [k, v] : method.parameters()) ImGui::Text("%s = %s", k.c_str(), v.c_str());
+    // The values as the method resolved them; a declared parameter's help is its tooltip.
+    const gi::MethodInfo* info = gi::findMethod(method.name());
+    for (const auto& [k, v] : method.parameters()) {
+      ImGui::Text("%s = %s", k.c_str(), v.c_str());
+      if (!info || !ImGui::IsItemHovered()) continue;
+      for (const auto& p : info->parameters)
+        if (p.name == k)
+          ImGui::SetTooltip(
+              "%s\n%s, default %s", p.help.c_str(), gi::describeParameterType(p).c_str(),
+              p.defaultValue.is_null() ? "the method's" : p.defaultValue.dump().c_str());
+    }
     ImGui::TreePop();
   }
   double total = 0;

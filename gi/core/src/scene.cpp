@@ -10,7 +10,6 @@
 #include <sstream>
 
 #include "nestlight/gi/environment_sequence.h"
-#include "nestlight/gi/method.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/json_field.h"
 #include "nestlight/octree/octree_reader.h"
@@ -325,7 +324,9 @@ GiSettings parseGi(Field g) {
   GiSettings gi;
   g.expectObject({"method", "mode", "max_bounces", "samples_per_pixel", "target_relative_error",
                   "time_limit", "seed", "parameters"});
-  if (g.has("method")) gi.method = g.at("method").choice(methodNames());
+  // Which names are methods is the registry's to say (gi/methods' checkSceneMethod): the scene
+  // file's name is checked there, before any override replaces it.
+  if (g.has("method")) gi.method = g.at("method").string();
   if (g.has("mode"))
     gi.mode = g.at("mode").choice({"radiance_cache", "albedo"}) == "albedo"
                   ? RadianceMode::Albedo

@@ -29,8 +29,6 @@ namespace nestlight::gi {
 
 namespace {
 
-constexpr int kSmcMax = 32, kBisMax = 64;
-
 int estimatorCode(IblParameters::Estimator e) {
   switch (e) {
     case IblParameters::Estimator::Mis:
@@ -163,7 +161,9 @@ class IblExtension : public RasterExtension {
   // The environment's visibility is traced, not read from shadow maps: the scene's lights are
   // raster's direct light, read at the camera's pixels only.
   bool shadowsForTheCameraOnly() const override { return true; }
-  std::vector<std::string> parameterKeys() const override { return iblParameterKeys(); }
+  std::vector<std::string> parameterKeys() const override {
+    return parameterNames(iblParameterSpecs());
+  }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
     return {{"estimator", estimatorName(params_.estimator)},
@@ -534,51 +534,6 @@ const char* estimatorName(IblParameters::Estimator e) {
       return "brdf";
   }
   return "?";
-}
-
-const std::vector<std::string>& iblParameterKeys() {
-  static const std::vector<std::string> keys = {
-      "estimator",         "brdf_samples",      "env_samples",      "bis_proposals",
-      "bis_samples",       "smc_particles",     "smc_intermediate", "smc_local_probability",
-      "smc_local_degrees", "smc_reinit_ratio",  "visibility",       "smc_statistics",
-      "smc_band_rows",     "smc_reinit_on_drop"};
-  return keys;
-}
-
-IblParameters iblParameters(const Scene& scene) {
-  IblParameters p;
-  if (scene.gi.parameters.is_null()) return p;
-  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
-  if (f.has("estimator")) {
-    const std::string e = f.at("estimator").choice({"mis", "bis", "smc", "env", "brdf"});
-    p.estimator = e == "mis"   ? IblParameters::Estimator::Mis
-                  : e == "bis" ? IblParameters::Estimator::Bis
-                  : e == "smc" ? IblParameters::Estimator::Smc
-                  : e == "env" ? IblParameters::Estimator::Environment
-                               : IblParameters::Estimator::Brdf;
-  }
-  if (f.has("brdf_samples")) p.brdfSamples = int(f.at("brdf_samples").integer(0, 4096));
-  if (f.has("env_samples")) p.envSamples = int(f.at("env_samples").integer(0, 4096));
-  if (f.has("bis_proposals")) p.bisProposals = int(f.at("bis_proposals").integer(1, 65536));
-  if (f.has("bis_samples")) p.bisSamples = int(f.at("bis_samples").integer(1, kBisMax));
-  if (f.has("smc_particles")) p.smcParticles = int(f.at("smc_particles").integer(1, kSmcMax));
-  if (f.has("smc_intermediate")) p.smcIntermediate = int(f.at("smc_intermediate").integer(1, 16));
-  if (f.has("smc_local_probability"))
-    p.smcLocalProbability = float(f.at("smc_local_probability").number(0, 1));
-  if (f.has("smc_local_degrees"))
-    p.smcLocalDegrees = float(f.at("smc_local_degrees").number(0.01, 90));
-  if (f.has("smc_reinit_ratio")) p.smcReinitRatio = float(f.at("smc_reinit_ratio").number(1, 1e30));
-  if (f.has("visibility")) p.visibility = f.at("visibility").boolean();
-  if (f.has("smc_statistics")) p.smcStatistics = f.at("smc_statistics").boolean();
-  if (f.has("smc_reinit_on_drop")) p.smcReinitOnDrop = f.at("smc_reinit_on_drop").boolean();
-  if (f.has("smc_band_rows")) p.smcBandRows = int(f.at("smc_band_rows").integer(0, 1 << 16));
-  if (p.estimator == IblParameters::Estimator::Mis && p.brdfSamples + p.envSamples == 0)
-    f.fail("MIS needs at least one sample: brdf_samples + env_samples > 0");
-  if (p.estimator == IblParameters::Estimator::Environment && p.envSamples == 0)
-    f.fail("estimator \"env\" samples the environment alone: env_samples must be positive");
-  if (p.estimator == IblParameters::Estimator::Brdf && p.brdfSamples == 0)
-    f.fail("estimator \"brdf\" samples the BSDF alone: brdf_samples must be positive");
-  return p;
 }
 
 std::unique_ptr<Method> createIblMethod(const Scene& scene, const MethodContext& ctx) {

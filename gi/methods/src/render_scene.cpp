@@ -16,6 +16,8 @@ namespace fs = std::filesystem;
 SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrides& ov) {
   auto t0 = std::chrono::steady_clock::now();
   Scene scene = loadScene(file);
+  // The file's own method must exist even when --method replaces it, as any field of the file.
+  checkSceneMethod(scene);
   if (ov.width) scene.camera.width = *ov.width;
   if (ov.height) scene.camera.height = *ov.height;
   if (ov.fov) scene.camera.fovYDegrees = *ov.fov;

@@ -36,7 +36,9 @@ class PbgiExtension : public RasterExtension {
   explicit PbgiExtension(const Scene& scene) : params_(pbgiParameters(scene)) {}
 
   std::string name() const override { return "pbgi"; }
-  std::vector<std::string> parameterKeys() const override { return pbgiParameterKeys(); }
+  std::vector<std::string> parameterKeys() const override {
+    return parameterNames(pbgiParameterSpecs());
+  }
 
   std::vector<std::pair<std::string, std::string>> parameters() const override {
     return {{"variant", variantName()},
@@ -680,42 +682,6 @@ class PbgiExtension : public RasterExtension {
 };
 
 }  // namespace
-
-const std::vector<std::string>& pbgiParameterKeys() {
-  static const std::vector<std::string> keys = {
-      "variant",       "micro_buffer",  "conservative",      "empty", "prune", "meshes",
-      "bounce_points", "pair_capacity", "steps_per_dispatch"};
-  return keys;
-}
-
-PbgiParameters pbgiParameters(const Scene& scene) {
-  PbgiParameters p;
-  if (scene.gi.parameters.is_null()) return p;
-  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
-  if (f.has("variant")) {
-    const JsonField v = f.at("variant");
-    const std::string name = v.choice({"classic", "mip", "x"});
-    p.variant = name == "classic" ? PbgiParameters::Variant::Classic
-                : name == "mip"   ? PbgiParameters::Variant::Mip
-                                  : PbgiParameters::Variant::X;
-  }
-  if (f.has("micro_buffer")) p.microBuffer = int(f.at("micro_buffer").integer(4, 64));
-  if (f.has("conservative")) p.conservative = f.at("conservative").boolean();
-  if (f.has("empty")) {
-    const std::string e = f.at("empty").choice({"auto", "average", "environment", "black"});
-    p.empty = e == "auto"          ? PbgiParameters::Empty::Auto
-              : e == "average"     ? PbgiParameters::Empty::Average
-              : e == "environment" ? PbgiParameters::Empty::Environment
-                                   : PbgiParameters::Empty::Black;
-  }
-  if (f.has("prune")) p.prune = f.at("prune").boolean();
-  if (f.has("meshes")) p.meshes = f.at("meshes").boolean();
-  if (f.has("bounce_points")) p.bouncePoints = int(f.at("bounce_points").integer(1, 1 << 24));
-  if (f.has("pair_capacity")) p.pairCapacity = int(f.at("pair_capacity").integer(1, 1 << 23));
-  if (f.has("steps_per_dispatch"))
-    p.stepsPerDispatch = int(f.at("steps_per_dispatch").integer(1, 1 << 24));
-  return p;
-}
 
 std::unique_ptr<Method> createPbgiMethod(const Scene& scene, const MethodContext& ctx) {
   return createRasterMethod(scene, ctx, std::make_unique<PbgiExtension>(scene));

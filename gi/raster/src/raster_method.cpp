@@ -1089,35 +1089,6 @@ class RasterMethod : public Method, public RasterFrame {
 
 }  // namespace
 
-RasterParameters parseRasterParameters(const Scene& scene,
-                                       const std::vector<std::string>& otherKeys) {
-  RasterParameters p;
-  if (scene.gi.parameters.is_null()) return p;
-  // The project's one validator: errors name the scene file and "scene.gi.parameters.<key>".
-  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
-  std::vector<std::string> keys = {"shadow_map_size", "rasteriser",    "splatting",
-                                   "splat_scale",     "point_budget",  "gpu_budget_mb",
-                                   "max_tile",        "stream_timeout"};
-  keys.insert(keys.end(), otherKeys.begin(), otherKeys.end());
-  f.expectObject(keys);
-  if (f.has("shadow_map_size")) p.shadowMapSize = int(f.at("shadow_map_size").integer(16, 16384));
-  if (f.has("rasteriser"))
-    p.computeRasteriser = f.at("rasteriser").choice({"points", "compute"}) == "compute";
-  if (f.has("splatting")) p.hqs = f.at("splatting").choice({"hqs", "basic"}) == "hqs";
-  if (f.has("splat_scale")) p.splatScale = float(f.at("splat_scale").number(0.1, 16));
-  if (f.has("point_budget")) p.pointBudget = uint64_t(f.at("point_budget").number(1, 1e10));
-  if (f.has("gpu_budget_mb")) p.gpuBytes = uint64_t(f.at("gpu_budget_mb").number(1, 1 << 20)) << 20;
-  // Larger tiles would pass GL's viewport limit with the splats' guard band, and a tile's
-  // read-back its 2 GiB limit.
-  if (f.has("max_tile")) p.maxTile = int(f.at("max_tile").integer(16, 8192));
-  if (f.has("stream_timeout")) p.streamTimeoutSeconds = f.at("stream_timeout").number(0.1, 1e6);
-  return p;
-}
-
-RasterParameters rasterParameters(const Scene& scene) {
-  return parseRasterParameters(scene, {});
-}
-
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx) {
   return std::make_unique<RasterMethod>(scene, ctx, nullptr);
 }

@@ -109,7 +109,9 @@ class VplExtension : public RasterExtension {
   explicit VplExtension(const Scene& scene) : params_(vplParameters(scene)) {}
 
   std::string name() const override { return "vpl"; }
-  std::vector<std::string> parameterKeys() const override { return vplParameterKeys(); }
+  std::vector<std::string> parameterKeys() const override {
+    return parameterNames(vplParameterSpecs());
+  }
 
   bool usesIsms() const { return params_.visibility != VplParameters::Visibility::None; }
   bool exact() const { return params_.visibility == VplParameters::Visibility::Exact; }
@@ -931,51 +933,6 @@ class VplExtension : public RasterExtension {
 };
 
 }  // namespace
-
-const std::vector<std::string>& vplParameterKeys() {
-  static const std::vector<std::string> keys = {
-      "vpls",       "target_ms", "light_resolution", "ism_size",  "ism_points",  "pull_push",
-      "interleave", "clamp",     "ism_bias",         "lod_scale", "energy_stop", "visibility"};
-  return keys;
-}
-
-VplParameters vplParameters(const Scene& scene) {
-  VplParameters p;
-  if (scene.gi.parameters.is_null()) return p;
-  const JsonField f(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
-  auto powerOfTwo = [&](const char* key, int lo, int hi) {
-    const JsonField v = f.at(key);
-    const int n = int(v.integer(lo, hi));
-    if (n & (n - 1))
-      v.fail("must be a power of two (" + std::to_string(lo) + " to " + std::to_string(hi) + ")");
-    return n;
-  };
-  if (f.has("vpls")) {
-    const JsonField v = f.at("vpls");
-    if (v.value().is_string()) {
-      if (v.choice({"auto"}) == "auto") p.autoCount = true;
-    } else {
-      p.count = int(v.integer(1, 65535));
-    }
-  }
-  if (f.has("target_ms")) p.targetMs = f.at("target_ms").number(0.1, 1e6);
-  if (f.has("light_resolution")) p.lightResolution = powerOfTwo("light_resolution", 16, 4096);
-  if (f.has("ism_size")) p.ismSize = powerOfTwo("ism_size", 8, 512);
-  if (f.has("ism_points")) p.ismPoints = int(f.at("ism_points").integer(16, 1 << 24));
-  if (f.has("pull_push")) p.pullPushLevels = int(f.at("pull_push").integer(0, 9));
-  if (f.has("interleave")) p.interleave = int(f.at("interleave").integer(1, 8));
-  if (f.has("clamp")) p.clampFraction = float(f.at("clamp").number(0, 1));
-  if (f.has("ism_bias")) p.ismBias = float(f.at("ism_bias").number(0, 64));
-  if (f.has("lod_scale")) p.lodScale = float(f.at("lod_scale").number(0.125, 16));
-  if (f.has("energy_stop")) p.energyStop = f.at("energy_stop").number(0, 1);
-  if (f.has("visibility")) {
-    const std::string v = f.at("visibility").choice({"ism", "none", "exact"});
-    p.visibility = v == "ism"    ? VplParameters::Visibility::Ism
-                   : v == "none" ? VplParameters::Visibility::None
-                                 : VplParameters::Visibility::Exact;
-  }
-  return p;
-}
 
 std::unique_ptr<Method> createVplMethod(const Scene& scene, const MethodContext& ctx) {
   auto ext = std::make_unique<VplExtension>(scene);

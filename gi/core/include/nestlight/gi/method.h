@@ -68,8 +68,4 @@ struct MethodContext {
   bool syncPassTiming = false;
 };
 
-// The names scene files may give as gi.method; the registry (gi/methods) creates exactly these
-// (a test keeps the two lists equal). Kept here so that gi/core checks scene files by itself.
-const std::vector<std::string>& methodNames();
-
 }  // namespace nestlight::gi

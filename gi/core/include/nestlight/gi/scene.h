@@ -78,7 +78,7 @@ struct SceneCamera {
 enum class RadianceMode { RadianceCache, Albedo };
 
 struct GiSettings {
-  std::string method = "reference";  // one of methodNames() (nestlight/gi/method.h)
+  std::string method = "reference";  // a registered method (nestlight/gi/methods.h)
   RadianceMode mode = RadianceMode::RadianceCache;
   int maxBounces = 4;              // path length in bounces after the camera hit
   int samplesPerPixel = 256;       // upper bound on samples

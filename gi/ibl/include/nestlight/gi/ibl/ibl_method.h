@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "nestlight/gi/method.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/gi/method_parameters.h"
 #include "nestlight/gi/scene.h"
 
 namespace nestlight::gi {
@@ -39,9 +41,12 @@ struct IblParameters {
   int smcBandRows = 0;
 };
 
+// The gi.parameters ibl reads beside raster's (src/ibl_parameters.cpp), and its entry in the
+// registry.
+const ParameterSpecs& iblParameterSpecs();
+MethodInfo iblMethodInfo();
 // From scene.gi.parameters; throws nestlight::Error naming scene.gi.parameters.<key>.
 IblParameters iblParameters(const Scene& scene);
-const std::vector<std::string>& iblParameterKeys();
 const char* estimatorName(IblParameters::Estimator e);
 
 std::unique_ptr<Method> createIblMethod(const Scene& scene, const MethodContext& ctx);

@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "nestlight/gi/method.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/gi/method_parameters.h"
 #include "nestlight/gi/scene.h"
 
 namespace nestlight::gi {
@@ -43,9 +45,12 @@ struct PbgiParameters {
   int stepsPerDispatch = 0;
 };
 
+// The gi.parameters pbgi reads beside raster's (src/pbgi_parameters.cpp), and its entry in the
+// registry.
+const ParameterSpecs& pbgiParameterSpecs();
+MethodInfo pbgiMethodInfo();
 // From scene.gi.parameters; throws nestlight::Error naming scene.gi.parameters.<key>.
 PbgiParameters pbgiParameters(const Scene& scene);
-const std::vector<std::string>& pbgiParameterKeys();
 
 std::unique_ptr<Method> createPbgiMethod(const Scene& scene, const MethodContext& ctx);
 

@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "nestlight/gi/method.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/gi/method_parameters.h"
 
 namespace nestlight::gi {
 
@@ -34,9 +36,12 @@ struct RasterParameters {
   double streamTimeoutSeconds = 300;  // waiting for a view's cut to load completely
 };
 
-// From the scene's gi.parameters ("shadow_map_size", "rasteriser", "splat_scale",
-// "point_budget", "gpu_budget_mb", "max_tile", "stream_timeout"); throws nestlight::Error naming
-// the scene file and the field.
+// The gi.parameters raster reads (src/raster_parameters.cpp), and its entry in the registry.
+const ParameterSpecs& rasterParameterSpecs();
+MethodInfo rasterMethodInfo();
+
+// From the scene's gi.parameters (rasterParameterSpecs()); throws nestlight::Error naming the
+// scene file and the field.
 RasterParameters rasterParameters(const Scene& scene);
 // The same, accepting `otherKeys` too (a method built on the raster frame reads those).
 RasterParameters parseRasterParameters(const Scene& scene,

@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "nestlight/gi/method.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/gi/method_parameters.h"
 #include "nestlight/gi/scene.h"
 
 namespace nestlight::gi {
@@ -39,10 +41,13 @@ struct VplParameters {
   enum class Visibility { Ism, None, Exact } visibility = Visibility::Ism;
 };
 
-// From scene.gi.parameters (keys: vplParameterKeys()); throws nestlight::Error naming the file
-// and scene.gi.parameters.<key>.
+// The gi.parameters vpl reads beside raster's (src/vpl_parameters.cpp), and its entry in the
+// registry.
+const ParameterSpecs& vplParameterSpecs();
+MethodInfo vplMethodInfo();
+// From scene.gi.parameters; throws nestlight::Error naming the file and
+// scene.gi.parameters.<key>.
 VplParameters vplParameters(const Scene& scene);
-const std::vector<std::string>& vplParameterKeys();
 
 std::unique_ptr<Method> createVplMethod(const Scene& scene, const MethodContext& ctx);
 
