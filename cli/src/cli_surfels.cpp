@@ -8,6 +8,7 @@
 #include "cli.h"
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/gi/mesh.h"
+#include "nestlight/gi/methods.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/tone_map.h"
 #include "nestlight/octree/error.h"
@@ -39,6 +40,7 @@ void addSurfels(CLI::App& app, int& exitCode) {
   cmd->add_option("--seed", *seed, "Random seed")->capture_default_str();
   cmd->callback([=, &exitCode]() {
     gi::Scene s = gi::loadScene(*scene);
+    gi::checkSceneMethod(s);  // the registry names the methods, not the scene parser
     if (s.meshes.empty()) throw Error(*scene, "scene.meshes", "the scene inserts no meshes");
     SourceHeader h;
     h.path = *out;

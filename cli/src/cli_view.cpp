@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "cli.h"
+#include "nestlight/gi/methods.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/viewer/window_app.h"
@@ -15,6 +16,7 @@ namespace {
 void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
                 const std::function<bool(const char*)>& given) {
   auto loaded = std::make_shared<gi::Scene>(gi::loadScene(file));
+  gi::checkSceneMethod(*loaded);  // the registry names the methods, not the scene parser
   const gi::Scene& scene = *loaded;
   opt.scene = loaded;
   // A scene of meshes alone is viewed through its GI method; there is no point view.
