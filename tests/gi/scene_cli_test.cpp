@@ -58,6 +58,34 @@ TEST(SceneCli, BadSceneFilesNameTheField) {
   EXPECT_NE(out.find("missing.obj"), std::string::npos) << out;
 }
 
+// --param sets any member of gi.parameters, checked by the method's declaration as the scene
+// file's members are; the declared flags (--variant) are checked by the command line.
+TEST(SceneCli, ParamSetsAnyDeclaredParameter) {
+  test::TempDir dir;
+  test::writeFile(dir.file("box.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  test::writeFile(dir.file("s.json"),
+                  R"({"meshes": [{"path": "box.obj"}], "lights": [{"type": "point", "position":
+                      [0, 0, 2], "intensity": 1}], "camera": {"eye": [0.3, -2, 1], "target":
+                      [0.3, 0.3, 0], "width": 8, "height": 8}, "gi": {"method": "raster"}})");
+  const std::string render = "render " + dir.file("s.json") + " -o " + dir.file("s.exr");
+  std::string out;
+  EXPECT_EQ(test::runCli(render + " --param shadow_map_size=5", &out), 1);
+  EXPECT_NE(out.find("s.json: scene.gi.parameters.shadow_map_size: expected an integer in [16, "
+                     "16384], got 5"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(test::runCli(render + " --param shadow_map_sise=64", &out), 1);
+  EXPECT_NE(out.find("scene.gi.parameters.shadow_map_sise: unknown field"), std::string::npos)
+      << out;
+  EXPECT_EQ(test::runCli(render + " --param shadow_map_size", &out), 1);
+  EXPECT_NE(out.find("--param: expected KEY=VALUE"), std::string::npos) << out;
+  EXPECT_NE(test::runCli(render + " --method pbgi --variant fast", &out), 0);
+  EXPECT_NE(out.find("--variant"), std::string::npos) << out;
+  ASSERT_EQ(test::runCli(render + " --param shadow_map_size=64 --param rasteriser=points", &out), 0)
+      << out;
+  EXPECT_NE(out.find("64 px shadow maps"), std::string::npos) << out;
+}
+
 TEST(SceneCli, BenchGiWritesTableAndPlot) {
   test::TempDir dir;
   std::string out;
