@@ -1,9 +1,9 @@
-// Directional shadow maps fitted to the camera's receivers (nestlight/gi/raster/shadow_fit.h),
+// Directional shadow maps fitted to the camera's receivers (nestlight/gi/frame/shadow_fit.h),
 // stabilised as cascaded shadow maps are (Valient 2008, "Stable Rendering of Cascaded Shadow
 // Maps"): a fixed light rotation, the origin snapped to texels, the size quantised. The scene's
 // objects grouped by single linkage (Sibson 1973, "SLINK: An optimally efficient algorithm for
 // the single-link cluster method") for the light views of methods that light beyond the view.
-#include "nestlight/gi/raster/shadow_fit.h"
+#include "nestlight/gi/frame/shadow_fit.h"
 
 #include <algorithm>
 #include <cmath>
