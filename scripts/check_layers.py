@@ -26,6 +26,69 @@ LIBRARY_FOLDER = {
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"nestlight/([a-z_]+)/')
 
+# Floors inside gi/ (docs/ARCHITECTURE.md, "Within gi/"): each sub-folder is a library whose
+# headers sit under gi/<library>/include/nestlight/gi/. A sub-folder not listed is a method.
+GI_FLOORS = {
+    "core": 0,
+    "metrics": 1, "frame": 1,
+    "shared": 2,
+    "reference": 3,
+    "methods": 5,
+}
+GI_METHOD_FLOOR = 4  # raster, vpl, pbgi, ibl, hdr and every method to come: siblings
+# Includes of a method's headers that stay until what they name moves below the methods: the
+# raster frame (RasterFrame, RasterExtension, createRasterMethod) that vpl, pbgi and ibl extend,
+# on its way to gi/frame/. Remove an entry when its header has moved.
+GI_PENDING = {
+    "nestlight/gi/raster/raster_frame.h",
+    "nestlight/gi/raster/raster_method.h",
+}
+GI_INCLUDE = re.compile(r'^\s*#\s*include\s+"(nestlight/gi/[^"]+)"')
+
+
+def gi_floor(library):
+    return GI_FLOORS.get(library, GI_METHOD_FLOOR)
+
+
+def check_gi(root):
+    """Includes between gi/'s libraries: downward only, and no method includes a sibling method."""
+    base = os.path.join(root, "gi")
+    if not os.path.isdir(base):
+        return []
+    libraries = sorted(d for d in os.listdir(base) if os.path.isdir(os.path.join(base, d)))
+    owner = {}  # "nestlight/gi/..." header -> the gi library that holds it
+    for library in libraries:
+        include = os.path.join(base, library, "include")
+        for dirpath, _, files in os.walk(include):
+            for name in files:
+                owner[os.path.relpath(os.path.join(dirpath, name), include)] = library
+    problems = []
+    for library in libraries:
+        for dirpath, _, files in os.walk(os.path.join(base, library)):
+            for name in files:
+                if not name.endswith((".cpp", ".h", ".hpp", ".inc")):
+                    continue
+                path = os.path.join(dirpath, name)
+                with open(path, encoding="utf-8", errors="replace") as f:
+                    for number, line in enumerate(f, 1):
+                        m = GI_INCLUDE.match(line)
+                        if not m or m.group(1) in GI_PENDING:
+                            continue
+                        target = owner.get(m.group(1))
+                        if target is None or target == library:
+                            continue
+                        here, there = gi_floor(library), gi_floor(target)
+                        where = f"{os.path.relpath(path, root)}:{number}: "
+                        if here == there == GI_METHOD_FLOOR:
+                            problems.append(
+                                where + f"gi/{library} includes gi/{target}: a method includes no "
+                                f"sibling method (what both need belongs in gi/shared)")
+                        elif there >= here:
+                            way = "upward" if there > here else "sideways"
+                            problems.append(where + f"gi/{library} (gi floor {here}) includes "
+                                            f"gi/{target} (gi floor {there}): {way}")
+    return problems
+
 
 def main():
     root = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), ".."))
@@ -54,6 +117,7 @@ def main():
                             problems.append(f"{os.path.relpath(path, root)}:{number}: {folder} (floor "
                                             f"{floor}) includes {target} (floor {FLOORS[target]}): "
                                             f"{way}")
+    problems += check_gi(root)
     for p in problems:
         print(p)
     if checked == 0:

@@ -2,7 +2,7 @@
 // coordinates, normals, colour) gets a hierarchy in its own frame that accounts for each of its
 // points, with leaves as wide as the level's spacing; and the layer travels with the node
 // through the store's prepare (the loader threads' path).
-#include "nestlight/gi/pbgi/bsh_layer.h"
+#include "nestlight/gi/shared/bsh_layer.h"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 #include "streaming/streaming_support.h"
 #include "test_support.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 namespace {
 
 TEST(BshLayer, EveryNodeOfANationalGridScanAccountsForItsPoints) {
@@ -91,4 +91,4 @@ TEST(BshLayer, EveryNodeOfANationalGridScanAccountsForItsPoints) {
 }
 
 }  // namespace
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -1,7 +1,7 @@
 // The bounding-sphere hierarchy's invariants (every child inside its parent's sphere, every
 // normal inside its node's cone, the pruning thresholds respected, every point accounted for) on
 // random and degenerate point sets; Morton codes and their radix sort; normal cones.
-#include "nestlight/gi/pbgi/bsh.h"
+#include "nestlight/gi/shared/bsh.h"
 
 #include <gtest/gtest.h>
 
@@ -12,10 +12,10 @@
 #include <random>
 
 #include "nestlight/frame/gl_node_store.h"
-#include "nestlight/gi/pbgi/morton.h"
-#include "nestlight/gi/pbgi/normal_cone.h"
+#include "nestlight/gi/shared/morton.h"
+#include "nestlight/gi/shared/normal_cone.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 namespace {
 
 // Tolerances. Spheres: the builder widens radii by 8 ulps of the coordinates' magnitude for float
@@ -465,4 +465,4 @@ TEST(TopTree, JoinsRootsIntoOneHierarchy) {
 }
 
 }  // namespace
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -16,10 +16,10 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/ibl/environment_table.h"
 #include "nestlight/gi/ibl/triangle_bvh.h"
-#include "nestlight/gi/pbgi/bsh_layer.h"
-#include "nestlight/gi/pbgi/cut_hierarchies.h"
 #include "nestlight/gi/raster/raster_frame.h"
 #include "nestlight/gi/sampling.h"
+#include "nestlight/gi/shared/bsh_layer.h"
+#include "nestlight/gi/shared/cut_hierarchies.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -105,15 +105,15 @@ class SlabBshLayer : public frame::NodeLayer {
   void prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
                std::vector<uint8_t>& out) const override {
     inner_.prepare(key, points, gpuPoints, out);
-    const size_t count = out.size() / sizeof(pbgi::BshNode);
-    std::vector<pbgi::BshNode> nodes(count);
-    if (count) std::memcpy(nodes.data(), out.data(), count * sizeof(pbgi::BshNode));
+    const size_t count = out.size() / sizeof(BshNode);
+    std::vector<BshNode> nodes(count);
+    if (count) std::memcpy(nodes.data(), out.data(), count * sizeof(BshNode));
     // Depth first: a node's sub-tree is [i, end), its right child's sub-tree ending it.
     std::vector<uint32_t> end(count);
     for (size_t i = count; i-- > 0;)
       end[i] = nodes[i].links.x == BSH_LEAF ? uint32_t(i + 1) : end[nodes[i].links.y];
     for (size_t i = 0; i < count; ++i) {
-      pbgi::BshNode& n = nodes[i];
+      BshNode& n = nodes[i];
       if (n.links.x == BSH_LEAF) continue;
       const glm::vec3 axis = frame::unpackNormal(n.links.w), c(n.sphere);
       if (n.links.w == 0 || !(glm::length(axis) > 0.5f)) {
@@ -122,7 +122,7 @@ class SlabBshLayer : public frame::NodeLayer {
       }
       float lo = INFINITY, hi = -INFINITY;
       for (uint32_t k = uint32_t(i + 1); k < end[i]; ++k) {
-        const pbgi::BshNode& l = nodes[k];
+        const BshNode& l = nodes[k];
         if (l.links.x != BSH_LEAF) continue;
         const float disc = std::min(std::bit_cast<float>(l.links.y), l.sphere.w);
         const glm::vec3 m = frame::unpackNormal(l.links.w);
@@ -140,16 +140,16 @@ class SlabBshLayer : public frame::NodeLayer {
       const float pad = 1e-4f * n.sphere.w + 8.0f * mag * 1.2e-7f;
       n.colour = glm::vec4(lo - pad, hi + pad, 1.0f, n.colour.w);
     }
-    if (count) std::memcpy(out.data(), nodes.data(), count * sizeof(pbgi::BshNode));
+    if (count) std::memcpy(out.data(), nodes.data(), count * sizeof(BshNode));
   }
 
  private:
-  static pbgi::BshOptions unpruned() {
-    pbgi::BshOptions o;
+  static BshOptions unpruned() {
+    BshOptions o;
     o.prune = false;
     return o;
   }
-  pbgi::BshLayer inner_;
+  BshLayer inner_;
 };
 
 class IblExtension : public RasterExtension {
@@ -501,7 +501,7 @@ class IblExtension : public RasterExtension {
   uint32_t seed_ = 1;
   size_t layer_ = 0;
   uint64_t generation_ = ~0ull;
-  pbgi::CutHierarchies hier_;
+  CutHierarchies hier_;
   gl::ShaderProgram program_;
   gl::Buffer envTable_, bvh_, triangles_, stats_, stateIn_, stateOut_;
   gl::Texture prevTexture_;

@@ -8,7 +8,7 @@
 
 #include "nestlight/gi/environment_source.h"
 #include "nestlight/gi/reference/path_tracer.h"
-#include "nestlight/gi/reference/reference_scene.h"
+#include "nestlight/gi/shared/reference_scene.h"
 
 namespace nestlight::gi {
 

@@ -12,12 +12,12 @@
 #include <cstring>
 
 #include "nestlight/frame/frame_graph.h"
-#include "nestlight/gi/pbgi/bsh.h"
-#include "nestlight/gi/pbgi/bsh_layer.h"
-#include "nestlight/gi/pbgi/cut_hierarchies.h"
-#include "nestlight/gi/pbgi/mesh_trees.h"
 #include "nestlight/gi/pbgi/micro_buffer.h"
 #include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/shared/bsh.h"
+#include "nestlight/gi/shared/bsh_layer.h"
+#include "nestlight/gi/shared/cut_hierarchies.h"
+#include "nestlight/gi/shared/mesh_trees.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -27,8 +27,6 @@ namespace nestlight::gi {
 
 namespace {
 
-using pbgi::BshNode;
-using PbgiNode = pbgi::glsl::PbgiNode;
 static_assert(sizeof(PbgiNode) == 32, "PbgiNode must keep std430's layout");
 
 class PbgiExtension : public RasterExtension {
@@ -90,15 +88,15 @@ class PbgiExtension : public RasterExtension {
     skyOwned_ = params_.empty == PbgiParameters::Empty::Environment && f.hasEnvironment() &&
                 (!albedo_ || bounces_ >= 2);
     if (skyOwned_) f.setSkyOnDiffuseLobes(false);
-    pbgi::BshOptions options;
+    BshOptions options;
     options.prune = params_.prune;
     layer_ = f.addNodeLayer(
         [options, this](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {
-          auto layer = std::make_shared<pbgi::BshLayer>(meta, options, std::move(colours));
+          auto layer = std::make_shared<BshLayer>(meta, options, std::move(colours));
           layers_.push_back(layer);
           return layer;
         });
-    if (params_.meshes) meshTrees_ = pbgi::buildMeshTrees(scene, f.meshes());
+    if (params_.meshes) meshTrees_ = buildMeshTrees(scene, f.meshes());
     // The coarsest meshes lift only the receivers in their own bounds (pbgi_common.glsl): a mesh
     // of few surfels has discs as wide as itself.
     std::vector<size_t> byDisc(meshTrees_.size());
@@ -108,7 +106,7 @@ class PbgiExtension : public RasterExtension {
     });
     liftBoxes_.clear();
     for (size_t k : byDisc) {
-      const pbgi::MeshTree& t = meshTrees_[k];
+      const MeshTree& t = meshTrees_[k];
       if (liftBoxes_.size() < 2 * PBGI_LIFT_BOXES && t.lo.x <= t.hi.x) {
         liftBoxes_.push_back(glm::vec4(t.lo, t.discRadius));
         liftBoxes_.push_back(glm::vec4(t.hi, float(t.material)));
@@ -181,7 +179,7 @@ class PbgiExtension : public RasterExtension {
         std::to_string(albedo_ && bounces_ >= 2 ? 1 + gatheredBounces_ : 0);
     f.attributes["nestlight:pbgi_bounce_receivers"] = std::to_string(bounceReceivers_);
     f.attributes["nestlight:pbgi_mesh_surfels"] = std::to_string(meshSurfels_);
-    pbgi::BshLayer::Totals built;
+    BshLayer::Totals built;
     for (const auto& l : layers_) {
       const auto t = l->totals();
       built.builds += t.builds, built.points += t.points, built.nodes += t.nodes,
@@ -493,10 +491,10 @@ class PbgiExtension : public RasterExtension {
                 const gl::Buffer& topIn, const gl::Buffer& nodesIn, const gl::Buffer& tableIn) {
     const uint32_t zero = 0;
     const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);
-    const size_t perReceiver = sizeof(pbgi::glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
+    const size_t perReceiver = sizeof(glsl::PbgiTraversal) + PBGI_STACK * 8 + m2 * 16;
     size_t chunk = std::min<size_t>(count, gl::kMaxSsboRange / (m2 * 16));
     chunk = std::min<size_t>(chunk, 1 << 16);
-    state_.reserve(chunk * sizeof(pbgi::glsl::PbgiTraversal));
+    state_.reserve(chunk * sizeof(glsl::PbgiTraversal));
     stack_.reserve(chunk * PBGI_STACK * 8);
     mb_.reserve(chunk * m2 * 16);
     stateBytes_ = std::max<uint64_t>(stateBytes_, chunk * perReceiver);
@@ -634,11 +632,10 @@ class PbgiExtension : public RasterExtension {
 
   PbgiParameters params_;
   size_t layer_ = 0;
-  std::vector<std::shared_ptr<const pbgi::BshLayer>>
-      layers_;  // one per scan, for their build totals
+  std::vector<std::shared_ptr<const BshLayer>> layers_;  // one per scan, for their build totals
   gl::ShaderProgram receiversProgram_, classic_, pyramidProgram_, pairsProgram_;
   gl::Buffer micro_, receivers_, state_, stack_, mb_;
-  pbgi::CutHierarchies hier_;
+  CutHierarchies hier_;
   gl::Buffer pyramid_, pairsA_, pairsB_, list_, listHead_;
   gl::ShaderProgram lightProgram_, lightUpProgram_, selectProgram_, downProgram_;
   gl::Buffer nodesDirect_,
@@ -650,7 +647,7 @@ class PbgiExtension : public RasterExtension {
   gl::Buffer nodesLit_, topLit_, tableLit_;  // albedo mode: the hierarchies with their lit radiance
   bool albedo_ = false;
   bool lit_ = false;  // the gather reads lit copies (albedo mode, or meshes' surfels)
-  std::vector<pbgi::MeshTree> meshTrees_;
+  std::vector<MeshTree> meshTrees_;
   uint64_t meshSurfels_ = 0;
   // Mesh receivers leave from this far above their surface (pbgi_common.glsl): per box, else per
   // material.

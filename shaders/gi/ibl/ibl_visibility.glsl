@@ -58,7 +58,7 @@ bool meshesOcclude(vec3 o, vec3 d, float tMax) {
 }
 
 // And against the resident cut of the scan: its points as discs (the leaves of the per-node
-// bounding-sphere hierarchies of the pbgi method, gi/pbgi/cut_hierarchies.h, joined by their top
+// bounding-sphere hierarchies of the pbgi method, gi/shared/cut_hierarchies.h, joined by their top
 // tree): spheres and slabs bound the rays' search, a leaf is a disc of its radius about its
 // normal (without a normal, a disc facing the ray).
 #include "../pbgi/bsh_interface.glsl"

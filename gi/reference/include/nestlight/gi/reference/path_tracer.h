@@ -15,8 +15,8 @@
 #include <string>
 
 #include "nestlight/gi/hdr_image.h"
-#include "nestlight/gi/reference/reference_scene.h"
 #include "nestlight/gi/scene.h"
+#include "nestlight/gi/shared/reference_scene.h"
 
 namespace nestlight::gi {
 

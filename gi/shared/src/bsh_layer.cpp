@@ -1,11 +1,11 @@
-#include "nestlight/gi/pbgi/bsh_layer.h"
+#include "nestlight/gi/shared/bsh_layer.h"
 
 #include <chrono>
 #include <cstring>
 
 #include "nestlight/octree/error.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 BshLayer::BshLayer(const Metadata& meta, BshOptions options,
                    std::shared_ptr<const ScanColours> colours)
@@ -57,4 +57,4 @@ BshLayer::Totals BshLayer::totals() const {
   return {builds_.load(), points_.load(), nodes_.load(), nanoseconds_.load()};
 }
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -1,4 +1,4 @@
-#include "nestlight/gi/pbgi/mesh_trees.h"
+#include "nestlight/gi/shared/mesh_trees.h"
 
 #include <cmath>
 
@@ -6,7 +6,7 @@
 #include "nestlight/gi/mesh.h"
 #include "nestlight/octree/error.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 std::vector<MeshTree> buildMeshTrees(const Scene& scene, const std::vector<TriangleMesh>& meshes) {
   NL_CHECK(meshes.size() == scene.meshes.size());
@@ -59,4 +59,4 @@ std::vector<MeshTree> buildMeshTrees(const Scene& scene, const std::vector<Trian
   return trees;
 }
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 inline constexpr int kMortonBitsPerAxis = 21;
 inline constexpr uint32_t kMortonAxisMax = (1u << kMortonBitsPerAxis) - 1;
@@ -19,4 +19,4 @@ uint64_t mortonCode(uint32_t x, uint32_t y, uint32_t z);
 // their order). LSD radix, 8 bits per pass, passes over bytes that every key shares skipped.
 void radixSortPairs(std::vector<uint64_t>& keys, std::vector<uint32_t>& values);
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

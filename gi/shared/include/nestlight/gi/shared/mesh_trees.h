@@ -21,10 +21,10 @@
 #include <vector>
 
 #include "nestlight/gi/mesh.h"
-#include "nestlight/gi/pbgi/bsh.h"
 #include "nestlight/gi/scene.h"
+#include "nestlight/gi/shared/bsh.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 struct MeshTree {
   std::vector<BshNode> nodes;  // positions relative to `origin`; colour: the surfels' albedo
@@ -40,4 +40,4 @@ struct MeshTree {
 // scene.meshes entry.
 std::vector<MeshTree> buildMeshTrees(const Scene& scene, const std::vector<TriangleMesh>& meshes);
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -1,7 +1,7 @@
 // Scan points as oriented discs, meshes as triangles, in one Embree 3 scene (Embree's
 // RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT and RTC_GEOMETRY_TYPE_TRIANGLE). Disc radii follow local
 // point spacing (issue 4; the surfel view of points of paper 004 section 6).
-#include "nestlight/gi/reference/reference_scene.h"
+#include "nestlight/gi/shared/reference_scene.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/parallel_for.h>

@@ -1,10 +1,10 @@
-#include "nestlight/gi/pbgi/cut_hierarchies.h"
+#include "nestlight/gi/shared/cut_hierarchies.h"
 
 #include <algorithm>
 #include <bit>
 #include <chrono>
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 void CutHierarchies::setMeshTrees(const std::vector<MeshTree>& trees) {
   meshTrees_ = trees;
@@ -107,4 +107,4 @@ void CutHierarchies::assemble(RasterFrame& f, size_t layer) {
   ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

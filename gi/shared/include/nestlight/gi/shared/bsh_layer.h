@@ -8,11 +8,11 @@
 #include <string>
 
 #include "nestlight/frame/gl_node_store.h"
-#include "nestlight/gi/pbgi/bsh.h"
 #include "nestlight/gi/scan_colour.h"
+#include "nestlight/gi/shared/bsh.h"
 #include "nestlight/octree/metadata.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 // Leaves: the node's points, linear colour from the scan's colour source
 // (nestlight/gi/scan_colour.h: the recorded 16-bit sRGB colour decoded, 0.8 grey without colour as
@@ -46,4 +46,4 @@ class BshLayer : public frame::NodeLayer {
   mutable std::atomic<uint64_t> builds_{0}, points_{0}, nodes_{0}, nanoseconds_{0};
 };
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -8,12 +8,12 @@
 #include <cstdint>
 #include <vector>
 
-#include "nestlight/gi/pbgi/bsh.h"
-#include "nestlight/gi/pbgi/mesh_trees.h"
 #include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/shared/bsh.h"
+#include "nestlight/gi/shared/mesh_trees.h"
 #include "nestlight/gl/resources.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 using PbgiNode = glsl::PbgiNode;
 
@@ -52,4 +52,4 @@ class CutHierarchies {
   double ms_ = 0;
 };
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -12,9 +12,9 @@
 
 #include <glm/glm.hpp>
 
-namespace nestlight::gi::pbgi {
+#include "nestlight/gi/sampling.h"  // kPi
 
-inline constexpr float kPi = 3.14159265358979f;
+namespace nestlight::gi {
 
 struct NormalCone {
   glm::vec3 axis{0, 0, 1};  // unit
@@ -32,4 +32,4 @@ struct NormalCone {
 // The smallest cone containing both.
 NormalCone merge(const NormalCone& a, const NormalCone& b);
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -1,11 +1,11 @@
-#include "nestlight/gi/pbgi/morton.h"
+#include "nestlight/gi/shared/morton.h"
 
 #include <array>
 
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/node_key.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 uint64_t mortonCode(uint32_t x, uint32_t y, uint32_t z) {
   NL_CHECK(x <= kMortonAxisMax && y <= kMortonAxisMax && z <= kMortonAxisMax);
@@ -44,4 +44,4 @@ void radixSortPairs(std::vector<uint64_t>& keys, std::vector<uint32_t>& values) 
   }
 }
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

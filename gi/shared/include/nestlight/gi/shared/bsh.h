@@ -20,7 +20,7 @@
 
 #include "nestlight/frame/interface.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 namespace glsl {
 using vec4 = glm::vec4;
@@ -86,4 +86,4 @@ inline bool isLeaf(const BshNode& n) {
   return n.links.x == BSH_LEAF;
 }
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

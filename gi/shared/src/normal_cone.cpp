@@ -1,9 +1,9 @@
-#include "nestlight/gi/pbgi/normal_cone.h"
+#include "nestlight/gi/shared/normal_cone.h"
 
 #include <algorithm>
 #include <cmath>
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 namespace {
 
@@ -60,4 +60,4 @@ NormalCone merge(const NormalCone& a, const NormalCone& b) {
   return out;
 }
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi

@@ -1,15 +1,15 @@
-#include "nestlight/gi/pbgi/bsh.h"
+#include "nestlight/gi/shared/bsh.h"
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
 
 #include "nestlight/frame/gl_node_store.h"
-#include "nestlight/gi/pbgi/morton.h"
-#include "nestlight/gi/pbgi/normal_cone.h"
+#include "nestlight/gi/shared/morton.h"
+#include "nestlight/gi/shared/normal_cone.h"
 #include "nestlight/octree/error.h"
 
-namespace nestlight::gi::pbgi {
+namespace nestlight::gi {
 
 namespace {
 
@@ -407,4 +407,4 @@ glm::vec3 coneAxis(const BshNode& n) {
   return n.links.w ? frame::unpackNormal(n.links.w) : glm::vec3(0);
 }
 
-}  // namespace nestlight::gi::pbgi
+}  // namespace nestlight::gi
