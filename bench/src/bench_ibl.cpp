@@ -1,24 +1,25 @@
-// `nestlight bench ibl` (nestlight/gi/bench_ibl.h).
-#include "nestlight/gi/bench_ibl.h"
+// `nestlight bench ibl` (nestlight/bench/bench_ibl.h).
+#include "nestlight/bench/bench_ibl.h"
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 
+#include "nestlight/bench/harness.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/environment_source.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/plot.h"
 #include "nestlight/gi/reference/path_tracer.h"
-#include "nestlight/gi/reference/reference_scene.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/octree/error.h"
 
-namespace nestlight::gi {
+namespace nestlight::bench {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using namespace gi;
 
 namespace {
 
@@ -72,13 +73,6 @@ HdrImage turned(const HdrImage& map, int columns) {
   for (int y = 0; y < map.height; ++y)
     for (int x = 0; x < map.width; ++x) out.set((x + columns) % map.width, y, map.get(x, y));
   return out;
-}
-
-double medianOf(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 // Pixels whose centre ray and all 8 neighbours' meet the same surface (a mesh's material, or the
@@ -178,87 +172,60 @@ json timeTo(const std::vector<std::pair<double, double>>& curve, double target) 
   return {{"ms", nullptr}, {"how", "not reached"}};
 }
 
-}  // namespace
+std::string probeName(int frame) {
+  char name[64];
+  std::snprintf(name, sizeof name, "probe_%04d.exr", frame);
+  return name;
+}
 
-BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
-  auto say = [&](const char* fmt, auto... args) {
-    if (!log) return;
-    std::fprintf(log, fmt, args...);
-    std::fflush(log);
-  };
-  if (o.frames < 2)
-    throw Error("--frames", "", "give at least 2 frames (flicker compares consecutive frames)");
-  const MethodInfo* ibl = findMethod("ibl");
-  NL_CHECK(ibl);
-  for (const auto& e : o.estimators)
-    if (e != "mis" && e != "bis" && e != "smc" && e != "env" && e != "brdf")
-      throw Error("--estimators", "", "unknown estimator '" + e + "' (mis, bis, smc, env, brdf)");
-  BenchIblReport report;
-  report.dir = o.out;
-  fs::create_directories(o.out);
-  json all = {{"device", o.device},
-              {"frames", o.frames},
-              {"size", o.size},
-              {"timing_size", o.timingSize},
-              {"time_to_error_at", o.timingSize > 0 ? o.timingSize : o.size},
-              {"reference_spp", o.referenceSpp},
-              {"roughness", o.roughness},
-              {"scenes", json::array()}};
-  std::ofstream csv(o.out / "bench_ibl.csv");
-  csv << "scene,estimator,samples,frame,ms,relative_l2,relative_l2_net,relative_variance,flicker,"
-         "relative_l2_4x4,"
-         "mean_ratio\n";
-  for (const std::string& sceneName : o.scenes) {
-    const fs::path dir = o.out / sceneName;
-    fs::create_directories(dir);
-    // The probe sequence.
-    if (sceneName == "moving-sun" || sceneName == "scanned") {
-      for (int f = 0; f < o.frames; ++f) {
-        char name[64];
-        std::snprintf(name, sizeof name, "probe_%04d.exr", f);
-        writeExr((dir / name).string(), movingSunFrame(f));
-      }
-    } else if (sceneName == "shared" || sceneName == "outdoor") {
-      const fs::path map =
-          o.sharedData / "hdr" /
-          (sceneName == "shared" ? "stage_env_latlong.exr" : "royal_esplanade_1k.hdr");
-      if (!fs::exists(map)) {
-        say("bench ibl: %s not found: the shared scene is skipped\n", map.c_str());
-        continue;
-      }
-      const HdrImage base = readHdrImage(map.string());
-      for (int f = 0; f < o.frames; ++f) {
-        char name[64];
-        std::snprintf(name, sizeof name, "probe_%04d.exr", f);
-        writeExr((dir / name).string(), turned(base, int(std::lround(base.width * 4.0 * f / 360))));
-      }
-    } else {
-      throw Error("--scenes", "",
-                  "unknown scene '" + sceneName + "' (moving-sun, scanned, shared, outdoor)");
+// The scene's probe sequence in dir; false (said so) when a shared map is missing.
+bool writeProbeSequence(const BenchIblOptions& o, const std::string& sceneName, const fs::path& dir,
+                        std::FILE* log) {
+  if (sceneName == "moving-sun" || sceneName == "scanned") {
+    for (int f = 0; f < o.frames; ++f) writeExr((dir / probeName(f)).string(), movingSunFrame(f));
+  } else if (sceneName == "shared" || sceneName == "outdoor") {
+    const fs::path map =
+        o.sharedData / "hdr" /
+        (sceneName == "shared" ? "stage_env_latlong.exr" : "royal_esplanade_1k.hdr");
+    if (!fs::exists(map)) {
+      say(log, "bench ibl: %s not found: the shared scene is skipped\n", map.c_str());
+      return false;
     }
-    json sceneJson;
-    if (sceneName == "scanned") {
-      // Scanned receivers: the object scene's town (make-scene object: ground, walls, columns and
-      // a sphere scanned with 2 mm of noise, a gold torus) in the albedo mode, where every scan
-      // point is lit, under the moving sun. The scan is made once in town/ and reused.
-      TestSceneOptions to;
-      to.points = 200000;
-      to.width = to.height = o.size;
-      to.quiet = true;
-      sceneJson =
-          json::parse(std::ifstream(makeTestScene(TestSceneKind::Object, dir / "town", to)));
-      for (auto& t : sceneJson["octrees"]) t["path"] = "town/" + t["path"].get<std::string>();
-      for (auto& m : sceneJson["meshes"]) m["path"] = "town/" + m["path"].get<std::string>();
-      sceneJson.erase("lights");
-      sceneJson.erase("output");
-      sceneJson["camera"]["width"] = sceneJson["camera"]["height"] = o.size;
-      sceneJson["environment"] = {{"sequence", "probe_%04d.exr"}, {"fps", 1}};
-      sceneJson["gi"] = {{"method", "direct"}, {"mode", "albedo"}, {"seed", 1}};
-    } else {
-      writeSphereObj(dir / "sphere.obj");
-      writeBoxObj(dir / "box.obj");
-      sceneJson = {
-          {"version", 1},
+    const HdrImage base = readHdrImage(map.string());
+    for (int f = 0; f < o.frames; ++f)
+      writeExr((dir / probeName(f)).string(),
+               turned(base, int(std::lround(base.width * 4.0 * f / 360))));
+  } else {
+    throw Error("--scenes", "",
+                "unknown scene '" + sceneName + "' (moving-sun, scanned, shared, outdoor)");
+  }
+  return true;
+}
+
+// The scene file's JSON: the scanned town, or the glossy sphere on its floor.
+json sceneDescription(const BenchIblOptions& o, const std::string& sceneName, const fs::path& dir) {
+  json sceneJson;
+  if (sceneName == "scanned") {
+    // Scanned receivers: the object scene's town (make-scene object: ground, walls, columns and
+    // a sphere scanned with 2 mm of noise, a gold torus) in the albedo mode, where every scan
+    // point is lit, under the moving sun. The scan is made once in town/ and reused.
+    TestSceneOptions to;
+    to.points = 200000;
+    to.width = to.height = o.size;
+    to.quiet = true;
+    sceneJson = json::parse(std::ifstream(makeTestScene(TestSceneKind::Object, dir / "town", to)));
+    for (auto& t : sceneJson["octrees"]) t["path"] = "town/" + t["path"].get<std::string>();
+    for (auto& m : sceneJson["meshes"]) m["path"] = "town/" + m["path"].get<std::string>();
+    sceneJson.erase("lights");
+    sceneJson.erase("output");
+    sceneJson["camera"]["width"] = sceneJson["camera"]["height"] = o.size;
+    sceneJson["environment"] = {{"sequence", "probe_%04d.exr"}, {"fps", 1}};
+    sceneJson["gi"] = {{"method", "direct"}, {"mode", "albedo"}, {"seed", 1}};
+    return sceneJson;
+  }
+  writeSphereObj(dir / "sphere.obj");
+  writeBoxObj(dir / "box.obj");
+  return {{"version", 1},
           {"materials",
            {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}},
             {"glossy",
@@ -283,215 +250,283 @@ BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
             {"width", o.size},
             {"height", o.size}}},
           {"gi", {{"method", "direct"}, {"mode", "radiance_cache"}, {"seed", 1}}}};
+}
+
+// One scene of the study: its frames' cameras, the mask of interior pixels and the ground truth
+// per frame, with everything the measures write to.
+struct SceneRun {
+  const BenchIblOptions& o;
+  std::string name;
+  fs::path dir;
+  Scene scene;
+  std::vector<SceneCamera> cameras;
+  std::vector<uint8_t> mask;
+  std::vector<HdrImage> refs;
+  std::vector<double> refNoise2;  // per frame: the reference's relative squared error
+  std::ofstream& csv;
+  std::FILE* log;
+};
+
+// Ground truth per frame: the reference's direct light, as two halves of the samples with
+// different seeds, whose mean is the reference and whose difference measures its own noise
+// (the errors are reported with it and with it taken out). Cached by `stamp`.
+void renderGroundTruth(SceneRun& run, ReferenceScene& rs, const std::string& stamp) {
+  const BenchIblOptions& o = run.o;
+  // The reference's first bounce (direct light), its camera rays through pixel centres as the
+  // GL methods shade them, lit by each frame's probe as the method is (EnvironmentSource).
+  std::unique_ptr<EnvironmentSource> probe;
+  ReferenceOptions ro = referenceOptionsFrom(run.scene.gi);
+  ro.maxBounces = 1;
+  ro.maxSamplesPerPixel = o.referenceSpp;
+  ro.targetRelativeError = 0;
+  ro.pixelCentres = true;
+  for (int f = 0; f < o.frames; ++f) {
+    HdrImage half[2];
+    for (int k = 0; k < 2; ++k) {
+      char name[128];
+      std::snprintf(name, sizeof name, "reference_%s_%dspp_%04d_%c.exr", stamp.c_str(),
+                    o.referenceSpp, f, "ab"[k]);
+      const fs::path file = run.dir / name;
+      if (fs::exists(file)) {
+        half[k] = readHdrImage(file.string());
+        continue;
+      }
+      if (!probe) probe = std::make_unique<EnvironmentSource>(run.scene.environment);
+      rs.setEnvironment(probe->at(run.cameras[size_t(f)].time));
+      ro.seed = 2 * uint64_t(f) + uint64_t(k) + 1;
+      ro.maxSamplesPerPixel = std::max(o.referenceSpp / 2, 1);
+      const ReferenceResult r = renderReference(rs, run.cameras[size_t(f)], ro,
+                                                [](const ReferenceProgress&) { return true; });
+      writeExr(file.string(), r.image,
+               {{"nestlight:method", "direct"},
+                {"nestlight:samples", std::to_string(r.samplesPerPixel)},
+                {"nestlight:pixel_centres", "1"}});
+      half[k] = r.image;
+      say(run.log, "bench ibl: %s reference frame %d (%c): %d spp in %.1f s\n", run.name.c_str(), f,
+          "ab"[k], r.samplesPerPixel, r.seconds);
     }
+    HdrImage mean = half[0];
+    for (size_t i = 0; i < mean.rgb.size(); ++i)
+      mean.rgb[i] = 0.5f * (half[0].rgb[i] + half[1].rgb[i]);
+    // The mean of two halves: its variance is a quarter of E (a - b)^2.
+    const Sums d = maskedSums(half[0], half[1], run.mask);
+    const Sums m = maskedSums(mean, mean, run.mask);
+    run.refNoise2.push_back(m.ref2 > 0 ? d.err2 / 4 / m.ref2 : 0);
+    run.refs.push_back(std::move(mean));
+  }
+  say(run.log,
+      "bench ibl: %s reference: %d spp, its own relative error %.4f (median over frames)\n",
+      run.name.c_str(), o.referenceSpp, std::sqrt(median(run.refNoise2)));
+}
+
+// Cached references are named by what they depend on: the scene (materials, camera, size) and
+// every probe frame's bytes.
+std::string referenceStamp(const BenchIblOptions& o, const json& sceneJson, const fs::path& dir) {
+  std::string stampText = sceneJson.dump();
+  for (int f = 0; f < o.frames; ++f) {
+    std::ifstream in(dir / probeName(f), std::ios::binary);
+    stampText +=
+        std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  char stamp[32];
+  std::snprintf(stamp, sizeof stamp, "%016zx", std::hash<std::string>{}(stampText));
+  return stamp;
+}
+
+// An estimator's curve and plot series as its sample counts run.
+struct EstimatorRun {
+  std::vector<std::pair<double, double>> curve;  // (median ms, median relative L2) per count
+  PlotSeries speed;
+  std::vector<PlotSeries>& frameSeries;
+};
+
+// One configuration (estimator, samples per pixel): the sequence rendered with two seeds and
+// measured frame by frame against the ground truth, and timed at the timing size.
+json runLevel(const SceneRun& run, const std::string& est, int q, EstimatorRun& er) {
+  const BenchIblOptions& o = run.o;
+  Scene s = run.scene;
+  s.gi.method = "ibl";
+  s.gi.parameters = json{{"estimator", est}};
+  findMethod("ibl")->applyQuality(s.gi, q);
+  auto runSeed = [&](uint64_t seed, int W) {
+    Scene ss = s;
+    ss.gi.seed = seed;
+    ss.camera.width = ss.camera.height = W;
+    auto m = createMethod(ss, {true, false});
+    std::vector<MethodFrame> out;
+    for (int f = 0; f < (W == o.size ? o.frames : std::min(o.frames, o.timingFrames)); ++f) {
+      SceneCamera c = run.cameras[size_t(f)];
+      c.width = c.height = W;
+      out.push_back(m->render(c));
+    }
+    return out;
+  };
+  const std::vector<MethodFrame> a = runSeed(1, o.size);
+  std::vector<MethodFrame> b;
+  if (o.variance) b = runSeed(2, o.size);
+  const std::vector<uint8_t>& mask = run.mask;
+  const std::vector<HdrImage>& refs = run.refs;
+  std::vector<double> errs, errsNet, vars, flick, ms, blockErrs, meanRatios;
+  for (int f = 0; f < o.frames; ++f) {
+    const Sums e = maskedSums(a[size_t(f)].image, refs[size_t(f)], mask);
+    const double rel = e.ref2 > 0 ? std::sqrt(e.err2 / e.ref2) : 0;
+    // The reference's own noise adds to the measured error (independent): taken out.
+    errsNet.push_back(std::sqrt(std::max(0.0, rel * rel - run.refNoise2[size_t(f)])));
+    double var = 0;
+    if (o.variance) {
+      const Sums d = maskedSums(a[size_t(f)].image, b[size_t(f)].image, mask);
+      var = e.ref2 > 0 ? d.err2 / 2 / e.ref2 : 0;  // E (a - b)^2 = 2 var, relative to mean r^2
+    }
+    double fl = 0;
+    if (f > 0) {
+      HdrImage da = a[size_t(f)].image, db = a[size_t(f - 1)].image;
+      for (size_t i = 0; i < da.rgb.size(); ++i) da.rgb[i] -= refs[size_t(f)].rgb[i];
+      for (size_t i = 0; i < db.rgb.size(); ++i) db.rgb[i] -= refs[size_t(f - 1)].rgb[i];
+      const Sums d = maskedSums(da, db, mask);
+      fl = e.ref2 > 0 ? std::sqrt(d.err2 / e.ref2) : 0;
+      flick.push_back(fl);
+    }
+    errs.push_back(rel), vars.push_back(var), ms.push_back(a[size_t(f)].seconds * 1e3);
+    const BlockStats bs = blockStats(a[size_t(f)].image, refs[size_t(f)], mask);
+    blockErrs.push_back(bs.relativeL2), meanRatios.push_back(bs.meanRatio);
+    run.csv << run.name << "," << est << "," << q << "," << f << "," << ms.back() << "," << rel
+            << "," << errsNet.back() << "," << var << "," << (f > 0 ? std::to_string(fl) : "")
+            << "," << bs.relativeL2 << "," << bs.meanRatio << "\n";
+  }
+  double timingMs = 0;
+  if (o.timingSize > 0) {
+    std::vector<double> t;
+    for (const MethodFrame& fr : runSeed(1, o.timingSize)) t.push_back(fr.seconds * 1e3);
+    timingMs = median(t);
+  }
+  const double medMs = median(ms), medErr = median(errsNet);
+  // Equal time at the timing size where it was measured: per-pixel relative error hardly
+  // depends on the image's size at a given sample count, frame time does (fixed costs).
+  er.curve.push_back({o.timingSize > 0 ? timingMs : medMs, medErr});
+  er.speed.points.push_back({er.curve.back().first, medErr, std::to_string(q)});
+  if (q == o.samples[o.samples.size() / 2]) {
+    PlotSeries fs{est + " (" + std::to_string(q) + " spp)", {}};
+    for (int f = 0; f < o.frames; ++f) fs.points.push_back({double(f), errsNet[size_t(f)]});
+    er.frameSeries.push_back(fs);
+  }
+  say(run.log,
+      "bench ibl: %-10s %-4s %3d spp: %8.1f ms/frame at %d^2 (%8.1f ms at %d^2), relative L2 "
+      "%.4f (%.4f without "
+      "the reference's noise; median of %d frames), relative variance %.2e, flicker %.4f; "
+      "4x4 blocks: relative L2 "
+      "%.4f, mean %.4f of the reference's\n",
+      run.name.c_str(), est.c_str(), q, medMs, o.size, timingMs, o.timingSize, median(errs), medErr,
+      o.frames, median(vars), median(flick), median(blockErrs), median(meanRatios));
+  return {{"samples", q},
+          {"median_ms", medMs},
+          {"timing_ms", timingMs},
+          {"median_relative_l2", median(errs)},
+          {"median_relative_l2_net", medErr},
+          {"median_relative_l2_4x4", median(blockErrs)},
+          {"median_mean_ratio", median(meanRatios)},
+          {"relative_l2_4x4_per_frame", blockErrs},
+          {"mean_ratio_per_frame", meanRatios},
+          {"relative_l2_per_frame", errs},
+          {"relative_l2_net_per_frame", errsNet},
+          {"relative_variance_per_frame", vars},
+          {"flicker_per_frame", flick},
+          {"median_flicker", median(flick)},
+          {"ms_per_frame", ms},
+          {"attributes", a.back().attributes}};
+}
+
+// Every estimator at every sample count on one scene, the best one's speed-up over environment
+// sampling alone, and the scene's two plots.
+json measureScene(const SceneRun& run) {
+  const BenchIblOptions& o = run.o;
+  std::vector<double> refNoise;
+  for (double v : run.refNoise2) refNoise.push_back(std::sqrt(v));
+  json sceneOut = {{"scene", run.name},
+                   {"reference_relative_error_per_frame", refNoise},
+                   {"estimators", json::array()}};
+  std::vector<PlotSeries> speedSeries, frameSeries;
+  std::map<std::string, json> timeTos;
+  for (const std::string& est : o.estimators) {
+    EstimatorRun er{{}, PlotSeries{est, {}}, frameSeries};
+    json estOut = {{"estimator", est}, {"levels", json::array()}};
+    for (int q : o.samples) estOut["levels"].push_back(runLevel(run, est, q, er));
+    estOut["time_to_5pct"] = timeTo(er.curve, 0.05);
+    estOut["time_to_2pct"] = timeTo(er.curve, 0.02);
+    timeTos[est] = estOut["time_to_5pct"];
+    speedSeries.push_back(er.speed);
+    sceneOut["estimators"].push_back(estOut);
+  }
+  // The best estimator's time to 5% against environment-map sampling alone.
+  if (timeTos.count("env") && timeTos["env"]["ms"].is_number()) {
+    std::string best;
+    double bestMs = INFINITY;
+    for (const auto& [e, t] : timeTos)
+      if (e != "env" && t["ms"].is_number() && t["ms"].get<double>() < bestMs)
+        bestMs = t["ms"].get<double>(), best = e;
+    if (!best.empty()) {
+      const double speedup = timeTos["env"]["ms"].get<double>() / bestMs;
+      sceneOut["best_to_5pct"] = {{"estimator", best}, {"speedup_over_env", speedup}};
+      say(run.log,
+          "bench ibl: %s: %s reaches 5%% in %.1f ms a frame (%d^2), %.2fx faster than "
+          "environment sampling alone\n",
+          run.name.c_str(), best.c_str(), bestMs, o.timingSize > 0 ? o.timingSize : o.size,
+          speedup);
+    }
+  }
+  const int timeSize = o.timingSize > 0 ? o.timingSize : o.size;
+  writeSvgPlot((o.out / (run.name + "_speed.svg")).string(),
+               "ibl on " + run.name + ": time against error",
+               "ms per frame (" + std::to_string(timeSize) + "^2)",
+               "relative L2 error (median over frames, net)", speedSeries, true, true);
+  writeSvgPlot((o.out / (run.name + "_frames.svg")).string(),
+               "ibl on " + run.name + ": error per frame", "frame",
+               "relative L2 error (the reference's noise taken out)", frameSeries, false, true);
+  return sceneOut;
+}
+
+}  // namespace
+
+BenchIblReport runBenchIbl(const BenchIblOptions& o, std::FILE* log) {
+  if (o.frames < 2)
+    throw Error("--frames", "", "give at least 2 frames (flicker compares consecutive frames)");
+  NL_CHECK(findMethod("ibl"));
+  for (const auto& e : o.estimators)
+    if (e != "mis" && e != "bis" && e != "smc" && e != "env" && e != "brdf")
+      throw Error("--estimators", "", "unknown estimator '" + e + "' (mis, bis, smc, env, brdf)");
+  BenchIblReport report;
+  report.dir = o.out;
+  fs::create_directories(o.out);
+  json all = {{"device", o.device},
+              {"frames", o.frames},
+              {"size", o.size},
+              {"timing_size", o.timingSize},
+              {"time_to_error_at", o.timingSize > 0 ? o.timingSize : o.size},
+              {"reference_spp", o.referenceSpp},
+              {"roughness", o.roughness},
+              {"scenes", json::array()}};
+  std::ofstream csv(o.out / "bench_ibl.csv");
+  csv << "scene,estimator,samples,frame,ms,relative_l2,relative_l2_net,relative_variance,flicker,"
+         "relative_l2_4x4,"
+         "mean_ratio\n";
+  for (const std::string& sceneName : o.scenes) {
+    const fs::path dir = o.out / sceneName;
+    fs::create_directories(dir);
+    if (!writeProbeSequence(o, sceneName, dir, log)) continue;
+    const json sceneJson = sceneDescription(o, sceneName, dir);
     std::ofstream(dir / "scene.json") << sceneJson.dump(2);
-    Scene scene = loadScene(dir / "scene.json");
-    // Cached references are named by what they depend on: the scene (materials, camera, size)
-    // and every probe frame's bytes.
-    std::string stampText = sceneJson.dump();
-    for (int f = 0; f < o.frames; ++f) {
-      char name[64];
-      std::snprintf(name, sizeof name, "probe_%04d.exr", f);
-      std::ifstream in(dir / name, std::ios::binary);
-      stampText +=
-          std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    }
-    char stamp[32];
-    std::snprintf(stamp, sizeof stamp, "%016zx", std::hash<std::string>{}(stampText));
-    const std::vector<SceneCamera> cameras = sceneCameras(scene);
-    NL_CHECK(int(cameras.size()) == o.frames);
+    SceneRun run{o, sceneName, dir, loadScene(dir / "scene.json"), {}, {}, {}, {}, csv, log};
+    const std::string stamp = referenceStamp(o, sceneJson, dir);
+    run.cameras = sceneCameras(run.scene);
+    NL_CHECK(int(run.cameras.size()) == o.frames);
     // The scene as the reference traces it: the mask's rays, and the references not yet cached.
-    const std::unique_ptr<ReferenceScene> rs = ReferenceScene::load(scene);
-    const std::vector<uint8_t> mask = interiorMask(scene, *rs, o.size, o.size);
-    // Ground truth per frame: the reference's direct light, as two halves of the samples with
-    // different seeds, whose mean is the reference and whose difference measures its own noise
-    // (the errors below are reported with it and with it taken out). Cached by a stamp.
-    std::vector<HdrImage> refs;
-    std::vector<double> refNoise2;  // per frame: the reference's relative squared error
-    {
-      // The reference's first bounce (direct light), its camera rays through pixel centres as the
-      // GL methods shade them, lit by each frame's probe as the method is (EnvironmentSource).
-      std::unique_ptr<EnvironmentSource> probe;
-      ReferenceOptions ro = referenceOptionsFrom(scene.gi);
-      ro.maxBounces = 1;
-      ro.maxSamplesPerPixel = o.referenceSpp;
-      ro.targetRelativeError = 0;
-      ro.pixelCentres = true;
-      for (int f = 0; f < o.frames; ++f) {
-        HdrImage half[2];
-        for (int k = 0; k < 2; ++k) {
-          char name[128];
-          std::snprintf(name, sizeof name, "reference_%s_%dspp_%04d_%c.exr", stamp, o.referenceSpp,
-                        f, "ab"[k]);
-          const fs::path file = dir / name;
-          if (fs::exists(file)) {
-            half[k] = readHdrImage(file.string());
-            continue;
-          }
-          if (!probe) probe = std::make_unique<EnvironmentSource>(scene.environment);
-          rs->setEnvironment(probe->at(cameras[size_t(f)].time));
-          ro.seed = 2 * uint64_t(f) + uint64_t(k) + 1;
-          ro.maxSamplesPerPixel = std::max(o.referenceSpp / 2, 1);
-          const ReferenceResult r = renderReference(*rs, cameras[size_t(f)], ro,
-                                                    [](const ReferenceProgress&) { return true; });
-          writeExr(file.string(), r.image,
-                   {{"nestlight:method", "direct"},
-                    {"nestlight:samples", std::to_string(r.samplesPerPixel)},
-                    {"nestlight:pixel_centres", "1"}});
-          half[k] = r.image;
-          say("bench ibl: %s reference frame %d (%c): %d spp in %.1f s\n", sceneName.c_str(), f,
-              "ab"[k], r.samplesPerPixel, r.seconds);
-        }
-        HdrImage mean = half[0];
-        for (size_t i = 0; i < mean.rgb.size(); ++i)
-          mean.rgb[i] = 0.5f * (half[0].rgb[i] + half[1].rgb[i]);
-        // The mean of two halves: its variance is a quarter of E (a - b)^2.
-        const Sums d = maskedSums(half[0], half[1], mask);
-        const Sums m = maskedSums(mean, mean, mask);
-        refNoise2.push_back(m.ref2 > 0 ? d.err2 / 4 / m.ref2 : 0);
-        refs.push_back(std::move(mean));
-      }
-      say("bench ibl: %s reference: %d spp, its own relative error %.4f (median over frames)\n",
-          sceneName.c_str(), o.referenceSpp, std::sqrt(medianOf(refNoise2)));
-    }
-    std::vector<double> refNoise;
-    for (double v : refNoise2) refNoise.push_back(std::sqrt(v));
-    json sceneOut = {{"scene", sceneName},
-                     {"reference_relative_error_per_frame", refNoise},
-                     {"estimators", json::array()}};
-    std::vector<PlotSeries> speedSeries, frameSeries;
-    json envBaseline;
-    std::map<std::string, json> timeTos;
-    for (const std::string& est : o.estimators) {
-      std::vector<std::pair<double, double>>
-          curve;  // (median ms, median relative L2) per sample count
-      PlotSeries speed{est, {}};
-      json estOut = {{"estimator", est}, {"levels", json::array()}};
-      for (int q : o.samples) {
-        Scene s = scene;
-        s.gi.method = "ibl";
-        s.gi.parameters = json{{"estimator", est}};
-        ibl->applyQuality(s.gi, q);
-        auto runSeed = [&](uint64_t seed, int W) {
-          Scene ss = s;
-          ss.gi.seed = seed;
-          ss.camera.width = ss.camera.height = W;
-          auto m = createMethod(ss, {true, false});
-          std::vector<MethodFrame> out;
-          for (int f = 0; f < (W == o.size ? o.frames : std::min(o.frames, o.timingFrames)); ++f) {
-            SceneCamera c = cameras[size_t(f)];
-            c.width = c.height = W;
-            out.push_back(m->render(c));
-          }
-          return out;
-        };
-        const std::vector<MethodFrame> a = runSeed(1, o.size);
-        std::vector<MethodFrame> b;
-        if (o.variance) b = runSeed(2, o.size);
-        std::vector<double> errs, errsNet, vars, flick, ms, blockErrs, meanRatios;
-        for (int f = 0; f < o.frames; ++f) {
-          const Sums e = maskedSums(a[size_t(f)].image, refs[size_t(f)], mask);
-          const double rel = e.ref2 > 0 ? std::sqrt(e.err2 / e.ref2) : 0;
-          // The reference's own noise adds to the measured error (independent): taken out.
-          errsNet.push_back(std::sqrt(std::max(0.0, rel * rel - refNoise2[size_t(f)])));
-          double var = 0;
-          if (o.variance) {
-            const Sums d = maskedSums(a[size_t(f)].image, b[size_t(f)].image, mask);
-            var =
-                e.ref2 > 0 ? d.err2 / 2 / e.ref2 : 0;  // E (a - b)^2 = 2 var, relative to mean r^2
-          }
-          double fl = 0;
-          if (f > 0) {
-            HdrImage da = a[size_t(f)].image, db = a[size_t(f - 1)].image;
-            for (size_t i = 0; i < da.rgb.size(); ++i) da.rgb[i] -= refs[size_t(f)].rgb[i];
-            for (size_t i = 0; i < db.rgb.size(); ++i) db.rgb[i] -= refs[size_t(f - 1)].rgb[i];
-            const Sums d = maskedSums(da, db, mask);
-            fl = e.ref2 > 0 ? std::sqrt(d.err2 / e.ref2) : 0;
-            flick.push_back(fl);
-          }
-          errs.push_back(rel), vars.push_back(var), ms.push_back(a[size_t(f)].seconds * 1e3);
-          const BlockStats bs = blockStats(a[size_t(f)].image, refs[size_t(f)], mask);
-          blockErrs.push_back(bs.relativeL2), meanRatios.push_back(bs.meanRatio);
-          csv << sceneName << "," << est << "," << q << "," << f << "," << ms.back() << "," << rel
-              << "," << errsNet.back() << "," << var << "," << (f > 0 ? std::to_string(fl) : "")
-              << "," << bs.relativeL2 << "," << bs.meanRatio << "\n";
-        }
-        double timingMs = 0;
-        if (o.timingSize > 0) {
-          std::vector<double> t;
-          for (const MethodFrame& fr : runSeed(1, o.timingSize)) t.push_back(fr.seconds * 1e3);
-          timingMs = medianOf(t);
-        }
-        const double medMs = medianOf(ms), medErr = medianOf(errsNet);
-        // Equal time at the timing size where it was measured: per-pixel relative error hardly
-        // depends on the image's size at a given sample count, frame time does (fixed costs).
-        curve.push_back({o.timingSize > 0 ? timingMs : medMs, medErr});
-        speed.points.push_back({curve.back().first, medErr, std::to_string(q)});
-        if (q == o.samples[o.samples.size() / 2]) {
-          PlotSeries fs{est + " (" + std::to_string(q) + " spp)", {}};
-          for (int f = 0; f < o.frames; ++f) fs.points.push_back({double(f), errsNet[size_t(f)]});
-          frameSeries.push_back(fs);
-        }
-        say("bench ibl: %-10s %-4s %3d spp: %8.1f ms/frame at %d^2 (%8.1f ms at %d^2), relative L2 "
-            "%.4f (%.4f without "
-            "the reference's noise; median of %d frames), relative variance %.2e, flicker %.4f; "
-            "4x4 blocks: relative L2 "
-            "%.4f, mean %.4f of the reference's\n",
-            sceneName.c_str(), est.c_str(), q, medMs, o.size, timingMs, o.timingSize,
-            medianOf(errs), medErr, o.frames, medianOf(vars), medianOf(flick), medianOf(blockErrs),
-            medianOf(meanRatios));
-        estOut["levels"].push_back({{"samples", q},
-                                    {"median_ms", medMs},
-                                    {"timing_ms", timingMs},
-                                    {"median_relative_l2", medianOf(errs)},
-                                    {"median_relative_l2_net", medErr},
-                                    {"median_relative_l2_4x4", medianOf(blockErrs)},
-                                    {"median_mean_ratio", medianOf(meanRatios)},
-                                    {"relative_l2_4x4_per_frame", blockErrs},
-                                    {"mean_ratio_per_frame", meanRatios},
-                                    {"relative_l2_per_frame", errs},
-                                    {"relative_l2_net_per_frame", errsNet},
-                                    {"relative_variance_per_frame", vars},
-                                    {"flicker_per_frame", flick},
-                                    {"median_flicker", medianOf(flick)},
-                                    {"ms_per_frame", ms},
-                                    {"attributes", a.back().attributes}});
-      }
-      estOut["time_to_5pct"] = timeTo(curve, 0.05);
-      estOut["time_to_2pct"] = timeTo(curve, 0.02);
-      timeTos[est] = estOut["time_to_5pct"];
-      speedSeries.push_back(speed);
-      sceneOut["estimators"].push_back(estOut);
-    }
-    // The best estimator's time to 5% against environment-map sampling alone.
-    if (timeTos.count("env") && timeTos["env"]["ms"].is_number()) {
-      std::string best;
-      double bestMs = INFINITY;
-      for (const auto& [e, t] : timeTos)
-        if (e != "env" && t["ms"].is_number() && t["ms"].get<double>() < bestMs)
-          bestMs = t["ms"].get<double>(), best = e;
-      if (!best.empty()) {
-        const double speedup = timeTos["env"]["ms"].get<double>() / bestMs;
-        sceneOut["best_to_5pct"] = {{"estimator", best}, {"speedup_over_env", speedup}};
-        say("bench ibl: %s: %s reaches 5%% in %.1f ms a frame (%d^2), %.2fx faster than "
-            "environment sampling alone\n",
-            sceneName.c_str(), best.c_str(), bestMs, o.timingSize > 0 ? o.timingSize : o.size,
-            speedup);
-      }
-    }
-    const int timeSize = o.timingSize > 0 ? o.timingSize : o.size;
-    writeSvgPlot((o.out / (sceneName + "_speed.svg")).string(),
-                 "ibl on " + sceneName + ": time against error",
-                 "ms per frame (" + std::to_string(timeSize) + "^2)",
-                 "relative L2 error (median over frames, net)", speedSeries, true, true);
-    writeSvgPlot((o.out / (sceneName + "_frames.svg")).string(),
-                 "ibl on " + sceneName + ": error per frame", "frame",
-                 "relative L2 error (the reference's noise taken out)", frameSeries, false, true);
-    all["scenes"].push_back(sceneOut);
+    const std::unique_ptr<ReferenceScene> rs = ReferenceScene::load(run.scene);
+    run.mask = interiorMask(run.scene, *rs, o.size, o.size);
+    renderGroundTruth(run, *rs, stamp);
+    all["scenes"].push_back(measureScene(run));
   }
   std::ofstream(o.out / "bench_ibl.json") << all.dump(2);
   report.json = std::move(all);
   return report;
 }
 
-}  // namespace nestlight::gi
+}  // namespace nestlight::bench

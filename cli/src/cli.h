@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/bench/harness.h"
 #include "nestlight/converters/progress.h"
 
 namespace nestlight::viewer {
@@ -57,22 +58,12 @@ uint64_t parseCount(const std::string& text, const std::string& option = "");
 uint64_t parseBytes(const std::string& text);
 // Files as given; a directory stands for its supported point files, sorted by name.
 std::vector<std::string> expandInputs(const std::vector<std::string>& inputs);
-std::string humanBytes(double bytes);
-double median(std::vector<double> v);
 // "1,4.5,16": comma-separated numbers; Error naming `option` and the item that is not one.
 std::vector<double> parseNumberList(const std::string& text, const std::string& option);
-std::string cpuName();  // /proc/cpuinfo's model name
-std::string humanCount(double n);
-// Runs this program with `args` in a child process (stdout discarded): wall time, the child's own
-// peak RSS, and the peak size of the converter's temporary folder under `watch` (an octree
-// folder being built; empty: not measured).
-struct ChildRun {
-  double seconds = 0;
-  uint64_t peakRss = 0;
-  uint64_t peakTempBytes = 0;
-  int status = 0;
-};
-ChildRun runChild(const std::vector<std::string>& args, const std::string& watch = "");
+// Counts, sizes and the CPU's name for reports, as the benchmarks print them.
+using bench::cpuName;
+using bench::humanBytes;
+using bench::humanCount;
 // --progress: "terminal", "json", "quiet" (or "none"); anything else is Auto.
 ProgressMode parseProgress(const std::string& s);
 

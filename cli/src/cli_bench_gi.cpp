@@ -1,8 +1,8 @@
-// `nestlight bench gi`: options for gi::runBenchGi (nestlight/gi/bench_gi.h).
+// `nestlight bench gi`: options for bench::runBenchGi (nestlight/bench/bench_gi.h).
 #include <sstream>
 
 #include "cli.h"
-#include "nestlight/gi/bench_gi.h"
+#include "nestlight/bench/bench_gi.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/octree/error.h"
 
@@ -44,7 +44,7 @@ void addBenchGi(CLI::App& app, int& exitCode) {
           "cornell/scene.json\n"
           "         nestlight bench gi cornell/scene.json --methods raster --quality "
           "raster=512,2048");
-  auto o = std::make_shared<gi::BenchGiOptions>();
+  auto o = std::make_shared<bench::BenchGiOptions>();
   auto scene = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   auto spp = std::make_shared<std::string>();
@@ -89,7 +89,7 @@ void addBenchGi(CLI::App& app, int& exitCode) {
                 "bounces and with exact "
                 "visibility, the ablation that separates the ISMs' error from the VPLs')");
   cmd->callback([=, &exitCode]() {
-    gi::BenchGiOptions opt = *o;
+    bench::BenchGiOptions opt = *o;
     opt.variants = !*noVariants;
     opt.device = cpuName();
     opt.scene = *scene;
@@ -109,7 +109,7 @@ void addBenchGi(CLI::App& app, int& exitCode) {
       opt.qualities[q.substr(0, eq)] =
           parseIntList(q.substr(eq + 1), "--quality " + q.substr(0, eq));
     }
-    gi::runBenchGi(opt, stdout);
+    bench::runBenchGi(opt, stdout);
     exitCode = 0;
   });
 }

@@ -1,9 +1,9 @@
-// `nestlight bench ibl`: options for gi::runBenchIbl (nestlight/gi/bench_ibl.h).
+// `nestlight bench ibl`: options for bench::runBenchIbl (nestlight/bench/bench_ibl.h).
 #include <cmath>
 #include <sstream>
 
 #include "cli.h"
-#include "nestlight/gi/bench_ibl.h"
+#include "nestlight/bench/bench_ibl.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::cli {
@@ -32,7 +32,7 @@ void addBenchIbl(CLI::App& app, int& exitCode) {
       "bench_ibl.csv,\n"
       "bench_ibl.json and SVG plots.\n"
       "Example: nestlight bench ibl -o bench-ibl --frames 8 --samples 4,16,64,256");
-  auto o = std::make_shared<gi::BenchIblOptions>();
+  auto o = std::make_shared<bench::BenchIblOptions>();
   auto scenes = std::make_shared<std::string>("moving-sun,scanned,shared");
   auto estimators = std::make_shared<std::string>("mis,bis,smc,env");
   auto samples = std::make_shared<std::string>("4,16,64");
@@ -71,7 +71,7 @@ void addBenchIbl(CLI::App& app, int& exitCode) {
   cmd->add_flag("--no-variance", *noVariance,
                 "Skip the second seed (no variance figures; half the time)");
   cmd->callback([=, &exitCode]() {
-    gi::BenchIblOptions opt = *o;
+    bench::BenchIblOptions opt = *o;
     opt.out = *out;
     opt.device = cpuName();
     opt.variance = !*noVariance;
@@ -92,7 +92,7 @@ void addBenchIbl(CLI::App& app, int& exitCode) {
         throw Error("--samples: '" + std::to_string(x) + "' is not 1 to 4096");
       opt.samples.push_back(int(x));
     }
-    gi::runBenchIbl(opt, stdout);
+    bench::runBenchIbl(opt, stdout);
     exitCode = 0;
   });
 }

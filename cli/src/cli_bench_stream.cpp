@@ -1,11 +1,11 @@
-// `nestlight bench stream`: options for streaming::runStreamBench
-// (nestlight/streaming/stream_bench.h).
+// `nestlight bench stream`: options for bench::runStreamBench
+// (nestlight/bench/stream_bench.h).
 #include <fstream>
 
 #include "cli.h"
+#include "nestlight/bench/stream_bench.h"
 #include "nestlight/converters/synthetic_octree.h"
 #include "nestlight/octree/error.h"
-#include "nestlight/streaming/stream_bench.h"
 
 namespace nestlight::cli {
 
@@ -21,7 +21,7 @@ void addBenchStream(CLI::App& app, int& exitCode) {
   auto dir = std::make_shared<std::string>();
   auto generate = std::make_shared<std::string>();
   auto work = std::make_shared<std::string>("bench-data");
-  auto o = std::make_shared<streaming::StreamBenchOptions>();
+  auto o = std::make_shared<bench::StreamBenchOptions>();
   auto out = std::make_shared<std::string>("bench-stream.json");
   cmd->add_option("octree", *dir, "Octree folder (or --generate)");
   cmd->add_option("--generate", *generate,
@@ -44,9 +44,9 @@ void addBenchStream(CLI::App& app, int& exitCode) {
     if (!generate->empty())
       octree = ensureSyntheticOctree(parseCount(*generate, "--generate"),
                                      fs::path(*work) / ("stream_" + *generate + ".octree"));
-    streaming::StreamBenchOptions opt = *o;
+    bench::StreamBenchOptions opt = *o;
     opt.device = cpuName();
-    const nlohmann::json results = streaming::runStreamBench(octree, opt, stdout);
+    const nlohmann::json results = bench::runStreamBench(octree, opt, stdout);
     std::ofstream(*out) << results.dump(2) << "\n";
     std::printf("results written to %s\n", out->c_str());
     exitCode = 0;

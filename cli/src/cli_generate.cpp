@@ -12,7 +12,7 @@
 #include "nestlight/converters/synthetic.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/converters/verify.h"
-#include "nestlight/gi/bench_gi.h"
+#include "nestlight/gi/metrics.h"
 #include "nestlight/gi/render_scene.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
@@ -24,24 +24,6 @@ namespace nestlight::cli {
 namespace fs = std::filesystem;
 
 void printBuildSummary(const BuildReport& r, const fs::path& out);
-
-// Writes a synthetic scan; returns the number of points.
-uint64_t writeSynthetic(const SyntheticSpec& spec, const std::string& path) {
-  auto src = openSynthetic(spec);
-  SourceHeader h = src->header();
-  h.path = path;
-  if (!h.scale) h.scale = Vec3d{spec.precision, spec.precision, spec.precision};
-  if (!h.offset) h.offset = spec.origin;
-  auto w = createWriter(path, h);
-  PointBatch batch;
-  uint64_t n = 0;
-  while (src->read(batch, 1 << 20)) {
-    w->write(batch);
-    n += batch.size();
-  }
-  w->close();
-  return n;
-}
 
 namespace {
 Vec3d parseVec(const std::string& s) {

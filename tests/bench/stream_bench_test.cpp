@@ -1,10 +1,10 @@
 // The `bench stream` harness as a library call: every measure reported, and a converged view never
 // reads less than the payload of the nodes it draws.
-#include "nestlight/streaming/stream_bench.h"
+#include "nestlight/bench/stream_bench.h"
 
 #include <gtest/gtest.h>
 
-#include "streaming_support.h"
+#include "streaming/streaming_support.h"
 #include "test_support.h"
 
 using namespace nestlight;
@@ -15,12 +15,12 @@ TEST(StreamBench, ReportsEveryMeasure) {
   spec.points = 100'000;
   spec.seed = 5;
   test::buildSyntheticOctree(t.path() / "o", spec, 2000);
-  streaming::StreamBenchOptions o;
+  bench::StreamBenchOptions o;
   o.frames = 20;
   o.teleports = 2;
   o.frameMs = 1;
   o.device = "test";
-  const nlohmann::json r = streaming::runStreamBench(t.path() / "o", o, nullptr);
+  const nlohmann::json r = bench::runStreamBench(t.path() / "o", o, nullptr);
   EXPECT_EQ(r["device"], "test");
   EXPECT_EQ(r["points"], 100'000u);
   ASSERT_EQ(r["paths"].size(), 3u);

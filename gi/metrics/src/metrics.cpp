@@ -394,6 +394,16 @@ nlohmann::json toJson(const ErrorImageLegend& l) {
           {"description", l.describe()}};
 }
 
+double relativeL2(const HdrImage& t, const HdrImage& r) {
+  NL_CHECK(t.rgb.size() == r.rgb.size());
+  double d = 0, n = 0;
+  for (size_t i = 0; i < t.rgb.size(); ++i) {
+    double e = double(t.rgb[i]) - r.rgb[i];
+    if (std::isfinite(e)) d += e * e, n += double(r.rgb[i]) * r.rgb[i];
+  }
+  return n > 0 ? std::sqrt(d / n) : (d > 0 ? INFINITY : 0);
+}
+
 HdrImage boxFilter(const HdrImage& img, int k) {
   NL_CHECK(k >= 1);
   const int w = (img.width + k - 1) / k, h = (img.height + k - 1) / k;

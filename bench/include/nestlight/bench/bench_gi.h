@@ -14,7 +14,7 @@
 
 #include "nestlight/gi/metrics.h"
 
-namespace nestlight::gi {
+namespace nestlight::bench {
 
 struct BenchGiOptions {
   std::filesystem::path scene;
@@ -43,10 +43,10 @@ struct BenchGiRow {
   double medianMs = 0;
   double raysPerSecond = 0, samplesPerSecond = 0;
   std::vector<std::pair<std::string, double>> passMs;  // GL methods: GPU time per pass, first run
-  ImageComparison cmp;
+  gi::ImageComparison cmp;
   double relativeL2 = 0;
-  double relativeL2Box4 = 0;   // of 4 x 4-pixel block means (shading, not pixel sampling)
-  ImageAttributes attributes;  // the first run's (clamp loss, ISM agreement, ...)
+  double relativeL2Box4 = 0;       // of 4 x 4-pixel block means (shading, not pixel sampling)
+  gi::ImageAttributes attributes;  // the first run's (clamp loss, ISM agreement, ...)
 };
 
 struct BenchGiReport {
@@ -55,12 +55,8 @@ struct BenchGiReport {
   std::filesystem::path dir;
 };
 
-// sqrt(sum (t - r)^2 / sum r^2) over all pixels and channels (non-finite differences skipped):
-// the relative L2 error the reference's stop rule estimates.
-double relativeL2(const HdrImage& test, const HdrImage& reference);
-
 // Throws nestlight::Error for unknown methods (before any rendering), bad scenes and failed
 // renders. Progress and the table go to `log` (nullptr: silent).
 BenchGiReport runBenchGi(const BenchGiOptions& options, std::FILE* log = stdout);
 
-}  // namespace nestlight::gi
+}  // namespace nestlight::bench

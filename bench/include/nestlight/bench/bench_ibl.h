@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace nestlight::gi {
+namespace nestlight::bench {
 
 struct BenchIblOptions {
   std::filesystem::path out = "bench-ibl";
@@ -46,4 +46,4 @@ struct BenchIblReport {
 // Throws nestlight::Error for bad options and failed renders. Progress and tables go to `log`.
 BenchIblReport runBenchIbl(const BenchIblOptions& options, std::FILE* log = stdout);
 
-}  // namespace nestlight::gi
+}  // namespace nestlight::bench

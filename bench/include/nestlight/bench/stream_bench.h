@@ -1,7 +1,7 @@
 // `nestlight bench stream`: the streaming scheduler's CPU time per frame with every node of a
 // large octree resident, the time to full detail after a teleport, and the bytes a converged view
-// read against the bytes its nodes hold. The harness lives here so that it measures the library
-// as any program links it; the command line only parses options.
+// read against the bytes its nodes hold. The harness measures the streaming library as any program
+// links it; the command line only parses options.
 #pragma once
 
 #include <cstdint>
@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-namespace nestlight::streaming {
+namespace nestlight::bench {
 
 struct StreamBenchOptions {
   int frames = 600;              // frames timed per camera path with every node resident
@@ -25,4 +25,4 @@ struct StreamBenchOptions {
 nlohmann::json runStreamBench(const std::filesystem::path& octree, const StreamBenchOptions& o,
                               std::FILE* log = stdout);
 
-}  // namespace nestlight::streaming
+}  // namespace nestlight::bench

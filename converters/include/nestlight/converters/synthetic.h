@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "nestlight/converters/reader.h"
@@ -41,6 +42,9 @@ struct SyntheticSpec {
 // every point exactly. Layout, in order of the flags: "rgb" uint16 x3 (8-bit values * 257,
 // rgbBits 8), "intensity" uint16, "normal" float x3 (unit length).
 std::unique_ptr<PointReader> openSynthetic(const SyntheticSpec& spec);
+// Writes openSynthetic(spec) to `path` (any format createWriter takes, by its extension), quantised
+// to spec.precision about spec.origin; returns the number of points.
+uint64_t writeSynthetic(const SyntheticSpec& spec, const std::string& path);
 
 // "surfaces", "cube", "duplicates", "plane" (case-insensitive).
 std::optional<SyntheticShape> parseSyntheticShape(std::string_view name);

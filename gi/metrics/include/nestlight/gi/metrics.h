@@ -82,6 +82,10 @@ double ssim(const HdrImage& a, const HdrImage& b, double dynamicRange);
 // and edges).
 HdrImage boxFilter(const HdrImage& img, int k);
 
+// sqrt(sum (t - r)^2 / sum r^2) over all pixels and channels (non-finite differences skipped):
+// the relative L2 error the reference's stop rule estimates.
+double relativeL2(const HdrImage& test, const HdrImage& reference);
+
 // Throws nestlight::Error("test: is WxH pixels but reference ref is W'xH' pixels").
 void checkSameSize(const HdrImage& test, const HdrImage& reference, const std::string& testName,
                    const std::string& referenceName);
