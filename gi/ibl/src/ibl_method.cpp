@@ -14,9 +14,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/frame/frame_graph.h"
+#include "nestlight/gi/frame/raster_frame.h"
 #include "nestlight/gi/ibl/environment_table.h"
 #include "nestlight/gi/ibl/triangle_bvh.h"
-#include "nestlight/gi/raster/raster_frame.h"
 #include "nestlight/gi/sampling.h"
 #include "nestlight/gi/shared/bsh_layer.h"
 #include "nestlight/gi/shared/cut_hierarchies.h"

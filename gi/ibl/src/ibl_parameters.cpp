@@ -2,9 +2,9 @@
 // estimators, and its entry in the registry.
 #include <algorithm>
 
+#include "nestlight/gi/frame/frame_parameters.h"
 #include "nestlight/gi/ibl/ibl_method.h"
 #include "nestlight/gi/method_info.h"
-#include "nestlight/gi/raster/raster_method.h"
 #include "nestlight/octree/json_field.h"
 
 namespace nestlight::gi {

@@ -12,8 +12,8 @@
 #include <cstring>
 
 #include "nestlight/frame/frame_graph.h"
+#include "nestlight/gi/frame/raster_frame.h"
 #include "nestlight/gi/pbgi/micro_buffer.h"
-#include "nestlight/gi/raster/raster_frame.h"
 #include "nestlight/gi/shared/bsh.h"
 #include "nestlight/gi/shared/bsh_layer.h"
 #include "nestlight/gi/shared/cut_hierarchies.h"

@@ -17,7 +17,7 @@
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/interface.h"
-#include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/frame/raster_frame.h"
 #include "nestlight/gi/shared/reference_scene.h"
 #include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/gl/program.h"

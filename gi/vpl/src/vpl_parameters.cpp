@@ -1,6 +1,6 @@
 // `vpl`'s declaration: its parameters and its entry in the registry.
+#include "nestlight/gi/frame/frame_parameters.h"
 #include "nestlight/gi/method_info.h"
-#include "nestlight/gi/raster/raster_method.h"
 #include "nestlight/gi/vpl/vpl_method.h"
 
 namespace nestlight::gi {

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "nestlight/gi/raster/raster_frame.h"
+#include "nestlight/gi/frame/raster_frame.h"
 #include "nestlight/gi/shared/bsh.h"
 #include "nestlight/gi/shared/mesh_trees.h"
 #include "nestlight/gl/resources.h"
