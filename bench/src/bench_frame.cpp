@@ -35,6 +35,7 @@ gi::Scene frameScene(const BenchFrameOptions& o, fs::path& file) {
                          fs::path(o.dir) / ("frame_cornell_" + o.pointsName), so);
   }
   gi::Scene s = gi::loadScene(file);
+  gi::checkSceneMethod(s);  // as the file says, before --method replaces it
   s.gi.method = o.method;
   s.gi.mode = o.mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
   for (const std::string& p : o.params) {

@@ -347,6 +347,7 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   const fs::path& dir = report.dir;
   fs::create_directories(dir);
   setup.probe = loadScene(setup.sceneFile);
+  checkSceneMethod(setup.probe);  // the registry names the methods, not the scene parser
   setup.W = o.width ? o.width : setup.probe.camera.width;
   setup.H = o.height ? o.height : setup.probe.camera.height;
 

@@ -245,30 +245,48 @@ std::string timedScreenshotName() {
   return buf;
 }
 
-}  // namespace
-
-int runViewer(const ViewerOptions& opt) {
-  // A scene may hold meshes alone: then there is no scan to stream, and the GI frame is the view.
+// What the window shows: the scan (when there is one, its colourings) or the scene's meshes alone,
+// their bounds and the title.
+struct ViewInput {
   std::unique_ptr<OctreeReader> reader;
+  ScanColours colours;
+  Box3d bounds;
+  double extent = 0;
+  std::string title;
+};
+
+ViewInput openViewInput(const ViewerOptions& opt) {
+  ViewInput in;
+  // A scene may hold meshes alone: then there is no scan to stream, and the GI frame is the view.
   if (!opt.octree.empty())
-    reader =
-        std::make_unique<OctreeReader>(opt.octree);  // a bad octree fails before a window opens
+    in.reader = std::make_unique<OctreeReader>(opt.octree);  // a bad octree fails before a window
   else if (!opt.scene || opt.scene->meshes.empty())
     throw Error(opt.scene ? opt.scene->file.string() : "", "",
                 "nothing to view: no scan and no mesh");
+  const Metadata* meta = in.reader ? &in.reader->metadata() : nullptr;
+  if (meta) in.colours = scanColours(opt, *meta);
+  in.bounds = meta ? meta->bounds : meshBounds(*opt.scene);
+  if (in.bounds.empty())
+    throw Error(opt.scene->file.string(), "scene.meshes", "the meshes have no finite vertex");
+  const Box3d& b = in.bounds;
+  in.extent = meta ? meta->cubeWorldSize()
+                   : std::max({b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z});
+  in.title = in.reader ? opt.octree.filename().string() : opt.scene->file.filename().string();
+  return in;
+}
+
+}  // namespace
+
+int runViewer(const ViewerOptions& opt) {
+  ViewInput in = openViewInput(opt);
+  const std::unique_ptr<OctreeReader>& reader = in.reader;
   const Metadata* meta = reader ? &reader->metadata() : nullptr;
-  ScanColours colours;
-  if (meta) colours = scanColours(opt, *meta);
+  ScanColours& colours = in.colours;
   const frame::ColourMode& mode = colours.mode;
   const std::shared_ptr<const ColourLayerReader>& hdrLayer = colours.hdrLayer;
-  const Box3d bounds = meta ? meta->bounds : meshBounds(*opt.scene);
-  if (bounds.empty())
-    throw Error(opt.scene->file.string(), "scene.meshes", "the meshes have no finite vertex");
-  const double extent = meta ? meta->cubeWorldSize()
-                             : std::max({bounds.max.x - bounds.min.x, bounds.max.y - bounds.min.y,
-                                         bounds.max.z - bounds.min.z});
-  const std::string title =
-      reader ? opt.octree.filename().string() : opt.scene->file.filename().string();
+  const Box3d& bounds = in.bounds;
+  const double extent = in.extent;
+  const std::string& title = in.title;
   gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + title);
   std::printf("view: %s\n", ctx.description().c_str());
 
