@@ -169,7 +169,7 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
 void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   if (!text.camera.empty()) {
     auto v = parseNumbers(text.camera, 6, "--camera");
-    viewer::Camera c;
+    frame::Camera c;
     c.eye = {v[0], v[1], v[2]};
     c.target = {v[3], v[4], v[5]};
     if (glm::length(c.eye - c.target) <= 0) throw Error("--camera: eye and target coincide");
@@ -178,15 +178,15 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   }
   auto view = parseNumbers(text.view, 2, "--view");
   job.azimuth = view[0], job.elevation = view[1];
-  job.settings.rasteriser = viewer::parseRasteriser(text.rasteriser);
-  job.settings.splatting = viewer::parseSplatting(text.splatting);
+  job.settings.rasteriser = frame::parseRasteriser(text.rasteriser);
+  job.settings.splatting = frame::parseSplatting(text.splatting);
   if (!text.colour.empty()) job.colour = frame::parseColourMode(text.colour);
   if (job.colour == frame::ColourMode::Hdr && text.edl && text.edl->count() == 0)
     job.settings.edlStrength = 0;
   job.budgets.points = parseCount(text.pointBudget, "--point-budget");
   job.budgets.gpuBytes = parseBytes(text.gpuBudget);
   job.budgets.uploadBytesPerFrame = parseBytes(text.uploadBudget);
-  if (job.settings.rasteriser == viewer::Rasteriser::Compute) job.settings.fixedPointSize = 1;
+  if (job.settings.rasteriser == frame::Rasteriser::Compute) job.settings.fixedPointSize = 1;
 }
 
 namespace {

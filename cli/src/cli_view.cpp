@@ -29,7 +29,7 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
     opt.octree = scene.octrees.front().path;
   }
   if (scene.cameraSet && !given("--camera")) {
-    viewer::Camera c;
+    frame::Camera c;
     c.eye = scene.camera.eye;
     c.target = scene.camera.target;
     c.up = scene.camera.up;
@@ -38,13 +38,13 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
   }
   const gi::SceneDisplay& d = scene.display;
   if (d.rasteriser && !given("--rasteriser")) {
-    opt.settings.rasteriser = viewer::parseRasteriser(*d.rasteriser);
+    opt.settings.rasteriser = frame::parseRasteriser(*d.rasteriser);
     if (!given("--fixed-point-size"))
       opt.settings.fixedPointSize =
-          opt.settings.rasteriser == viewer::Rasteriser::Compute ? 1.f : 0.f;
+          opt.settings.rasteriser == frame::Rasteriser::Compute ? 1.f : 0.f;
   }
   if (d.splatting && !given("--splatting"))
-    opt.settings.splatting = viewer::parseSplatting(*d.splatting);
+    opt.settings.splatting = frame::parseSplatting(*d.splatting);
   if (d.pointSize && !given("--point-size")) opt.settings.sizeScale = *d.pointSize;
   if (d.edlStrength && !given("--edl")) opt.settings.edlStrength = *d.edlStrength;
 }

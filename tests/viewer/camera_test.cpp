@@ -1,12 +1,12 @@
 // The viewer's camera control keeps a scene camera's up: it opens on the camera as given and
 // turns about that up (the viewer assumed z-up and dropped it).
-#include "nestlight/viewer/camera.h"
+#include "nestlight/frame/camera.h"
 
 #include <gtest/gtest.h>
 
 #include <glm/glm.hpp>
 
-using namespace nestlight::viewer;
+using namespace nestlight::frame;
 
 namespace {
 

@@ -13,10 +13,12 @@
 #include "nestlight/gl/context.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/headless.h"
+#include "nestlight/viewer/image.h"
 #include "test_support.h"
 
 using namespace nestlight;
 using namespace nestlight::viewer;
+using namespace nestlight::frame;
 namespace fs = std::filesystem;
 
 namespace {

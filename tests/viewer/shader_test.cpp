@@ -5,15 +5,14 @@
 #include <cstdlib>
 #include <set>
 
+#include "nestlight/frame/point_view.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/program_catalogue.h"
 #include "nestlight/shaders/embedded.h"
-#include "nestlight/viewer/frame_renderer.h"
 #include "test_support.h"
 
 using namespace nestlight;
-using namespace nestlight::viewer;
 
 TEST(Shaders, EveryFileIsEmbedded) {
   std::vector<std::string> paths;
@@ -84,7 +83,7 @@ TEST(Shaders, CompileErrorNamesFileAndLineOnThisDriver) {
 TEST(Shaders, EveryProgramCompilesAndLinks) {
   auto ctx = gl::createHeadlessContext();
   EXPECT_NE(ctx->description().find("4.5"), std::string::npos) << ctx->description();
-  EXPECT_NO_THROW(FrameRenderer renderer);
+  EXPECT_NO_THROW(frame::PointView renderer);
   // The whole catalogue, as `nestlight gl-info --programs` checks it on a GPU: nothing fails;
   // only programs needing extensions the driver lacks (64-bit atomics on llvmpipe) are skipped.
   const std::vector<gl::ProgramCheck> checks = gl::checkCatalogue();

@@ -9,12 +9,14 @@
 
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
-#include "nestlight/viewer/camera.h"
+#include "nestlight/frame/camera.h"
 #include "nestlight/viewer/headless.h"
+#include "nestlight/viewer/image.h"
 #include "test_support.h"
 
 using namespace nestlight;
 using namespace nestlight::viewer;
+using namespace nestlight::frame;
 namespace fs = std::filesystem;
 
 namespace {

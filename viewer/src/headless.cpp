@@ -11,6 +11,7 @@
 #include "nestlight/gl/context.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/viewer/image.h"
 
 namespace nestlight::viewer {
 
@@ -47,7 +48,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
                     frame::colourModeName(mode) + "'");
   // An HDR layer is drawn in linear colour: EXR files keep it whole, PNG files clamp it.
   std::shared_ptr<const ColourLayerReader> layer;
-  RenderSettings settings = job.settings;
+  frame::RenderSettings settings = job.settings;
   if (mode == frame::ColourMode::Hdr) {
     layer = std::make_shared<const ColourLayerReader>(job.octree, meta, job.colourLayer);
     settings.linearOutput = true;
@@ -56,7 +57,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
   if (!job.quiet) std::printf("render: %s\n", context->description().c_str());
   {
     frame::GlNodeStore store(meta, mode, layer);
-    FrameRenderer renderer;
+    frame::PointView renderer;
     std::vector<RenderedFrame> out;
     {
       streaming::Streamer streamer(reader, store, job.budgets);
@@ -72,7 +73,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
       }
       const int frames = job.path ? job.path->frames() : 1;
       for (int f = 0; f < frames; ++f) {
-        Camera cam;
+        frame::Camera cam;
         if (job.path) {
           const gi::CameraKey k = job.path->at(f);
           cam.eye = k.eye, cam.target = k.target;
@@ -80,8 +81,8 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
         } else if (job.camera)
           cam = *job.camera;
         else
-          cam = Camera::framing(meta.bounds, job.fovYDegrees, double(job.width) / job.height,
-                                job.azimuth, job.elevation);
+          cam = frame::Camera::framing(meta.bounds, job.fovYDegrees, double(job.width) / job.height,
+                                       job.azimuth, job.elevation);
         cam.fitClipPlanes(meta.bounds);
         const streaming::View view = cam.view(job.width, job.height);
         streaming::FrameStats st = streamer.update(view);
@@ -103,7 +104,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
             st = streamer.update(view);
           }
         }
-        DrawTimings timings;
+        frame::DrawTimings timings;
         Image img = renderer.render(streamer.drawList(), store, cam, job.width, job.height,
                                     settings, &timings);
         RenderedFrame rf;

@@ -21,8 +21,18 @@
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/viewer/image.h"
 
 namespace nestlight::viewer {
+
+// The point view's types (nestlight/frame/point_view.h, camera.h), which the window drives.
+using frame::Camera;
+using frame::CameraController;
+using frame::DrawTimings;
+using frame::PointView;
+using frame::Rasteriser;
+using frame::RenderSettings;
+using frame::Splatting;
 
 namespace {
 // The world bounds of a scene's meshes: what a scene without a scan is framed by.
@@ -187,7 +197,7 @@ void methodPanel(const gi::Method& method, float& exposure, const gi::MethodFram
 // The view as shown, saved: the method's linear frame (EXR as rendered, PNG through the panel's
 // exposure) or the point view's image.
 void saveScreenshot(const std::string& file, gi::Method* method, const gi::SceneCamera& sceneCam,
-                    float exposure, FrameRenderer& renderer, streaming::Streamer* streamer,
+                    float exposure, PointView& renderer, streaming::Streamer* streamer,
                     frame::GlNodeStore* store, const Camera& cam, int fbw, int fbh,
                     const RenderSettings& settings) {
   if (method) {
@@ -310,7 +320,7 @@ int runViewer(const ViewerOptions& opt) {
     }
     std::unique_ptr<frame::GlNodeStore> store;
     std::unique_ptr<streaming::Streamer> streamer;
-    FrameRenderer renderer;
+    PointView renderer;
     RenderSettings settings = opt.settings;
     streaming::Budgets budgets = opt.budgets;
     if (reader) {

@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/frame/camera.h"
 #include "nestlight/frame/gl_node_store.h"
+#include "nestlight/frame/point_view.h"
 #include "nestlight/gi/camera_path.h"
 #include "nestlight/streaming/streamer.h"
-#include "nestlight/viewer/camera.h"
-#include "nestlight/viewer/frame_renderer.h"
 
 namespace nestlight::viewer {
 
@@ -18,7 +18,7 @@ struct RenderJob {
   std::filesystem::path octree;
   std::string output;  // .png or .exr; with a path, "%04d" (or _NNNN appended)
   int width = 1280, height = 720;
-  std::optional<Camera> camera;  // none: framing the scan from azimuth/elevation
+  std::optional<frame::Camera> camera;  // none: framing the scan from azimuth/elevation
   double azimuth = 35, elevation = 30, fovYDegrees = 60;
   std::optional<gi::CameraPath>
       path;              // a `--path` file (gi::loadCameraPath); its "fov" wins over fovYDegrees
@@ -26,7 +26,7 @@ struct RenderJob {
   bool waitComplete = false;    // render a frame only once its cut is fully resident
   double timeoutSeconds = 120;  // for waitComplete
   int warmupFrames = 30;        // without waitComplete: streamer updates before a still
-  RenderSettings settings;
+  frame::RenderSettings settings;
   streaming::Budgets budgets;
   std::optional<frame::ColourMode> colour;         // none: rgb when the scan has it, else elevation
   std::string colourLayer = frame::kHdrLayerName;  // the colour layer ColourMode::Hdr draws

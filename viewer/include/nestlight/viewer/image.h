@@ -1,21 +1,17 @@
-// The point view's frames: RGBA floats, top row first, display-referred (the scan's recorded sRGB
-// colour), or linear (`linear`: an HDR colour layer drawn for an EXR file). Files go through gi's
-// image library (nestlight/gi/hdr_image.h); EXR files get linear values, PNG display values.
+// The point view's frames as files (the frame itself, frame::Image, is the point view's:
+// nestlight/frame/image.h). Files go through gi's image library (nestlight/gi/hdr_image.h); EXR
+// files get linear values, PNG display values.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "nestlight/frame/image.h"
+
 namespace nestlight::viewer {
 
-struct Image {
-  int width = 0, height = 0;
-  std::vector<float> rgba;  // 4 per pixel
-  bool linear = false;      // rgb is linear (unbounded), not display-referred
-  float* at(int x, int y) { return &rgba[4 * (size_t(y) * width + x)]; }
-  const float* at(int x, int y) const { return &rgba[4 * (size_t(y) * width + x)]; }
-};
+using frame::Image;
 
 // By extension: .png (8-bit sRGB) or .exr (half-float linear RGBA). Throws nestlight::Error.
 void writeImage(const Image& img, const std::string& path);

@@ -14,9 +14,9 @@ namespace nestlight::viewer {
 struct ViewerOptions {
   std::filesystem::path octree;
   int width = 1280, height = 800;
-  std::optional<Camera> camera;  // none: framing the scan from azimuth/elevation
+  std::optional<frame::Camera> camera;  // none: framing the scan from azimuth/elevation
   double azimuth = 35, elevation = 30, fovYDegrees = 60;
-  RenderSettings settings;
+  frame::RenderSettings settings;
   streaming::Budgets budgets;
   std::optional<frame::ColourMode> colour;
   std::string colourLayer = frame::kHdrLayerName;  // what ColourMode::Hdr draws

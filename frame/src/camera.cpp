@@ -1,11 +1,11 @@
-#include "nestlight/viewer/camera.h"
+#include "nestlight/frame/camera.h"
 
 #include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 #include <limits>
 
-namespace nestlight::viewer {
+namespace nestlight::frame {
 
 Camera Camera::framing(const Box3d& box, double fovYDegrees, double aspect, double azimuth,
                        double elevation, double margin) {
@@ -131,4 +131,4 @@ Camera CameraController::camera() const {
   return c;
 }
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::frame

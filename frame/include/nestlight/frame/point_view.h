@@ -3,7 +3,8 @@
 // G-buffer: colour, view-space normal, depth) and "eye_dome_lighting" (with a margin so tiles see
 // their neighbours; it encodes for display itself, the point view's tone map being an exposure and
 // the sRGB curve, or writes linear values for HDR files). The graph renders large images in tiles
-// and owns the targets.
+// and owns the targets. The viewer's window and headless driver (`nestlight render`) draw with
+// it; `bench render` measures its rasterisers.
 #pragma once
 
 #include <epoxy/gl.h>
@@ -13,16 +14,16 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/frame/camera.h"
 #include "nestlight/frame/draw_tree.h"
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
+#include "nestlight/frame/image.h"
 #include "nestlight/frame/point_splatting.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/streaming/streamer.h"
-#include "nestlight/viewer/camera.h"
-#include "nestlight/viewer/image.h"
 
-namespace nestlight::viewer {
+namespace nestlight::frame {
 
 enum class Rasteriser { Points, Compute };
 const char* rasteriserName(Rasteriser r);
@@ -70,23 +71,22 @@ struct DrawTimings {
   uint64_t points = 0;  // points submitted
 };
 
-class FrameRenderer {
+class PointView {
  public:
-  FrameRenderer();
-  ~FrameRenderer();
-  FrameRenderer(const FrameRenderer&) = delete;
-  FrameRenderer& operator=(const FrameRenderer&) = delete;
+  PointView();
+  ~PointView();
+  PointView(const PointView&) = delete;
+  PointView& operator=(const PointView&) = delete;
 
   // Renders width x height (tiled when larger than settings.maxTile) and reads it back.
-  Image render(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
+  Image render(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
                const Camera& camera, int width, int height, const RenderSettings& settings,
                DrawTimings* timings = nullptr);
 
   // Renders into the output texture (no read-back, no tiling): for the window.
-  GLuint renderToTexture(const std::vector<streaming::DrawNode>& nodes,
-                         const frame::GlNodeStore& store, const Camera& camera, int width,
-                         int height, const RenderSettings& settings,
-                         DrawTimings* timings = nullptr);
+  GLuint renderToTexture(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+                         const Camera& camera, int width, int height,
+                         const RenderSettings& settings, DrawTimings* timings = nullptr);
   // A framebuffer with the output texture attached (the window blits from it).
   GLuint outputFramebuffer();
   // "one-pass 64-bit" where GL_NV_shader_atomic_int64 compiled, else "two-pass 32-bit".
@@ -97,26 +97,26 @@ class FrameRenderer {
  private:
   struct TileView;
   // The "points" pass: every node of nodes_ into the tile's G-buffer with settings_.
-  void rasterise(const frame::PassContext& ctx);
-  void splatPoints(const frame::PassContext& ctx, const TileView& view);
+  void rasterise(const PassContext& ctx);
+  void splatPoints(const PassContext& ctx, const TileView& view);
   void computePoints(const TileView& view);
   glm::vec3 nodeOffset(const streaming::DrawNode& n) const;
-  void begin(const std::vector<streaming::DrawNode>& nodes, const frame::GlNodeStore& store,
+  void begin(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
              const Camera& camera, const RenderSettings& settings, DrawTimings* timings);
 
-  frame::PointSplatting splatting_;  // the splatting passes, shared with the GI frame
+  PointSplatting splatting_;  // the splatting passes, shared with the GI frame
   gl::ShaderProgram edl_;
-  frame::FrameGraph graph_;
+  FrameGraph graph_;
   gl::VertexArray vao_;
   gl::Framebuffer gbufferFbo_, hqsFbo_,
-      outputFbo_;             // attachments set from the graph's targets per run
-  frame::DrawTree drawTree_;  // the vertex shader's finest-node lookup (splat_size.glsl)
+      outputFbo_;      // attachments set from the graph's targets per run
+  DrawTree drawTree_;  // the vertex shader's finest-node lookup (splat_size.glsl)
   // What the passes draw this frame (set by render()/renderToTexture() before the graph runs).
   const std::vector<streaming::DrawNode>* nodes_ = nullptr;
-  const frame::GlNodeStore* store_ = nullptr;
+  const GlNodeStore* store_ = nullptr;
   Camera camera_;
   RenderSettings settings_;
   DrawTimings* timings_ = nullptr;
 };
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::frame

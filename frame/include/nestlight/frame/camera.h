@@ -10,7 +10,7 @@
 #include "nestlight/octree/geometry.h"
 #include "nestlight/streaming/view.h"
 
-namespace nestlight::viewer {
+namespace nestlight::frame {
 
 struct Camera {
   glm::dvec3 eye{0, 0, 0};
@@ -58,4 +58,4 @@ struct CameraController {
 // image with the large image's projection.
 glm::dmat4 tileFromClip(int width, int height, int x0, int y0, int w, int h);
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::frame

@@ -1,4 +1,4 @@
-#include "nestlight/viewer/frame_renderer.h"
+#include "nestlight/frame/point_view.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,7 +10,7 @@
 
 #include "nestlight/octree/error.h"
 
-namespace nestlight::viewer {
+namespace nestlight::frame {
 
 namespace {
 void setMat4(GLuint prog, const char* name, const glm::dmat4& m) {
@@ -37,8 +37,8 @@ Splatting parseSplatting(const std::string& name) {
   throw Error("unknown splatting '" + name + "' (basic, hqs)");
 }
 
-FrameRenderer::FrameRenderer()
-    : splatting_(frame::SplatFrame::PointView, true),
+PointView::PointView()
+    : splatting_(SplatFrame::PointView, true),
       edl_(
           {{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "points/edl.frag"}}) {
   vao_ = gl::VertexArray::create();
@@ -54,20 +54,20 @@ FrameRenderer::FrameRenderer()
   graph_.addTarget("hqs_normal", {GL_RGBA32F});  // HQS sums: normal w, depth w
   graph_.addTarget("output", {GL_RGBA16F});  // display-referred (sRGB), or linear (linearOutput)
   graph_.addPass(
-      "points", frame::Scope::Tile,
-      [](frame::PassBuilder& b) {
+      "points", Scope::Tile,
+      [](PassBuilder& b) {
         for (const char* t : {"depth", "colour", "normal", "hqs_colour", "hqs_normal"}) b.write(t);
       },
-      [this](const frame::PassContext& ctx) { rasterise(ctx); });
+      [this](const PassContext& ctx) { rasterise(ctx); });
   graph_.addPass(
-      "eye_dome_lighting", frame::Scope::Tile,
-      [](frame::PassBuilder& b) {
+      "eye_dome_lighting", Scope::Tile,
+      [](PassBuilder& b) {
         b.read("colour");
         b.read("depth");
         b.write("output");
         b.margin(int(std::ceil(RenderSettings::kMaxEdlRadius)) + 2);
       },
-      [this](const frame::PassContext& ctx) {
+      [this](const PassContext& ctx) {
         const RenderSettings& s = settings_;
         const GLuint e = edl_.id();
         edl_.use();
@@ -95,18 +95,18 @@ FrameRenderer::FrameRenderer()
   graph_.compile("output");
 }
 
-FrameRenderer::~FrameRenderer() = default;
+PointView::~PointView() = default;
 
 // The tile's views: clipFromView maps the tile's pixels, viewFromCamRel rotates camera-relative
 // positions into view space.
-struct FrameRenderer::TileView {
+struct PointView::TileView {
   glm::dmat4 clipFromView, viewFromCamRel;
   int w = 0, h = 0;
 };
 
-void FrameRenderer::rasterise(const frame::PassContext& ctx) {
+void PointView::rasterise(const PassContext& ctx) {
   const Camera& camera = camera_;
-  const frame::Tile& tile = ctx.tile();
+  const Tile& tile = ctx.tile();
   const int fullW = tile.fullWidth, fullH = tile.fullHeight;
   // The G-buffer and the HQS sums, on this run's targets (the graph reallocates them with size).
   gbufferFbo_.attach(GL_COLOR_ATTACHMENT0, ctx.target("colour"));
@@ -140,19 +140,19 @@ void FrameRenderer::rasterise(const frame::PassContext& ctx) {
   glViewport(0, 0, v.w, v.h);
 }
 
-glm::vec3 FrameRenderer::nodeOffset(const streaming::DrawNode& n) const {
+glm::vec3 PointView::nodeOffset(const streaming::DrawNode& n) const {
   const glm::dvec3 origin(n.worldBounds.min.x, n.worldBounds.min.y, n.worldBounds.min.z);
   return glm::vec3(origin - camera_.eye);  // the difference is small: float keeps it exact enough
 }
 
-// The GL_POINTS rasteriser: basic splats or high-quality splatting (frame::PointSplatting).
-void FrameRenderer::splatPoints(const frame::PassContext& ctx, const TileView& v) {
+// The GL_POINTS rasteriser: basic splats or high-quality splatting (PointSplatting).
+void PointView::splatPoints(const PassContext& ctx, const TileView& v) {
   const std::vector<streaming::DrawNode>& nodes = *nodes_;
-  const frame::GlNodeStore& store = *store_;
+  const GlNodeStore& store = *store_;
   const Camera& camera = camera_;
   const RenderSettings& s = settings_;
   DrawTimings* t = timings_;
-  const frame::Tile& tile = ctx.tile();
+  const Tile& tile = ctx.tile();
   const int fullW = tile.fullWidth, fullH = tile.fullHeight, x0 = tile.x0, y0 = tile.y0;
   const int w = v.w, h = v.h;
   const double pixelsPerUnit = fullH / (2.0 * std::tan(glm::radians(camera.fovYDegrees) * 0.5));
@@ -189,7 +189,7 @@ void FrameRenderer::splatPoints(const frame::PassContext& ctx, const TileView& v
       glProgramUniform1f(p, sizeLoc, float(n.worldBounds.max.x - n.worldBounds.min.x));
       glProgramUniform1ui(p, nLoc, n.numPoints);
       glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, store.buffer(n.handle), 0,
-                        GLsizeiptr(n.numPoints) * GLsizeiptr(frame::kGpuPointBytes));
+                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
       glDrawArrays(GL_POINTS, 0, GLsizei(n.numPoints));
       if (t && countPoints) t->points += n.numPoints;
     }
@@ -206,7 +206,7 @@ void FrameRenderer::splatPoints(const frame::PassContext& ctx, const TileView& v
     drawSplats(basic, true);
     return;
   }
-  frame::PointSplatting::HqsTargets targets;
+  PointSplatting::HqsTargets targets;
   targets.depthFbo = targets.sumFbo = hqsFbo_.id();
   targets.sums = 2;
   targets.sumTextures = {ctx.target("hqs_colour").id(), ctx.target("hqs_normal").id()};
@@ -217,11 +217,11 @@ void FrameRenderer::splatPoints(const frame::PassContext& ctx, const TileView& v
   splatting_.hqs(targets, s.hqsDepthEpsilon, glm::mat4(v.clipFromView), drawSplats);
 }
 
-// The compute rasteriser (frame::PointSplatting): one dispatch per node with its buffer and
+// The compute rasteriser (PointSplatting): one dispatch per node with its buffer and
 // camera offset.
-void FrameRenderer::computePoints(const TileView& v) {
+void PointView::computePoints(const TileView& v) {
   const std::vector<streaming::DrawNode>& nodes = *nodes_;
-  const frame::GlNodeStore& store = *store_;
+  const GlNodeStore& store = *store_;
   DrawTimings* t = timings_;
   auto dispatchNodes = [&](const gl::ShaderProgram& pass, bool countPoints) {
     const GLuint p = pass.id();
@@ -237,7 +237,7 @@ void FrameRenderer::computePoints(const TileView& v) {
       glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
       glProgramUniform1ui(p, nLoc, n.numPoints);
       glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, store.buffer(n.handle), 0,
-                        GLsizeiptr(n.numPoints) * GLsizeiptr(frame::kGpuPointBytes));
+                        GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
       glDispatchCompute((n.numPoints + 127) / 128, 1, 1);
       if (t && countPoints) t->points += n.numPoints;
     }
@@ -252,9 +252,8 @@ void FrameRenderer::computePoints(const TileView& v) {
                      resolveUniforms);
 }
 
-void FrameRenderer::begin(const std::vector<streaming::DrawNode>& nodes,
-                          const frame::GlNodeStore& store, const Camera& camera,
-                          const RenderSettings& s, DrawTimings* t) {
+void PointView::begin(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+                      const Camera& camera, const RenderSettings& s, DrawTimings* t) {
   nodes_ = &nodes;
   store_ = &store;
   camera_ = camera;
@@ -263,15 +262,14 @@ void FrameRenderer::begin(const std::vector<streaming::DrawNode>& nodes,
   drawTree_.upload(nodes);
 }
 
-GLuint FrameRenderer::outputFramebuffer() {
+GLuint PointView::outputFramebuffer() {
   outputFbo_.attach(GL_COLOR_ATTACHMENT0, graph_.target("output"));
   return outputFbo_.id();
 }
 
-GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& nodes,
-                                      const frame::GlNodeStore& store, const Camera& camera,
-                                      int width, int height, const RenderSettings& s,
-                                      DrawTimings* t) {
+GLuint PointView::renderToTexture(const std::vector<streaming::DrawNode>& nodes,
+                                  const GlNodeStore& store, const Camera& camera, int width,
+                                  int height, const RenderSettings& s, DrawTimings* t) {
   const auto t0 = std::chrono::steady_clock::now();
   begin(nodes, store, camera, s, t);
   graph_.executeToTarget(width, height);
@@ -283,9 +281,9 @@ GLuint FrameRenderer::renderToTexture(const std::vector<streaming::DrawNode>& no
   return graph_.target("output").id();
 }
 
-Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes,
-                            const frame::GlNodeStore& store, const Camera& camera, int width,
-                            int height, const RenderSettings& s, DrawTimings* t) {
+Image PointView::render(const std::vector<streaming::DrawNode>& nodes, const GlNodeStore& store,
+                        const Camera& camera, int width, int height, const RenderSettings& s,
+                        DrawTimings* t) {
   if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
     throw Error("image size " + std::to_string(width) + "x" + std::to_string(height) +
                 " is out of range");
@@ -306,4 +304,4 @@ Image FrameRenderer::render(const std::vector<streaming::DrawNode>& nodes,
   return img;
 }
 
-}  // namespace nestlight::viewer
+}  // namespace nestlight::frame
