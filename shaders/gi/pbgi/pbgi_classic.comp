@@ -61,9 +61,15 @@ const float kFar = 3.0e38;
 const float kTwoPi = 6.2831853;
 uint mbBase, stackBase;
 
+// The nearest sample wins; at equal depth the smaller colour (red, then green, then blue), so that
+// the m-pixel does not depend on the order samples arrive in: X-PBGI's receiver lists are built
+// by atomics, in whatever order the pairs ran, and coincident discs tie.
 void writeM(int k, vec3 c, float t) {
   uint a = mbBase + uint(k);
-  if (t < mbs[a].a) mbs[a] = vec4(c, t);
+  vec4 m = mbs[a];
+  bool wins = t < m.a ||
+              (t == m.a && (c.r < m.r || (c.r == m.r && (c.g < m.g || (c.g == m.g && c.b < m.b)))));
+  if (wins) mbs[a] = vec4(c, t);
 }
 
 // The m-pixel of direction wl (receiver frame).
