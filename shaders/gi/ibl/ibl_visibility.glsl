@@ -61,7 +61,7 @@ bool meshesOcclude(vec3 o, vec3 d, float tMax) {
 // bounding-sphere hierarchies of the pbgi method, gi/shared/cut_hierarchies.h, joined by their top
 // tree): spheres and slabs bound the rays' search, a leaf is a disc of its radius about its
 // normal (without a normal, a disc facing the ray).
-#include "../pbgi/bsh_interface.glsl"
+#include "../shared/bsh_interface.glsl"
 #include "../pbgi/pbgi_nodes.glsl"
 #include "../../common/octahedral.glsl"
 uniform int uTopCount;  // 0: nothing resident

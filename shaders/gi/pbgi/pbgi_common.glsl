@@ -2,7 +2,7 @@
 // receiver a G-buffer pixel stands for.
 #include "../common/gbuffer_in.glsl"
 #include "../../common/octahedral.glsl"
-#include "bsh_interface.glsl"
+#include "../shared/bsh_interface.glsl"
 #include "../common/environment.glsl"
 #ifndef PBGI_MB
 #define PBGI_MB 16  // the method compiles with its micro_buffer; this is for validators

@@ -26,7 +26,7 @@ namespace glsl {
 using vec4 = glm::vec4;
 using uvec4 = glm::uvec4;
 using ivec4 = glm::ivec4;
-#include "gi/pbgi/bsh_interface.glsl"
+#include "gi/shared/bsh_interface.glsl"
 }  // namespace glsl
 
 using BshNode = glsl::BshNode;

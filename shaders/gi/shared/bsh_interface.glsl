@@ -1,5 +1,6 @@
-// The `pbgi` method's bounding-sphere hierarchy as C++ (gi/pbgi) writes it and GLSL reads it.
-// Kept to the preprocessor subset both share; include frame_interface.glsl first (NL_STRUCT).
+// The bounding-sphere hierarchy (gi/shared: pbgi gathers over it, ibl traces rays through it) as
+// C++ writes it and GLSL reads it. Kept to the preprocessor subset both share; include
+// frame_interface.glsl first (NL_STRUCT).
 //
 // One hierarchy per resident octree node, uploaded as the node's layer: an array of BshNode in
 // depth-first order, the root at index 0, positions in the node's frame (metres from the node
