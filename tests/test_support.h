@@ -39,6 +39,11 @@ std::filesystem::path sourceDir();
 
 // Runs the built `nestlight` with `args`; returns the exit code, stdout+stderr in `output`.
 int runCli(const std::string& args, std::string* output = nullptr);
+// For tests whose commands run GL methods: llvmpipe's JIT-compiled shader code allocates blocks
+// that LeakSanitizer cannot attribute (tests/CMakeLists.txt turns leak checks off for the GL test
+// binaries for the same reason), so child processes started after this get the same setting.
+// Leaks of the CLI itself stay covered by the commands that run no GL.
+void noLeakChecksInGlChildren();
 
 void writeFile(const std::string& path, const std::string& bytes);
 std::string readFile(const std::string& path);

@@ -272,10 +272,7 @@ TEST(Cli, LazOutputNeedsOnlyTheSpaceOfTheLazFile) {
 // not apply to scenes, and refuses streaming options for the path tracer, by name; the output's
 // folder is made before rendering.
 TEST(Cli, SceneRendersApplyOrRefuseScanOptionsByName) {
-  // The renders below run GL on llvmpipe, whose JIT-compiled shader code allocates blocks that
-  // LeakSanitizer cannot attribute (tests/CMakeLists.txt turns leak checks off for the GL test
-  // binaries for the same reason): the child processes get the same setting.
-  ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
+  nestlight::test::noLeakChecksInGlChildren();  // the renders below run GL
   TempDir t;
   std::string out;
   ASSERT_EQ(

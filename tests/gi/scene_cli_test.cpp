@@ -68,6 +68,7 @@ TEST(SceneCli, ParamSetsAnyDeclaredParameter) {
                       [0, 0, 2], "intensity": 1}], "camera": {"eye": [0.3, -2, 1], "target":
                       [0.3, 0.3, 0], "width": 8, "height": 8}, "gi": {"method": "raster"}})");
   const std::string render = "render " + dir.file("s.json") + " -o " + dir.file("s.exr");
+  test::noLeakChecksInGlChildren();  // the last render runs the raster method
   std::string out;
   EXPECT_EQ(test::runCli(render + " --param shadow_map_size=5", &out), 1);
   EXPECT_NE(out.find("s.json: scene.gi.parameters.shadow_map_size: expected an integer in [16, "
@@ -89,9 +90,7 @@ TEST(SceneCli, ParamSetsAnyDeclaredParameter) {
 TEST(SceneCli, BenchGiWritesTableAndPlot) {
   test::TempDir dir;
   std::string out;
-  // The raster method runs llvmpipe in the child, whose JIT blocks LeakSanitizer cannot attribute
-  // (see tests/CMakeLists.txt); leaks of the CLI itself are covered by the other CLI tests.
-  ::setenv("ASAN_OPTIONS", "detect_leaks=0", 1);
+  test::noLeakChecksInGlChildren();
   ASSERT_EQ(
       test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out),
       0)
