@@ -28,6 +28,14 @@ Scene furnaceScene(const nestlight::test::TempDir& t, double rho, const json& pa
   return boxInSphereScene(t, rho, "pbgi", parameters);
 }
 
+// Pixels whose values are not bit for bit equal (the images have one size).
+int differingPixels(const HdrImage& a, const HdrImage& b) {
+  int differ = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) differ += !(a.get(x, y) == b.get(x, y));
+  return differ;
+}
+
 // The box's mean over the central pixels (the box fills them).
 double boxMean(const HdrImage& img) {
   double sum = 0;
@@ -374,9 +382,7 @@ TEST(Pbgi, PairOverflowFallsBackToTheClassicTraversal) {
   const MethodFrame b = createMethod(tiny, {true, false})->render(tiny.camera);
   EXPECT_NE(b.attributes.at("nestlight:pbgi_pair_overflows"), "0");
   EXPECT_NE(b.summary.find("gathered from the root"), std::string::npos) << b.summary;
-  int differ = 0;
-  for (int y = 0; y < a.image.height; ++y)
-    for (int x = 0; x < a.image.width; ++x) differ += !(a.image.get(x, y) == b.image.get(x, y));
+  const int differ = differingPixels(a.image, b.image);
   EXPECT_EQ(differ, 0);
 }
 
@@ -507,9 +513,7 @@ TEST(Pbgi, ResumedTraversalsGiveTheSameImage) {
   EXPECT_EQ(dispatchesA, 1);
   EXPECT_GT(dispatchesB, 3);
   ASSERT_EQ(a.image.pixels(), b.image.pixels());
-  int differ = 0;
-  for (int y = 0; y < a.image.height; ++y)
-    for (int x = 0; x < a.image.width; ++x) differ += !(a.image.get(x, y) == b.image.get(x, y));
+  const int differ = differingPixels(a.image, b.image);
   EXPECT_EQ(differ, 0);
   EXPECT_GT(boxMean(b.image), 0.0);
 }
@@ -534,11 +538,7 @@ TEST(Pbgi, XRendersTheSameImageEveryTime) {
   for (int run = 1; run < 3; ++run) {
     const MethodFrame again = createMethod(s, {true, false})->render(s.camera);
     ASSERT_EQ(again.image.pixels(), first.image.pixels());
-    int differ = 0;
-    for (int y = 0; y < first.image.height; ++y)
-      for (int x = 0; x < first.image.width; ++x)
-        differ += !(again.image.get(x, y) == first.image.get(x, y));
-    EXPECT_EQ(differ, 0) << "run " << run;
+    EXPECT_EQ(differingPixels(again.image, first.image), 0) << "run " << run;
   }
 }
 
