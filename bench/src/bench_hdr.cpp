@@ -14,8 +14,8 @@
 #include <thread>
 
 #include "nestlight/bench/harness.h"
+#include "nestlight/bench/hdr_protocol.h"
 #include "nestlight/gi/hdr/expand.h"
-#include "nestlight/gi/hdr/protocol.h"
 #include "nestlight/gi/hdr/renderings.h"
 #include "nestlight/gi/hdr/self_photo.h"
 #include "nestlight/gi/methods.h"
@@ -74,13 +74,13 @@ json benchSize(const BenchHdrOptions& o, uint64_t points,
                const std::vector<std::string>& modeList) {
   const fs::path dir = fs::path(o.work) / ("hdr_protocol_" + std::to_string(points));
   if (!fs::exists(dir / "protocol.json")) {
-    gi::hdr::ProtocolOptions po;
+    ProtocolOptions po;
     po.points = points;
     po.overwrite = true;
     po.quiet = true;
     std::printf("making the protocol scene of %s points in %s\n",
                 humanCount(double(points)).c_str(), dir.c_str());
-    gi::hdr::makeHdrProtocol(dir, po);
+    makeHdrProtocol(dir, po);
   }
   const fs::path octree = dir / "scan.octree";
   json size = {{"points", points}, {"methods", json::object()}};
@@ -120,7 +120,7 @@ json benchSize(const BenchHdrOptions& o, uint64_t points,
       peak = std::max(peak, last["peak_rss_bytes"].get<double>());
     }
     log2Exposure = last["log2_exposure"].get<double>();
-    const gi::hdr::LayerError err = gi::hdr::compareWithTruth(octree, layer);
+    const LayerError err = compareWithTruth(octree, layer);
     json m = {{"seconds_median", json::object()},
               {"peak_rss_bytes", peak},
               {"error", err.toJson()},
@@ -145,7 +145,7 @@ json benchSize(const BenchHdrOptions& o, uint64_t points,
     const size_t comma = std::min(o.layers.find(',', at), o.layers.size());
     const std::string layer = o.layers.substr(at, comma - at);
     at = comma + 1;
-    const gi::hdr::LayerError err = gi::hdr::compareWithTruth(octree, layer);
+    const LayerError err = compareWithTruth(octree, layer);
     std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8.3f %9.3f\n",
                 humanCount(double(points)).c_str(), layer.c_str(), "", "", "", "", "", "", "", "",
                 err.rmsClipped, err.stopsClipped);
@@ -153,18 +153,17 @@ json benchSize(const BenchHdrOptions& o, uint64_t points,
     judged.emplace_back(layer, layer);
   }
   for (const std::string base : {"ldr", "landis"}) {
-    const gi::hdr::LayerError err =
-        gi::hdr::compareWithTruth(octree, base, 0.9, std::exp2(log2Exposure) * photoMax);
+    const LayerError err = compareWithTruth(octree, base, 0.9, std::exp2(log2Exposure) * photoMax);
     std::printf("%-8s %-10s %8s %8s %8s %8s %8s %8s  %9s %9s %8.3f %9.3f\n",
                 humanCount(double(points)).c_str(), base == "ldr" ? "LDR" : "LANDIS-PC", "", "", "",
                 "", "", "", "", "", err.rmsClipped, err.stopsClipped);
     size["methods"][base == "ldr" ? "LDR" : "LANDISPC"] = {{"error", err.toJson()}};
   }
   if (o.relit.method != "none") {
-    gi::hdr::writeBaselineLayers(octree, 0.9, std::exp2(log2Exposure) * photoMax);
+    writeBaselineLayers(octree, 0.9, std::exp2(log2Exposure) * photoMax);
     auto render = [&](const std::string& colour, std::vector<uint8_t>* mask) {
-      const gi::Scene scene = gi::loadScene(gi::hdr::writeRelitScene(dir, colour, o.relit));
-      if (mask) *mask = gi::hdr::relitObjectMask(scene);
+      const gi::Scene scene = gi::loadScene(writeRelitScene(dir, colour, o.relit));
+      if (mask) *mask = relitObjectMask(scene);
       gi::MethodFrame f = gi::createMethod(scene, {true, false})->render(scene.camera);
       gi::writeExr((dir / ("relit-" + colour + ".exr")).string(), f.image, f.attributes);
       return f;
@@ -178,8 +177,7 @@ json benchSize(const BenchHdrOptions& o, uint64_t points,
         o.relit.method.c_str(), o.relit.width, o.relit.height, truth.seconds,
         (unsigned long long)std::count(mask.begin(), mask.end(), uint8_t(1)));
     for (const auto& [layer, name] : judged) {
-      const gi::hdr::RelitError e =
-          gi::hdr::compareRelit(render(layer, nullptr).image, truth.image, mask);
+      const RelitError e = compareRelit(render(layer, nullptr).image, truth.image, mask);
       std::printf("  %s RMS %.4f (%.1f%%)", name.c_str(), e.rms, 100 * e.relativeRms);
       size["methods"][name]["relit"] = {{"rms", e.rms},
                                         {"relative_rms", e.relativeRms},

@@ -6,7 +6,7 @@
 
 #include "cli.h"
 #include "nestlight/gi/hdr/expand.h"
-#include "nestlight/gi/hdr/protocol.h"
+#include "nestlight/gi/hdr/views.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::cli {

@@ -3,8 +3,8 @@
 #include <filesystem>
 
 #include "cli.h"
+#include "nestlight/bench/hdr_protocol.h"
 #include "nestlight/converters/test_scenes.h"
-#include "nestlight/gi/hdr/protocol.h"
 
 namespace nestlight::cli {
 
@@ -50,12 +50,12 @@ void addMakeScene(CLI::App& app, int& exitCode) {
   cmd->callback([=, &exitCode]() {
     opt->points = parseCount(*points, "--points");
     if (*kind == "hdr-room") {
-      gi::hdr::ProtocolOptions po;
+      bench::ProtocolOptions po;
       po.points = opt->points;
       po.seed = opt->seed;
       po.overwrite = opt->overwrite;
       po.quiet = opt->quiet;
-      const fs::path file = gi::hdr::makeHdrProtocol(*dir, po);
+      const fs::path file = bench::makeHdrProtocol(*dir, po);
       std::printf("make-scene: wrote %s (scan.octree with its 'truth' layer, photo.exr)\n",
                   file.c_str());
       exitCode = 0;

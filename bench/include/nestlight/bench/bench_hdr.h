@@ -1,5 +1,5 @@
 // `nestlight bench hdr`: HDR expansion on the ground-truth protocol (Sabbadin et al., "High
-// Dynamic Range Point Clouds for Real-Time Relighting", 2019, section 6.2; gi/hdr/protocol.h):
+// Dynamic Range Point Clouds for Real-Time Relighting", 2019, section 6.2; hdr_protocol.h):
 // stage timings and peak memory against point count (their Table 1), the cloud colour's error
 // against the truth beside the baselines (their Table 2's point-cloud column) for both modes, and
 // the error of relit renders of inserted objects against the render lit by the truth (Table 2's
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "nestlight/gi/hdr/relit.h"
+#include "nestlight/bench/hdr_relit.h"
 
 namespace nestlight::bench {
 
@@ -25,7 +25,7 @@ struct BenchHdrOptions {
   std::string modes = "rgb,luminance";  // "rgb", "luminance", "both" or "none" (with layers)
   std::string layers;                   // also judge these colour layers (comma-separated)
   bool unregistered = false;            // expand without the photograph's camera
-  gi::hdr::RelitOptions relit;
+  RelitOptions relit;
   std::string scanDemo;  // runBenchHdrScan's scan
   double threshold = 0.9;
 };

@@ -17,6 +17,7 @@
 #include "nestlight/converters/progress.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/metadata.h"
+#include "nestlight/octree/process_memory.h"  // peakRssBytes, which BuildReport carries
 
 namespace nestlight {
 
@@ -54,8 +55,5 @@ struct BuildReport {
 // Builds the octree of every point of `sources`. Throws nestlight::Error on bad input.
 BuildReport buildOctree(std::vector<std::unique_ptr<PointReader>> sources,
                         const BuildOptions& options);
-
-// Peak resident set size of this process so far, in bytes.
-uint64_t peakRssBytes();
 
 }  // namespace nestlight

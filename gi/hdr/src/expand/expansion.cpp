@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "nestlight/converters/builder.h"
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/process_memory.h"
 
 namespace nestlight::gi::hdr::expand {
 

@@ -9,8 +9,8 @@
 #include <cstring>
 
 #include "expand/expansion.h"
-#include "nestlight/converters/builder.h"
 #include "nestlight/octree/colour_layer.h"
+#include "nestlight/octree/process_memory.h"
 
 namespace nestlight::gi::hdr::expand {
 

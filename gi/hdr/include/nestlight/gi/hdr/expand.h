@@ -85,7 +85,7 @@ struct ExpandOptions {
   // Spread (robust standard deviation, stops) of the log ratios between the scan and the
   // photograph over the pairs the renderings explain. The protocol's pure exposure change
   // measures about 0.1 (8-bit renderings, splat edges); a gamma of 1.4 on the photograph's tone
-  // about 0.6 and sends the clipped points stops beyond the truth (tests/hdr/expand_test.cpp).
+  // about 0.6 and sends the clipped points stops beyond the truth (tests/gi/hdr/expand_test.cpp).
   double maxSpreadStops = 0.4;
   // Largest highlight slope (PairEstimate::highlightSlope) accepted: 1 is an exposure change; a
   // photograph whose highlights grow faster than the scan's overshoots beyond the clipping. The

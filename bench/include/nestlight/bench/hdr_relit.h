@@ -1,8 +1,9 @@
 // The relighting half of HDR expansion's ground-truth protocol (Sabbadin et al., "High Dynamic
 // Range Point Clouds for Real-Time Relighting", 2019, section 6.2 and Table 2's rendering
-// columns): virtual objects inserted in the protocol room (protocol.h), lit by the scan's colour
-// as a radiance cache through a GI method, rendered once per colour source and compared with the
-// render lit by the true colour over the objects' pixels only (the paper removes the background).
+// columns): virtual objects inserted in the protocol room (hdr_protocol.h), lit by the scan's
+// colour as a radiance cache through a GI method, rendered once per colour source and compared with
+// the render lit by the true colour over the objects' pixels only (the paper removes the
+// background).
 #pragma once
 
 #include <cstdint>
@@ -13,7 +14,7 @@
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/scene.h"
 
-namespace nestlight::gi::hdr {
+namespace nestlight::bench {
 
 // Writes the baselines as colour layers of a protocol octree, so that renders read them as any
 // other colour source: "ldr" (the scan's colour linearised by gamma 2.2, as expansion leaves the
@@ -36,14 +37,14 @@ std::filesystem::path writeRelitScene(const std::filesystem::path& protocolDir,
                                       const std::string& colour, const RelitOptions& options);
 
 // 1 where the scene camera's pixel centre sees one of the inserted boxes.
-std::vector<uint8_t> relitObjectMask(const Scene& scene);
+std::vector<uint8_t> relitObjectMask(const gi::Scene& scene);
 
 struct RelitError {
   double rms = 0;          // over the masked pixels and RGB channels, in the truth's units
   double relativeRms = 0;  // rms / the truth render's mean over the same pixels and channels
   uint64_t pixels = 0;
 };
-RelitError compareRelit(const HdrImage& render, const HdrImage& truth,
+RelitError compareRelit(const gi::HdrImage& render, const gi::HdrImage& truth,
                         const std::vector<uint8_t>& mask);
 
-}  // namespace nestlight::gi::hdr
+}  // namespace nestlight::bench

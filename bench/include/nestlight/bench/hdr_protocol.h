@@ -20,7 +20,7 @@
 #include "nestlight/gi/hdr/views.h"
 #include "nestlight/gi/hdr_image.h"
 
-namespace nestlight::gi::hdr {
+namespace nestlight::bench {
 
 struct ProtocolOptions {
   uint64_t points = 1'000'000;
@@ -37,7 +37,7 @@ struct ProtocolOptions {
 // The room's true radiance at a point on one of its surfaces (normal facing into the room).
 glm::vec3 protocolRadiance(const glm::dvec3& position, const glm::vec3& normal);
 // The photograph's camera: inside the room, seeing the lamp and the sunlit floor.
-View protocolPhotoView(int width, int height);
+gi::hdr::View protocolPhotoView(int width, int height);
 
 // Writes dir/scan.octree (LDR rgb, normals, and the "truth" colour layer: the true radiance
 // times the exposure, in the LDR colour's units), dir/photo.exr (the true radiance, linear,
@@ -60,4 +60,4 @@ struct LayerError {
 LayerError compareWithTruth(const std::filesystem::path& octree, const std::string& layer,
                             double clipThreshold = 0.9, double landisMax = 0);
 
-}  // namespace nestlight::gi::hdr
+}  // namespace nestlight::bench

@@ -1,5 +1,5 @@
-// The ground-truth protocol of HDR expansion (see protocol.h).
-#include "nestlight/gi/hdr/protocol.h"
+// The ground-truth protocol of HDR expansion (see hdr_protocol.h).
+#include "nestlight/bench/hdr_protocol.h"
 
 #include <tbb/parallel_for.h>
 
@@ -18,10 +18,12 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_writer.h"
 
-namespace nestlight::gi::hdr {
+namespace nestlight::bench {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using namespace gi;
+using namespace gi::hdr;
 
 namespace {
 
@@ -292,4 +294,4 @@ LayerError compareWithTruth(const fs::path& octree, const std::string& layer, do
   return err;
 }
 
-}  // namespace nestlight::gi::hdr
+}  // namespace nestlight::bench

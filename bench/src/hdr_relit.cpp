@@ -1,5 +1,5 @@
-// The relighting half of the ground-truth protocol (see relit.h).
-#include "nestlight/gi/hdr/relit.h"
+// The relighting half of the ground-truth protocol (see hdr_relit.h).
+#include "nestlight/bench/hdr_relit.h"
 
 #include <tbb/parallel_for.h>
 
@@ -15,10 +15,12 @@
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
 
-namespace nestlight::gi::hdr {
+namespace nestlight::bench {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
+using namespace gi;
+using namespace gi::hdr;
 
 namespace {
 
@@ -139,4 +141,4 @@ RelitError compareRelit(const HdrImage& render, const HdrImage& truth,
   return e;
 }
 
-}  // namespace nestlight::gi::hdr
+}  // namespace nestlight::bench
