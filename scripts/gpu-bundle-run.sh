@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # `run PROGRAM ARGS...` inside an unpacked GPU bundle (scripts/gpu-bundle.sh): runs bin/PROGRAM
-# (nestlight, gi_gl_tests, viewer_tests, frame_tests) with the bundle's libraries and GL loaders
+# (nestlight and the GL test suites of scripts/gpu-suites.txt) with the bundle's libraries and GL loaders
 # on the library path, and the NVIDIA driver's EGL vendor file where the machine keeps it outside
 # libglvnd's default folders.
 set -euo pipefail

@@ -38,7 +38,9 @@ done
 # The carry limit of the GPU machine is 64 MiB for the working tree and everything carried;
 # the bundle and the checkout together keep 25% of it spare.
 carry_limit=$((64 * 1024 * 1024))
-test_targets="nestlight gi_gl_tests viewer_tests frame_tests"
+# The GL test suites of scripts/gpu-suites.txt.
+suites=$(awk '$1 !~ /^#/ && NF {print $1 "_tests"}' scripts/gpu-suites.txt | tr '\n' ' ')
+test_targets="nestlight $suites"
 
 if [ -n "$tune" ]; then
   build_dir=${build_dir:-build-gpu}
@@ -55,7 +57,7 @@ trap 'rm -rf "$stage"' EXIT
 b="$stage/nestlight-gpu"
 mkdir -p "$b/bin" "$b/lib" "$b/fallback" "$b/debs"
 cp "$build_dir/nestlight" "$b/bin/"
-for t in gi_gl_tests viewer_tests frame_tests; do cp "$build_dir/tests/$t" "$b/bin/"; done
+for t in $suites; do cp "$build_dir/tests/$t" "$b/bin/"; done
 strip --strip-unneeded "$b"/bin/* 2>/dev/null || true
 
 # Libraries every Linux with glibc >= 2.36 has (the bundle's binaries need that glibc), and the

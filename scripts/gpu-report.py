@@ -159,6 +159,17 @@ GOLDEN_LINE = re.compile(r"^golden (\S+): (\d+) of (\d+) pixels differ by more t
                          r"max channel error ([0-9.]+)")
 
 
+def gl_suites():
+    """The GL test suites of the run, in the order of scripts/gpu-suites.txt."""
+    names = []
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "gpu-suites.txt")) as f:
+        for line in f:
+            fields = line.split()
+            if fields and not fields[0].startswith("#"):
+                names.append(fields[0])
+    return names
+
+
 def parse_tests(log_path):
     """Per-test results from gtest's console output (a suite killed at its limit still reports the
     tests it finished; the one it was running is 'unfinished')."""
@@ -237,7 +248,7 @@ def report(work, out, quick, threads, deadline):
     md.append("|---|---|---|---|---|")
     all_goldens = []
     failures = []
-    for suite in ("gi_gl", "viewer", "frame"):
+    for suite in gl_suites():
         tests, goldens = parse_tests(os.path.join(work, "logs", "tests-%s.log" % suite))
         if tests is None:
             md.append("| %s | - | - | - | not run |" % suite)

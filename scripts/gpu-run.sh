@@ -4,7 +4,7 @@
 # project's real-time targets are about and writes a report:
 #   1. context: GL vendor, renderer, version; every shader program compiled and linked
 #      (`nestlight gl-info --programs`, the 64-bit compute rasteriser included);
-#   2. the GL test suites (gi_gl, viewer, frame) on that GPU, per test, with the golden images'
+#   2. the GL test suites (scripts/gpu-suites.txt) on that GPU, per test, with the golden images'
 #      differences;
 #   3. point rendering: `bench render` on a generated scan converted there (100M points): GL_POINTS
 #      basic and HQS, compute 32-bit and 64-bit;
@@ -112,16 +112,11 @@ step() {
 if [ $quick = 1 ]; then
   points=200k; W=64; H=36; pbgi_size=32; runs=1
   vpls="16 64"; mbs="8"; variants="classic x"; estimators="smc"
-  # A few tests of each suite: the plumbing, not the suites (the GPU run runs them whole).
-  f_gi_gl='Raster.PointLightOverPlaneIsTheClosedForm:Vpl.OneVplLightsAPerpendicularWallAsTheClosedForm'
-  f_viewer='Shaders.EveryFileIsEmbedded:Shaders.IncludesExpandOnceWithLineDirectives:RenderGolden.LionPoints'
-  f_frame='FrameGraph.ReadBeforeWriteNamesPassAndTarget:FrameGraph.PassesNobodyReadsAreCulled'
   gi_points=20k; gi_size="--width 24 --height 16"; gi_ref="--reference-time-limit 2 --reference-spp 16"
   gi_methods="--methods raster,vpl --no-variants"
 else
   points=100M; W=1920; H=1080; pbgi_size=512; runs=5
   vpls="256 1024 4096"; mbs="16 32"; variants="classic mip x"; estimators="mis bis smc"
-  f_gi_gl='*'; f_viewer='-Window.*'; f_frame='*'  # Window tests need Xvfb, which the GPU machine lacks
   gi_points=300k; gi_size=""; gi_ref="--reference-time-limit 40"
   gi_methods=""
 fi
@@ -129,14 +124,22 @@ fi
 # 1. Context and every shader program.
 step gl_info 60 "$NL gl-info --programs --json $work/res/gl-info.json"
 
-# 2. The GL test suites, side by side (each prints per-test lines the report reads).
-step tests $([ $quick = 1 ] && echo 60 || echo 150) "
-  mkdir -p $work/tests-gi_gl $work/tests-viewer $work/tests-frame
-  (cd $work/tests-gi_gl && $(suite gi_gl_tests) --gtest_filter='$f_gi_gl' --gtest_output=json:$work/res/tests-gi_gl.json > $work/logs/tests-gi_gl.log 2>&1; echo \$? > rc) &
-  (cd $work/tests-viewer && $(suite viewer_tests) --gtest_filter='$f_viewer' --gtest_output=json:$work/res/tests-viewer.json > $work/logs/tests-viewer.log 2>&1; echo \$? > rc) &
-  (cd $work/tests-frame && $(suite frame_tests) --gtest_filter='$f_frame' --gtest_output=json:$work/res/tests-frame.json > $work/logs/tests-frame.log 2>&1; echo \$? > rc) &
+# 2. The GL test suites, side by side (each prints per-test lines the report reads). The full
+# run's filters leave out the window tests of `viewer`: they need Xvfb, which the GPU machine lacks.
+suites=""
+tests_cmd=""
+while read -r name full quick_filter; do
+  case "$name" in ''|'#'*) continue ;; esac
+  filter=$([ $quick = 1 ] && echo "$quick_filter" || echo "$full")
+  [ "$filter" = "-" ] && continue
+  suites="$suites $name"
+  tests_cmd="$tests_cmd
+  mkdir -p $work/tests-$name
+  (cd $work/tests-$name && $(suite ${name}_tests) --gtest_filter='$filter' --gtest_output=json:$work/res/tests-$name.json > $work/logs/tests-$name.log 2>&1; echo \$? > rc) &"
+done < scripts/gpu-suites.txt
+step tests $([ $quick = 1 ] && echo 60 || echo 150) "$tests_cmd
   wait
-  for s in gi_gl viewer frame; do test \"\$(cat $work/tests-\$s/rc)\" = 0 || exit 1; done"
+  for s in $suites; do test \"\$(cat $work/tests-\$s/rc)\" = 0 || exit 1; done"
 # Diff images of failed golden tests come back with the details.
 cp "$work"/tests-*/render-*.png "$work/res/" 2>/dev/null
 

@@ -193,7 +193,7 @@ class IblExtension : public RasterExtension {
     // mean plane; on a curved scan that plane stands above the points at the cluster's rim (by up
     // to a fifth of its radius at pbgi's normal agreement), far above the lift a receiver leaves
     // its own surface by, and the receivers there lost their sky: dark rings on the object scene's
-    // scanned sphere, 7% of a scanned 10 m dome's light (tests/gi_gl/ibl_scan_test.cpp).
+    // scanned sphere, 7% of a scanned 10 m dome's light (tests/gi/ibl/ibl_scan_test.cpp).
     // Pruned sub-trees' discs cost less than every point's; their slabs (SlabBshLayer) win that
     // time back exactly.
     layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {

@@ -10,11 +10,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "gi/sphere_scan.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/srgb.h"
-#include "sphere_scan.h"
 #include "test_support.h"
 
 namespace nestlight::gi {

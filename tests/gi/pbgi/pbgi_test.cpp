@@ -8,7 +8,7 @@
 #include <fstream>
 #include <set>
 
-#include "gi_gl/sphere_scan.h"
+#include "gi/sphere_scan.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"

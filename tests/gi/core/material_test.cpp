@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "chi2.h"
+#include "gi/chi2.h"
 
 using namespace nestlight::gi;
 using namespace nestlight::gi::test;

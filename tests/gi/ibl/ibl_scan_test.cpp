@@ -9,7 +9,7 @@
 #include <cmath>
 #include <fstream>
 
-#include "floor_scene.h"
+#include "gi/floor_scene.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/method.h"

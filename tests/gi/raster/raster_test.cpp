@@ -10,7 +10,7 @@
 #include <set>
 #include <vector>
 
-#include "floor_scene.h"
+#include "gi/floor_scene.h"
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/test_scenes.h"
@@ -31,22 +31,6 @@ namespace {
 
 using json = nlohmann::json;
 
-// A Lambert floor of albedo 0.5 (floor_scene.h) under `lights`, optionally a 1 x 1 m occluder 1 m
-// above it.
-Scene floorScene(const test::TempDir& t, const json& lights, int size = 64, bool occluder = false) {
-  json j = floorSceneJson(t, size);
-  if (occluder)
-    j["meshes"].push_back(
-        json{{"path", "box.obj"},
-             {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
-             {"material", "floor"}});
-  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
-  j["lights"] = lights;
-  j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 1024}}}};
-  std::ofstream(t.path() / "scene.json") << j.dump(2);
-  return loadScene(t.path() / "scene.json");
-}
-
 MethodFrame renderRaster(const Scene& s) {
   auto m = createMethod(s, {true, false});
   EXPECT_EQ(m->name(), "raster");
@@ -56,7 +40,7 @@ MethodFrame renderRaster(const Scene& s) {
 TEST(Raster, PointLightOverPlaneIsTheClosedForm) {
   test::TempDir t;
   const float I = 40.0f, h = 3.0f;
-  Scene s = floorScene(
+  Scene s = lambertFloorScene(
       t, json::array({json{{"type", "point"}, {"position", {1.0, 0.5, h}}, {"intensity", I}}}));
   MethodFrame f = renderRaster(s);
   ASSERT_EQ(f.image.width, 64);
@@ -82,12 +66,12 @@ TEST(Raster, PointLightOverPlaneIsTheClosedForm) {
 TEST(Raster, SpotConeIsTheClosedForm) {
   test::TempDir t;
   const float I = 50.0f, h = 4.0f;
-  Scene s = floorScene(t, json::array({json{{"type", "spot"},
-                                            {"position", {0.0, 0.0, h}},
-                                            {"direction", {0.0, 0.0, -1.0}},
-                                            {"intensity", I},
-                                            {"inner_angle", 15.0},
-                                            {"outer_angle", 25.0}}}));
+  Scene s = lambertFloorScene(t, json::array({json{{"type", "spot"},
+                                                   {"position", {0.0, 0.0, h}},
+                                                   {"direction", {0.0, 0.0, -1.0}},
+                                                   {"intensity", I},
+                                                   {"inner_angle", 15.0},
+                                                   {"outer_angle", 25.0}}}));
   MethodFrame f = renderRaster(s);
   const float cosIn = std::cos(glm::radians(15.0f)), cosOut = std::cos(glm::radians(25.0f));
   int inside = 0, outside = 0, edge = 0;
@@ -124,7 +108,7 @@ TEST(Raster, OccluderCastsAnUmbra) {
   // A 1 x 1 x 0.2 m plate 1 m above the floor, the light at (1.5, 0, 4): by similar triangles the
   // plate's shadow spans x in [-1.36, 0.17], |y| < 0.71 on the floor. The camera, above the
   // centre, sees the floor beside the plate (|x| or |y| > 0.63) in the shadow's left part.
-  Scene s = floorScene(
+  Scene s = lambertFloorScene(
       t, json::array({json{{"type", "point"}, {"position", {1.5, 0.0, 4.0}}, {"intensity", 40.0}}}),
       64, true);
   MethodFrame f = renderRaster(s);
@@ -151,7 +135,7 @@ TEST(Raster, OccluderCastsAnUmbra) {
 
 TEST(Raster, TiledFrameEqualsUntiled) {
   test::TempDir t;
-  Scene s = floorScene(
+  Scene s = lambertFloorScene(
       t, json::array({json{{"type", "point"}, {"position", {0.0, 0.0, 4.0}}, {"intensity", 40.0}}}),
       80, true);
   s.camera.width = 96;
@@ -220,123 +204,6 @@ TEST(Raster, TiledScanFrameEqualsUntiled) {
     EXPECT_LE(differ, whole.image.rgb.size() / 50) << splatting;  // measured: basic 0.5%, hqs 0.4%
   }
 }
-
-}  // namespace
-}  // namespace nestlight::gi
-
-namespace nestlight::gi {
-namespace {
-
-// The methods by name, as scene files name them.
-TEST(Methods, RegistryMakesEveryNameSceneFilesAccept) {
-  std::set<std::string> names;
-  for (const auto& m : registeredMethods()) {
-    EXPECT_TRUE(names.insert(m.name).second) << m.name << " registered twice";
-    EXPECT_FALSE(m.defaultQualities.empty()) << m.name;
-    EXPECT_TRUE(m.create && m.applyQuality) << m.name;
-  }
-  test::TempDir t;
-  Scene s = floorScene(t, json::array());
-  s.gi.method = "nope";
-  Error e = test::errorOf([&] { createMethod(s); });
-  EXPECT_NE(std::string(e.what()).find("gi.method"), std::string::npos) << e.what();
-  EXPECT_NE(std::string(e.what()).find("reference, direct, raster"), std::string::npos) << e.what();
-  // A method's parameters go through the same validator: the error names the field.
-  s.gi.method = "raster";
-  s.gi.parameters = json{{"shadow_map_size", 5}};
-  Error bad = test::errorOf([&] { createMethod(s); });
-  EXPECT_NE(std::string(bad.what()).find("scene.gi.parameters.shadow_map_size"), std::string::npos)
-      << bad.what();
-  s.gi.parameters = json{{"shadow_map_sise", 1024}};
-  Error typo = test::errorOf([&] { createMethod(s); });
-  EXPECT_NE(std::string(typo.what()).find("unknown field"), std::string::npos) << typo.what();
-}
-
-// pbrt-v4's integrator tests: one analytic scene, every registered method. A point light over a
-// Lambert floor with nothing else to bounce from: every method, whatever its number of bounces,
-// must give (rho / pi) I cos(theta) / d^2.
-class EveryMethod : public ::testing::TestWithParam<std::string> {};
-
-TEST_P(EveryMethod, PointLightOverPlane) {
-  test::TempDir t;
-  const float I = 40.0f, h = 3.0f;
-  Scene s = floorScene(
-      t, json::array({json{{"type", "point"}, {"position", {1.0, 0.5, h}}, {"intensity", I}}}), 32);
-  const MethodInfo* info = findMethod(GetParam());
-  ASSERT_NE(info, nullptr);
-  if (!info->albedoMode)
-    GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
-  s.gi.method = info->name;
-  // The lowest quality a sampling method needs here: 16 samples per pixel jitter over the pixel.
-  info->applyQuality(s.gi,
-                     info->qualityName == "samples per pixel" ? 16 : info->defaultQualities.back());
-  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
-  double sum = 0, sumWant = 0, worst = 0;
-  for (int y = 0; y < 32; ++y)
-    for (int x = 0; x < 32; ++x) {
-      glm::vec3 p;
-      if (!floorPoint(s, x, y, &p)) continue;
-      const glm::vec3 toL = glm::vec3(1.0f, 0.5f, h) - p;
-      const float d2 = glm::dot(toL, toL), want = 0.5f / kPi * I * (toL.z / std::sqrt(d2)) / d2;
-      const float got = f.image.get(x, y).r;
-      sum += got, sumWant += want;
-      worst = std::max(worst, double(std::abs(got - want) / want));
-    }
-  // Sampling methods average the pixel's area, raster shades its centre: near the light the
-  // radiance curves across a 0.2 m pixel, and the area's mean differs from the centre's value by
-  // up to 2.6% (measured), with 16 jittered samples' noise on top.
-  const double tolerance = info->qualityName == "samples per pixel" ? 0.04 : 1e-3;
-  EXPECT_LT(worst, tolerance) << info->name;
-  EXPECT_NEAR(sum / sumWant, 1.0, tolerance / 4) << info->name;
-}
-
-// A video light probe played over a shot: the floor under a uniform sky whose frames are 1, 3 and
-// 0.5. A camera's time picks the frame every method lights with (the reference's ground truth
-// and the GL methods alike), and a Lambert floor of albedo 0.5 under a uniform sky L returns 0.5 L.
-TEST_P(EveryMethod, VideoLightProbeFollowsTheCameraTime) {
-  test::TempDir t;
-  Scene s = floorScene(t, json::array(), 16);
-  const MethodInfo* info = findMethod(GetParam());
-  ASSERT_NE(info, nullptr);
-  if (!info->albedoMode)
-    GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
-  const float sky[3] = {1.0f, 3.0f, 0.5f};
-  for (int i = 0; i < 3; ++i) {
-    HdrImage img(16, 8);
-    std::fill(img.rgb.begin(), img.rgb.end(), sky[i]);
-    writeExr((t.path() / ("sky_" + std::to_string(i) + ".exr")).string(), img);
-  }
-  SceneEnvironment e;
-  e.sequence = t.path() / "sky_%d.exr";
-  e.fps = 10;
-  s.environment = e;
-  s.gi.method = info->name;
-  info->applyQuality(s.gi,
-                     info->qualityName == "samples per pixel" ? 16 : info->defaultQualities.back());
-  const std::vector<SceneCamera> cameras = sceneCameras(s);
-  ASSERT_EQ(cameras.size(), 3u);
-  auto m = createMethod(s, {true, false});
-  for (int i : {0, 2, 1, 2}) {
-    EXPECT_NEAR(cameras[size_t(i)].time, (i + 0.5) / 10.0, 1e-12);
-    MethodFrame f = m->render(cameras[size_t(i)]);
-    double sum = 0;
-    int n = 0;
-    for (int y = 0; y < 16; ++y)
-      for (int x = 0; x < 16; ++x) {
-        glm::vec3 p;
-        if (!floorPoint(s, x, y, &p)) continue;
-        sum += f.image.get(x, y).r, n++;
-      }
-    ASSERT_GT(n, 100);
-    // Every method is exact for a uniform sky on an unoccluded plane but for its sampling noise
-    // (16 samples) or its sky representation (micro-buffer m-pixels, spherical harmonics): 3%.
-    EXPECT_NEAR(sum / n / (0.5 * sky[i]), 1.0, 0.03) << info->name << " frame " << i;
-    EXPECT_EQ(f.attributes["nestlight:environment_frame"], std::to_string(i)) << info->name;
-  }
-}
-
-INSTANTIATE_TEST_SUITE_P(Registered, EveryMethod, ::testing::ValuesIn(registeredMethodNames()),
-                         [](const auto& info) { return info.param; });
 
 // The make-scene scenes, raster against the reference's first bounce in the albedo mode (the scan
 // lit by the scene's lights, as the raster method lights it).
@@ -554,12 +421,12 @@ TEST(Raster, OccludersOutOfViewStillCastShadows) {
 
 TEST(Raster, RunsOnTheOsMesaFallback) {
   test::TempDir t;
-  Scene s = floorScene(t,
-                       json::array({json{{"type", "spot"},
-                                         {"position", {0.0, 0.0, 4.0}},
-                                         {"direction", {0.0, 0.0, -1.0}},
-                                         {"intensity", 50.0}}}),
-                       32, true);
+  Scene s = lambertFloorScene(t,
+                              json::array({json{{"type", "spot"},
+                                                {"position", {0.0, 0.0, 4.0}},
+                                                {"direction", {0.0, 0.0, -1.0}},
+                                                {"intensity", 50.0}}}),
+                              32, true);
   MethodFrame egl = renderRaster(s);
   ::setenv("NESTLIGHT_GL_PLATFORM", "osmesa", 1);
   MethodFrame osmesa;

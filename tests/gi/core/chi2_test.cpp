@@ -1,7 +1,7 @@
 // The chi-square helper itself (tests/gi/chi2.h): its incomplete gamma function against closed
 // forms and published quantiles, its quadrature on a narrow lobe, and that it accepts a correct
 // sampler and rejects a subtly wrong one.
-#include "chi2.h"
+#include "gi/chi2.h"
 
 #include <gtest/gtest.h>
 

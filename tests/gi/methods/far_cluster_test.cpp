@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "floor_scene.h"
+#include "gi/floor_scene.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/scene.h"

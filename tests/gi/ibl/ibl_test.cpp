@@ -7,7 +7,8 @@
 #include <cmath>
 #include <fstream>
 
-#include "floor_scene.h"
+#include "gi/floor_scene.h"
+#include "gi/sphere_scan.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/material.h"
@@ -15,7 +16,6 @@
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/reference/path_tracer.h"
 #include "nestlight/gi/scene.h"
-#include "sphere_scan.h"
 #include "test_support.h"
 
 namespace nestlight::gi {

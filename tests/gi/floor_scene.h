@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "nestlight/converters/test_scenes.h"
@@ -67,6 +68,23 @@ inline bool floorPoint(const Scene& s, int x, int y, glm::vec3* p, float half = 
   if (!(d.z < 0)) return false;
   *p = o + d * (-o.z / d.z);
   return std::abs(p->x) < half && std::abs(p->y) < half;
+}
+
+// A Lambert floor of albedo 0.5 under `lights`, optionally a 1 x 1 m occluder 1 m
+// above it.
+inline Scene lambertFloorScene(const test::TempDir& t, const nlohmann::json& lights, int size = 64,
+                               bool occluder = false) {
+  nlohmann::json j = floorSceneJson(t, size);
+  if (occluder)
+    j["meshes"].push_back(nlohmann::json{
+        {"path", "box.obj"},
+        {"transform", {{"translate", {-0.5, -0.5, 1.0}}, {"scale", {1.0, 1.0, 0.2}}}},
+        {"material", "floor"}});
+  j["materials"] = {{"floor", {{"type", "lambert"}, {"base_color", 0.5}}}};
+  j["lights"] = lights;
+  j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 1024}}}};
+  std::ofstream(t.path() / "scene.json") << j.dump(2);
+  return loadScene(t.path() / "scene.json");
 }
 
 }  // namespace nestlight::gi

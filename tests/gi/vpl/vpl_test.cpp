@@ -10,8 +10,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "../gi/chi2.h"
-#include "gi_gl/sphere_scan.h"
+#include "gi/chi2.h"
+#include "gi/sphere_scan.h"
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/test_scenes.h"

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "chi2.h"
+#include "gi/chi2.h"
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/octree/error.h"
 #include "test_support.h"
