@@ -27,13 +27,13 @@ const ParameterSpecs& rasterParameterSpecs() {
   return specs;
 }
 
-RasterParameters parseRasterParameters(const Scene& scene,
-                                       const std::vector<std::string>& otherKeys) {
+FrameParameters parseFrameParameters(const Scene& scene,
+                                     const std::vector<std::string>& otherKeys) {
   std::vector<std::string> names = parameterNames(rasterParameterSpecs());
   names.insert(names.end(), otherKeys.begin(), otherKeys.end());
   checkParameterNames(scene, names);
   const ResolvedParameters r = resolveParameterValues(scene, rasterParameterSpecs());
-  RasterParameters p;
+  FrameParameters p;
   p.shadowMapSize = int(r.integer("shadow_map_size"));
   p.computeRasteriser = r.string("rasteriser") == "compute";
   p.hqs = r.string("splatting") == "hqs";

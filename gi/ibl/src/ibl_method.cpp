@@ -14,7 +14,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/frame/frame_graph.h"
-#include "nestlight/gi/frame/raster_frame.h"
+#include "nestlight/gi/frame/scene_frame.h"
 #include "nestlight/gi/ibl/environment_table.h"
 #include "nestlight/gi/ibl/triangle_bvh.h"
 #include "nestlight/gi/sampling.h"
@@ -152,7 +152,7 @@ class SlabBshLayer : public frame::NodeLayer {
   BshLayer inner_;
 };
 
-class IblExtension : public RasterExtension {
+class IblExtension : public FrameExtension {
  public:
   explicit IblExtension(const Scene& scene)
       : params_(iblParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
@@ -182,7 +182,7 @@ class IblExtension : public RasterExtension {
             {"smc_band_rows", std::to_string(params_.smcBandRows)}};
   }
 
-  std::string setUp(RasterFrame& f) override {
+  std::string setUp(SceneFrame& f) override {
     const Scene& scene = f.scene();
     // This pass owns the environment's light on every receiver, occluded: direct light must not
     // add its unshadowed irradiance too.
@@ -238,7 +238,7 @@ class IblExtension : public RasterExtension {
     return "radiance_ibl";
   }
 
-  void beforeFrame(RasterFrame& f) override {
+  void beforeFrame(SceneFrame& f) override {
     if (f.cutGeneration() != generation_) {
       generation_ = f.cutGeneration();
       hier_.assemble(f, layer_);
@@ -271,7 +271,7 @@ class IblExtension : public RasterExtension {
     frameClip_ = false;
   }
 
-  void describe(const RasterFrame&, MethodFrame& mf) const override {
+  void describe(const SceneFrame&, MethodFrame& mf) const override {
     std::array<uint32_t, IBL_STAT_COUNT> s{};
     glGetNamedBufferSubData(stats_.id(), 0, sizeof s, s.data());
     mf.attributes["nestlight:ibl_estimator"] = estimatorName(params_.estimator);
@@ -358,7 +358,7 @@ class IblExtension : public RasterExtension {
     glTextureSubImage2D(prevTexture_.id(), 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, rgba.data());
   }
 
-  void shade(RasterFrame& f, const frame::PassContext& ctx) {
+  void shade(SceneFrame& f, const frame::PassContext& ctx) {
     const frame::Tile& tile = ctx.tile();
     const bool smc = params_.estimator == IblParameters::Estimator::Smc;
     f.bindSceneBuffers();

@@ -12,7 +12,7 @@
 #include <cstring>
 
 #include "nestlight/frame/frame_graph.h"
-#include "nestlight/gi/frame/raster_frame.h"
+#include "nestlight/gi/frame/scene_frame.h"
 #include "nestlight/gi/pbgi/micro_buffer.h"
 #include "nestlight/gi/shared/bsh.h"
 #include "nestlight/gi/shared/bsh_layer.h"
@@ -29,7 +29,7 @@ namespace {
 
 static_assert(sizeof(PbgiNode) == 32, "PbgiNode must keep std430's layout");
 
-class PbgiExtension : public RasterExtension {
+class PbgiExtension : public FrameExtension {
  public:
   explicit PbgiExtension(const Scene& scene) : params_(pbgiParameters(scene)) {}
 
@@ -76,7 +76,7 @@ class PbgiExtension : public RasterExtension {
     return "?";
   }
 
-  std::string setUp(RasterFrame& f) override {
+  std::string setUp(SceneFrame& f) override {
     const Scene& scene = f.scene();
     if (params_.empty == PbgiParameters::Empty::Auto)
       params_.empty =
@@ -155,13 +155,13 @@ class PbgiExtension : public RasterExtension {
     return "radiance_gi";
   }
 
-  void beforeFrame(RasterFrame& f) override {
+  void beforeFrame(SceneFrame& f) override {
     if (f.cutGeneration() != generation_ || topCount_ == 0) rebuild(f);
     receiverCount_ = dispatches_ = stackOverflows_ = 0;
     pairGenerations_ = pairOverflows_ = pairBytes_ = listEntries_ = 0;
   }
 
-  void describe(const RasterFrame&, MethodFrame& f) const override {
+  void describe(const SceneFrame&, MethodFrame& f) const override {
     f.attributes["nestlight:pbgi_variant"] = variantName();
     f.attributes["nestlight:pbgi_pair_generations"] = std::to_string(pairGenerations_);
     f.attributes["nestlight:pbgi_pair_overflows"] = std::to_string(pairOverflows_);
@@ -225,7 +225,7 @@ class PbgiExtension : public RasterExtension {
 
  private:
   // The cut's hierarchies into one buffer, their roots into the top tree.
-  void rebuild(RasterFrame& f) {
+  void rebuild(SceneFrame& f) {
     const auto t0 = std::chrono::steady_clock::now();
     generation_ = f.cutGeneration();
     hier_.assemble(f, layer_);
@@ -265,7 +265,7 @@ class PbgiExtension : public RasterExtension {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
 
-  void addPasses(RasterFrame& f) {
+  void addPasses(SceneFrame& f) {
     frame::FrameGraph& g = f.graph();
     g.addTarget("radiance_gi", {GL_RGBA32F});
     if (lit_) {
@@ -292,7 +292,7 @@ class PbgiExtension : public RasterExtension {
   // Lit copies of the hierarchies and the top tree, which the gather reads instead: in the albedo
   // mode every node's radiance from the lights (pbgi_light.comp); in the radiance-cache mode the
   // scan's nodes as they are (their colour is their radiance) and the meshes' surfels lit.
-  void lightNodes(RasterFrame& f, const frame::PassContext& ctx) {
+  void lightNodes(SceneFrame& f, const frame::PassContext& ctx) {
     gatheredBounces_ = bounceReceivers_ = 0;
     if (topCount_ == 0) return;
     const size_t firstLit = albedo_ ? 0 : scanTrees_;  // the scan's were copied at rebuild()
@@ -380,7 +380,7 @@ class PbgiExtension : public RasterExtension {
   // traversal with nodes as receivers), every leaf below takes its direct light plus its albedo
   // times what its receiver gathered (pbgi_bounce_down.comp), and the sweeps rebuild the inner
   // nodes: each pass adds one bounce to the light the pixels then gather.
-  void gatherBounces(RasterFrame& f) {
+  void gatherBounces(SceneFrame& f) {
     if (tableCount_ == 0 || bshNodes_ == 0) return;
     nodesDirect_.reserve(nodesLit_.bytes());
     glCopyNamedBufferSubData(nodesLit_.id(), nodesDirect_.id(), 0, 0,
@@ -437,7 +437,7 @@ class PbgiExtension : public RasterExtension {
 
   // Lists the tile's receivers, then gathers for them in chunks that fit one buffer range, each
   // dispatched until every receiver of the chunk has finished its traversal.
-  void gather(RasterFrame& f, const frame::PassContext& ctx) {
+  void gather(SceneFrame& f, const frame::PassContext& ctx) {
     const frame::Tile& tile = ctx.tile();
     const size_t pixels = size_t(tile.width) * size_t(tile.height);
     receivers_.reserve((4 + pixels) * 4);
@@ -487,7 +487,7 @@ class PbgiExtension : public RasterExtension {
 
   // The classic traversal for `count` receivers listed in receivers_ (pixels, or hierarchy nodes),
   // in chunks that fit one buffer range, each dispatched until every receiver has finished.
-  void traverse(RasterFrame& f, size_t count, bool nodeReceivers, bool lists,
+  void traverse(SceneFrame& f, size_t count, bool nodeReceivers, bool lists,
                 const gl::Buffer& topIn, const gl::Buffer& nodesIn, const gl::Buffer& tableIn) {
     const uint32_t zero = 0;
     const size_t m2 = size_t(params_.microBuffer) * size_t(params_.microBuffer);

@@ -1,8 +1,8 @@
-// The `raster` method: the GI frame (nestlight/gi/frame/raster_frame.h) with no extension, direct
+// The `raster` method: the GI frame (nestlight/gi/frame/scene_frame.h) with no extension, direct
 // light only.
 #include "nestlight/gi/raster/raster_method.h"
 
-#include "nestlight/gi/frame/raster_frame.h"
+#include "nestlight/gi/frame/scene_frame.h"
 
 namespace nestlight::gi {
 

@@ -5,8 +5,8 @@
 
 namespace nestlight::gi {
 
-RasterParameters rasterParameters(const Scene& scene) {
-  return parseRasterParameters(scene, {});
+FrameParameters rasterParameters(const Scene& scene) {
+  return parseFrameParameters(scene, {});
 }
 
 MethodInfo rasterMethodInfo() {

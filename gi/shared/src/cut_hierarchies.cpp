@@ -17,7 +17,7 @@ void CutHierarchies::setMeshTrees(const std::vector<MeshTree>& trees) {
   if (!all.empty()) meshNodes_ = gl::Buffer(all.size() * sizeof(BshNode), all.data(), 0);
 }
 
-void CutHierarchies::assemble(RasterFrame& f, size_t layer) {
+void CutHierarchies::assemble(SceneFrame& f, size_t layer) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto& cut = f.lightsCut();
   std::vector<PbgiNode> table;

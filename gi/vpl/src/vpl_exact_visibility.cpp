@@ -10,7 +10,7 @@
 
 namespace nestlight::gi::vpl {
 
-void VplExtension::addExactPass(RasterFrame& f) {
+void VplExtension::addExactPass(SceneFrame& f) {
   frame::FrameGraph& g = f.graph();
   g.addBuffer("vpl_exact");
   g.addPass(

@@ -17,7 +17,7 @@
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/interface.h"
-#include "nestlight/gi/frame/raster_frame.h"
+#include "nestlight/gi/frame/scene_frame.h"
 #include "nestlight/gi/shared/reference_scene.h"
 #include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/gl/program.h"
@@ -79,7 +79,7 @@ class ImportanceWarp {
   gl::ShaderProgram pyramid_, warp_;
 };
 
-class VplExtension : public RasterExtension {
+class VplExtension : public FrameExtension {
  public:
   explicit VplExtension(const Scene& scene) : params_(vplParameters(scene)) {}
   std::string name() const override { return "vpl"; }
@@ -94,43 +94,43 @@ class VplExtension : public RasterExtension {
                                                                 : "none";
   }
   std::vector<std::pair<std::string, std::string>> parameters() const override;
-  std::string setUp(RasterFrame& f) override;
-  void beforeFrame(RasterFrame& f) override;
-  void describe(const RasterFrame& f, MethodFrame& out) const override;
+  std::string setUp(SceneFrame& f) override;
+  void beforeFrame(SceneFrame& f) override;
+  void describe(const SceneFrame& f, MethodFrame& out) const override;
   void afterReadBack(const std::vector<float>& rgba, MethodFrame& out) override;
 
  private:
   // vpl_method.cpp: the frame (light views, buffers, the VPL count, VPL generations over the
   // bounces, the passes in order).
-  void setUpLightViews(RasterFrame& f);
+  void setUpLightViews(SceneFrame& f);
   void compile();
   void allocateCountBuffers();
   bool afterFrame(double seconds, bool still) override;
-  void addPasses(RasterFrame& f);
-  void addVisibilityAndShadingPasses(RasterFrame& f);
-  void generateVpls(RasterFrame& f, const frame::PassContext& ctx);
+  void addPasses(SceneFrame& f);
+  void addVisibilityAndShadingPasses(SceneFrame& f);
+  void generateVpls(SceneFrame& f, const frame::PassContext& ctx);
   double emittedFlux(int gen);
 
   // vpl_warping.cpp: the light G-buffer and importance-warped VPLs.
-  void addLightPasses(RasterFrame& f, const char* const (&lightTargets)[4]);
+  void addLightPasses(SceneFrame& f, const char* const (&lightTargets)[4]);
   void bindLightTextures(const frame::PassContext& ctx) const;
   void emitFromScans();
 
   // vpl_ism.cpp: the ISM pool (the cut's points, the meshes' surfels) and the ISM atlas.
-  void setUpSurfels(RasterFrame& f);
+  void setUpSurfels(SceneFrame& f);
   void setPoolUniforms(const gl::ShaderProgram& p) const;
-  void buildPool(RasterFrame& f);
-  void addIsmPass(RasterFrame& f);
+  void buildPool(SceneFrame& f);
+  void addIsmPass(SceneFrame& f);
 
   // vpl_pull_push.cpp: the ISMs' holes filled from their coarser levels.
-  void addPullPushPass(RasterFrame& f);
+  void addPullPushPass(SceneFrame& f);
 
   // vpl_shading.cpp: interleaved shading and the geometry-aware filter.
-  void addShadePass(RasterFrame& f);
-  void addFilterPass(RasterFrame& f);
+  void addShadePass(SceneFrame& f);
+  void addFilterPass(SceneFrame& f);
 
   // vpl_exact_visibility.cpp: Embree's rays instead of the ISMs.
-  void addExactPass(RasterFrame& f);
+  void addExactPass(SceneFrame& f);
   void exactVisibility(const frame::PassContext& ctx);
 
   static uint32_t packHalf2(float a, float b) {
@@ -142,7 +142,7 @@ class VplExtension : public RasterExtension {
     params_.count = n;
     allocateCountBuffers();
   }
-  void bindCommon(RasterFrame& f) const {
+  void bindCommon(SceneFrame& f) const {
     f.bindSceneBuffers();
     lightViews_.bindBase(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_LIGHT_VIEWS);
     records_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_RECORDS, 0, records_.bytes());

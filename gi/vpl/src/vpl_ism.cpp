@@ -13,7 +13,7 @@
 namespace nestlight::gi::vpl {
 
 // The meshes' surfels join the ISM occluders (and the bounces' hit points) as nodes of their own.
-void VplExtension::setUpSurfels(RasterFrame& f) {
+void VplExtension::setUpSurfels(SceneFrame& f) {
   const Scene& scene = f.scene();
   for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
     const SceneMesh& m = scene.meshes[mi];
@@ -68,7 +68,7 @@ void VplExtension::setPoolUniforms(const gl::ShaderProgram& p) const {
 
 // The ISM pool: the lights' cut's points (gathered on the GPU from the nodes' buffers) and the
 // meshes' surfels, with a node table for the level-of-detail choice.
-void VplExtension::buildPool(RasterFrame& f) {
+void VplExtension::buildPool(SceneFrame& f) {
   const auto& cut = f.lightsCut();
   std::vector<PoolNode> nodes;
   std::vector<char> hasChild(cut.size(), 0);
@@ -118,7 +118,7 @@ void VplExtension::buildPool(RasterFrame& f) {
   if (scanPoints == 0) return;
   pool_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_POOL, 0, pool_.bytes());
   gather_.use();
-  const float splat = f.rasterParameters().splatScale;
+  const float splat = f.frameParameters().splatScale;
   int boundScan = -1;
   for (size_t j = 0; j < taken.size(); ++j) {
     const CutNode& c = cut[taken[j]];
@@ -139,7 +139,7 @@ void VplExtension::buildPool(RasterFrame& f) {
 }
 
 // The ISM atlas: every VPL's pool points splatted into its paraboloid map.
-void VplExtension::addIsmPass(RasterFrame& f) {
+void VplExtension::addIsmPass(SceneFrame& f) {
   frame::FrameGraph& g = f.graph();
   g.addPass(
       "ism", frame::Scope::Frame,

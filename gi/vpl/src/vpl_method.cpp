@@ -30,7 +30,7 @@ std::vector<std::pair<std::string, std::string>> VplExtension::parameters() cons
           {"visibility", visibilityName()}};
 }
 
-std::string VplExtension::setUp(RasterFrame& f) {
+std::string VplExtension::setUp(SceneFrame& f) {
   const Scene& scene = f.scene();
   bounces_ = std::max(scene.gi.maxBounces, 1);
   radianceCache_ = scene.gi.mode == RadianceMode::RadianceCache;
@@ -67,7 +67,7 @@ std::string VplExtension::setUp(RasterFrame& f) {
   return "radiance_gi";
 }
 
-void VplExtension::beforeFrame(RasterFrame& f) {
+void VplExtension::beforeFrame(SceneFrame& f) {
   if (exact()) {
     const GLuint zero = 0;
     glClearNamedBufferData(agreement_.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
@@ -79,7 +79,7 @@ void VplExtension::beforeFrame(RasterFrame& f) {
   }
 }
 
-void VplExtension::describe(const RasterFrame& f, MethodFrame& out) const {
+void VplExtension::describe(const SceneFrame& f, MethodFrame& out) const {
   (void)f;
   out.attributes["nestlight:vpls"] = std::to_string(params_.count);
   out.attributes["nestlight:vpl_generations"] = std::to_string(generationsRun_);
@@ -133,15 +133,15 @@ void VplExtension::afterReadBack(const std::vector<float>& rgba, MethodFrame& ou
 }
 
 // The lights' views' inverses, and the clamp's distance, relative to the clusters they span
-// (RasterFrame::lightViewBoundsLo): a mesh 1000 km away, in a cluster of its own, would
+// (SceneFrame::lightViewBoundsLo): a mesh 1000 km away, in a cluster of its own, would
 // otherwise clamp every VPL's light. Again whenever the frame refits the views.
-void VplExtension::setUpLightViews(RasterFrame& f) {
+void VplExtension::setUpLightViews(SceneFrame& f) {
   lightViewsGeneration_ = f.lightViewsGeneration();
   radius_ = 0.5f * glm::length(f.lightViewBoundsHi() - f.lightViewBoundsLo());
   clampDistance_ = std::max(params_.clampFraction * radius_, 1e-6f);
   layerOwner_.clear();
   const auto& clips = f.lightClipFromWorld();
-  const int S = f.rasterParameters().shadowMapSize;
+  const int S = f.frameParameters().shadowMapSize;
   std::vector<LightView> views;
   for (size_t layer = 0; layer < clips.size(); ++layer) {
     int owner = -1;
@@ -247,7 +247,7 @@ bool VplExtension::afterFrame(double seconds, bool still) {
   return false;
 }
 
-void VplExtension::addPasses(RasterFrame& f) {
+void VplExtension::addPasses(SceneFrame& f) {
   frame::FrameGraph& g = f.graph();
   g.addBuffer("vpls");
   g.addBuffer("ism_raw");
@@ -278,7 +278,7 @@ void VplExtension::addPasses(RasterFrame& f) {
 }
 
 // ISMs, pull-push, (exact visibility,) shading and the filter.
-void VplExtension::addVisibilityAndShadingPasses(RasterFrame& f) {
+void VplExtension::addVisibilityAndShadingPasses(SceneFrame& f) {
   if (usesIsms()) {
     addIsmPass(f);
     addPullPushPass(f);
@@ -288,7 +288,7 @@ void VplExtension::addVisibilityAndShadingPasses(RasterFrame& f) {
   addFilterPass(f);
 }
 
-void VplExtension::generateVpls(RasterFrame& f, const frame::PassContext& ctx) {
+void VplExtension::generateVpls(SceneFrame& f, const frame::PassContext& ctx) {
   bindCommon(f);
   generationsRun_ = 0;
   stopNote_.clear();

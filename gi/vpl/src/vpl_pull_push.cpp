@@ -8,7 +8,7 @@
 namespace nestlight::gi::vpl {
 
 // Pull-push: the ISMs' holes filled from their coarser levels.
-void VplExtension::addPullPushPass(RasterFrame& f) {
+void VplExtension::addPullPushPass(SceneFrame& f) {
   frame::FrameGraph& g = f.graph();
   g.addPass(
       "pull_push", frame::Scope::Frame,

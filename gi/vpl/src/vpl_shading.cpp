@@ -5,7 +5,7 @@
 namespace nestlight::gi::vpl {
 
 // Interleaved shading: each pixel takes the VPLs of its subset of n x n.
-void VplExtension::addShadePass(RasterFrame& f) {
+void VplExtension::addShadePass(SceneFrame& f) {
   frame::FrameGraph& g = f.graph();
   g.addPass(
       "vpl_shade", frame::Scope::Tile,
@@ -44,7 +44,7 @@ void VplExtension::addShadePass(RasterFrame& f) {
 }
 
 // The geometry-aware filter over the n x n subsets, and the direct light added.
-void VplExtension::addFilterPass(RasterFrame& f) {
+void VplExtension::addFilterPass(SceneFrame& f) {
   frame::FrameGraph& g = f.graph();
   g.addPass(
       "vpl_filter", frame::Scope::Tile,

@@ -38,7 +38,7 @@ void ImportanceWarp::run(const gl::Buffer& levels, int size, int layers, int cou
 }
 
 // The light G-buffer and the warped samples on it.
-void VplExtension::addLightPasses(RasterFrame& f, const char* const (&lightTargets)[4]) {
+void VplExtension::addLightPasses(SceneFrame& f, const char* const (&lightTargets)[4]) {
   frame::FrameGraph& g = f.graph();
   const int G = params_.lightResolution, layers = std::max(layers_, 1);
   g.addTarget("light_depth", {GL_DEPTH_COMPONENT32F, true, G, G, layers});
@@ -61,7 +61,7 @@ void VplExtension::addLightPasses(RasterFrame& f, const char* const (&lightTarge
         glDisable(GL_BLEND);
         glDisable(GL_CULL_FACE);
         glViewport(0, 0, G, G);
-        const int S = f.rasterParameters().shadowMapSize;
+        const int S = f.frameParameters().shadowMapSize;
         for (int layer = 0; layer < layers_; ++layer) {
           lightFbo_.attachLayer(GL_COLOR_ATTACHMENT0, ctx.target("light_base"), layer);
           lightFbo_.attachLayer(GL_COLOR_ATTACHMENT1, ctx.target("light_normal"), layer);

@@ -1,4 +1,4 @@
-// The scene's environment as the raster frame binds it (RasterFrame::bindEnvironment): the
+// The scene's environment as the GI frame binds it (SceneFrame::bindEnvironment): the
 // lat-long map (as gi::EnvironmentMap samples it) and its irradiance as order-2 spherical
 // harmonics (Ramamoorthi and Hanrahan 2001, "An Efficient Representation for Irradiance
 // Environment Maps").

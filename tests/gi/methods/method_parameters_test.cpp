@@ -54,7 +54,7 @@ TEST(Methods, TypedParametersStartAtTheDeclaredDefaults) {
   s.file = "/scenes/defaults.json";
   for (const json& none : {json(), json::object()}) {
     s.gi.parameters = none;
-    const RasterParameters r = rasterParameters(s), r0;
+    const FrameParameters r = rasterParameters(s), r0;
     EXPECT_EQ(r.shadowMapSize, r0.shadowMapSize);
     EXPECT_EQ(r.computeRasteriser, r0.computeRasteriser);
     EXPECT_EQ(r.hqs, r0.hqs);

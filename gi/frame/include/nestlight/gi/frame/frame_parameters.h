@@ -11,7 +11,7 @@
 
 namespace nestlight::gi {
 
-struct RasterParameters {
+struct FrameParameters {
   int shadowMapSize = 2048;  // texels per side of each shadow-map layer
   // The scans' G-buffer: GL_POINTS splats sized by the measured spacing, or the compute
   // rasteriser (one pixel per point, the points within 1% of the nearest depth averaged). Shadow
@@ -34,7 +34,6 @@ const ParameterSpecs& rasterParameterSpecs();
 
 // From the scene's gi.parameters (rasterParameterSpecs()), accepting `otherKeys` too (a method
 // built on the frame reads those); throws nestlight::Error naming the scene file and the field.
-RasterParameters parseRasterParameters(const Scene& scene,
-                                       const std::vector<std::string>& otherKeys);
+FrameParameters parseFrameParameters(const Scene& scene, const std::vector<std::string>& otherKeys);
 
 }  // namespace nestlight::gi

@@ -24,7 +24,7 @@ MethodInfo rasterMethodInfo();
 
 // From the scene's gi.parameters (rasterParameterSpecs()); throws nestlight::Error naming the
 // scene file and the field.
-RasterParameters rasterParameters(const Scene& scene);
+FrameParameters rasterParameters(const Scene& scene);
 
 // Opens the scene's scans and meshes and, unless ctx says one is current, a headless GL context.
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx);

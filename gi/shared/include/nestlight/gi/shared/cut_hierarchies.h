@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "nestlight/gi/frame/raster_frame.h"
+#include "nestlight/gi/frame/scene_frame.h"
 #include "nestlight/gi/shared/bsh.h"
 #include "nestlight/gi/shared/mesh_trees.h"
 #include "nestlight/gl/resources.h"
@@ -23,7 +23,7 @@ class CutHierarchies {
   void setMeshTrees(const std::vector<MeshTree>& trees);
   // Gathers the lights' cut's hierarchies (node layer `layer`). The finest nodes are left out
   // (and counted) when the whole would exceed one 128 MiB buffer range.
-  void assemble(RasterFrame& frame, size_t layer);
+  void assemble(SceneFrame& frame, size_t layer);
 
   const gl::Buffer& top() const { return top_; }
   const gl::Buffer& nodes() const { return nodes_; }

@@ -1,8 +1,8 @@
 // The raster frame as a base for other real-time GI methods: `raster` loads the scene (scans
 // streamed under budgets, meshes, lights with their shadow maps, materials) and builds the GI
 // frame's passes for the camera's G-buffer and direct light; a method that adds indirect light
-// (VPLs, hierarchies) is a RasterExtension that adds its own passes to the same frame graph and
-// reads what the frame offers through RasterFrame. The method is made by
+// (VPLs, hierarchies) is a FrameExtension that adds its own passes to the same frame graph and
+// reads what the frame offers through SceneFrame. The method is made by
 // createRasterMethod(scene, ctx, extension).
 #pragma once
 
@@ -42,11 +42,11 @@ struct CutNode {
   uint64_t handle = 0;     // its store handle (layerBuffer)
 };
 
-class RasterFrame {
+class SceneFrame {
  public:
-  virtual ~RasterFrame() = default;
+  virtual ~SceneFrame() = default;
   virtual const Scene& scene() const = 0;
-  virtual const RasterParameters& rasterParameters() const = 0;
+  virtual const FrameParameters& frameParameters() const = 0;
   virtual frame::FrameGraph& graph() = 0;
   // The scene's bounds in its local frame (scans and meshes).
   virtual glm::vec3 boundsLo() const = 0;
@@ -54,7 +54,7 @@ class RasterFrame {
   // The lights, and per shadow-map layer its clip-from-world and view-from-world (spot: one
   // perspective layer, point: six cube faces, directional: one orthographic layer over the
   // clusters of objects the camera sees, shadow_fit.h's clusterObjects, refitted when that set
-  // changes; unless RasterExtension::shadowsForTheCameraOnly: then over what the camera sees,
+  // changes; unless FrameExtension::shadowsForTheCameraOnly: then over what the camera sees,
   // refitted every frame).
   virtual const std::vector<frame::LightRecord>& lights() const = 0;
   virtual const std::vector<glm::mat4>& lightClipFromWorld() const = 0;
@@ -113,20 +113,20 @@ class RasterFrame {
   virtual const std::vector<TriangleMesh>& meshes() const = 0;
 };
 
-class RasterExtension {
+class FrameExtension {
  public:
-  virtual ~RasterExtension() = default;
+  virtual ~FrameExtension() = default;
   virtual std::string name() const = 0;
   // gi.parameters keys the extension reads (beside raster's); parse them in setUp.
   virtual std::vector<std::string> parameterKeys() const = 0;
   // Called once the scene is loaded: validates the extension's parameters, adds its passes after
   // direct light (the "radiance" target holds direct light and what the camera sees of the
   // environment) and returns the target to tone map and read back.
-  virtual std::string setUp(RasterFrame& frame) = 0;
+  virtual std::string setUp(SceneFrame& frame) = 0;
   // Before each frame executes, after the cuts are streamed.
-  virtual void beforeFrame(RasterFrame& frame) { (void)frame; }
+  virtual void beforeFrame(SceneFrame& frame) { (void)frame; }
   // After each frame: attributes and a summary of the extension's own (appended to raster's).
-  virtual void describe(const RasterFrame& frame, MethodFrame& f) const { (void)frame, (void)f; }
+  virtual void describe(const SceneFrame& frame, MethodFrame& f) const { (void)frame, (void)f; }
   // After a still's read-back (`rgba`: the output target's pixels, alpha included).
   virtual void afterReadBack(const std::vector<float>& rgba, MethodFrame& f) {
     (void)rgba, (void)f;
@@ -150,6 +150,6 @@ class RasterExtension {
 
 // `raster` with `extension`'s passes (nullptr: raster alone); the method takes its name.
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx,
-                                           std::unique_ptr<RasterExtension> extension);
+                                           std::unique_ptr<FrameExtension> extension);
 
 }  // namespace nestlight::gi

@@ -6,7 +6,7 @@
 #include <cstdio>
 
 #include "nestlight/gi/frame/irradiance_sh.h"
-#include "raster_frame_impl.h"
+#include "scene_frame_impl.h"
 
 namespace nestlight::gi::frame_detail {
 

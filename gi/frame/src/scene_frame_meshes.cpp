@@ -2,7 +2,7 @@
 // and drawn with shaders/gi/raster/mesh.vert) and the scene's materials (NL_SSBO_MATERIALS).
 #include <cmath>
 
-#include "raster_frame_impl.h"
+#include "scene_frame_impl.h"
 
 namespace nestlight::gi::frame_detail {
 

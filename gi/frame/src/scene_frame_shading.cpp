@@ -4,7 +4,7 @@
 // the environment's unshadowed irradiance on diffuse lobes), the tone map to the display, and
 // the read-back of a still.
 #include "nestlight/frame/passes.h"
-#include "raster_frame_impl.h"
+#include "scene_frame_impl.h"
 
 namespace nestlight::gi::frame_detail {
 

@@ -1,10 +1,10 @@
 // The GI frame's implementation, shared by its files (one concern each): the class behind
-// RasterFrame and the `raster` method (nestlight/gi/frame/raster_frame.h), its scans, meshes,
-// lights and environment. raster_frame.cpp drives a frame (the passes in order, render,
-// renderInteractive); raster_frame_scans.cpp streams the scans' cuts and draws them;
-// raster_frame_meshes.cpp loads and draws the meshes and uploads the materials;
-// raster_frame_lights.cpp holds the lights and their shadow maps; raster_frame_environment.cpp
-// the environment map; raster_frame_gbuffer.cpp the G-buffer passes; raster_frame_shading.cpp
+// SceneFrame and the `raster` method (nestlight/gi/frame/scene_frame.h), its scans, meshes,
+// lights and environment. scene_frame.cpp drives a frame (the passes in order, render,
+// renderInteractive); scene_frame_scans.cpp streams the scans' cuts and draws them;
+// scene_frame_meshes.cpp loads and draws the meshes and uploads the materials;
+// scene_frame_lights.cpp holds the lights and their shadow maps; scene_frame_environment.cpp
+// the environment map; scene_frame_gbuffer.cpp the G-buffer passes; scene_frame_shading.cpp
 // direct light, the tone map and the read-back.
 #pragma once
 
@@ -27,7 +27,7 @@
 #include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/environment_source.h"
 #include "nestlight/gi/frame/frame_parameters.h"
-#include "nestlight/gi/frame/raster_frame.h"
+#include "nestlight/gi/frame/scene_frame.h"
 #include "nestlight/gi/frame/shadow_fit.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/method.h"
@@ -81,18 +81,18 @@ struct GpuScan {
       colours;  // the scene's octrees[].colour (a layer: drawn as HDR)
 };
 
-class RasterMethod : public Method, public RasterFrame {
+class RasterMethod : public Method, public SceneFrame {
  public:
   RasterMethod(const Scene& scene, const MethodContext& mc,
-               std::unique_ptr<RasterExtension> extension);
+               std::unique_ptr<FrameExtension> extension);
 
   ~RasterMethod() override;
 
   std::string name() const override { return extension_ ? extension_->name() : "raster"; }
 
-  // RasterFrame, for the extension.
+  // SceneFrame, for the extension.
   const Scene& scene() const override { return scene_; }
-  const RasterParameters& rasterParameters() const override { return params_; }
+  const FrameParameters& frameParameters() const override { return params_; }
   frame::FrameGraph& graph() override { return graph_; }
   glm::vec3 boundsLo() const override { return bounds_.lo; }
   glm::vec3 boundsHi() const override { return bounds_.hi; }
@@ -133,12 +133,12 @@ class RasterMethod : public Method, public RasterFrame {
   std::vector<std::pair<std::string, std::string>> parameters() const override;
 
  private:
-  // raster_frame.cpp: the frame's passes in order, its output and what it reports.
+  // scene_frame.cpp: the frame's passes in order, its output and what it reports.
   void setOutput(const std::string& output);
   void buildGraph();
   void describe(MethodFrame& f, uint64_t drawPoints, double streamSeconds) const;
 
-  // raster_frame_scans.cpp: the scans, their cuts streamed and drawn.
+  // scene_frame_scans.cpp: the scans, their cuts streamed and drawn.
   void loadScans();
   uint64_t stream(const SceneCamera& camera, bool complete);
   void updateLightsCut();
@@ -149,24 +149,24 @@ class RasterMethod : public Method, public RasterFrame {
                    const std::function<void(const streaming::DrawNode&)>& draw,
                    bool lightsCut = false);
 
-  // raster_frame_meshes.cpp: the meshes and the materials.
+  // scene_frame_meshes.cpp: the meshes and the materials.
   void loadMeshes();
   void uploadMaterials();
   void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
                   bool materials) override;
 
-  // raster_frame_lights.cpp: the lights and their shadow maps.
+  // scene_frame_lights.cpp: the lights and their shadow maps.
   void setUpLights();
   void fitShadowsToCamera(const ShadowFitCamera& camera);
   void fitLightViewsToClusters(const ShadowFitCamera& camera);
   void addShadowMapPass();
 
-  // raster_frame_environment.cpp: the environment map.
+  // scene_frame_environment.cpp: the environment map.
   void setUpEnvironment();
   void selectEnvironment(const SceneCamera& camera);
   void uploadEnvironment(std::shared_ptr<const EnvironmentMap> map, bool sequence);
 
-  // raster_frame_gbuffer.cpp: the G-buffer passes.
+  // scene_frame_gbuffer.cpp: the G-buffer passes.
   void bindGBuffer(const frame::PassContext& ctx);
   glm::mat4 guardBand(const frame::PassContext& ctx) const;
   static constexpr float kMaxSplatPixels = 64.0f;
@@ -175,18 +175,18 @@ class RasterMethod : public Method, public RasterFrame {
   void computeScans(const frame::PassContext& ctx);
   void addGBufferPasses();
 
-  // raster_frame_shading.cpp: direct light, the tone map and the read-back.
+  // scene_frame_shading.cpp: direct light, the tone map and the read-back.
   void addDirectLightPass();
   void addToneMapPass();
   static HdrImage imageOf(const std::vector<float>& rgba, int W, int H);
 
   Scene scene_;
   bool quiet_ = false;
-  std::unique_ptr<RasterExtension> extension_;
+  std::unique_ptr<FrameExtension> extension_;
   std::string radianceTarget_ = "radiance";  // what the tone map and the read-back take
   std::vector<CutNode> lightsCut_;
   uint64_t cutGeneration_ = 0;
-  RasterParameters params_;
+  FrameParameters params_;
   std::unique_ptr<gl::GlContext> context_;
   LocalBox bounds_;
   std::vector<LocalBox>

@@ -1,14 +1,14 @@
 // The GI frame's scans: each read by its OctreeReader into a GL node store, with two cuts
 // streamed into it under the budgets (nestlight/streaming): the camera's, and the lights' (the
 // whole scan at about a shadow map's resolution, so occluders out of the camera's view still
-// cast shadows), the latter offered to extensions as one list (RasterFrame::lightsCut); and
+// cast shadows), the latter offered to extensions as one list (SceneFrame::lightsCut); and
 // their drawn nodes drawn (shaders/points/points.vert, NL_SCENE_FRAME 1).
 #include <algorithm>
 #include <glm/gtc/matrix_transform.hpp>
 #include <thread>
 #include <unordered_map>
 
-#include "raster_frame_impl.h"
+#include "scene_frame_impl.h"
 
 namespace nestlight::gi::frame_detail {
 

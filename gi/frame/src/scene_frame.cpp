@@ -1,21 +1,21 @@
-// The GI frame (nestlight/gi/frame/raster_frame.h): the `raster` method and the frame every GL
+// The GI frame (nestlight/gi/frame/scene_frame.h): the `raster` method and the frame every GL
 // method extends, driven here: made from the scene (scans, meshes, lights, environment,
 // materials), its passes in order (shadow maps, G-buffer, direct light, the extension's, the
 // tone map), stills and interactive frames rendered, what a frame reports. The concerns live
-// beside it (raster_frame_impl.h lists them).
+// beside it (scene_frame_impl.h lists them).
 #include <cstdio>
 
-#include "raster_frame_impl.h"
+#include "scene_frame_impl.h"
 
 namespace nestlight::gi {
 
 namespace frame_detail {
 
 RasterMethod::RasterMethod(const Scene& scene, const MethodContext& mc,
-                           std::unique_ptr<RasterExtension> extension)
+                           std::unique_ptr<FrameExtension> extension)
     : scene_(scene), quiet_(mc.quiet), extension_(std::move(extension)) {
   graph_.setSyncTiming(mc.syncPassTiming);
-  params_ = parseRasterParameters(
+  params_ = parseFrameParameters(
       scene, extension_ ? extension_->parameterKeys() : std::vector<std::string>{});
   if (!mc.glContextCurrent) {
     context_ = gl::createHeadlessContext();
@@ -207,7 +207,7 @@ void RasterMethod::describe(MethodFrame& f, uint64_t drawPoints, double streamSe
 }  // namespace frame_detail
 
 std::unique_ptr<Method> createRasterMethod(const Scene& scene, const MethodContext& ctx,
-                                           std::unique_ptr<RasterExtension> extension) {
+                                           std::unique_ptr<FrameExtension> extension) {
   return std::make_unique<frame_detail::RasterMethod>(scene, ctx, std::move(extension));
 }
 

@@ -2,7 +2,7 @@
 // frame/point_splatting.h (basic splats, high-quality splatting, or the compute rasteriser; the
 // papers are cited there) into the same G-buffer, within a guard band around each tile.
 #include "nestlight/frame/passes.h"
-#include "raster_frame_impl.h"
+#include "scene_frame_impl.h"
 
 namespace nestlight::gi::frame_detail {
 

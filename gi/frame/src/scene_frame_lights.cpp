@@ -7,7 +7,7 @@
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "raster_frame_impl.h"
+#include "scene_frame_impl.h"
 
 namespace nestlight::gi::frame_detail {
 
