@@ -2,8 +2,9 @@
 # and most of that time went into parsing the same third-party headers in every file. nlohmann's
 # json (about 2.7 s a file at -O3) reaches nearly every file through the octree's metadata and
 # the readers; CLI11 (about 9 s, header-only in Debian) every sub-command; GoogleTest every test.
-# Each is parsed once per target instead. Option NESTLIGHT_PCH=OFF builds without them, which is
-# also how to check that every file includes what it uses.
+# Each is parsed once per group of targets instead (libraries, tests, the program). Option
+# NESTLIGHT_PCH=OFF builds without them, which is also how to check that every file includes what
+# it uses.
 # The fuzz build (clang, a few libraries) gains little and clang refuses a precompiled header on
 # any flag difference, so it builds without.
 if(NESTLIGHT_FUZZ)
@@ -16,13 +17,21 @@ set(NESTLIGHT_PCH_COMMON
     <algorithm> <array> <cmath> <cstdint> <filesystem> <functional> <map> <memory> <optional>
     <string> <string_view> <unordered_map> <vector> <nlohmann/json.hpp>)
 
-# nestlight_precompile(target [headers...]): the common set plus the target's own heavy headers.
-function(nestlight_precompile target)
+# nestlight_precompile(target group [headers...]): the common set plus the group's own heavy
+# headers, compiled once per group: the first target of a group builds the header and the others
+# reuse it (every target of the tree compiles with the same flags and definitions, which a
+# precompiled header requires; -Winvalid-pch reports one that does not).
+function(nestlight_precompile target group)
   if(NOT NESTLIGHT_PCH)
     return()
   endif()
-  target_precompile_headers(${target} PRIVATE ${NESTLIGHT_PCH_COMMON} ${ARGN})
-  # A header precompiled with other flags is silently parsed again; say so instead.
+  get_property(_host GLOBAL PROPERTY NESTLIGHT_PCH_HOST_${group})
+  if(_host)
+    target_precompile_headers(${target} REUSE_FROM ${_host})
+  else()
+    target_precompile_headers(${target} PRIVATE ${NESTLIGHT_PCH_COMMON} ${ARGN})
+    set_property(GLOBAL PROPERTY NESTLIGHT_PCH_HOST_${group} ${target})
+  endif()
   target_compile_options(${target} PRIVATE -Winvalid-pch)
   target_link_libraries(${target} PRIVATE nlohmann_json::nlohmann_json)
 endfunction()
@@ -44,11 +53,11 @@ function(nestlight_precompile_tree dir)
       continue()
     endif()
     if(t STREQUAL "nestlight")
-      nestlight_precompile(${t} <CLI/CLI.hpp>)
+      nestlight_precompile(${t} cli <CLI/CLI.hpp>)
     elseif(t MATCHES "_tests$")
-      nestlight_precompile(${t} <gtest/gtest.h>)
+      nestlight_precompile(${t} tests <gtest/gtest.h>)
     else()
-      nestlight_precompile(${t})
+      nestlight_precompile(${t} libraries)
     endif()
   endforeach()
   get_property(_subdirs DIRECTORY ${dir} PROPERTY SUBDIRECTORIES)
