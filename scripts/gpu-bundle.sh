@@ -20,7 +20,8 @@ build_dir=""
 tune=""
 out=".gpu/nestlight-gpu-bundle.tar.xz"
 check=0
-xz_level=9
+# xz -6: 34 MiB in 70 s on two cores; -9 saved 2 MiB for 160 s.
+xz_level=6
 shared_data=1
 while [ $# -gt 0 ]; do
   case "$1" in

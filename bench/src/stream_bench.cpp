@@ -22,6 +22,7 @@ namespace nestlight::bench {
 
 namespace fs = std::filesystem;
 using namespace streaming;
+using streaming::View;  // gi has a View too, and a unity build sees both directives
 
 namespace {
 
@@ -39,10 +40,10 @@ double percentileOf(std::vector<double> v, double p) {
 }
 
 // Cameras over the scan's bounds.
-struct SceneFrame {
+struct StreamScene {
   glm::dvec3 lo, hi, center;
   double diag;
-  explicit SceneFrame(const Metadata& m)
+  explicit StreamScene(const Metadata& m)
       : lo(m.bounds.min.x, m.bounds.min.y, m.bounds.min.z),
         hi(m.bounds.max.x, m.bounds.max.y, m.bounds.max.z),
         center(0.5 * (lo + hi)),
@@ -84,7 +85,7 @@ std::string mib(double bytes) {
 // 1. Scheduler CPU time per frame with every node resident: unlimited budgets, the whole scan
 //    in view and refined to its leaves, then camera paths whose cut keeps (or changes over)
 //    that resident set. The store keeps sizes only: the time is the scheduler's.
-void measureAllResident(OctreeReader& reader, const SceneFrame& scene, const StreamBenchOptions& o,
+void measureAllResident(OctreeReader& reader, const StreamScene& scene, const StreamBenchOptions& o,
                         nlohmann::json& results, std::FILE* log) {
   Budgets b;
   b.points = uint64_t(1) << 50;
@@ -154,7 +155,7 @@ void measureAllResident(OctreeReader& reader, const SceneFrame& scene, const Str
 
 // 2. Time to full detail after a teleport to each view, frames paced at --frame-ms, one streamer
 //    that goes from view to view: frames and milliseconds per view.
-void teleportTimes(const fs::path& octree, const SceneFrame& scene, const std::vector<View>& views,
+void teleportTimes(const fs::path& octree, const StreamScene& scene, const std::vector<View>& views,
                    MemoryStore& store, const StreamBenchOptions& o, std::vector<double>& tpFrames,
                    std::vector<double>& tpMs) {
   const Budgets b;             // the defaults a viewer starts with
@@ -180,7 +181,7 @@ void teleportTimes(const fs::path& octree, const SceneFrame& scene, const std::v
 // 2. and 3. Time to full detail after a teleport, default budgets; bytes read for a converged
 //    view from a cold start against the payload bytes of the nodes it draws (a ratio above 1:
 //    reads that were cancelled late, discarded or evicted).
-void measureTeleports(const fs::path& octree, OctreeReader& reader, const SceneFrame& scene,
+void measureTeleports(const fs::path& octree, OctreeReader& reader, const StreamScene& scene,
                       const StreamBenchOptions& o, nlohmann::json& results, std::FILE* log) {
   const Budgets b;  // the defaults a viewer starts with
   std::mt19937_64 rng(o.seed + 1);
@@ -248,7 +249,7 @@ void measureTeleports(const fs::path& octree, OctreeReader& reader, const SceneF
 nlohmann::json runStreamBench(const fs::path& octree, const StreamBenchOptions& o, std::FILE* log) {
   OctreeReader reader(octree);
   const Metadata& m = reader.metadata();
-  const SceneFrame scene(m);
+  const StreamScene scene(m);
   nlohmann::json results = {{"device", o.device},
                             {"cores", std::thread::hardware_concurrency()},
                             {"octree", octree.string()},

@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kZstdLevel = 3;
+constexpr int kColourZstdLevel = 3;
 
 void put32(uint8_t* p, uint32_t v) {
   std::memcpy(p, &v, 4);
@@ -89,7 +89,7 @@ std::vector<uint8_t> encodeColourPayload(const float* rgb, size_t points, double
       raw[n + k] = uint8_t(bits & 0xff);
     }
   std::vector<uint8_t> out(ZSTD_compressBound(raw.size()));
-  const size_t z = ZSTD_compress(out.data(), out.size(), raw.data(), raw.size(), kZstdLevel);
+  const size_t z = ZSTD_compress(out.data(), out.size(), raw.data(), raw.size(), kColourZstdLevel);
   NL_CHECK_MSG(!ZSTD_isError(z), ZSTD_getErrorName(z));
   out.resize(z);
   return out;

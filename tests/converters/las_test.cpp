@@ -236,7 +236,7 @@ struct AllPoints {
   }
 };
 
-AllPoints readAll(PointReader& r, size_t batchSize = 17) {
+AllPoints readLasPoints(PointReader& r, size_t batchSize = 17) {
   AllPoints all;
   all.layout = r.header().layout;
   PointBatch b;
@@ -368,7 +368,7 @@ TEST(LasReader, DecodesEveryPointFormat) {
     EXPECT_NE(h.layout[h.layout.find("height")].description.find("scale=0.01"), std::string::npos);
     EXPECT_TRUE(r->warnings().empty()) << r->warnings().front();
 
-    expectPointsMatch(pf, readAll(*r), kPoints);
+    expectPointsMatch(pf, readLasPoints(*r), kPoints);
     // Rewind starts again from the first point.
     r->rewind();
     PointBatch b;
@@ -438,7 +438,7 @@ TEST(LasReader, LenientModeKeepsCompleteRecordsAndWarns) {
   ASSERT_EQ(r->warnings().size(), 1u);
   EXPECT_NE(r->warnings()[0].find("only 98 complete records"), std::string::npos)
       << r->warnings()[0];
-  expectPointsMatch(7, readAll(*r), 98);
+  expectPointsMatch(7, readLasPoints(*r), 98);
 }
 
 TEST(LasReader, HeaderClaimingFewerPointsWarns) {
@@ -447,7 +447,7 @@ TEST(LasReader, HeaderClaimingFewerPointsWarns) {
   auto r = openBytes(f.bytes());
   ASSERT_EQ(r->warnings().size(), 1u);
   EXPECT_NE(r->warnings()[0].find("10 more records"), std::string::npos) << r->warnings()[0];
-  expectPointsMatch(1, readAll(*r), 90);
+  expectPointsMatch(1, readLasPoints(*r), 90);
 }
 
 TEST(LasReader, EvlrsAfterThePointsAreNotTrailingBytes) {
@@ -457,7 +457,7 @@ TEST(LasReader, EvlrsAfterThePointsAreNotTrailingBytes) {
   auto r = openBytes(f.bytes());
   EXPECT_TRUE(r->warnings().empty()) << r->warnings().front();
   EXPECT_EQ(r->header().crs["wkt"], wkt);
-  expectPointsMatch(6, readAll(*r), 10);
+  expectPointsMatch(6, readLasPoints(*r), 10);
 
   // Bytes between the points and the EVLRs are reported.
   f.trailing = "junk";
@@ -513,7 +513,7 @@ TEST(LasReader, ExtraBytesDescriptors) {
   EXPECT_EQ(l[n - 3], (Attribute{"vec", ScalarType::F32, 3, ""}));
   EXPECT_EQ(l[n - 2], (Attribute{"extra_3", ScalarType::U8, 1, ""}));
   EXPECT_EQ(l[n - 1], (Attribute{"extra_bytes", ScalarType::U8, 2, ""}));
-  AllPoints all = readAll(*r);
+  AllPoints all = readLasPoints(*r);
   ASSERT_EQ(all.size(), 1u);
   EXPECT_EQ(all.get("blob", 0, 4), 'e');
   EXPECT_EQ(all.get("intensity", 0), makePoint(0, 1).intensity);
@@ -651,7 +651,7 @@ TEST(LasWriter, RoundTripsEveryPointFormat) {
     copyTo(*source, path);
     EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
     source->rewind();
-    const AllPoints a = readAll(*source);
+    const AllPoints a = readLasPoints(*source);
 
     auto back = openReader(path);
     EXPECT_TRUE(back->warnings().empty()) << back->warnings().front();
@@ -660,7 +660,7 @@ TEST(LasWriter, RoundTripsEveryPointFormat) {
     EXPECT_EQ(back->header().declaredPoints, uint64_t(kPoints));
     EXPECT_EQ(*back->header().scale, *source->header().scale);
     EXPECT_EQ(*back->header().offset, *source->header().offset);
-    const AllPoints b = readAll(*back);
+    const AllPoints b = readLasPoints(*back);
     ASSERT_EQ(b.size(), a.size());
     EXPECT_EQ(b.xyz, a.xyz);
     // Every attribute comes back under its name, with its type and bytes.
@@ -721,7 +721,7 @@ TEST(LasWriter, NationalGridCoordinatesRoundTripExactly) {
     EXPECT_EQ(*r->header().scale, *h.scale);
     EXPECT_EQ(*r->header().offset, offset);
     EXPECT_EQ(r->header().details["point_format"], 0);
-    const AllPoints out = readAll(*r, 300);
+    const AllPoints out = readLasPoints(*r, 300);
     EXPECT_EQ(out.xyz, in.xyz);
     // And within a nanometre of the millimetre values themselves.
     for (size_t i = 0; i < mm.size(); ++i)
@@ -740,7 +740,7 @@ TEST(LasWriter, DefaultQuantisationIsMillimetresFromTheFirstPoint) {
   auto r = openReader(path);
   EXPECT_EQ(*r->header().scale, (Vec3d{0.001, 0.001, 0.001}));
   EXPECT_EQ(*r->header().offset, (Vec3d{500000, 5000000, 12}));
-  const AllPoints out = readAll(*r);
+  const AllPoints out = readLasPoints(*r);
   ASSERT_EQ(out.size(), 2u);
   for (int k = 0; k < 6; ++k) EXPECT_NEAR(out.xyz[k], in.xyz[k], 0.0005 + 1e-9);
   EXPECT_EQ(out.xyz[0], 123 * 0.001 + 500000);
@@ -781,7 +781,7 @@ TEST(LasWriter, OtherAttributesGoToExtraBytes) {
   auto r = openReader(path);
   EXPECT_EQ(r->header().details["point_format"], 2);
   EXPECT_TRUE(r->warnings().empty());
-  const AllPoints out = readAll(*r);
+  const AllPoints out = readLasPoints(*r);
   ASSERT_EQ(out.size(), 2u);
   auto expectSame = [&](const std::string& inName, const std::string& outName) {
     const int i = h.layout.find(inName), o = out.layout.find(outName);
@@ -846,7 +846,7 @@ void checkUpgrade(bool laz, int first, int second) {
   if (laz) EXPECT_EQ(r->header().details["laszip"]["compressor"], "layered chunked");
   EXPECT_EQ(r->header().details["global_encoding"].get<int>() & 16, 16);  // WKT
   EXPECT_EQ(r->header().crs["wkt"], "PROJCS[\"x\"]");
-  const AllPoints out = readAll(*r);
+  const AllPoints out = readLasPoints(*r);
   const int total = first + second;
   ASSERT_EQ(out.size(), size_t(total));
   int wrong = 0;
@@ -940,7 +940,7 @@ struct Summary {
 };
 Summary summarise(PointReader& r) {
   Summary s;
-  s.points = readAll(r, 50000);
+  s.points = readLasPoints(r, 50000);
   for (size_t i = 0; i < s.points.size(); ++i) {
     ++s.classes[static_cast<int>(s.points.get("classification", i))];
     s.intensitySum += static_cast<uint64_t>(s.points.get("intensity", i));

@@ -29,7 +29,7 @@ T attrAt(const PointBatch& b, const PointReader& r, size_t point, std::string_vi
   return v;
 }
 
-std::vector<PointBatch> readAll(PointReader& r, size_t batchSize) {
+std::vector<PointBatch> readBatches(PointReader& r, size_t batchSize) {
   std::vector<PointBatch> out;
   PointBatch b;
   while (r.read(b, batchSize)) out.push_back(b);
@@ -125,7 +125,7 @@ TEST(PcdReader, AsciiValuesExact) {
   EXPECT_EQ(h.details["sensor_origin"], nlohmann::json({1.0, 2.0, 3.0}));
   EXPECT_EQ(h.details["sensor_orientation"], nlohmann::json({1.0, 0.0, 0.0, 0.0}));
 
-  auto batches = readAll(*r, 1000);
+  auto batches = readBatches(*r, 1000);
   ASSERT_EQ(batches.size(), 1u);
   const PointBatch& b = batches[0];
   ASSERT_EQ(b.size(), 3u);

@@ -15,14 +15,14 @@
 namespace nestlight {
 namespace {
 
-struct All {
+struct SyntheticPoints {
   std::vector<double> xyz;
   std::vector<uint8_t> attrs;
   size_t batches = 0;
 };
 
-All readAll(PointReader& r, size_t batchSize) {
-  All out;
+SyntheticPoints readSynthetic(PointReader& r, size_t batchSize) {
+  SyntheticPoints out;
   PointBatch b;
   while (r.read(b, batchSize)) {
     EXPECT_LE(b.size(), batchSize);
@@ -48,19 +48,19 @@ TEST(Synthetic, DeterministicAcrossBatchSizesAndRewind) {
     s.seed = 42;
     auto a = openSynthetic(s);
     auto b = openSynthetic(s);
-    const All big = readAll(*a, 1'000'000);
-    const All small = readAll(*b, 1000);
+    const SyntheticPoints big = readSynthetic(*a, 1'000'000);
+    const SyntheticPoints small = readSynthetic(*b, 1000);
     EXPECT_EQ(big.batches, 1u);
     EXPECT_EQ(small.batches, 301u);
     EXPECT_EQ(big.xyz, small.xyz);
     EXPECT_EQ(big.attrs, small.attrs);
     a->rewind();
-    const All again = readAll(*a, 77'777);
+    const SyntheticPoints again = readSynthetic(*a, 77'777);
     EXPECT_EQ(big.xyz, again.xyz);
     EXPECT_EQ(big.attrs, again.attrs);
 
     s.seed = 43;
-    const All other = readAll(*openSynthetic(s), 1'000'000);
+    const SyntheticPoints other = readSynthetic(*openSynthetic(s), 1'000'000);
     EXPECT_NE(big.xyz, other.xyz);
   }
 }
@@ -76,7 +76,7 @@ TEST(Synthetic, CountsAndHeader) {
     EXPECT_EQ(h.layout[0], (Attribute{"rgb", ScalarType::U16, 3, ""}));
     EXPECT_EQ(h.layout[1], (Attribute{"intensity", ScalarType::U16, 1, ""}));
     EXPECT_EQ(h.layout[2], (Attribute{"normal", ScalarType::F32, 3, ""}));
-    const All all = readAll(*r, 1000);
+    const SyntheticPoints all = readSynthetic(*r, 1000);
     EXPECT_EQ(all.xyz.size(), n * 3);
     EXPECT_EQ(r->bytesConsumed(), r->bytesTotal());
   }
@@ -85,7 +85,7 @@ TEST(Synthetic, CountsAndHeader) {
   auto r = openSynthetic(bare);
   EXPECT_EQ(r->header().layout.size(), 0u);
   EXPECT_EQ(r->header().rgbBits, 0);
-  EXPECT_EQ(readAll(*r, 3).xyz.size(), 30u);
+  EXPECT_EQ(readSynthetic(*r, 3).xyz.size(), 30u);
 }
 
 TEST(Synthetic, PointsInsideDeclaredBoundsAndOnTheGrid) {
@@ -96,7 +96,7 @@ TEST(Synthetic, PointsInsideDeclaredBoundsAndOnTheGrid) {
     s.noise = 0.05;
     auto r = openSynthetic(s);
     const Box3d box = *r->header().declaredBounds;
-    const All all = readAll(*r, 65'536);
+    const SyntheticPoints all = readSynthetic(*r, 65'536);
     Box3d seen;
     for (size_t i = 0; i < all.xyz.size(); i += 3) {
       const double x = all.xyz[i], y = all.xyz[i + 1], z = all.xyz[i + 2];
@@ -122,7 +122,7 @@ TEST(Synthetic, DuplicatesAreIdentical) {
   SyntheticSpec s = spec(SyntheticShape::Duplicates, 5000);
   s.origin = {10, 20, 30};
   auto r = openSynthetic(s);
-  const All all = readAll(*r, 999);
+  const SyntheticPoints all = readSynthetic(*r, 999);
   const size_t stride = r->header().layout.stride();
   for (size_t i = 0; i < 5000; ++i) {
     ASSERT_EQ(all.xyz[i * 3 + 0], 60.0);
@@ -139,7 +139,7 @@ TEST(Synthetic, PlaneHasZeroZExtent) {
   SyntheticSpec s = spec(SyntheticShape::Plane, 100'000);
   s.origin = {500000, 5000000, 100.25};
   auto r = openSynthetic(s);
-  const All all = readAll(*r, 4096);
+  const SyntheticPoints all = readSynthetic(*r, 4096);
   for (size_t i = 0; i < all.xyz.size(); i += 3) ASSERT_EQ(all.xyz[i + 2], 100.25);
   const Box3d box = *r->header().declaredBounds;
   EXPECT_EQ(box.min.z, 100.25);
@@ -153,7 +153,7 @@ TEST(Synthetic, NormalsAreUnitLength) {
     auto r = openSynthetic(spec(shape, 100'000));
     const PointLayout& l = r->header().layout;
     const size_t off = l.offset(size_t(l.find("normal")));
-    const All all = readAll(*r, 100'000);
+    const SyntheticPoints all = readSynthetic(*r, 100'000);
     for (size_t i = 0; i < 100'000; ++i) {
       float n[3];
       std::memcpy(n, &all.attrs[i * l.stride() + off], 12);
@@ -167,7 +167,7 @@ TEST(Synthetic, SurfacesColourVariesSmoothly) {
   // in generation order are unrelated, so compare the spread of all colours with the spread of
   // colours within small cells.
   auto r = openSynthetic(spec(SyntheticShape::Surfaces, 200'000));
-  const All all = readAll(*r, 200'000);
+  const SyntheticPoints all = readSynthetic(*r, 200'000);
   const size_t stride = r->header().layout.stride();
   uint16_t lo = 65535, hi = 0;
   for (size_t i = 0; i < 200'000; ++i) {

@@ -16,7 +16,7 @@
 
 #include "nestlight/gi/sampling.h"
 
-namespace nestlight::gi::test {
+namespace nestlight::gi::chi2 {
 
 // Regularised upper incomplete gamma function Q(a, x) = Gamma(a, x) / Gamma(a), a > 0, x >= 0.
 // Implemented here because no dependency on DESIGN.md's list offers it (the standard library
@@ -269,4 +269,4 @@ inline Chi2Result chi2Test(const std::function<std::optional<glm::vec3>(Rng&)>& 
   return r;
 }
 
-}  // namespace nestlight::gi::test
+}  // namespace nestlight::gi::chi2

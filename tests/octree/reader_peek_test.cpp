@@ -61,8 +61,6 @@ class ReaderPeek : public ::testing::Test {
 };
 TempDir* ReaderPeek::tmp_ = nullptr;
 
-}  // namespace
-
 TEST_F(ReaderPeek, PeekAnswersFromLoadedChunksWithoutReading) {
   OctreeReader r(dir());
   const NodeKey proxy = firstProxy(r);
@@ -162,3 +160,5 @@ TEST_F(ReaderPeek, DamagedChunkFailsTheSameWayEveryTime) {
   EXPECT_NO_THROW(r.readNode(NodeKey::root()));
   EXPECT_TRUE(r.hierarchyPending(proxy));
 }
+
+}  // namespace

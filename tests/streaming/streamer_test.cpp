@@ -63,8 +63,6 @@ View randomView(std::mt19937& rng, const Metadata& m) {
   return test::camera(eye, target);
 }
 
-}  // namespace
-
 TEST_F(StreamerTest, CompleteCutEqualsIdealCutAfterCameraStops) {
   OctreeReader reader(dir());
   const Metadata& m = reader.metadata();
@@ -343,8 +341,6 @@ TEST_F(StreamerTest, DefaultBadNodeLogIsOneLineOnStderr) {
   EXPECT_NE(err.find("octree.bin"), std::string::npos) << err;
 }
 
-namespace {
-
 struct BadLog {
   std::mutex mutex;
   std::vector<BadNode> nodes;
@@ -377,8 +373,6 @@ bool drawsBelow(const Streamer& s, const NodeKey& k) {
     if (k.isAncestorOf(d.key)) return true;
   return false;
 }
-
-}  // namespace
 
 TEST_F(StreamerTest, CorruptedPayloadIsReportedOnceAndRenderingGoesOn) {
   TempDir t;
@@ -584,3 +578,5 @@ TEST(Streamer, NationalGridScan) {
     }
   }
 }
+
+}  // namespace

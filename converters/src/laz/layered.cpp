@@ -305,7 +305,7 @@ class LayeredDecoder final : public ChunkDecoder {
       last.returnNumber = uint8_t(r);
 
       const uint32_t m = kReturnMap6[n][r];
-      const uint32_t level = returnLevel(n, r);
+      const uint32_t level = cappedReturnLevel(n, r);
       const uint32_t cpr = (r == 1 ? 1u : 0u) | (r >= n ? 2u : 0u);
       const uint32_t single = n == 1 ? 1u : 0u;
       const uint32_t mctx = (m << 1) | (gpsChange ? 1u : 0u);

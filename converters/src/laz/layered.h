@@ -45,7 +45,7 @@ constexpr uint8_t kReturnMap6[16][16] = {{0, 1, 2, 3, 4, 5, 3, 4, 4, 5, 5, 5, 5,
                                          {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5, 5},
                                          {5, 3, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5, 5}};
 // Context of the height predictor: how deep the return is (|n - r|), capped at 7.
-inline uint32_t returnLevel(uint32_t n, uint32_t r) {
+inline uint32_t cappedReturnLevel(uint32_t n, uint32_t r) {
   const uint32_t d = n > r ? n - r : r - n;
   return d < 7 ? d : 7;
 }

@@ -200,7 +200,7 @@ class LayeredEncoder final : public ChunkEncoder {
 
       const uint32_t n = last.numberOfReturns, r = last.returnNumber;
       const uint32_t m = kReturnMap6[n][r];
-      const uint32_t level = returnLevel(n, r);
+      const uint32_t level = cappedReturnLevel(n, r);
       const uint32_t cpr = (r == 1 ? 1u : 0u) | (r >= n ? 2u : 0u);
       const uint32_t single = n == 1 ? 1u : 0u;
       const uint32_t mctx = (m << 1) | (gpsChange ? 1u : 0u);

@@ -22,12 +22,6 @@ inline bool isSeparator(char c) {
   return c == ',' || text::isBlank(c);
 }
 
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && text::isBlank(s.front())) s.remove_prefix(1);
-  while (!s.empty() && text::isBlank(s.back())) s.remove_suffix(1);
-  return s;
-}
-
 std::vector<std::string_view> tokens(std::string_view line) {
   return text::splitBy(line, [](char c) { return isSeparator(c); });
 }
@@ -76,7 +70,7 @@ class XyzReader final : public PointReader {
     if (have) {
       auto t = tokens(text);
       if (!t.empty() && !isNumber(t[0])) {
-        details["headerLine"] = text::validUtf8(trim(text));
+        details["headerLine"] = text::validUtf8(text::trim(text));
         have = nextLine(d, pos, line, text);
       }
     }
@@ -88,7 +82,7 @@ class XyzReader final : public PointReader {
       std::string_view spec = options_.columns;
       while (true) {
         size_t comma = spec.find(',');
-        names.push_back(text::validUtf8(trim(spec.substr(0, comma))));
+        names.push_back(text::validUtf8(text::trim(spec.substr(0, comma))));
         if (comma == std::string_view::npos) break;
         spec.remove_prefix(comma + 1);
       }

@@ -74,7 +74,9 @@ class NearestExceptSelf {
 
   size_t size() const { return count_; }
   bool full() const { return count_ == capacity_; }
+  // With no room at all (k = 0) nothing is worth keeping, and there is no last slot to read.
   float worstDist() const {
+    if (capacity_ == 0) return 0.0f;
     return full() ? dist_[capacity_ - 1] : std::numeric_limits<float>::max();
   }
   // nanoflann caches worstDist per leaf, so candidates no better than the current worst can

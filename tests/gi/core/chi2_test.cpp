@@ -8,7 +8,7 @@
 #include <cmath>
 
 using namespace nestlight::gi;
-using namespace nestlight::gi::test;
+using namespace nestlight::gi::chi2;
 
 TEST(Chi2, IncompleteGammaMatchesClosedForms) {
   for (double x : {1e-3, 0.1, 0.9, 1.0, 2.5, 5.0, 30.0, 200.0}) {

@@ -19,7 +19,7 @@
 #include "test_support.h"
 
 using namespace nestlight::gi;
-using namespace nestlight::gi::test;
+using namespace nestlight::gi::chi2;
 
 namespace {
 

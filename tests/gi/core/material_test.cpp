@@ -15,7 +15,7 @@
 #include "gi/chi2.h"
 
 using namespace nestlight::gi;
-using namespace nestlight::gi::test;
+using namespace nestlight::gi::chi2;
 
 namespace {
 

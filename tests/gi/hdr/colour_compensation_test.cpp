@@ -18,7 +18,7 @@ namespace nestlight::gi::hdr {
 namespace {
 
 constexpr int kWidth = 320, kHeight = 240;
-constexpr double kGamma = 2.2;
+constexpr double kCameraGamma = 2.2;
 
 // Exposure (x1.3), a warm white balance and a little channel cross-talk: what a camera's automatic
 // settings do between the scan and a later photograph. Maps camera linear RGB to reference.
@@ -42,10 +42,10 @@ Eigen::Vector3d referenceDisplay(int x, int y) {
 }
 
 Eigen::Vector3d decode(const Eigen::Vector3d& d) {
-  return d.unaryExpr([](double v) { return std::pow(v, kGamma); });
+  return d.unaryExpr([](double v) { return std::pow(v, kCameraGamma); });
 }
 Eigen::Vector3d encode(const Eigen::Vector3d& l) {
-  return l.unaryExpr([](double v) { return std::pow(v, 1 / kGamma); });
+  return l.unaryExpr([](double v) { return std::pow(v, 1 / kCameraGamma); });
 }
 
 void setPixel(HdrImage& image, int x, int y, const Eigen::Vector3d& c) {
@@ -56,16 +56,17 @@ Eigen::Vector3d pixel(const HdrImage& image, int x, int y) {
   return {c.r, c.g, c.b};
 }
 
-struct Scene {
+struct PhotoPair {
   HdrImage camera, rendering;  // display-encoded
   std::vector<uint8_t> coverage;
 };
 
 // The photograph is the rendering taken back through the inverse of `transform`: c(u) = r exactly,
 // up to float storage.
-Scene makeScene(const Eigen::Matrix3d& transform, int width = kWidth, int height = kHeight) {
-  Scene s{HdrImage(width, height), HdrImage(width, height),
-          std::vector<uint8_t>(size_t(width) * height, 1)};
+PhotoPair makePhotoPair(const Eigen::Matrix3d& transform, int width = kWidth,
+                        int height = kHeight) {
+  PhotoPair s{HdrImage(width, height), HdrImage(width, height),
+              std::vector<uint8_t>(size_t(width) * height, 1)};
   const Eigen::Matrix3d inverse = transform.inverse();
   for (int y = 0; y < height; y++) {
     for (int x = 0; x < width; x++) {
@@ -102,7 +103,7 @@ TEST(ColourCompensation, HueSaturationDistanceIsTakenInTheDisc) {
 // the images (relative 6e-8, times 2.2 through the gamma curve): 1e-5.
 TEST(ColourCompensation, RecoversAKnownTransform) {
   const Eigen::Matrix3d truth = trueTransform();
-  const Scene s = makeScene(truth);
+  const PhotoPair s = makePhotoPair(truth);
 
   const PairSelection selection = selectColourPairs(s.camera, s.rendering, s.coverage);
   ASSERT_EQ(selection.statistics.accepted, uint64_t(kWidth) * kHeight);
@@ -147,7 +148,7 @@ TEST(ColourCompensation, RecoversAKnownTransform) {
 
 // Linear inputs give the same fit: the thresholds are in display values either way.
 TEST(ColourCompensation, LinearInputsGiveTheSameFit) {
-  const Scene s = makeScene(trueTransform());
+  const PhotoPair s = makePhotoPair(trueTransform());
   const ColourCompensation display = estimateColourCompensation(s.camera, s.rendering, s.coverage);
   ColourCompensationOptions options;
   options.inputsLinear = true;
@@ -161,7 +162,7 @@ TEST(ColourCompensation, LinearInputsGiveTheSameFit) {
 // about 4 * 1.3 * 6e-8 per step, amplified by the condition number (about 1.5); 1e-5 is a bound
 // an order above that which a wrong inverse misses by far.
 TEST(ColourCompensation, InverseRoundTrip) {
-  const Scene s = makeScene(trueTransform());
+  const PhotoPair s = makePhotoPair(trueTransform());
   const ColourCompensation c = estimateColourCompensation(s.camera, s.rendering, s.coverage);
   HdrImage image(64, 48);
   std::mt19937 rng(3);
@@ -197,7 +198,7 @@ TEST(ColourCompensation, InverseRoundTrip) {
 //   (348) and the pixels touching it outside (352) to gradient.
 TEST(ColourCompensation, RejectsAndCountsBadPairs) {
   const Eigen::Matrix3d truth = trueTransform();
-  Scene s = makeScene(truth);
+  PhotoPair s = makePhotoPair(truth);
   const Eigen::Matrix3d inverse = truth.inverse();
   for (int y = 20; y < 40; y++) {
     for (int x = 20; x < 40; x++) setPixel(s.camera, x, y, {1, 1, 1});
@@ -272,7 +273,7 @@ TEST(ColourCompensation, RejectsAndCountsBadPairs) {
 // 0.5 * 0.25 in value and are rejected at 0.1; without it they bias C.
 TEST(ColourCompensation, PreviousEstimateRejectsBrightnessOutliers) {
   const Eigen::Matrix3d truth = trueTransform();
-  Scene s = makeScene(truth);
+  PhotoPair s = makePhotoPair(truth);
   for (int y = 40; y < 120; y++) {
     for (int x = 40; x < 136; x++) setPixel(s.camera, x, y, 0.5 * pixel(s.camera, x, y));
   }
@@ -326,7 +327,7 @@ TEST(ColourCompensation, WeightsFollowEquationOne) {
 TEST(ColourCompensation, FewPairsFallBackToTheChannelScale) {
   const Eigen::Vector3d scale(1.4, 1.1, 0.7);
   const Eigen::Matrix3d truth = scale.asDiagonal();
-  const Scene s = makeScene(truth, 40, 40);
+  const PhotoPair s = makePhotoPair(truth, 40, 40);
   const ColourCompensation c = estimateColourCompensation(s.camera, s.rendering, s.coverage);
   EXPECT_EQ(c.statistics.accepted, 1600u);
   EXPECT_TRUE(c.usable);
@@ -351,7 +352,7 @@ TEST(ColourCompensation, FewPairsFallBackToTheChannelScale) {
 // Pairs that span only the grey axis leave U W^2 U^T singular without regularisation: C is then
 // not trusted and A is used. With the paper's gamma the unconstrained directions follow A.
 TEST(ColourCompensation, DegeneratePairsFallBackWithoutRegularisation) {
-  Scene s{HdrImage(kWidth, kHeight), HdrImage(kWidth, kHeight), {}};
+  PhotoPair s{HdrImage(kWidth, kHeight), HdrImage(kWidth, kHeight), {}};
   for (int y = 0; y < kHeight; y++) {
     for (int x = 0; x < kWidth; x++) {
       const double g = 0.3 + 0.3 * x / double(kWidth);
@@ -376,7 +377,7 @@ TEST(ColourCompensation, DegeneratePairsFallBackWithoutRegularisation) {
 // Test 5. A black, a white and a NaN photograph: no pairs at all. The result is the identity,
 // approximated and marked unusable (the frame carries no colour information), never NaN.
 TEST(ColourCompensation, UnusablePhotographsGiveTheIdentity) {
-  const Scene base = makeScene(trueTransform(), 64, 48);
+  const PhotoPair base = makePhotoPair(trueTransform(), 64, 48);
   for (const float value : {0.0f, 1.0f, NAN}) {
     HdrImage camera(64, 48);
     std::fill(camera.rgb.begin(), camera.rgb.end(), value);
@@ -399,7 +400,7 @@ TEST(ColourCompensation, UnusablePhotographsGiveTheIdentity) {
 }
 
 TEST(ColourCompensation, MismatchedInputsThrow) {
-  const Scene s = makeScene(trueTransform(), 16, 16);
+  const PhotoPair s = makePhotoPair(trueTransform(), 16, 16);
   EXPECT_THROW(selectColourPairs(s.camera, HdrImage(16, 8), {}), Error);
   EXPECT_THROW(selectColourPairs(s.camera, s.rendering, std::vector<uint8_t>(10, 1)), Error);
 }

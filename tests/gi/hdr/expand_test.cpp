@@ -14,6 +14,7 @@
 #include <cmath>
 #include <random>
 
+#include "gi/hdr/small_expand.h"
 #include "nestlight/bench/hdr_protocol.h"
 #include "nestlight/bench/hdr_relit.h"
 #include "nestlight/converters/builder.h"
@@ -42,15 +43,6 @@ const fs::path& protocolDir() {
     return tmp->path() / "room";
   }();
   return dir;
-}
-
-ExpandOptions smallOptions() {
-  ExpandOptions o;
-  o.autoViews = 2;
-  o.faceSize = 96;
-  o.patchIterations = 4;
-  o.maxPhotoSize = 200;
-  return o;
 }
 
 fs::path copyOctree(const fs::path& from, const fs::path& to) {
@@ -154,7 +146,7 @@ TEST(Expand, RestoresClippedColourBetterThanLdrAndGlobalInverseToneMapping) {
   test::TempDir tmp;
   const fs::path dir = copyOctree(protocolDir() / "scan.octree", tmp.path() / "scan.octree");
   const HdrImage photo = readHdrImage((protocolDir() / "photo.exr").string());
-  const ExpandReport r = expandHdr(dir, photo, smallOptions());
+  const ExpandReport r = expandHdr(dir, photo, smallExpandOptions());
   // The protocol's exposure is 0.5: the search finds it from the histograms alone.
   EXPECT_NEAR(r.log2Exposure, -1.0, 0.25);
   EXPECT_GT(r.overexposed, 0u);
@@ -198,7 +190,7 @@ TEST(Expand, ARegisteredPhotographRestoresTheLampAndTheSunlitFloor) {
   test::TempDir tmp;
   const fs::path dir = copyOctree(protocolDir() / "scan.octree", tmp.path() / "scan.octree");
   const HdrImage photo = readHdrImage((protocolDir() / "photo.exr").string());
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   o.photoView = bench::protocolPhotoView(photo.width, photo.height);
   const ExpandReport r = expandHdr(dir, photo, o);
   EXPECT_EQ(r.views.front().name, "photo");
@@ -277,12 +269,12 @@ TEST(Expand, APhotographOfSomethingElseMatchesLittleAndStillGivesAValidLayer) {
                   photo.rgb[3 * i + 2] = b * u(rng);
   }
   // Refused: the few matches give too few pixel pairs to rest an exposure on.
-  const Error e = test::errorOf([&] { expandHdr(dir, photo, smallOptions()); });
+  const Error e = test::errorOf([&] { expandHdr(dir, photo, smallExpandOptions()); });
   EXPECT_NE(std::string(e.what()).find("pixel pairs"), std::string::npos) << e.what();
   EXPECT_NE(std::string(e.what()).find("--force"), std::string::npos) << e.what();
   EXPECT_EQ(OctreeReader(dir).metadata().layer("hdr"), nullptr);
   // Forced, the layer is written and valid.
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   o.force = true;
   const ExpandReport r = expandHdr(dir, photo, o);
   EXPECT_FALSE(r.warnings.empty());
@@ -294,7 +286,8 @@ TEST(Expand, APhotographOfSomethingElseMatchesLittleAndStillGivesAValidLayer) {
 TEST(Expand, ABlackPhotographOrAScanWithoutColourIsAnError) {
   test::TempDir tmp;
   const fs::path dir = copyOctree(protocolDir() / "scan.octree", tmp.path() / "scan.octree");
-  const Error black = test::errorOf([&] { expandHdr(dir, HdrImage(32, 32), smallOptions()); });
+  const Error black =
+      test::errorOf([&] { expandHdr(dir, HdrImage(32, 32), smallExpandOptions()); });
   EXPECT_NE(std::string(black.what()).find("no positive finite luminance"), std::string::npos)
       << black.what();
   EXPECT_EQ(OctreeReader(dir).metadata().layer("hdr"), nullptr);
@@ -308,7 +301,8 @@ TEST(Expand, ABlackPhotographOrAScanWithoutColourIsAnError) {
   std::vector<std::unique_ptr<PointReader>> src;
   src.push_back(openSynthetic(spec));
   buildOctree(std::move(src), bo);
-  const Error grey = test::errorOf([&] { expandHdr(bo.output, HdrImage(8, 8), smallOptions()); });
+  const Error grey =
+      test::errorOf([&] { expandHdr(bo.output, HdrImage(8, 8), smallExpandOptions()); });
   EXPECT_NE(std::string(grey.what()).find("no rgb colour"), std::string::npos) << grey.what();
 }
 
@@ -323,9 +317,9 @@ TEST(Expand, ASaturatedPhotographExpandsNothingAndStillGivesAValidLayer) {
   HdrImage photo(64, 48);
   for (float& v : photo.rgb) v = 1000.0f;
   // Refused (no pixel pair to rest an exposure on); forced, written and harmless.
-  const Error e = test::errorOf([&] { expandHdr(dir, photo, smallOptions()); });
+  const Error e = test::errorOf([&] { expandHdr(dir, photo, smallExpandOptions()); });
   EXPECT_NE(std::string(e.what()).find("pixel pairs"), std::string::npos) << e.what();
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   o.force = true;
   const ExpandReport r = expandHdr(dir, photo, o);
   EXPECT_GT(r.overexposed, 0u);
@@ -341,7 +335,7 @@ void killedAt(const fs::path& dir, const HdrImage& photo, const std::string& sta
   const pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
-    ExpandOptions o = smallOptions();
+    ExpandOptions o = smallExpandOptions();
     o.progress = [&](const std::string& s, double) {
       if (s == stage) ::kill(::getpid(), SIGKILL);
     };
@@ -366,7 +360,7 @@ TEST(Expand, ARunKilledMidwayLeavesTheOctreeValidAndTheLayerAbsent) {
     EXPECT_EQ(OctreeReader(dir).metadata().layer("hdr"), nullptr);
   }
   // The next run cleans up and completes.
-  expandHdr(dir, photo, smallOptions());
+  expandHdr(dir, photo, smallExpandOptions());
   const VerifyReport v = verifyOctree(dir);
   EXPECT_TRUE(v.ok());
   EXPECT_TRUE(v.notes.empty());

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <functional>
 
+#include "gi/hdr/small_expand.h"
 #include "nestlight/bench/hdr_protocol.h"
 #include "nestlight/converters/verify.h"
 #include "nestlight/gi/hdr/expand.h"
@@ -69,15 +70,6 @@ const Scenes& scenes() {
     return r;
   }();
   return s;
-}
-
-ExpandOptions smallOptions() {
-  ExpandOptions o;
-  o.autoViews = 2;
-  o.faceSize = 96;
-  o.patchIterations = 4;
-  o.maxPhotoSize = 200;
-  return o;
 }
 
 // Relative L2 distance of a layer ("ldr": the scan's own colour, linear) from the truth layer
@@ -168,7 +160,7 @@ double expectOutcome(const Tone& tone, bool registered, const char* refusal) {
   // "What it does not do well": unregistered matches cannot tell a lamp the scan lacks from a
   // clipped region of the scan).
   const HdrImage photo = toned(tone, !registered);
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   if (registered) o.photoView = bench::protocolPhotoView(photo.width, photo.height);
   const double ldr = relativeL2(dir, "ldr");
   if (!refusal) {
@@ -245,7 +237,7 @@ TEST(ExpandExposure, RegisteredFromTheCoverageNotTheBackground) {
   test::TempDir tmp;
   const fs::path dir = freshCopy(tmp, "scan.octree");
   const HdrImage photo = toned(tones()[0], true);
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   o.photoView = bench::protocolPhotoView(photo.width, photo.height);
   const ExpandReport r = expandHdr(dir, photo, o);
   EXPECT_EQ(r.checks.method, "photo-view");
@@ -287,7 +279,7 @@ TEST(ExpandExposure, ForceWritesWithWarningsAndBoundedValues) {
   test::TempDir tmp;
   const fs::path dir = freshCopy(tmp, "scan.octree");
   const HdrImage photo = toned(tones()[2]);  // gamma 1.4: refused above
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   o.photoView = bench::protocolPhotoView(photo.width, photo.height);
   o.force = true;
   const ExpandReport r = expandHdr(dir, photo, o);
@@ -316,7 +308,7 @@ TEST(ExpandExposure, UnregisteredLampExpandsCloserThanLdrOrRefuses) {
   test::TempDir tmp;
   const fs::path dir = freshCopy(tmp, "scan.octree");
   const HdrImage photo = toned(tones()[0], false);
-  const ExpandOptions o = smallOptions();
+  const ExpandOptions o = smallExpandOptions();
   const double ldr = relativeL2(dir, "ldr");
   try {
     const ExpandReport r = expandHdr(dir, photo, o);
@@ -381,7 +373,7 @@ TEST(ExpandExposure, AMaskLetsAnUnregisteredPhotographWithBackgroundExpand) {
     test::TempDir tmp;
     const fs::path dir = freshCopy(tmp, "scan.octree");
     const HdrImage photo = toned(c.tone, c.sky);
-    ExpandOptions o = smallOptions();
+    ExpandOptions o = smallExpandOptions();
     o.photoMask = c.mask;
     const double ldr = relativeL2(dir, "ldr");
     const ExpandReport r = expandHdr(dir, photo, o);
@@ -411,7 +403,7 @@ TEST(ExpandExposure, AMaskOfAnotherSizeOrAllBlackIsRefused) {
   test::TempDir tmp;
   const fs::path dir = freshCopy(tmp, "scan.octree");
   const HdrImage photo = toned(tones()[0], true);
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   o.photoMask.assign(photo.pixels() - 1, 1);
   EXPECT_NE(std::string(test::errorOf([&] { expandHdr(dir, photo, o); }).what()).find("photo mask"),
             std::string::npos);
@@ -453,7 +445,7 @@ TEST(ExpandExposure, AForcedExposureIsUsedAsGiven) {
   test::TempDir tmp;
   const fs::path dir = freshCopy(tmp, "scan.octree");
   const HdrImage photo = toned(tones()[2]);
-  ExpandOptions o = smallOptions();
+  ExpandOptions o = smallExpandOptions();
   o.photoView = bench::protocolPhotoView(photo.width, photo.height);
   o.log2Exposure = -2.5;
   o.minMatchedShare = 0;

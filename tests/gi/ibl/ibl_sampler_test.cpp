@@ -21,8 +21,8 @@
 namespace nestlight::gi {
 namespace {
 
-using test::Chi2Options;
-using test::Chi2Result;
+using chi2::Chi2Options;
+using chi2::Chi2Result;
 
 // Runs shaders/tests/ibl_samplers.comp: `count` samples (xyz, pdf; pdf < 0: none).
 class SamplerHarness {
@@ -85,7 +85,7 @@ Chi2Result chi2Of(const std::vector<glm::vec4>& s,
                   const std::function<double(const glm::vec3&)>& pdf, Chi2Options o) {
   size_t next = 0;
   o.samples = s.size();
-  return test::chi2Test(
+  return chi2::chi2Test(
       [&](Rng&) -> std::optional<glm::vec3> {
         const glm::vec4 v = s[next++];
         if (v.w < 0) return std::nullopt;

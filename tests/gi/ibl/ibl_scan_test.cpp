@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "gi/floor_scene.h"
 #include "nestlight/gi/hdr_image.h"
@@ -23,7 +24,6 @@ namespace nestlight::gi {
 namespace {
 
 using json = nlohmann::json;
-constexpr double kPiD = 3.14159265358979323846;
 constexpr int kGrey = 188;      // the scan's colour (8-bit sRGB)
 constexpr double kSide = 12.0;  // the floor: kSide x kSide m about the origin
 
@@ -86,9 +86,9 @@ struct LowSun {
   double irradianceOverPi = 0;
   explicit LowSun(float E) {
     map.set(20, 11, Rgb(E));
-    const double th0 = kPiD * 11 / 32, th1 = kPiD * 12 / 32;
-    irradianceOverPi =
-        E / kPiD * (2 * kPiD / 64) * (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
+    const double th0 = std::numbers::pi * 11 / 32, th1 = std::numbers::pi * 12 / 32;
+    irradianceOverPi = E / std::numbers::pi * (2 * std::numbers::pi / 64) *
+                       (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2;
   }
 };
 
@@ -208,7 +208,7 @@ TEST(IblScan, AScannedDomeDoesNotShadowItself) {
            "float ny\n"
            "property float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
            "blue\nend_header\n";
-    const double golden = kPiD * (3 - std::sqrt(5.0));
+    const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
     for (int i = 0; i < n; ++i) {
       const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z), phi = golden * i;
       const glm::dvec3 q(r * std::cos(phi), r * std::sin(phi), z);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "gi/floor_scene.h"
 #include "gi/sphere_scan.h"
@@ -22,7 +23,6 @@ namespace nestlight::gi {
 namespace {
 
 using json = nlohmann::json;
-constexpr double kPiD = 3.14159265358979323846;
 
 // The floor (floor_scene.h), optionally a 2 x 2 m slab 1 m above it, and the environment.
 Scene floorScene(const test::TempDir& t, const json& material, const json& environment,
@@ -116,8 +116,8 @@ struct SunTexel {
     for (int y = 0; y < 8; ++y)
       for (int x = 0; x < 16; ++x) map.set(x, y, Rgb(sky));
     map.set(column, 2, Rgb(E));
-    const double th0 = kPiD * 2 / 8, th1 = kPiD * 3 / 8;
-    radiance = 0.5 / kPiD * (E - sky) * (2 * kPiD / 16) *
+    const double th0 = std::numbers::pi * 2 / 8, th1 = std::numbers::pi * 3 / 8;
+    radiance = 0.5 / std::numbers::pi * (E - sky) * (2 * std::numbers::pi / 16) *
                    (std::pow(std::cos(th0), 2) - std::pow(std::cos(th1), 2)) / 2 +
                0.5 * sky;
   }
@@ -247,14 +247,15 @@ TEST(Ibl, TheScanShadowsTheSky) {
 // zenith per frame: a slowly changing probe, as the paper's video sequences are between frames.
 HdrImage rotatingSky(int frame, float sun) {
   const int W = 128, H = 64;
-  const double sigma = 5 * kPiD / 180;
+  const double sigma = 5 * std::numbers::pi / 180;
   HdrImage img(W, H);
-  const double st = std::sin(50 * kPiD / 180), ct = std::cos(50 * kPiD / 180);
-  const double phi0 = 2 * kPiD * frame / W;
+  const double st = std::sin(50 * std::numbers::pi / 180),
+               ct = std::cos(50 * std::numbers::pi / 180);
+  const double phi0 = 2 * std::numbers::pi * frame / W;
   const glm::dvec3 c(st * std::cos(phi0), st * std::sin(phi0), ct);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
-      const double th = kPiD * (y + 0.5) / H, ph = 2 * kPiD * (x + 0.5) / W;
+      const double th = std::numbers::pi * (y + 0.5) / H, ph = 2 * std::numbers::pi * (x + 0.5) / W;
       const glm::dvec3 d(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
       const double a = std::acos(std::clamp(glm::dot(c, d), -1.0, 1.0));
       img.set(x, y, Rgb(float(0.2 + sun * std::exp(-a * a / (2 * sigma * sigma)))));
@@ -267,9 +268,11 @@ HdrImage rotatingSky(int frame, float sun) {
 double trueZ(const HdrImage& img, double rhoY) {
   double z = 0;
   for (int y = 0; y < img.height / 2; ++y) {
-    const double c0 = std::cos(kPiD * y / img.height), c1 = std::cos(kPiD * (y + 1) / img.height);
+    const double c0 = std::cos(std::numbers::pi * y / img.height),
+                 c1 = std::cos(std::numbers::pi * (y + 1) / img.height);
     for (int x = 0; x < img.width; ++x)
-      z += double(luminance(img.get(x, y))) * (2 * kPiD / img.width) * (c0 * c0 - c1 * c1) / 2;
+      z += double(luminance(img.get(x, y))) * (2 * std::numbers::pi / img.width) *
+           (c0 * c0 - c1 * c1) / 2;
   }
   return z * rhoY;
 }
@@ -294,7 +297,8 @@ TEST(Ibl, SmcTracksTheNormalisingConstantAndReinitialisesOnAJump) {
   auto m = createMethod(s, {true, false});
   for (int f = 0; f < frames; ++f) {
     const MethodFrame r = m->render(cameras[size_t(f)]);
-    const double want = trueZ(rotatingSky(f, f == frames - 1 ? 1000.0f : 50.0f), 0.5 / kPiD);
+    const double want =
+        trueZ(rotatingSky(f, f == frames - 1 ? 1000.0f : 50.0f), 0.5 / std::numbers::pi);
     const double zMean = std::stod(r.attributes.at("nestlight:ibl_smc_z_mean"));
     const long receivers = std::stol(r.attributes.at("nestlight:ibl_receivers"));
     const long jumps = std::stol(r.attributes.at("nestlight:ibl_smc_reinit_jump"));
@@ -339,7 +343,7 @@ TEST(Ibl, SmcSamplesFollowAMovingCamera) {
   p["smc_statistics"] = true;
   p["bis_proposals"] = 256;
   Scene s = floorScene(t, {{"type", "lambert"}, {"base_color", 0.5}}, {{"path", "sky.exr"}}, p, 24);
-  const double want = trueZ(rotatingSky(0, 50.0f), 0.5 / kPiD);
+  const double want = trueZ(rotatingSky(0, 50.0f), 0.5 / std::numbers::pi);
   auto m = createMethod(s, {true, false});
   for (int f = 0; f < 6; ++f) {
     SceneCamera c = s.camera;

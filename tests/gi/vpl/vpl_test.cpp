@@ -341,7 +341,7 @@ TEST(Vpl, WarpedHaltonSamplesFollowTheImportance) {
     stat += (observed[i] - expected[i]) * (observed[i] - expected[i]) / expected[i];
     ++bins;
   }
-  const double p = test::chi2Survival(stat, bins - 1);
+  const double p = chi2::chi2Survival(stat, bins - 1);
   std::printf("warp: chi-square p = %.4g over %zu texels\n", p, imp.size());
   EXPECT_GT(p, 1e-3);
   // Zero importance everywhere: no sample is valid.
