@@ -74,7 +74,8 @@ class NearestExceptSelf {
 
   size_t size() const { return count_; }
   bool full() const { return count_ == capacity_; }
-  // With no room at all (k = 0) nothing is worth keeping, and there is no last slot to read.
+  // The capacity is at least 1 here (k >= 1 is checked, and a lone point builds no graph); the
+  // test keeps the class safe on its own and GCC from warning of a read of slot -1.
   float worstDist() const {
     if (capacity_ == 0) return 0.0f;
     return full() ? dist_[capacity_ - 1] : std::numeric_limits<float>::max();
