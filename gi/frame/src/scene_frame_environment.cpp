@@ -1,11 +1,13 @@
 // The GI frame's environment: the scene's map or a video light probe's frame, uploaded as a
-// mipmapped texture, and its irradiance on diffuse lobes as order-2 spherical harmonics
+// mipmapped texture, its irradiance on diffuse lobes as order-2 spherical harmonics
 // (Ramamoorthi and Hanrahan 2001, "An Efficient Representation for Irradiance Environment
-// Maps").
+// Maps"), and for glossy lobes prefiltered by roughness with the split sum's table (Karis 2013,
+// "Real Shading in Unreal Engine 4"; nestlight/gi/frame/split_sum.h).
 #include <algorithm>
 #include <cstdio>
 
 #include "nestlight/gi/frame/irradiance_sh.h"
+#include "nestlight/gi/frame/split_sum.h"
 #include "scene_frame_impl.h"
 
 namespace nestlight::gi::frame_detail {
@@ -69,6 +71,56 @@ void RasterMethod::uploadEnvironment(std::shared_ptr<const EnvironmentMap> map, 
   glTextureSubImage2D(environment_.id(), 0, 0, 0, img.width, img.height, GL_RGBA, GL_FLOAT,
                       rgba.data());
   glGenerateTextureMipmap(environment_.id());
+  if (hasEnvironment_) prefilterEnvironment();
+}
+
+namespace {
+// Roughness 0.2, 0.4, ... 1: linear steps in roughness, as Karis 2013 spaces its mip levels.
+constexpr int kPrefilteredLevels = 5;
+// The first level's width: 1.4 degrees a texel, a third of roughness 0.2's lobe (alpha 0.04) at
+// half maximum. Each later level halves it, as its lobe widens.
+constexpr int kPrefilteredWidth = 256;
+// Half vectors a texel: with filtered importance sampling each reads the mip level of its share
+// of the lobe, so 64 leave no visible noise (Krivanek and Colbert 2008 use 24 to 40).
+constexpr int kPrefilterSamples = 64;
+constexpr int kSplitSumSize = 32;
+}  // namespace
+
+void RasterMethod::prefilterEnvironment() {
+  if (envPrefilter_.id() == 0)
+    envPrefilter_ =
+        gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/common/environment_prefilter.comp"}});
+  if (!splitSumTable_) {
+    const SplitSumTable t = splitSumTable(kSplitSumSize);
+    splitSumTable_ = gl::Texture(GL_RG32F, t.size, t.size);
+    glTextureSubImage2D(splitSumTable_.id(), 0, 0, 0, t.size, t.size, GL_RG, GL_FLOAT, t.ab.data());
+    splitSumTable_.setFilter(GL_LINEAR, GL_LINEAR);
+    glTextureParameteri(splitSumTable_.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(splitSumTable_.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  }
+  if (!envPrefiltered_) {
+    // RGBA32F: a sun beyond half-float range stays finite through the filter.
+    envPrefiltered_ =
+        gl::Texture(GL_RGBA32F, kPrefilteredWidth, kPrefilteredWidth / 2, kPrefilteredLevels);
+    envPrefiltered_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
+    glTextureParameteri(envPrefiltered_.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  }
+  envPrefilter_.use();
+  bindEnvironment(envPrefilter_);
+  glUniform1i(envPrefilter_.uniform("uSamples"), kPrefilterSamples);
+  for (int level = 0; level < kPrefilteredLevels; ++level) {
+    const int w = std::max(kPrefilteredWidth >> level, 2), h = std::max(w / 2, 1);
+    glUniform1f(envPrefilter_.uniform("uRoughness"), float(level + 1) / kPrefilteredLevels);
+    glBindImageTexture(0, envPrefiltered_.id(), level, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glDispatchCompute(GLuint((w + 7) / 8), GLuint((h + 7) / 8), 1);
+  }
+  glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+}
+
+void RasterMethod::bindEnvironmentSpecular(const gl::ShaderProgram& program) const {
+  glBindTextureUnit(6, envPrefiltered_ ? envPrefiltered_.id() : 0);
+  glBindTextureUnit(7, splitSumTable_ ? splitSumTable_.id() : 0);
+  glUniform1i(program.uniform("uEnvPrefilteredLevels"), kPrefilteredLevels);
 }
 
 }  // namespace nestlight::gi::frame_detail

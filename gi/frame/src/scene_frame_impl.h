@@ -111,7 +111,7 @@ class RasterMethod : public Method, public SceneFrame {
   bool hasEnvironment() const override { return hasEnvironment_; }
   std::shared_ptr<const EnvironmentMap> environmentMap() const override { return envMap_; }
   uint64_t environmentGeneration() const override { return envGeneration_; }
-  void setSkyOnDiffuseLobes(bool on) override { skyOnDiffuse_ = on; }
+  void setSkyInDirectLight(bool on) override { skyInDirectLight_ = on; }
   const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
   uint64_t cutGeneration() const override { return cutGeneration_; }
   void bindLightsCutTree(int scan) const override { scans_.at(size_t(scan)).shadowTree.bind(); }
@@ -165,6 +165,8 @@ class RasterMethod : public Method, public SceneFrame {
   void setUpEnvironment();
   void selectEnvironment(const SceneCamera& camera);
   void uploadEnvironment(std::shared_ptr<const EnvironmentMap> map, bool sequence);
+  void prefilterEnvironment();
+  void bindEnvironmentSpecular(const gl::ShaderProgram& program) const;
 
   // scene_frame_gbuffer.cpp: the G-buffer passes.
   void bindGBuffer(const frame::PassContext& ctx);
@@ -209,6 +211,10 @@ class RasterMethod : public Method, public SceneFrame {
   std::vector<glm::mat4> shadowViewFromWorld_;  // the view alone (splat sizes)
   gl::Buffer lightsBuffer_, shadowViewsBuffer_, materialsBuffer_;
   gl::Texture environment_;
+  // The split sum's two factors (environment_specular.glsl): the sky prefiltered per roughness
+  // level, and the GGX lobe's table (made once, with the first environment).
+  gl::Texture envPrefiltered_, splitSumTable_;
+  gl::ShaderProgram envPrefilter_;
   bool hasEnvironment_ = false;
   std::unique_ptr<EnvironmentSource> envSource_;
   std::shared_ptr<const EnvironmentMap> envMap_ = std::make_shared<const EnvironmentMap>();
@@ -224,7 +230,7 @@ class RasterMethod : public Method, public SceneFrame {
   gl::Framebuffer shadowFbo_;
   frame::FrameGraph graph_;
   std::shared_ptr<float> exposure_ = std::make_shared<float>(0.0f);
-  bool skyOnDiffuse_ = true;
+  bool skyInDirectLight_ = true;
   int frameNumber_ = 0;
   double beforeFrameSeconds_ = 0;
   std::string output_;  // the target the graph was compiled for

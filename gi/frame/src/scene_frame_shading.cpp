@@ -1,7 +1,8 @@
 // The GI frame's shading: direct light from the G-buffer (shaders/gi/raster/direct_light.frag:
 // every light through its shadow map, with normal-offset lookups and percentage-closer
 // filtering, Reeves, Salesin and Cook 1987, "Rendering Antialiased Shadows with Depth Maps";
-// the environment's unshadowed irradiance on diffuse lobes), the tone map to the display, and
+// the environment's unshadowed light: irradiance on diffuse lobes, the split sum on glossy ones),
+// the tone map to the display, and
 // the read-back of a still.
 #include "nestlight/frame/passes.h"
 #include "scene_frame_impl.h"
@@ -31,7 +32,8 @@ void RasterMethod::addDirectLightPass() {
         maps.setDepthCompare(true);
         glBindTextureUnit(4, maps.id());
         bindEnvironment(directLight_);
-        glUniform1i(directLight_.uniform("uSkyOnDiffuse"), skyOnDiffuse_ ? 1 : 0);
+        glUniform1i(directLight_.uniform("uSkyInDirectLight"), skyInDirectLight_ ? 1 : 0);
+        bindEnvironmentSpecular(directLight_);
         lightsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_LIGHTS);
         shadowViewsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_SHADOW_VIEWS);
         materialsBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, NL_SSBO_MATERIALS);

@@ -186,7 +186,7 @@ class IblExtension : public FrameExtension {
     const Scene& scene = f.scene();
     // This pass owns the environment's light on every receiver, occluded: direct light must not
     // add its unshadowed irradiance too.
-    f.setSkyOnDiffuseLobes(false);
+    f.setSkyInDirectLight(false);
     // The scan occludes through the hierarchies pbgi gathers from (built per node on the loader
     // threads, joined under a top tree when the cut changes), but unpruned: every leaf is a point's
     // disc, as the reference's. pbgi's pruning makes a flat-enough sub-tree one disc in its points'

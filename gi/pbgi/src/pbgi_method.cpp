@@ -83,11 +83,12 @@ class PbgiExtension : public FrameExtension {
           f.hasEnvironment() ? PbgiParameters::Empty::Environment : PbgiParameters::Empty::Average;
     albedo_ = scene.gi.mode == RadianceMode::Albedo;
     bounces_ = std::max(scene.gi.maxBounces, 1);
-    // Empty m-pixels that see the sky gather it occluded by the scan: direct light then leaves it
-    // off the receivers' diffuse lobes (every pixel direct light shades is a receiver here).
+    // Empty m-pixels that see the sky gather it occluded by the scan, on every lobe of the
+    // receiver's BRDF: direct light then leaves it off the receivers (every pixel direct light
+    // shades is a receiver here).
     skyOwned_ = params_.empty == PbgiParameters::Empty::Environment && f.hasEnvironment() &&
                 (!albedo_ || bounces_ >= 2);
-    if (skyOwned_) f.setSkyOnDiffuseLobes(false);
+    if (skyOwned_) f.setSkyInDirectLight(false);
     BshOptions options;
     options.prune = params_.prune;
     layer_ = f.addNodeLayer(

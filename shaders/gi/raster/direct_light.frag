@@ -1,7 +1,8 @@
 // Direct light from the G-buffer (the `raster` method): every light with its shadow map, the
-// BSDF of gi/core's materials, the environment seen behind the scene and, on diffuse lobes, its
-// unshadowed irradiance (order-2 spherical harmonics, Ramamoorthi and Hanrahan 2001, "An
-// Efficient Representation for Irradiance Environment Maps"). Scan points emit their colour in
+// BSDF of gi/core's materials, the environment seen behind the scene and its unshadowed light on
+// every lobe: irradiance on diffuse lobes (order-2 spherical harmonics, Ramamoorthi and Hanrahan
+// 2001, "An Efficient Representation for Irradiance Environment Maps"), the prefiltered sky on
+// glossy ones (the split sum, environment_specular.glsl). Scan points emit their colour in
 // the radiance-cache mode and are Lambert reflectors of it in the albedo mode, as in gi/reference.
 #include "../../interface/frame_interface.glsl"
 #include "../common/gbuffer_in.glsl"
@@ -11,7 +12,8 @@ layout(binding = 1) uniform sampler2D uBaseColour;
 layout(binding = 2) uniform sampler2D uNormal;
 layout(binding = 3) uniform usampler2D uMaterial;
 #include "../common/environment.glsl"
-uniform bool uSkyOnDiffuse;  // RasterFrame::setSkyOnDiffuseLobes
+#include "../common/environment_specular.glsl"
+uniform bool uSkyInDirectLight;  // SceneFrame::setSkyInDirectLight
 layout(location = 0) out vec4 outRadiance;
 
 void main() {
@@ -82,9 +84,9 @@ void main() {
     if (all(lessThanEqual(f, vec3(0.0)))) continue;
     L += f * s.radiance * wiL.z * visibility(i, p, n, baseAndRadius.a, s);
   }
-  if (uHasEnvironment && uSkyOnDiffuse) {
-    // The diffuse lobe's share only (unless a GI method gathers the sky itself).
-    L += diffuseAlbedo(mat) * kInvPi * irradiance(n);
+  if (uHasEnvironment && uSkyInDirectLight) {
+    // Unless a GI method gathers the sky itself, occluded.
+    L += environmentLight(mat, n, wo);
   }
   outRadiance = vec4(L, 1.0);
 }

@@ -69,17 +69,18 @@ class SceneFrame {
   // (NL_SSBO_MATERIALS).
   virtual void bindSceneBuffers() const = 0;
   // Sets shaders/gi/common/environment.glsl's uniforms of the bound `program` and binds the map
-  // to texture unit 5. Direct light already holds the environment's unshadowed irradiance on
-  // diffuse lobes (and what the camera sees of it behind the scene).
+  // to texture unit 5. Direct light already holds the environment's unshadowed light on every
+  // lobe (irradiance on diffuse lobes, the prefiltered sky on glossy ones) and what the camera
+  // sees of it behind the scene.
   virtual void bindEnvironment(const gl::ShaderProgram& program) const = 0;
   virtual bool hasEnvironment() const = 0;
   // The environment map the frame lights with now (a video light probe's current frame; a black
   // map without an environment), and a count that changes whenever it does.
   virtual std::shared_ptr<const EnvironmentMap> environmentMap() const = 0;
   virtual uint64_t environmentGeneration() const = 0;
-  // Whether direct light adds the sky's unshadowed irradiance to diffuse lobes (the default); an
+  // Whether direct light adds the sky's unshadowed light to every lobe (the default); an
   // extension that gathers the sky itself, occluded by the scene, turns it off in setUp.
-  virtual void setSkyOnDiffuseLobes(bool on) = 0;
+  virtual void setSkyInDirectLight(bool on) = 0;
   // Draws the scans' splats (shaders/points/points.vert, compiled with NL_SCENE_FRAME 1, with
   // `program`'s fragment stage): the camera's cut or the lights' cut.
   virtual void drawScans(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
