@@ -8,6 +8,7 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <optional>
 
 #include "nestlight/bench/harness.h"
 #include "nestlight/gi/environment_sequence.h"
@@ -60,30 +61,16 @@ std::string assetStamp(const Scene& s) {
   return std::to_string(std::hash<std::string>{}(stamp));
 }
 
-// log-log interpolation of the time at which `rows` (in order of quality) reach `target`.
-// `box4`: the error of 4 x 4-pixel block means.
-json timeToError(const std::vector<const BenchGiRow*>& rows, double target, bool box4 = false) {
-  auto err = [box4](const BenchGiRow& r) { return box4 ? r.relativeL2Box4 : r.relativeL2; };
-  for (size_t i = 0; i < rows.size(); ++i) {
-    if (err(*rows[i]) <= target) {
-      if (i == 0) return {{"ms", rows[0]->medianMs}, {"how", "reached at the lowest setting"}};
-      const BenchGiRow &a = *rows[i - 1], &b = *rows[i];
-      double t = (std::log(target) - std::log(err(a))) / (std::log(err(b)) - std::log(err(a)));
-      return {{"ms",
-               std::exp(std::log(a.medianMs) + t * (std::log(b.medianMs) - std::log(a.medianMs)))},
-              {"how", "interpolated between " + std::to_string(a.quality) + " and " +
-                          std::to_string(b.quality) + " " + a.qualityName}};
-    }
-  }
-  if (rows.empty() || !(err(*rows.back()) > 0)) return {{"ms", nullptr}, {"how", "no data"}};
-  const BenchGiRow& b = *rows.back();
-  if (b.qualityName != "samples per pixel")
-    return {{"ms", nullptr},
-            {"how", "not reached (" + std::to_string(err(b)) + " at the best setting)"}};
-  // Monte Carlo error falls as 1/sqrt(time): extrapolate from the best setting.
-  double ms = b.medianMs * std::pow(err(b) / target, 2);
-  return {{"ms", ms},
-          {"how", "extrapolated as error ~ time^-1/2 from " + std::to_string(b.quality) + " spp"}};
+std::string shortNumber(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+json timeJson(const TimeToError& t) {
+  json j = {{"ms", t.ms ? json(*t.ms) : json(nullptr)}, {"how", t.how}};
+  if (t.slope) j["log_log_slope"] = *t.slope;
+  return j;
 }
 
 // The scene every measured run starts from, as the options set it: the method asked for, the
@@ -93,6 +80,9 @@ struct Setup {
   fs::path sceneFile;
   Scene probe;
   int W = 0, H = 0;
+  // reference.png's exposure (the scene's output.exposure, else automatic from the reference), and
+  // the one the tone-mapped metrics use: they judge the pixels a reader of the PNGs sees.
+  double exposure = 0;
   Scene prepared(const std::string& method) const {
     Scene s = probe;
     s.gi.method = method;
@@ -187,8 +177,21 @@ Reference loadOrRenderReference(const Setup& setup, const fs::path& refPath, std
   return ref;
 }
 
-// One configuration (method, variant, quality level): timed over the runs, its first frame
-// written and compared with the reference, its table row printed.
+// A quality level's short unit, for the plot's labels and the table.
+std::string qualityUnit(const MethodInfo& m) {
+  if (m.qualityName == "samples per pixel") return "spp";
+  if (m.qualityName == "shadow-map texels") return "texels";
+  if (m.qualityName == "micro-buffer m-pixels per side") return "m-px";
+  return m.qualityName;
+}
+
+double msSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+// One configuration (method, variant, quality level): set up (the method made, and a GL
+// method's first frame, which compiles its shaders and fills its caches, rendered untimed), then
+// timed over the runs; the last timed frame is written and compared with the reference.
 BenchGiRow runConfiguration(const Setup& setup, const MethodInfo& m,
                             const MethodInfo::Variant& variant, int level,
                             const HdrImage& reference, const fs::path& refPath, const fs::path& dir,
@@ -199,51 +202,68 @@ BenchGiRow runConfiguration(const Setup& setup, const MethodInfo& m,
   // estimators).
   variant.apply(s.gi);
   m.applyQuality(s.gi, level);
-  std::unique_ptr<Method> method = createMethod(s, {true, false, true});
   BenchGiRow row;
   row.method = m.name;
   row.variant = variant.name;
   row.qualityName = m.qualityName;
+  row.qualityUnit = qualityUnit(m);
   row.quality = level;
-  MethodFrame first;
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_ptr<Method> method = createMethod(s, {true, false, true});
+  // A CPU method's first frame costs what any other does (its scene is built when it is made).
+  if (m.gpu) method->render(s.camera);
+  row.setupMs = msSince(start);
+  MethodFrame last;
   for (int run = 0; run < setup.o.runs; ++run) {
-    MethodFrame f = method->render(s.camera);
-    row.ms.push_back(f.seconds * 1e3);
-    if (run == 0) first = std::move(f);
+    last = method->render(s.camera);
+    row.ms.push_back(last.seconds * 1e3);
   }
   row.medianMs = median(row.ms);
-  row.raysPerSecond = first.raysPerSecond();
-  row.samplesPerSecond = first.samplesPerSecond();
-  row.passMs = first.passMs;
-  row.attributes = first.attributes;
+  row.raysPerSecond = last.raysPerSecond();
+  row.samplesPerSecond = last.samplesPerSecond();
+  row.passMs = last.passMs;
+  row.attributes = last.attributes;
   std::string stem =
       m.name + (variant.name.empty() ? "" : "_" + variant.name) + "_" + std::to_string(level);
   std::replace(stem.begin(), stem.end(), ' ', '_');
-  writeExr((dir / (stem + ".exr")).string(), first.image, first.attributes);
+  writeExr((dir / (stem + ".exr")).string(), last.image, last.attributes);
   CompareOptions co;
   co.testName = m.name + " " + std::to_string(level);
   co.referenceName = refPath.string();
-  co.exposureStops = setup.probe.output.exposure;
-  row.cmp = compareImages(first.image, reference, co);
-  row.relativeL2 = relativeL2(first.image, reference);
-  row.relativeL2Box4 = relativeL2(boxFilter(first.image, 4), boxFilter(reference, 4));
-  const std::string label = m.name + (variant.name.empty() ? "" : " (" + variant.name + ")");
-  say(log, "%-10s %8d %10.1f %12.3g %10.4f %10.4g %9.2f %7.4f %11.4f\n", label.c_str(), level,
-      row.medianMs, row.raysPerSecond, row.relativeL2, row.cmp.linear.rmse, row.cmp.linear.psnr,
-      row.cmp.linear.ssim, row.cmp.toneMapped.ssim);
+  co.exposureStops = setup.exposure;
+  row.cmp = compareImages(last.image, reference, co);
+  row.relativeL2 = relativeL2(last.image, reference);
+  row.relativeL2Box4 = relativeL2(boxFilter(last.image, 4), boxFilter(reference, 4));
+  say(log, "  %s%s, %d %s: set-up %.0f ms, median %.1f ms, relative L2 %.4f\n", m.name.c_str(),
+      variant.name.empty() ? "" : (" (" + variant.name + ")").c_str(), level,
+      row.qualityUnit.c_str(), row.setupMs, row.medianMs, row.relativeL2);
   return row;
+}
+
+std::string seriesName(const std::string& method, const std::string& variant) {
+  return method + (variant.empty() ? "" : " (" + variant + ")");
+}
+
+std::string csvField(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string q = "\"";
+  for (char c : text) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
 }
 
 std::string csvLine(const BenchGiRow& r) {
   auto [lo, hi] = std::minmax_element(r.ms.begin(), r.ms.end());
+  char rays[40] = "";
+  if (r.raysPerSecond > 0) std::snprintf(rays, sizeof rays, "%.6g", r.raysPerSecond);
   char line[640];
-  std::snprintf(
-      line, sizeof line,
-      "%s,%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.6g,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,%.6f,%llu\n",
-      r.method.c_str(), r.variant.c_str(), r.quality, r.qualityName.c_str(), r.ms.size(),
-      r.medianMs, *lo, *hi, r.raysPerSecond, r.samplesPerSecond, r.relativeL2, r.cmp.linear.rmse,
-      r.cmp.linear.relativeMse, r.cmp.linear.psnr, r.cmp.linear.ssim, r.cmp.toneMapped.rmse,
-      r.cmp.toneMapped.psnr, r.cmp.toneMapped.ssim, (unsigned long long)r.cmp.test.pixels);
+  std::snprintf(line, sizeof line,
+                "%s,%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.3f,%s,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,"
+                "%.6f,%llu,\n",
+                r.method.c_str(), csvField(r.variant).c_str(), r.quality, r.qualityName.c_str(),
+                r.ms.size(), r.setupMs, r.medianMs, *lo, *hi, rays, r.samplesPerSecond,
+                r.relativeL2, r.cmp.linear.rmse, r.cmp.linear.relativeMse, r.cmp.linear.psnr,
+                r.cmp.linear.ssim, r.cmp.toneMapped.rmse, r.cmp.toneMapped.psnr,
+                r.cmp.toneMapped.ssim, (unsigned long long)r.cmp.test.pixels);
   return line;
 }
 
@@ -257,14 +277,45 @@ json rowJson(const BenchGiRow& r) {
           {"attributes", attrs},
           {"quality", r.quality},
           {"quality_name", r.qualityName},
+          {"setup_ms", r.setupMs},
           {"runs_ms", r.ms},
           {"median_ms", r.medianMs},
-          {"rays_per_second", r.raysPerSecond},
+          // A method that traces no rays (GL rasterisation) has none to count.
+          {"rays_per_second", r.raysPerSecond > 0 ? json(r.raysPerSecond) : json(nullptr)},
           {"samples_per_second", r.samplesPerSecond},
           {"gpu_pass_ms", passes},
           {"relative_l2", r.relativeL2},
           {"relative_l2_box4", r.relativeL2Box4},
           {"comparison", toJson(r.cmp)}};
+}
+
+std::string fixed(double v, int digits) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+// The text table, its columns as wide as their cells; then the skipped rows with their reasons.
+void sayTable(std::FILE* log, const BenchGiReport& report) {
+  std::vector<std::vector<std::string>> t = {{"method", "variant", "quality", "set-up ms",
+                                              "median ms", "runs", "rays/s", "rel L2", "RMSE",
+                                              "PSNR dB", "SSIM", "SSIM (tm)"}};
+  for (const BenchGiRow& r : report.rows)
+    t.push_back({r.method, r.variant.empty() ? "—" : r.variant,
+                 std::to_string(r.quality) + " " + r.qualityUnit, fixed(r.setupMs, 0),
+                 fixed(r.medianMs, 1), std::to_string(r.ms.size()),
+                 r.raysPerSecond > 0 ? humanCount(r.raysPerSecond) : "—", fixed(r.relativeL2, 4),
+                 shortNumber(r.cmp.linear.rmse), fixed(r.cmp.linear.psnr, 2),
+                 fixed(r.cmp.linear.ssim, 4), fixed(r.cmp.toneMapped.ssim, 4)});
+  say(log, "%s",
+      alignedTable(t, {false, false, true, true, true, true, true, true, true, true, true, true})
+          .c_str());
+  if (report.skipped.empty()) return;
+  say(log, "skipped:\n");
+  std::vector<std::vector<std::string>> k = {{"method", "variant", "why"}};
+  for (const BenchGiSkip& sk : report.skipped)
+    k.push_back({sk.method, sk.variant.empty() ? "(all)" : sk.variant, sk.reason});
+  say(log, "%s", alignedTable(k).c_str());
 }
 
 void sayTimesTo(std::FILE* log, const char* what, const json& times) {
@@ -275,7 +326,22 @@ void sayTimesTo(std::FILE* log, const char* what, const json& times) {
   }
 }
 
-// bench_gi.csv, .json (also report.json) and .svg, and the times to 10% and 1% error.
+// The plot's series, one per method and variant in the order they ran: one colour a method, one
+// marker a variant, points labelled with their quality and its unit.
+std::vector<PlotSeries> plotSeries(const BenchGiReport& report) {
+  std::vector<PlotSeries> series;
+  for (const BenchGiRow& r : report.rows) {
+    const std::string name = seriesName(r.method, r.variant);
+    auto it = std::find_if(series.begin(), series.end(),
+                           [&](const PlotSeries& ps) { return ps.name == name; });
+    if (it == series.end()) it = series.insert(series.end(), {name, {}, r.method});
+    it->points.push_back(
+        {r.medianMs, r.relativeL2, std::to_string(r.quality) + " " + r.qualityUnit});
+  }
+  return series;
+}
+
+// bench_gi.csv, .json (also report.json), .svg and .png, and the times to 10% and 1% error.
 void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo, std::FILE* log) {
   const fs::path& dir = report.dir;
   const std::string device =
@@ -283,33 +349,29 @@ void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo,
       std::to_string(tbb::info::default_concurrency()) +
       " threads (CPU methods: Embree 3; GL methods: the context's device)";
   std::ofstream csv(dir / "bench_gi.csv");
-  csv << "method,variant,quality,quality_name,runs,median_ms,min_ms,max_ms,rays_per_second,samples_"
-         "per_second,relative_l2,"
-         "rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,psnr_tonemapped_db,ssim_tonemapped,"
-         "nonfinite_pixels\n";
-  json jrows = json::array();
-  std::vector<PlotSeries> series;
+  csv << "method,variant,quality,quality_name,runs,setup_ms,median_ms,min_ms,max_ms,rays_per_"
+         "second,samples_per_second,relative_l2,rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,"
+         "psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels,skipped\n";
+  json jrows = json::array(), jskipped = json::array();
   json timeTo1, timeTo10, timeTo10Box4;
-  // One series per method and variant, in the order they ran.
-  std::vector<std::pair<std::string, std::string>> keys;
-  for (const BenchGiRow& r : report.rows)
-    if (std::find(keys.begin(), keys.end(), std::make_pair(r.method, r.variant)) == keys.end())
-      keys.emplace_back(r.method, r.variant);
-  for (const auto& [methodName, variantName] : keys) {
-    PlotSeries ps;
-    ps.name = methodName + (variantName.empty() ? "" : " (" + variantName + ")");
-    std::vector<const BenchGiRow*> mine;
+  for (const PlotSeries& ps : plotSeries(report)) {
+    std::vector<ErrorPoint> curve, box4;
     for (const BenchGiRow& r : report.rows) {
-      if (r.method != methodName || r.variant != variantName) continue;
-      mine.push_back(&r);
+      if (seriesName(r.method, r.variant) != ps.name) continue;
       csv << csvLine(r);
       jrows.push_back(rowJson(r));
-      ps.points.push_back({r.medianMs, r.relativeL2, std::to_string(r.quality)});
+      const std::string label = std::to_string(r.quality) + " " + r.qualityUnit;
+      curve.push_back({r.medianMs, r.relativeL2, label});
+      box4.push_back({r.medianMs, r.relativeL2Box4, label});
     }
-    timeTo1[ps.name] = timeToError(mine, 0.01);
-    timeTo10[ps.name] = timeToError(mine, 0.1);
-    timeTo10Box4[ps.name] = timeToError(mine, 0.1, true);
-    series.push_back(std::move(ps));
+    timeTo1[ps.name] = timeJson(timeToError(curve, 0.01));
+    timeTo10[ps.name] = timeJson(timeToError(curve, 0.1));
+    timeTo10Box4[ps.name] = timeJson(timeToError(box4, 0.1));
+  }
+  for (const BenchGiSkip& sk : report.skipped) {
+    csv << sk.method << "," << csvField(sk.variant) << ",,,0,,,,,,,,,,,,,,,," << csvField(sk.reason)
+        << "\n";
+    jskipped.push_back({{"method", sk.method}, {"variant", sk.variant}, {"reason", sk.reason}});
   }
   report.json = {
       {"scene", setup.sceneFile.string()},
@@ -319,25 +381,88 @@ void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo,
       {"width", setup.W},
       {"height", setup.H},
       {"runs", setup.o.runs},
+      {"timing",
+       "median of the runs' frame times, after the set-up (making the method and, for a GL "
+       "method, one untimed frame that compiles its shaders), reported apart as setup_ms"},
       {"reference", refInfo},
+      {"exposure_stops", setup.exposure},
       {"rows", jrows},
+      {"skipped", jskipped},
       {"time_to_1_percent", timeTo1},
       {"time_to_10_percent", timeTo10},
       {"time_to_10_percent_box4", timeTo10Box4},
+      {"time_to_error_rule",
+       "first point at or below the target, log-log interpolated; else extrapolated along the "
+       "least-squares line of log error on log time over the last " +
+           std::to_string(kTimeFitPoints) + " points, only where its slope is at most " +
+           shortNumber(kTimeFitSlope) + " and the time it gives at most " +
+           shortNumber(kTimeFitReach) + "x the longest measured; else not reached"},
       {"error_measure", "relative L2: sqrt(sum (t - r)^2 / sum r^2) over pixels and channels"}};
   std::ofstream(dir / "bench_gi.json") << report.json.dump(2) << "\n";
-  writeSvgPlot((dir / "bench_gi.svg").string(),
-               "GI speed against error: " + setup.sceneFile.parent_path().filename().string(),
-               "time per frame (ms, " + device + ")", "relative L2 error against the reference",
-               series, true, true);
+  const std::string title =
+      "GI speed against error: " + setup.sceneFile.parent_path().filename().string();
+  const std::string xLabel = "time per frame (ms, median of " + std::to_string(setup.o.runs) +
+                             " runs after set-up; " + device + ")";
+  const std::vector<PlotSeries> series = plotSeries(report);
+  writeSvgPlot((dir / "bench_gi.svg").string(), title, xLabel,
+               "relative L2 error against the reference", series, true, true);
+  writePngPlot((dir / "bench_gi.png").string(), title, xLabel,
+               "relative L2 error against the reference", series, true, true);
+  sayTable(log, report);
   sayTimesTo(log, "10% relative error of 4x4-pixel means", timeTo10Box4);
   sayTimesTo(log, "10% relative error", timeTo10);
   sayTimesTo(log, "1% relative error", timeTo1);
-  say(log, "bench gi: wrote %s/bench_gi.{csv,json,svg} (device: %s)\n", dir.c_str(),
+  say(log, "bench gi: wrote %s/bench_gi.{csv,json,svg,png} (device: %s)\n", dir.c_str(),
       device.c_str());
 }
 
 }  // namespace
+
+TimeToError timeToError(const std::vector<ErrorPoint>& curve, double target) {
+  std::vector<ErrorPoint> c;
+  for (const ErrorPoint& p : curve)
+    if (p.ms > 0 && p.error > 0 && std::isfinite(p.ms) && std::isfinite(p.error)) c.push_back(p);
+  for (size_t i = 0; i < c.size(); ++i) {
+    if (c[i].error > target) continue;
+    if (i == 0) return {c[0].ms, "reached at the lowest setting (" + c[0].label + ")", {}};
+    const ErrorPoint &a = c[i - 1], &b = c[i];
+    const double t =
+        (std::log(target) - std::log(a.error)) / (std::log(b.error) - std::log(a.error));
+    return {std::exp(std::log(a.ms) + t * (std::log(b.ms) - std::log(a.ms))),
+            "interpolated between " + a.label + " and " + b.label,
+            {}};
+  }
+  if (c.empty()) return {{}, "no data", {}};
+  const std::string best = "not reached (" + shortNumber(c.back().error) + " at " + c.back().label;
+  if (c.size() < 2) return {{}, best + "; one point, no trend)", {}};
+  // Least squares of log error on log time over the last points.
+  const size_t first = c.size() > size_t(kTimeFitPoints) ? c.size() - kTimeFitPoints : 0;
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, longest = 0;
+  for (size_t i = first; i < c.size(); ++i) {
+    const double x = std::log(c[i].ms), y = std::log(c[i].error);
+    n += 1, sx += x, sy += y, sxx += x * x, sxy += x * y;
+  }
+  for (const ErrorPoint& p : c) longest = std::max(longest, p.ms);
+  const double var = sxx - sx * sx / n;
+  // Times within 1% of each other over the fit: no trend against time to speak of.
+  if (!(var > n * 1e-4)) return {{}, best + "; its time does not grow with quality)", {}};
+  const double slope = (sxy - sx * sy / n) / var;
+  if (!(slope <= kTimeFitSlope))
+    return {{},
+            best + "; error against time not falling: log-log slope " + shortNumber(slope) + ")",
+            slope};
+  const ErrorPoint& last = c.back();
+  const double ms = last.ms * std::pow(target / last.error, 1 / slope);
+  if (!(ms <= kTimeFitReach * longest))
+    return {{},
+            best + "; the fit, slope " + shortNumber(slope) + ", would need " + shortNumber(ms) +
+                " ms, beyond " + shortNumber(kTimeFitReach) + "x the longest measured)",
+            slope};
+  return {ms,
+          "extrapolated from " + last.label + " along the log-log fit of the last " +
+              std::to_string(c.size() - first) + " points (slope " + shortNumber(slope) + ")",
+          slope};
+}
 
 BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   const std::vector<const MethodInfo*> methods = selectMethods(o);
@@ -361,24 +486,37 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
 
   const fs::path refPath = dir / "reference.exr";
   const Reference reference = loadOrRenderReference(setup, refPath, log);
-  writeToneMappedPng((dir / "reference.png").string(), reference.image,
-                     setup.probe.output.exposure);
+  const PngExposure exposure = choosePngExposure(
+      reference.image, std::nullopt,
+      setup.probe.output.exposureSet ? std::optional<double>(setup.probe.output.exposure)
+                                     : std::nullopt);
+  setup.exposure = exposure.stops;
+  writeToneMappedPng((dir / "reference.png").string(), reference.image, exposure.stops);
+  say(log, "  reference.png and the tone-mapped metrics: exposure %s\n",
+      exposure.description.c_str());
 
-  say(log, "%-10s %8s %10s %12s %10s %10s %9s %7s %11s\n", "method", "quality", "median ms",
-      "rays/s", "rel L2", "RMSE", "PSNR dB", "SSIM", "SSIM (tm)");
+  say(log, "bench gi: %d timed runs per setting after the set-up\n", o.runs);
   for (const MethodInfo* m : methods) {
-    if (!m->albedoMode && setup.prepared(m->name).gi.mode == RadianceMode::Albedo) {
-      say(log, "%s: skipped (it renders the radiance-cache mode only so far)\n", m->name.c_str());
+    const Scene scene = setup.prepared(m->name);
+    if (std::string why = whyNotApplicable(*m, scene); !why.empty()) {
+      say(log, "%s: skipped (%s)\n", m->name.c_str(), why.c_str());
+      report.skipped.push_back({m->name, "", why});
       continue;
     }
     auto q = o.qualities.find(m->name);
     const std::vector<int>& levels = q != o.qualities.end() ? q->second : m->defaultQualities;
     std::vector<MethodInfo::Variant> variants = {{"", [](GiSettings&) {}}};
     if (o.variants) variants.insert(variants.end(), m->variants.begin(), m->variants.end());
-    for (const auto& variant : variants)
+    for (const auto& variant : variants) {
+      if (std::string why = whyNotApplicable(*m, scene, &variant); !why.empty()) {
+        say(log, "%s (%s): skipped (%s)\n", m->name.c_str(), variant.name.c_str(), why.c_str());
+        report.skipped.push_back({m->name, variant.name, why});
+        continue;
+      }
       for (int level : levels)
         report.rows.push_back(
             runConfiguration(setup, *m, variant, level, reference.image, refPath, dir, log));
+    }
   }
   writeReport(report, setup, reference.info, log);
   return report;

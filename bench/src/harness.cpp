@@ -70,6 +70,46 @@ std::string humanCount(double n) {
 
 namespace {
 
+size_t codePoints(const std::string& s) {
+  size_t n = 0;
+  for (char c : s) n += (static_cast<unsigned char>(c) & 0xc0) != 0x80;
+  return n;
+}
+
+}  // namespace
+
+std::string alignedTable(const std::vector<std::vector<std::string>>& rows,
+                         const std::vector<bool>& right) {
+  std::vector<size_t> width;
+  for (const auto& r : rows)
+    for (size_t c = 0; c < r.size(); ++c) {
+      if (width.size() <= c) width.resize(c + 1, 0);
+      width[c] = std::max(width[c], codePoints(r[c]));
+    }
+  std::string out;
+  auto line = [&](const std::vector<std::string>& r) {
+    std::string l;
+    for (size_t c = 0; c < width.size(); ++c) {
+      const std::string cell = c < r.size() ? r[c] : "";
+      const std::string pad(width[c] - codePoints(cell), ' ');
+      l += (c ? "  " : "") + (c < right.size() && right[c] ? pad + cell : cell + pad);
+    }
+    while (!l.empty() && l.back() == ' ') l.pop_back();
+    out += l + "\n";
+  };
+  for (size_t i = 0; i < rows.size(); ++i) {
+    line(rows[i]);
+    if (i == 0) {
+      std::vector<std::string> rule;
+      for (size_t w : width) rule.push_back(std::string(w, '-'));
+      line(rule);
+    }
+  }
+  return out;
+}
+
+namespace {
+
 // Bytes of the files under `dir` (missing: 0).
 uint64_t folderBytes(const fs::path& dir) {
   uint64_t total = 0;

@@ -38,7 +38,9 @@ void addBenchGi(CLI::App& app, int& exitCode) {
       "once to\n"
       "--reference-error (cached in the output folder), then each method at each of its quality "
       "levels is\n"
-      "timed (median of --runs, loading excluded) and compared with it. Methods:" +
+      "timed (median of --runs; set-up reported apart) and compared with it; a method or variant "
+      "that\ncannot apply to the scene (ibl without an environment) is skipped with its reason. "
+      "Methods:" +
           methods +
           "\nExample: nestlight make-scene cornell -o cornell && nestlight bench gi "
           "cornell/scene.json\n"
@@ -52,7 +54,9 @@ void addBenchGi(CLI::App& app, int& exitCode) {
   auto quality = std::make_shared<std::vector<std::string>>();
   cmd->add_option("scene", *scene, "Scene file (.json)")->required();
   cmd->add_option("-o,--out", *out, "Output folder (default: bench-gi beside the scene)");
-  cmd->add_option("--runs", o->runs, "Timed runs per setting; the median is reported")
+  cmd->add_option("--runs", o->runs,
+                  "Timed frames per setting, after the set-up (making the method and a GL "
+                  "method's first frame, reported apart); the median is reported")
       ->capture_default_str()
       ->check(CLI::Range(1, 100));
   cmd->add_option("--reference-error", o->referenceError,

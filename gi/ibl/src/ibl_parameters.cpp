@@ -110,6 +110,12 @@ MethodInfo iblMethodInfo() {
   m.defaultQualities = {2, 8, 32};
   m.applyQuality = applyIblQuality;
   m.create = createIblMethod;
+  // Its light is the environment's; the scene's lights are the raster frame's direct light.
+  m.whyNotApplicable = [](const Scene& s) -> std::string {
+    return s.environment ? ""
+                         : "the scene has no environment, and ibl's own light is the "
+                           "environment's: it would render raster's direct light alone";
+  };
   m.variants = {{"bis", [](GiSettings& g) { g.parameters["estimator"] = "bis"; }},
                 {"smc", [](GiSettings& g) { g.parameters["estimator"] = "smc"; }},
                 {"environment sampling", [](GiSettings& g) { g.parameters["estimator"] = "env"; }},

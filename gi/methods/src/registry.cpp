@@ -46,4 +46,14 @@ std::unique_ptr<Method> createMethod(const Scene& scene, const MethodContext& ct
   return findMethod(scene.gi.method)->create(scene, ctx);
 }
 
+std::string whyNotApplicable(const MethodInfo& method, const Scene& scene,
+                             const MethodInfo::Variant* variant) {
+  if (!method.albedoMode && scene.gi.mode == RadianceMode::Albedo)
+    return "it renders the radiance-cache mode only so far";
+  if (method.whyNotApplicable)
+    if (std::string why = method.whyNotApplicable(scene); !why.empty()) return why;
+  if (variant && variant->whyNotApplicable) return variant->whyNotApplicable(scene);
+  return "";
+}
+
 }  // namespace nestlight::gi

@@ -71,7 +71,12 @@ MethodInfo pbgiMethodInfo() {
                 {"mip", [](GiSettings& g) { g.parameters["variant"] = "mip"; }},
                 {"no pruning", [](GiSettings& g) { g.parameters["prune"] = false; }},
                 {"conservative", [](GiSettings& g) { g.parameters["conservative"] = true; }},
-                {"no meshes", [](GiSettings& g) { g.parameters["meshes"] = false; }}};
+                {"no meshes", [](GiSettings& g) { g.parameters["meshes"] = false; },
+                 [](const Scene& s) -> std::string {
+                   return s.meshes.empty() ? "the scene has no inserted mesh: the same image as "
+                                             "pbgi's own"
+                                           : "";
+                 }}};
   m.parameters = rasterParameterSpecs();
   m.parameters.insert(m.parameters.end(), pbgiParameterSpecs().begin(), pbgiParameterSpecs().end());
   return m;

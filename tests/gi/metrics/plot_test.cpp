@@ -1,6 +1,8 @@
-// SVG speed-against-error charts: well-formed XML (balanced tags, escaped text), one marker per
-// drawable point, decade ticks on log axes, and the awkward inputs (one point, equal values,
-// zero and negative values on log axes, NaN) drawn without NaN coordinates and explained.
+// Speed-against-error charts (SVG, and the same drawn into a PNG): one colour per method and one
+// marker per variant, point labels that never overlap, well-formed XML (balanced tags, escaped
+// text), one marker per drawable point, decade ticks on log axes, and the awkward inputs (one
+// point, equal values, zero and negative values on log axes, NaN) drawn without NaN coordinates and
+// explained.
 #include "nestlight/gi/plot.h"
 
 #include <gtest/gtest.h>
@@ -13,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/gi/hdr_image.h"
 #include "test_support.h"
 
 using namespace nestlight::gi;
@@ -215,4 +218,79 @@ TEST(Plot, WriteSvgPlotWritesTheSameTextOrThrowsNamingThePath) {
   const nestlight::Error e =
       errorOf([&] { writeSvgPlot(t.file("missing/p.svg"), "t", "x", "y", series, 0, 0); });
   EXPECT_NE(e.file().find("missing/p.svg"), std::string::npos) << e.what();
+}
+
+TEST(Plot, OneColourPerGroupAndOneMarkerPerSeriesWithinIt) {
+  // bench gi's case: 6 methods, up to 6 variants each; series of one method share its colour.
+  std::vector<PlotSeries> s;
+  const int variants[] = {1, 1, 1, 5, 6, 5};
+  for (int m = 0; m < 6; ++m)
+    for (int v = 0; v < variants[m]; ++v)
+      s.push_back({"m" + std::to_string(m) + " v" + std::to_string(v),
+                   {{1.0 + m, 0.1 + 0.01 * v}},
+                   "m" + std::to_string(m)});
+  const PlotLayout L = plotLayout(s, true, true);
+  ASSERT_EQ(L.styles.size(), s.size());
+  for (size_t a = 0; a < s.size(); ++a)
+    for (size_t b = a + 1; b < s.size(); ++b) {
+      const bool sameGroup = s[a].group == s[b].group;
+      EXPECT_EQ(L.styles[a].colour == L.styles[b].colour, sameGroup) << a << " " << b;
+      // Within a method each variant has its own marker (6 variants, 8 shapes).
+      if (sameGroup) EXPECT_NE(L.styles[a].marker, L.styles[b].marker) << a << " " << b;
+    }
+  EXPECT_GE(plotMarkerCount(), 6);
+  // The SVG draws what the layout says: every series' colour appears in it.
+  const std::string svg = svgPlot("t", "x", "y", s, true, true);
+  for (const auto& st : L.styles) EXPECT_NE(svg.find(st.colour), std::string::npos);
+}
+
+TEST(Plot, PointLabelsNeverOverlapOnACrowdedChart) {
+  // 12 series of 5 points crowded into one decade, every point labelled: far more labels than
+  // free room. Placed labels must not overlap each other; the rest are counted and noted.
+  std::vector<PlotSeries> s;
+  for (int i = 0; i < 12; ++i) {
+    PlotSeries ps{"s" + std::to_string(i), {}, "g" + std::to_string(i % 4)};
+    for (int k = 0; k < 5; ++k)
+      ps.points.push_back(
+          {10 + 3.0 * k + 0.4 * i, 0.05 + 0.01 * k + 0.002 * i, std::to_string(1 << k) + " spp"});
+    s.push_back(ps);
+  }
+  const PlotLayout L = plotLayout(s, true, true);
+  EXPECT_EQ(L.labels.size() + L.labelsLeftOut, 60u);
+  EXPECT_GT(L.labels.size(), 5u);  // some room was found
+  for (size_t a = 0; a < L.labels.size(); ++a) {
+    EXPECT_LT(L.labels[a].box.x0, L.labels[a].box.x1);
+    for (size_t b = a + 1; b < L.labels.size(); ++b)
+      EXPECT_FALSE(L.labels[a].box.overlaps(L.labels[b].box))
+          << L.labels[a].text << " and " << L.labels[b].text;
+  }
+  const std::string svg = svgPlot("t", "x", "y", s, true, true);
+  EXPECT_EQ(count(svg, "class=\"point-label\""), L.labels.size());
+  if (L.labelsLeftOut)
+    EXPECT_NE(svg.find("point labels left out where they would overlap"), std::string::npos);
+}
+
+TEST(Plot, PngIsWrittenAndDecodesWithTheSeriesColours) {
+  TempDir t;
+  std::vector<PlotSeries> s = {{"a", {{1, 0.5, "1 spp"}, {10, 0.1, "16 spp"}}, "a"},
+                               {"b", {{2, 0.3}, {20, 0.05}}, "b"}};
+  writePngPlot(t.file("p.png"), "title", "x (ms)", "error", s, true, true);
+  const HdrImage img = readPng(t.file("p.png"));
+  const PlotLayout L = plotLayout(s, true, true);
+  EXPECT_EQ(img.width, int(L.width));
+  EXPECT_EQ(img.height, int(L.height));
+  // The first series' colour (#0072B2 = 0, 114, 178) is drawn somewhere (its markers and line),
+  // and so is black text; the background is white.
+  auto has = [&](float r, float g, float b) {
+    for (size_t p = 0; p < img.pixels(); ++p)
+      if (std::abs(img.rgb[3 * p] - r) < 0.02f && std::abs(img.rgb[3 * p + 1] - g) < 0.02f &&
+          std::abs(img.rgb[3 * p + 2] - b) < 0.02f)
+        return true;
+    return false;
+  };
+  EXPECT_TRUE(has(0, 114 / 255.f, 178 / 255.f));
+  EXPECT_TRUE(has(213 / 255.f, 94 / 255.f, 0));  // the second's, #D55E00
+  EXPECT_TRUE(has(0, 0, 0));
+  EXPECT_TRUE(has(1, 1, 1));
+  EXPECT_FALSE(std::filesystem::exists(t.file("p.png.partial")));
 }

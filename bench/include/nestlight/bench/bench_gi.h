@@ -1,14 +1,17 @@
 // The evaluation harness of the GI methods (`nestlight bench gi`): the path-traced reference is
 // rendered once to a tight error target and cached beside the results; every method asked for
 // (default: every registered one) then renders the scene at each of its quality levels, timed
-// (median of runs, loading excluded) and compared with the reference (gi/metrics). Writes CSV,
-// JSON and an SVG plot of time against relative error.
+// (median of runs; the set-up, making the method and a GL method's first frame with its shader
+// compilation, reported apart) and compared with the reference (gi/metrics). A method or variant
+// that cannot apply to the scene (gi::whyNotApplicable) is skipped with its reason. Writes CSV,
+// JSON and a plot of time against relative error (SVG, and PNG beside it).
 #pragma once
 
 #include <cstdio>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,7 +22,7 @@ namespace nestlight::bench {
 struct BenchGiOptions {
   std::filesystem::path scene;
   std::filesystem::path out;  // empty: bench-gi beside the scene
-  int runs = 3;
+  int runs = 3;  // timed frames per setting, after the set-up (a GL method's first frame)
   double referenceError = 0.004;
   double referenceTimeLimit = 1800;
   int referenceSpp = 1 << 16;
@@ -39,7 +42,9 @@ struct BenchGiRow {
   std::string variant;  // "" : the method as the scene sets it
   std::string qualityName;
   int quality = 0;
-  std::vector<double> ms;  // per run, the method's frame time
+  std::string qualityUnit;  // short, for labels: "spp", "VPLs"
+  double setupMs = 0;  // making the method (loading, building) and, for GL methods, a first frame
+  std::vector<double> ms;  // per run, the method's frame time, after the set-up
   double medianMs = 0;
   double raysPerSecond = 0, samplesPerSecond = 0;
   std::vector<std::pair<std::string, double>> passMs;  // GL methods: GPU time per pass, first run
@@ -49,11 +54,36 @@ struct BenchGiRow {
   gi::ImageAttributes attributes;  // the first run's (clamp loss, ISM agreement, ...)
 };
 
+// A method or variant not measured, and why (gi::whyNotApplicable).
+struct BenchGiSkip {
+  std::string method, variant, reason;
+};
+
 struct BenchGiReport {
   std::vector<BenchGiRow> rows;
+  std::vector<BenchGiSkip> skipped;
   nlohmann::json json;  // what bench_gi.json holds
   std::filesystem::path dir;
 };
+
+// The time at which a curve of (time, error) points, in order of quality, reaches `target`: the
+// first point at or below it (log-log interpolated from the one before), else an extrapolation
+// of the straight line fitted to log error against log time over the last kTimeFitPoints points,
+// made only where that slope is at most kTimeFitSlope (the error clearly falls with time: a Monte
+// Carlo estimator's is -1/2) and the time it gives is at most kTimeFitReach times the longest
+// measured; otherwise not reached (ms empty). One rule for every method.
+constexpr int kTimeFitPoints = 3;
+constexpr double kTimeFitSlope = -0.2, kTimeFitReach = 10;
+struct ErrorPoint {
+  double ms = 0, error = 0;
+  std::string label;  // "32 spp"
+};
+struct TimeToError {
+  std::optional<double> ms;
+  std::string how;
+  std::optional<double> slope;  // of the fit, where one was made
+};
+TimeToError timeToError(const std::vector<ErrorPoint>& curve, double target);
 
 // Throws nestlight::Error for unknown methods (before any rendering), bad scenes and failed
 // renders. Progress and the table go to `log` (nullptr: silent).

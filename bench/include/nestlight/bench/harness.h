@@ -22,6 +22,12 @@ std::string cpuName();                 // /proc/cpuinfo's model name
 std::string humanBytes(double bytes);  // "1.5 MiB"
 std::string humanCount(double n);      // "1.50 M", "800.0 k"
 
+// Text rows in columns as wide as their widest cell (UTF-8 counted in code points, so "—" is
+// one), two spaces apart, each line ending in '\n'; the first row is the header, underlined.
+// right[c]: column c aligned right (numbers); missing: left.
+std::string alignedTable(const std::vector<std::vector<std::string>>& rows,
+                         const std::vector<bool>& right = {});
+
 // Runs the program this process runs (/proc/self/exe: the `nestlight` command line) with `args`
 // in a child process (stdout discarded): wall time, the child's own peak RSS, and the peak size
 // of the converter's temporary folder under `watch` (an octree folder being built; empty: not

@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "nestlight/gi/method.h"
@@ -24,11 +25,20 @@ struct MethodInfo {
   // Sets one quality level in a scene's settings before the method is made.
   std::function<void(GiSettings&, int quality)> applyQuality;
   std::function<std::unique_ptr<Method>(const Scene&, const MethodContext&)> create;
+  // Why the method cannot apply to a scene (its gi.mode as it will render): "" when it can, else
+  // the reason, which `bench gi` prints and records instead of a row that would only repeat
+  // another (ibl without an environment renders raster's direct light). Unset: it always can.
+  using Applicability = std::function<std::string(const Scene&)>;
+  Applicability whyNotApplicable;
   // Settings `bench gi` also measures, each at every quality level (vpl: fewer bounces; exact
-  // visibility, the ablation that separates the ISMs' error from the VPLs').
+  // visibility, the ablation that separates the ISMs' error from the VPLs'); each may say, as the
+  // method does, why it cannot apply to a scene (its image would equal the method's own).
   struct Variant {
+    Variant(std::string n, std::function<void(GiSettings&)> a, Applicability why = {})
+        : name(std::move(n)), apply(std::move(a)), whyNotApplicable(std::move(why)) {}
     std::string name;
     std::function<void(GiSettings&)> apply;
+    Applicability whyNotApplicable;
   };
   std::vector<Variant> variants;
   // Whether it renders the albedo mode (scan points lit by the scene's lights); `bench gi`

@@ -27,5 +27,11 @@ void checkSceneMethod(const Scene& scene);
 // Makes scene.gi.method for `scene`. Throws nestlight::Error as checkSceneMethod for an unknown
 // method, or the method's own errors (its parameters, its inputs).
 std::unique_ptr<Method> createMethod(const Scene& scene, const MethodContext& ctx = {});
+// Why `bench gi` does not measure `method` (with `variant`; nullptr: as the scene sets it) on
+// `scene`, whose gi.mode is the one it would render: "" when it applies, else the reason. Asks
+// the method's declaration: the mode it renders (MethodInfo::albedoMode), then its own and the
+// variant's whyNotApplicable.
+std::string whyNotApplicable(const MethodInfo& method, const Scene& scene,
+                             const MethodInfo::Variant* variant = nullptr);
 
 }  // namespace nestlight::gi
