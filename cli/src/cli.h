@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +14,9 @@
 
 namespace nestlight::viewer {
 struct RenderJob;
+}
+namespace nestlight::gi {
+struct SceneRenderOverrides;
 }
 
 namespace nestlight::cli {
@@ -26,6 +30,20 @@ struct RenderOptionText {
 void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
                       std::shared_ptr<RenderOptionText> text);
 void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text);
+
+// The options of scene files that choose and set the GI method, shared by `render` and `view`
+// (cli_scene_options.cpp). addSceneMethodOptions: --method, --mode, the flags the methods declare
+// (--variant, --estimator), --param KEY=VALUE, --spp; addSceneBounceOptions: --bounces, --seed.
+// applySceneMethodOptions, after parsing, sets the mode and the parameters in `sc`.
+struct SceneMethodText {
+  std::string mode;
+  std::map<std::string, std::string> flags;  // parameter name: value ("" when not given)
+  std::vector<std::string> params;           // --param KEY=VALUE
+};
+void addSceneMethodOptions(CLI::App* cmd, gi::SceneRenderOverrides& sc, SceneMethodText& text,
+                           const std::string& group);
+void addSceneBounceOptions(CLI::App* cmd, gi::SceneRenderOverrides& sc, const std::string& group);
+void applySceneMethodOptions(const SceneMethodText& text, gi::SceneRenderOverrides& sc);
 
 // Each adds its sub-command; the callback stores the exit code in `exitCode`.
 void addConvert(CLI::App& app, int& exitCode);

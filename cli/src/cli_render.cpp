@@ -189,47 +189,6 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   if (job.settings.rasteriser == frame::Rasteriser::Compute) job.settings.fixedPointSize = 1;
 }
 
-namespace {
-
-// The flags the methods declare (gi::ParameterSpec::flag, e.g. pbgi's --variant, ibl's
-// --estimator): --<name> sets gi.parameters.<name>; methods declaring one name share its flag.
-void addParameterFlags(CLI::App* cmd, std::map<std::string, std::string>& values,
-                       const std::string& group) {
-  std::vector<std::pair<const gi::ParameterSpec*, std::string>> flags;  // with their methods
-  for (const auto& m : gi::registeredMethods())
-    for (const auto& p : m.parameters) {
-      if (!p.flag) continue;
-      auto same = std::find_if(flags.begin(), flags.end(),
-                               [&](const auto& f) { return f.first->name == p.name; });
-      if (same == flags.end())
-        flags.push_back({&p, "method " + m.name});
-      else
-        same->second = "methods " + same->second.substr(7) + ", " + m.name;
-    }
-  for (const auto& [spec, methods] : flags) {
-    std::string dashed = spec->name;
-    std::replace(dashed.begin(), dashed.end(), '_', '-');
-    auto* o = cmd->add_option(
-        "--" + dashed, values[spec->name],
-        "Scenes, " + methods + ": " + spec->help + " (gi.parameters." + spec->name + ")");
-    if (spec->type == gi::ParameterType::Choice) o->check(CLI::IsMember(spec->choices));
-    o->group(group);
-  }
-}
-
-// --param KEY=VALUE: VALUE is JSON (4, 0.5, true) or, failing that, a string (classic).
-void setParameterFromText(const std::string& text, gi::SceneRenderOverrides& sc) {
-  const size_t eq = text.find('=');
-  if (eq == std::string::npos || eq == 0)
-    throw Error("--param: expected KEY=VALUE, got '" + text + "'");
-  const std::string value = text.substr(eq + 1);
-  nlohmann::json j = nlohmann::json::parse(value, nullptr, false);
-  if (j.is_discarded()) j = value;
-  sc.parameters[text.substr(0, eq)] = j;
-}
-
-}  // namespace
-
 void addRender(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand(
       "render",
@@ -268,30 +227,9 @@ void addRender(CLI::App& app, int& exitCode) {
       ->capture_default_str();
   addRenderOptions(cmd, *job, text);
   auto sc = std::make_shared<gi::SceneRenderOverrides>();
-  auto mode = std::make_shared<std::string>();
+  auto methodText = std::make_shared<SceneMethodText>();
   std::string group = "Scene files";
-  std::string methodHelp = "Scenes: the GI method (default: the scene's gi.method):";
-  std::vector<std::string> names;
-  for (const auto& m : gi::registeredMethods()) {
-    methodHelp += "\n  " + m.name + ": " + m.summary;
-    names.push_back(m.name);
-  }
-  cmd->add_option("--method", sc->method, methodHelp)->check(CLI::IsMember(names))->group(group);
-  cmd->add_option("--mode", *mode,
-                  "Scenes: radiance_cache (scan points emit their colour) or albedo (scan points "
-                  "reflect with their colour as albedo)")
-      ->check(CLI::IsMember({"radiance_cache", "albedo"}))
-      ->group(group);
-  auto parameterFlags = std::make_shared<std::map<std::string, std::string>>();
-  addParameterFlags(cmd, *parameterFlags, group);
-  auto parameterText = std::make_shared<std::vector<std::string>>();
-  cmd->add_option("--param", *parameterText,
-                  "Scenes: KEY=VALUE sets gi.parameters.KEY (VALUE as JSON, else a string); the "
-                  "method checks it as it checks the scene file's (docs/SCENE.md lists them)")
-      ->group(group);
-  cmd->add_option("--spp", sc->spp, "Scenes: samples per pixel at most")
-      ->check(CLI::Range(1, 1 << 24))
-      ->group(group);
+  addSceneMethodOptions(cmd, *sc, *methodText, group);
   cmd->add_option(
          "--target-error", sc->targetError,
          "Scenes: stop when the estimated relative error (two half-sample images) falls below")
@@ -300,10 +238,7 @@ void addRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--time-limit", sc->timeLimit, "Scenes: stop after this many seconds")
       ->check(CLI::Range(0.0, 1e7))
       ->group(group);
-  cmd->add_option("--bounces", sc->bounces, "Scenes: scattering events per path (1: direct light)")
-      ->check(CLI::Range(0, 64))
-      ->group(group);
-  cmd->add_option("--seed", sc->seed, "Scenes: random seed")->group(group);
+  addSceneBounceOptions(cmd, *sc, group);
   cmd->add_flag("--still", sc->still,
                 "Scenes: one image from the scene's camera even when it has a camera path or an "
                 "environment sequence (each renders one image per frame, NAME_0000.exr, ...; "
@@ -318,11 +253,7 @@ void addRender(CLI::App& app, int& exitCode) {
           throw Error("--fov: expected degrees in [0.01, 179]");
         sc->fov = job->fovYDegrees;
       }
-      if (!mode->empty())
-        sc->mode = *mode == "albedo" ? gi::RadianceMode::Albedo : gi::RadianceMode::RadianceCache;
-      for (const auto& t : *parameterText) setParameterFromText(t, *sc);
-      for (const auto& [name, value] : *parameterFlags)
-        if (!value.empty()) sc->parameters[name] = value;
+      applySceneMethodOptions(*methodText, *sc);
       applySceneScanOptions(*cmd, *octree, *job, *text, *sc);
       makeOutputFolder(job->output);
       sc->output = job->output;

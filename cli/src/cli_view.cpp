@@ -1,10 +1,13 @@
 // `nestlight view`: the interactive viewer.
+#include <cstdio>
 #include <functional>
 #include <memory>
 
 #include "cli.h"
+#include "nestlight/gi/method_parameters.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/scene.h"
+#include "nestlight/gi/scene_overrides.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/viewer/window_app.h"
 
@@ -14,9 +17,14 @@ namespace {
 // A scene file opens its first scan with the scene's camera and display settings (docs/SCENE.md);
 // what the command line says explicitly wins over the file (`given`: an option was on it).
 void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
-                const std::function<bool(const char*)>& given) {
+                const std::function<bool(const char*)>& given,
+                const gi::SceneRenderOverrides& overrides) {
   auto loaded = std::make_shared<gi::Scene>(gi::loadScene(file));
   gi::checkSceneMethod(*loaded);  // the registry names the methods, not the scene parser
+  // --method, --variant, --param, ...: as `render` takes them, checked before a window opens.
+  gi::applySceneOverrides(*loaded, overrides);
+  const gi::MethodInfo& info = *gi::findMethod(loaded->gi.method);
+  if (!info.parameters.empty()) gi::resolveParameters(*loaded, info.parameters);
   const gi::Scene& scene = *loaded;
   opt.scene = loaded;
   // A scene of meshes alone is viewed through its GI method; there is no point view.
@@ -48,6 +56,24 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
   if (d.pointSize && !given("--point-size")) opt.settings.sizeScale = *d.pointSize;
   if (d.edlStrength && !given("--edl")) opt.settings.edlStrength = *d.edlStrength;
 }
+
+// --dry-run: the method and the parameters the window would open with, as the method resolves
+// them (defaults included).
+void printView(const viewer::ViewerOptions& opt) {
+  if (!opt.scene) {
+    std::printf("view: %s: points\n", opt.octree.c_str());
+    return;
+  }
+  const gi::Scene& s = *opt.scene;
+  const gi::MethodInfo& info = *gi::findMethod(s.gi.method);
+  std::printf("view: %s: method %s, %s mode, %d bounces, %d samples per pixel at most%s\n",
+              s.file.c_str(), s.gi.method.c_str(),
+              s.gi.mode == gi::RadianceMode::Albedo ? "albedo" : "radiance_cache", s.gi.maxBounces,
+              s.gi.samplesPerPixel, opt.startWithPoints ? "; opens on the points" : "");
+  if (!info.parameters.empty())
+    std::printf("view: parameters %s\n",
+                gi::resolveParameters(s, info.parameters).values().dump().c_str());
+}
 }  // namespace
 
 void addView(CLI::App& app, int& exitCode) {
@@ -55,10 +81,12 @@ void addView(CLI::App& app, int& exitCode) {
       app.add_subcommand("view",
                          "Open an octree in a window and fly through it; nodes stream in under the "
                          "budgets. Given a scene file,\n"
-                         "the scene is lit in real time through the GI frame by its gi.method "
-                         "(raster where the scene names an\n"
-                         "offline method), with the method's parameters and per-pass GPU timings "
-                         "in the panel; the scene's first\n"
+                         "the scene is lit by its gi.method or --method: the GL methods in real "
+                         "time through the GI frame, the\n"
+                         "path tracer (reference, direct) progressively, accumulating while the "
+                         "camera rests. The panel switches\n"
+                         "between every registered method, variant and parameter live; the "
+                         "scene's first\n"
                          "scan is also shown as points with its camera and \"display\" settings. A "
                          "scene of meshes alone is shown\n"
                          "through its GI method, framed by the meshes when it has no camera.\n"
@@ -86,6 +114,16 @@ void addView(CLI::App& app, int& exitCode) {
       ->check(CLI::IsMember({"gi", "points"}))
       ->capture_default_str();
   addRenderOptions(cmd, *job, text);
+  // The method and its settings, as `render` takes them (the panel changes them live).
+  auto sc = std::make_shared<gi::SceneRenderOverrides>();
+  auto methodText = std::make_shared<SceneMethodText>();
+  const std::string group = "Scene files";
+  addSceneMethodOptions(cmd, *sc, *methodText, group);
+  addSceneBounceOptions(cmd, *sc, group);
+  auto dryRun = std::make_shared<bool>(false);
+  cmd->add_flag("--dry-run", *dryRun,
+                "Check the input and the options, print the method and parameters the window "
+                "would open with, and exit without opening one");
   cmd->callback([=, &exitCode]() {
     job->octree = *input;
     applyRenderOptions(*job, *text);
@@ -100,8 +138,20 @@ void addView(CLI::App& app, int& exitCode) {
     opt->colour = job->colour;
     opt->colourLayer = job->colourLayer;
     opt->startWithPoints = *show == "points";
-    if (std::filesystem::path(*input).extension() == ".json")
-      applyScene(*input, *opt, [cmd](const char* name) { return cmd->count(name) > 0; });
+    applySceneMethodOptions(*methodText, *sc);
+    if (std::filesystem::path(*input).extension() == ".json") {
+      applyScene(
+          *input, *opt, [cmd](const char* name) { return cmd->count(name) > 0; }, *sc);
+    } else {
+      for (const CLI::Option* o : cmd->get_options())
+        if (o->get_group() == group && o->count() > 0)
+          throw Error(o->get_name() + ": applies to scene files (.json), whose GI method it sets");
+    }
+    if (*dryRun) {
+      printView(*opt);
+      exitCode = 0;
+      return;
+    }
     exitCode = viewer::runViewer(*opt);
   });
 }

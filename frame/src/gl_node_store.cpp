@@ -79,8 +79,14 @@ uint32_t classColour(uint32_t c) {
   }
 }
 
-// A perceptually ordered ramp (dark blue - teal - yellow) for scalar values in [0, 1].
-uint32_t ramp(double t) {
+}  // namespace
+
+// Most returns are dark: a square root spreads them.
+double intensityGrey(double intensity) {
+  return std::sqrt(std::clamp(intensity, 0.0, 65535.0) / 65535.0);
+}
+
+uint32_t elevationRamp(double t) {
   t = std::clamp(t, 0.0, 1.0);
   const double stops[5][3] = {{0.27, 0.00, 0.33},
                               {0.23, 0.32, 0.55},
@@ -94,8 +100,6 @@ uint32_t ramp(double t) {
                   stops[i][1] + (stops[i + 1][1] - stops[i][1]) * f,
                   stops[i][2] + (stops[i + 1][2] - stops[i][2]) * f);
 }
-
-}  // namespace
 
 const char* colourModeName(ColourMode m) {
   switch (m) {
@@ -195,8 +199,7 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts,
         if (intensity_ >= 0) {
           uint16_t v;
           std::memcpy(&v, a + iOff, 2);
-          const double g =
-              std::sqrt(v / 65535.0);  // most returns are dark: a square root spreads them
+          const double g = intensityGrey(v);
           colour = packRgba(g, g, g);
         }
         break;
@@ -204,7 +207,7 @@ void GlNodeStore::prepare(const NodeKey& key, PointBuffer&& pts,
         if (classification_ >= 0) colour = classColour(a[cOff]);
         break;
       case ColourMode::Elevation:
-        colour = ramp((meta_.world(2, p[2]) - zLo) / zRange);
+        colour = elevationRamp((meta_.world(2, p[2]) - zLo) / zRange);
         break;
       case ColourMode::Normal:
         colour = packRgba(nrm[0] * 0.5 + 0.5, nrm[1] * 0.5 + 0.5, nrm[2] * 0.5 + 0.5);

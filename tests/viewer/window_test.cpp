@@ -25,6 +25,11 @@ fs::path syntheticOctree(const test::TempDir& tmp, uint64_t points) {
   buildOctree(std::move(r), o);
   return o.output;
 }
+
+// xvfb-run with the panel's state file under `tmp` (XDG_CONFIG_HOME), never in the real home.
+std::string xvfbIn(const test::TempDir& tmp) {
+  return "XDG_CONFIG_HOME=" + tmp.file("config") + " xvfb-run -a -s '-screen 0 640x480x24' ";
+}
 }  // namespace
 
 TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
@@ -34,8 +39,8 @@ TEST(Window, XvfbOpensMovesAndTakesScreenshot) {
   const fs::path octree = syntheticOctree(tmp, 200'000);
   const std::string shot = tmp.file("shot.png");
   std::string out;
-  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " +
-                          ::nestlight::test::nestlightBinary() + " view " + octree.string() +
+  const std::string cmd = xvfbIn(tmp) + ::nestlight::test::nestlightBinary() + " view " +
+                          octree.string() +
                           " --width 320 --height 240 --frames 40 --orbit 3 --screenshot " + shot;
   const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
   out = test::readFile(tmp.file("log.txt"));
@@ -69,10 +74,10 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
              "display": {"splatting": "basic", "edl_strength": 0}})";
   }
   const std::string shot = tmp.file("shot.png");
-  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " +
-                          ::nestlight::test::nestlightBinary() + " view " + tmp.file("scene.json") +
-                          " --show points --width 160 --height 120 --frames 20 --screenshot " +
-                          shot;
+  const std::string xvfb = xvfbIn(tmp);
+  const std::string cmd =
+      xvfb + ::nestlight::test::nestlightBinary() + " view " + tmp.file("scene.json") +
+      " --show points --width 160 --height 120 --frames 20 --screenshot " + shot;
   const int rc = std::system((cmd + " > " + tmp.file("log.txt") + " 2>&1").c_str());
   const std::string out = test::readFile(tmp.file("log.txt"));
   ASSERT_EQ(rc, 0) << out;
@@ -92,12 +97,12 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
     f << R"({"octrees": ["s.octree"], "camera": {"eye": [150, -60, 80], "target": [250, -160, 150]}})";
   }
   const std::string away = tmp.file("away.png");
-  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " +
-                         ::nestlight::test::nestlightBinary() + " view " + tmp.file("away.json") +
-                         " --show points --width 160 --height 120 --frames 5 --screenshot " + away +
-                         " > " + tmp.file("away.txt") + " 2>&1")
-                            .c_str()),
-            0)
+  ASSERT_EQ(
+      std::system((xvfb + ::nestlight::test::nestlightBinary() + " view " + tmp.file("away.json") +
+                   " --show points --width 160 --height 120 --frames 5 --screenshot " + away +
+                   " > " + tmp.file("away.txt") + " 2>&1")
+                      .c_str()),
+      0)
       << test::readFile(tmp.file("away.txt"));
   viewer::Image empty = viewer::readImage(away);
   size_t seen = 0;
@@ -107,18 +112,18 @@ TEST(Window, ViewsASceneFileWithItsCameraAndDisplaySettings) {
       seen += std::fabs(p[0] - 0.08f) + std::fabs(p[1] - 0.08f) + std::fabs(p[2] - 0.10f) > 0.05f;
     }
   EXPECT_EQ(seen, 0u);
-  // By default a scene opens on its GI method (raster here: the scene names none that runs in
-  // real time): the scan's recorded colour as radiance on a black background (no environment),
-  // and the panel's method line in the log.
+  // By default a scene opens on its GI method (the path tracer here, the default of a scene that
+  // names none, accumulating progressively up to --spp): the scan's recorded colour as radiance
+  // on a black background (no environment), and the method line in the log.
   const std::string gi = tmp.file("gi.png");
-  ASSERT_EQ(std::system(("xvfb-run -a -s '-screen 0 640x480x24' " +
-                         ::nestlight::test::nestlightBinary() + " view " + tmp.file("scene.json") +
-                         " --width 160 --height 120 --frames 20 --screenshot " + gi + " > " +
-                         tmp.file("gi.txt") + " 2>&1")
-                            .c_str()),
-            0)
+  ASSERT_EQ(
+      std::system((xvfb + ::nestlight::test::nestlightBinary() + " view " + tmp.file("scene.json") +
+                   " --spp 16 --width 160 --height 120 --frames 20 --screenshot " + gi + " > " +
+                   tmp.file("gi.txt") + " 2>&1")
+                      .c_str()),
+      0)
       << test::readFile(tmp.file("gi.txt"));
-  EXPECT_NE(test::readFile(tmp.file("gi.txt")).find("raster through the GI frame"),
+  EXPECT_NE(test::readFile(tmp.file("gi.txt")).find("reference progressively, up to 16 samples"),
             std::string::npos)
       << test::readFile(tmp.file("gi.txt"));
   viewer::Image lit = viewer::readImage(gi);
@@ -162,10 +167,10 @@ TEST(Window, ViewsASceneOfMeshesAlone) {
   const std::string view =
       ::nestlight::test::nestlightBinary() + " view " + tmp.file("meshes.json");
   const std::string shot = tmp.file("shot.png");
-  const int rc = std::system(("xvfb-run -a -s '-screen 0 640x480x24' " + view +
-                              " --width 160 --height 120 --frames 5 --screenshot " + shot + " > " +
-                              tmp.file("log.txt") + " 2>&1")
-                                 .c_str());
+  const int rc =
+      std::system((xvfbIn(tmp) + view + " --width 160 --height 120 --frames 5 --screenshot " +
+                   shot + " > " + tmp.file("log.txt") + " 2>&1")
+                      .c_str());
   const std::string out = test::readFile(tmp.file("log.txt"));
   ASSERT_EQ(rc, 0) << out;
   viewer::Image img = viewer::readImage(shot);

@@ -12,8 +12,11 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
+#include <functional>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "method_view.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/tone_map.h"
@@ -113,8 +116,45 @@ void moveCamera(CameraController& cc, GLFWwindow* w, const ImGuiIO& io, double d
   }
 }
 
-// The point view's part of the panel: rasteriser, colouring, splatting, budgets and the
-// streaming figures. A colouring change restarts the residency (colours are baked on upload).
+// A colour bar with its two ends' values under it: the legend of a scalar colouring.
+void legend(const std::function<ImU32(double)>& colour, int segments, const char* lo,
+            const char* hi, const char* caption) {
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  const ImVec2 at = ImGui::GetCursorScreenPos();
+  const float w = ImGui::CalcItemWidth(), h = ImGui::GetFontSize();
+  for (int i = 0; i < segments; ++i) {
+    const float x0 = at.x + w * i / segments, x1 = at.x + w * (i + 1) / segments;
+    const ImU32 c0 = colour(double(i) / segments), c1 = colour(double(i + 1) / segments);
+    draw->AddRectFilledMultiColor(ImVec2(x0, at.y), ImVec2(x1, at.y + h), c0, c1, c1, c0);
+  }
+  ImGui::Dummy(ImVec2(w, h));
+  ImGui::TextUnformatted(lo);
+  ImGui::SameLine(std::max(w - ImGui::CalcTextSize(hi).x, ImGui::CalcTextSize(lo).x + 8));
+  ImGui::TextUnformatted(hi);
+  ImGui::SameLine();
+  ImGui::TextDisabled("%s", caption);
+}
+
+// The elevation and intensity colourings' scales: which colour is which height or return.
+void colourLegend(frame::ColourMode mode, const Metadata& meta) {
+  char lo[64], hi[64];
+  if (mode == frame::ColourMode::Elevation) {
+    std::snprintf(lo, sizeof lo, "%.2f", meta.bounds.min.z);
+    std::snprintf(hi, sizeof hi, "%.2f", meta.bounds.max.z);
+    legend([](double t) { return ImU32(frame::elevationRamp(t)); }, 4, lo, hi, "z");
+  } else if (mode == frame::ColourMode::Intensity) {
+    legend(
+        [](double t) {
+          const auto g = uint32_t(frame::intensityGrey(t * 65535.0) * 255.0 + 0.5);
+          return ImU32(g | (g << 8) | (g << 16) | (255u << 24));
+        },
+        16, "0", "65535", "intensity (square root)");
+  }
+}
+
+// The point view's part of the panel: rasteriser, colouring (with its legend), splatting, budgets
+// and the streaming figures. A colouring change restarts the residency (colours are baked on
+// upload).
 void pointsPanel(RenderSettings& settings, ScanColours& colours, OctreeReader& reader,
                  frame::GlNodeStore& store, std::unique_ptr<streaming::Streamer>& streamer,
                  streaming::Budgets& budgets, const streaming::FrameStats& st,
@@ -136,12 +176,12 @@ void pointsPanel(RenderSettings& settings, ScanColours& colours, OctreeReader& r
     store.setColourMode(mode);
     streamer = std::make_unique<streaming::Streamer>(reader, store, budgets);
   }
+  colourLegend(mode, reader.metadata());
   if (settings.rasteriser == Rasteriser::Points) {
     int splat = settings.splatting == Splatting::Hqs ? 0 : 1;
     if (ImGui::Combo("splatting", &splat, "high quality (blended)\0basic (nearest)\0"))
       settings.splatting = splat == 0 ? Splatting::Hqs : Splatting::Basic;
   }
-  ImGui::SliderFloat("exposure (stops)", &settings.exposureStops, -12.f, 4.f);
   ImGui::SliderFloat("point size", &settings.sizeScale, 0.25f, 4.f);
   ImGui::SliderFloat("EDL strength", &settings.edlStrength, 0.f, 5.f);
   ImGui::SliderFloat("EDL radius", &settings.edlRadius, 0.5f, 4.f);
@@ -168,61 +208,6 @@ void pointsPanel(RenderSettings& settings, ScanColours& colours, OctreeReader& r
   ImGui::Text("ms: cut %.2f upload %.2f draw %.1f", st.msCutSelection, st.msUpload, timings.msDraw);
 }
 
-// The GI frame's part of the panel: exposure, the method's parameters and its passes' times.
-void methodPanel(const gi::Method& method, float& exposure, const gi::MethodFrame& stats) {
-  ImGui::SliderFloat("exposure (EV)", &exposure, -10.f, 10.f);
-  if (ImGui::TreeNode("parameters")) {
-    // The values as the method resolved them; a declared parameter's help is its tooltip.
-    const gi::MethodInfo* info = gi::findMethod(method.name());
-    for (const auto& [k, v] : method.parameters()) {
-      ImGui::Text("%s = %s", k.c_str(), v.c_str());
-      if (!info || !ImGui::IsItemHovered()) continue;
-      for (const auto& p : info->parameters)
-        if (p.name == k)
-          ImGui::SetTooltip(
-              "%s\n%s, default %s", p.help.c_str(), gi::describeParameterType(p).c_str(),
-              p.defaultValue.is_null() ? "the method's" : p.defaultValue.dump().c_str());
-    }
-    ImGui::TreePop();
-  }
-  double total = 0;
-  for (const auto& [name, ms] : stats.passMs) {
-    ImGui::Text("%-16s %7.2f ms", name.c_str(), ms);
-    total += ms;
-  }
-  ImGui::Text("%-16s %7.2f ms (frame %.1f ms)", "GPU total", total, stats.seconds * 1e3);
-  ImGui::Separator();
-}
-
-// The view as shown, saved: the method's linear frame (EXR as rendered, PNG through the panel's
-// exposure) or the point view's image.
-void saveScreenshot(const std::string& file, gi::Method* method, const gi::SceneCamera& sceneCam,
-                    float exposure, PointView& renderer, streaming::Streamer* streamer,
-                    frame::GlNodeStore* store, const Camera& cam, int fbw, int fbh,
-                    const RenderSettings& settings) {
-  if (method) {
-    const gi::MethodFrame f = method->render(sceneCam);
-    if (std::filesystem::path(file).extension() == ".exr")
-      gi::writeExr(file, f.image, f.attributes);
-    else
-      gi::writeToneMappedPng(file, f.image, exposure);
-  } else {
-    Image img = renderer.render(streamer->drawList(), *store, cam, fbw, fbh, settings);
-    writeImage(img, file);
-  }
-}
-
-// The scene's GI method for the window: one that renders offline is replaced by raster, and
-// `note` says so.
-std::unique_ptr<gi::Method> interactiveMethod(gi::Scene s, std::string& note) {
-  const gi::MethodInfo* info = gi::findMethod(s.gi.method);
-  if (!info || !info->gpu) {
-    note = s.gi.method + " renders offline (nestlight render); shown: raster";
-    s.gi.method = "raster";
-  }
-  return gi::createMethod(s, {false, true});
-}
-
 gi::SceneCamera sceneCamera(const Camera& cam, int width, int height, double time) {
   gi::SceneCamera c;
   c.eye = cam.eye, c.target = cam.target, c.up = cam.up;
@@ -231,12 +216,30 @@ gi::SceneCamera sceneCamera(const Camera& cam, int width, int height, double tim
   return c;
 }
 
-// Dear ImGui for the window, shut down before the window's context goes.
+// Where the panel's state (position, size, collapsed) is kept between runs: Dear ImGui's ini
+// file under $XDG_CONFIG_HOME/nestlight, else ~/.config/nestlight (the XDG base directories);
+// empty, and nothing kept, when neither is set or the folder cannot be made.
+std::string panelStateFile() {
+  std::filesystem::path dir;
+  if (const char* xdg = std::getenv("XDG_CONFIG_HOME"); xdg && *xdg)
+    dir = xdg;
+  else if (const char* home = std::getenv("HOME"); home && *home)
+    dir = std::filesystem::path(home) / ".config";
+  else
+    return "";
+  dir /= "nestlight";
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  return ec ? "" : (dir / "imgui.ini").string();
+}
+
+// Dear ImGui for the window, shut down before the window's context goes (which writes the
+// panel's state file).
 struct ImGuiSession {
-  explicit ImGuiSession(GLFWwindow* window) {
+  explicit ImGuiSession(GLFWwindow* window) : iniFile(panelStateFile()) {
     IMGUI_CHECKVERSION();
     ImGui::CreateContext();
-    ImGui::GetIO().IniFilename = nullptr;
+    ImGui::GetIO().IniFilename = iniFile.empty() ? nullptr : iniFile.c_str();
     ImGui_ImplGlfw_InitForOpenGL(window, true);
     ImGui_ImplOpenGL3_Init("#version 450 core");
   }
@@ -247,6 +250,7 @@ struct ImGuiSession {
   }
   ImGuiSession(const ImGuiSession&) = delete;
   ImGuiSession& operator=(const ImGuiSession&) = delete;
+  const std::string iniFile;
 };
 
 std::string timedScreenshotName() {
@@ -285,149 +289,252 @@ ViewInput openViewInput(const ViewerOptions& opt) {
   return in;
 }
 
+// The window's state and its frame: the point view, the GI method the panel chose (MethodView),
+// the camera, the panel.
+class Viewer {
+ public:
+  Viewer(const ViewerOptions& opt, ViewInput& in, gl::WindowContext& ctx)
+      : opt_(opt), in_(in), ctx_(ctx), settings_(opt.settings), budgets_(opt.budgets) {
+    const std::unique_ptr<OctreeReader>& reader = in.reader;
+    if (reader) {
+      store_ = std::make_unique<frame::GlNodeStore>(reader->metadata(), in.colours.mode,
+                                                    in.colours.hdrLayer);
+      streamer_ = std::make_unique<streaming::Streamer>(*reader, *store_, budgets_);
+    }
+    int w = opt.width, h = opt.height;
+    glfwGetFramebufferSize(ctx.window(), &w, &h);
+    cc_.from(opt.camera ? *opt.camera
+                        : Camera::framing(in.bounds, opt.fovYDegrees,
+                                          double(std::max(w, 1)) / std::max(h, 1), opt.azimuth,
+                                          opt.elevation));
+    cc_.speed = std::max(in.extent * 0.1, 1e-3);
+    lastFbo_ = gl::Framebuffer::create();
+    if (opt.scene) {
+      methods_ = std::make_unique<MethodView>(
+          opt.scene, [this](const std::string& status, double f) { redraw(status, f); });
+      showMethod_ = !opt.startWithPoints || !reader;
+      if (showMethod_) methods_->build();
+    }
+  }
+  ~Viewer() {
+    streamer_.reset();
+    methods_.reset();  // its GL objects go while the context lives
+  }
+  // One frame; false once the window is to close or the scripted frames are done.
+  bool step();
+
+ private:
+  void panel(const streaming::FrameStats& st, const DrawTimings& timings, bool& shot);
+  void viewChoice();
+  // While a method builds: the last frame and the panel with what it is doing, at most 20 times
+  // a second (each costs a frame's swap).
+  void redraw(const std::string& status, double fraction);
+  void keepLastFrame(int fbw, int fbh);
+  void screenshot(const std::string& file, const gi::SceneCamera& sceneCam, const Camera& cam,
+                  int fbw, int fbh, uint64_t drawPoints);
+
+  const ViewerOptions& opt_;
+  ViewInput& in_;
+  gl::WindowContext& ctx_;
+  RenderSettings settings_;
+  streaming::Budgets budgets_;
+  std::unique_ptr<frame::GlNodeStore> store_;
+  std::unique_ptr<streaming::Streamer> streamer_;
+  PointView renderer_;
+  std::unique_ptr<MethodView> methods_;
+  bool showMethod_ = false;
+  CameraController cc_;
+  std::string status_;
+  int frame_ = 0;
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now(), opened_ = last_,
+                                        lastRedraw_{};
+  double lastX_ = NAN, lastY_ = NAN;
+  gl::Framebuffer lastFbo_;
+  gl::Texture lastFrame_;
+};
+
+void Viewer::keepLastFrame(int fbw, int fbh) {
+  if (lastFrame_.width() != fbw || lastFrame_.height() != fbh) {
+    lastFrame_ = gl::Texture(GL_RGBA8, fbw, fbh);
+    lastFbo_.attach(GL_COLOR_ATTACHMENT0, lastFrame_);
+  }
+  glBlitNamedFramebuffer(0, lastFbo_.id(), 0, 0, fbw, fbh, 0, 0, fbw, fbh, GL_COLOR_BUFFER_BIT,
+                         GL_NEAREST);
+}
+
+void Viewer::redraw(const std::string& status, double fraction) {
+  const auto now = std::chrono::steady_clock::now();
+  if (fraction > 0 && fraction < 1 && now - lastRedraw_ < std::chrono::milliseconds(50)) return;
+  lastRedraw_ = now;
+  std::printf("view: %s\n", status.c_str());
+  std::fflush(stdout);
+  glfwPollEvents();
+  int fbw = 0, fbh = 0;
+  glfwGetFramebufferSize(ctx_.window(), &fbw, &fbh);
+  if (fbw <= 0 || fbh <= 0) return;
+  const float black[4] = {0, 0, 0, 1};
+  glClearNamedFramebufferfv(0, GL_COLOR, 0, black);
+  if (lastFrame_.id())
+    glBlitNamedFramebuffer(lastFbo_.id(), 0, 0, 0, lastFrame_.width(), lastFrame_.height(), 0, 0,
+                           fbw, fbh, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+  ImGui::Begin("nestlight");
+  ImGui::TextUnformatted(in_.title.c_str());
+  ImGui::PushTextWrapPos(0);
+  ImGui::TextUnformatted(status.c_str());
+  ImGui::PopTextWrapPos();
+  ImGui::ProgressBar(float(std::clamp(fraction, 0.0, 1.0)));
+  ImGui::End();
+  ImGui::Render();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glViewport(0, 0, fbw, fbh);
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  glfwSwapBuffers(ctx_.window());
+}
+
+// The view menu: the points (when there is a scan) and every registered method.
+void Viewer::viewChoice() {
+  if (!methods_) return;
+  std::vector<std::string> names;
+  if (in_.reader) names.push_back("points");
+  for (const std::string& m : gi::registeredMethodNames()) names.push_back(m);
+  const std::string shown = showMethod_ ? methods_->methodName() : "points";
+  int index = int(std::find(names.begin(), names.end(), shown) - names.begin());
+  std::string items;
+  for (const auto& n : names) items += n + '\0';
+  if (!ImGui::Combo("view", &index, items.c_str())) return;
+  const std::string& chosen = names[size_t(index)];
+  showMethod_ = chosen != "points";
+  // A method is made the first time it is shown (MethodView starts with its build pending).
+  if (showMethod_) methods_->select(chosen);
+}
+
+void Viewer::panel(const streaming::FrameStats& st, const DrawTimings& timings, bool& shot) {
+  int fbw = 0, fbh = 0;
+  glfwGetFramebufferSize(ctx_.window(), &fbw, &fbh);
+  ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(360, float(std::min(fbh - 20, 640))), ImGuiCond_FirstUseEver);
+  // Collapsed (its title bar's arrow), it keeps to one line; Dear ImGui's state file remembers.
+  ImGui::Begin("nestlight");
+  // Labels keep 11 characters' room (the longest parameter names wrap no further).
+  ImGui::PushItemWidth(-ImGui::GetFontSize() * 11);
+  ImGui::TextUnformatted(in_.title.c_str());
+  viewChoice();
+  shot = ImGui::Button("screenshot");
+  if (!status_.empty()) {
+    ImGui::SameLine();
+    ImGui::TextUnformatted(status_.c_str());
+  }
+  const bool method = methods_ && showMethod_;
+  ImGui::SliderFloat("exposure (stops)", method ? &methods_->exposure() : &settings_.exposureStops,
+                     -12.f, 12.f);
+  int camMode = cc_.mode == CameraController::Mode::Orbit ? 0 : 1;
+  if (ImGui::Combo("camera", &camMode, "orbit (drag, wheel)\0fly (WASD QE, drag)\0"))
+    cc_.mode = camMode == 0 ? CameraController::Mode::Orbit : CameraController::Mode::Fly;
+  ImGui::Separator();
+  if (method)
+    methods_->panel();
+  else if (in_.reader)
+    pointsPanel(settings_, in_.colours, *in_.reader, *store_, streamer_, budgets_, st, timings);
+  ImGui::PopItemWidth();
+  ImGui::End();
+}
+
+void Viewer::screenshot(const std::string& file, const gi::SceneCamera& sceneCam, const Camera& cam,
+                        int fbw, int fbh, uint64_t drawPoints) {
+  std::string what;
+  if (methods_ && showMethod_) {
+    what = methods_->screenshot(file, sceneCam);
+  } else {
+    Image img = renderer_.render(streamer_->drawList(), *store_, cam, fbw, fbh, settings_);
+    writeImage(img, file);
+    what = std::to_string(fbw) + "x" + std::to_string(fbh) + ", " + std::to_string(drawPoints) +
+           " points drawn";
+  }
+  status_ = "saved " + file;
+  // The terminal shows the whole path; the panel may cut it.
+  std::printf("view: %s (%s)\n", status_.c_str(), what.c_str());
+  std::fflush(stdout);
+}
+
+bool Viewer::step() {
+  GLFWwindow* w = ctx_.window();
+  // A progressive view idles between events so that its worker has the cores.
+  if (methods_ && showMethod_ && methods_->progressive() && opt_.frames == 0)
+    glfwWaitEventsTimeout(1.0 / 30);
+  else
+    glfwPollEvents();
+  if (glfwWindowShouldClose(w)) return false;
+  const auto now = std::chrono::steady_clock::now();
+  const double dt = std::chrono::duration<double>(now - last_).count();
+  last_ = now;
+  double x = 0, y = 0;
+  glfwGetCursorPos(w, &x, &y);
+  if (!std::isnan(lastX_)) moveCamera(cc_, w, ImGui::GetIO(), x - lastX_, y - lastY_, dt);
+  lastX_ = x, lastY_ = y;
+  cc_.yaw += opt_.orbitDegreesPerFrame;
+  int fbw = 0, fbh = 0;
+  glfwGetFramebufferSize(w, &fbw, &fbh);
+  if (fbw <= 0 || fbh <= 0) return true;  // minimised
+  Camera cam = cc_.camera();
+  cam.fitClipPlanes(in_.bounds);
+  // Near the scan, near/far from the box alone would clip what is in front of the eye.
+  cam.nearPlane = std::max(std::min(cam.nearPlane, cc_.distance * 0.01), cam.farPlane * 1e-5);
+  const gi::SceneCamera sceneCam =
+      sceneCamera(cam, fbw, fbh, std::chrono::duration<double>(now - opened_).count());
+  streaming::FrameStats st{};
+  if (streamer_) st = streamer_->update(cam.view(fbw, fbh));
+  DrawTimings timings;
+  if (methods_ && showMethod_) {
+    methods_->draw(sceneCam, fbw, fbh);
+  } else {
+    renderer_.renderToTexture(streamer_->drawList(), *store_, cam, fbw, fbh, settings_, &timings);
+    glBlitNamedFramebuffer(renderer_.outputFramebuffer(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh,
+                           GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  }
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  bool shot = false;
+  panel(st, timings, shot);
+  // A method to be made: the frame as it is now (the panel not yet drawn) stays on screen.
+  const bool build = methods_ && showMethod_ && methods_->buildPending();
+  if (build) keepLastFrame(fbw, fbh);
+  ImGui::Render();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glViewport(0, 0, fbw, fbh);
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  ++frame_;
+  const bool lastFrame = opt_.frames > 0 && frame_ >= opt_.frames;
+  if (shot || (lastFrame && !opt_.screenshot.empty())) {
+    // A scripted run's progressive view is saved once it holds its samples per pixel.
+    if (lastFrame && methods_ && showMethod_ && !methods_->waitForSamples(600))
+      std::fprintf(stderr, "view: the samples per pixel were not reached in 600 s\n");
+    // The last frame's goes where asked; a button's gets the time in its name.
+    screenshot(lastFrame && !opt_.screenshot.empty() ? opt_.screenshot : timedScreenshotName(),
+               sceneCam, cam, fbw, fbh, st.drawPoints);
+  }
+  glfwSwapBuffers(w);
+  if (build) methods_->build();
+  return !lastFrame;
+}
+
 }  // namespace
 
 int runViewer(const ViewerOptions& opt) {
   ViewInput in = openViewInput(opt);
-  const std::unique_ptr<OctreeReader>& reader = in.reader;
-  const Metadata* meta = reader ? &reader->metadata() : nullptr;
-  ScanColours& colours = in.colours;
-  const frame::ColourMode& mode = colours.mode;
-  const std::shared_ptr<const ColourLayerReader>& hdrLayer = colours.hdrLayer;
-  const Box3d& bounds = in.bounds;
-  const double extent = in.extent;
-  const std::string& title = in.title;
-  gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + title);
+  gl::WindowContext ctx(opt.width, opt.height, "nestlight view - " + in.title);
   std::printf("view: %s\n", ctx.description().c_str());
-
   const ImGuiSession imgui(ctx.window());
-
-  int exitCode = 0;
   {
-    // The scene's GI method, when the viewer was given a scene: made here, in the window's context.
-    std::unique_ptr<gi::Method> method;
-    std::string methodNote;
-    gl::Framebuffer methodFbo;
-    bool showMethod = false;
-    float exposure = opt.scene ? float(opt.scene->output.exposure) : 0.0f;
-    gi::MethodFrame methodStats;
-    if (opt.scene) {
-      method = interactiveMethod(*opt.scene, methodNote);
-      methodFbo = gl::Framebuffer::create();
-      showMethod = !opt.startWithPoints || !reader;
-      std::printf("view: %s through the GI frame%s\n", method->name().c_str(),
-                  methodNote.empty() ? "" : (" (" + methodNote + ")").c_str());
+    Viewer viewer(opt, in, ctx);
+    while (viewer.step()) {
     }
-    std::unique_ptr<frame::GlNodeStore> store;
-    std::unique_ptr<streaming::Streamer> streamer;
-    PointView renderer;
-    RenderSettings settings = opt.settings;
-    streaming::Budgets budgets = opt.budgets;
-    if (reader) {
-      store = std::make_unique<frame::GlNodeStore>(*meta, mode, hdrLayer);
-      streamer = std::make_unique<streaming::Streamer>(*reader, *store, budgets);
-    }
-    CameraController cc;
-    int winW = opt.width, winH = opt.height;
-    glfwGetFramebufferSize(ctx.window(), &winW, &winH);
-    cc.from(opt.camera ? *opt.camera
-                       : Camera::framing(bounds, opt.fovYDegrees,
-                                         double(std::max(winW, 1)) / std::max(winH, 1), opt.azimuth,
-                                         opt.elevation));
-    cc.speed = std::max(extent * 0.1, 1e-3);
-    std::string status;
-    int frame = 0;
-    auto last = std::chrono::steady_clock::now();
-    const auto opened = last;  // a scene's video light probe plays from here
-    double lastX = 0, lastY = 0;
-    glfwGetCursorPos(ctx.window(), &lastX, &lastY);
-    std::vector<float> pointMillions{float(budgets.points) / 1e6f};
-    while (!glfwWindowShouldClose(ctx.window())) {
-      glfwPollEvents();
-      const auto now = std::chrono::steady_clock::now();
-      const double dt = std::chrono::duration<double>(now - last).count();
-      last = now;
-      ImGuiIO& io = ImGui::GetIO();
-
-      // Camera input, unless the panel has the mouse or keyboard.
-      double x = 0, y = 0;
-      glfwGetCursorPos(ctx.window(), &x, &y);
-      const double dx = x - lastX, dy = y - lastY;
-      lastX = x, lastY = y;
-      GLFWwindow* w = ctx.window();
-      moveCamera(cc, w, io, dx, dy, dt);
-      cc.yaw += opt.orbitDegreesPerFrame;
-
-      int fbw = 0, fbh = 0;
-      glfwGetFramebufferSize(w, &fbw, &fbh);
-      if (fbw <= 0 || fbh <= 0) continue;  // minimised
-      Camera cam = cc.camera();
-      cam.fitClipPlanes(bounds);
-      // Near the scan, near/far from the box alone would clip what is in front of the eye.
-      cam.nearPlane = std::max(std::min(cam.nearPlane, cc.distance * 0.01), cam.farPlane * 1e-5);
-      const gi::SceneCamera sceneCam =
-          sceneCamera(cam, fbw, fbh, std::chrono::duration<double>(now - opened).count());
-      streaming::FrameStats st{};
-      if (streamer) st = streamer->update(cam.view(fbw, fbh));
-      DrawTimings timings;
-      if (showMethod) {
-        const GLuint tex = method->renderInteractive(sceneCam, exposure, &methodStats);
-        methodFbo.attachRaw(GL_COLOR_ATTACHMENT0, tex);
-        glBlitNamedFramebuffer(methodFbo.id(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh,
-                               GL_COLOR_BUFFER_BIT, GL_NEAREST);
-      } else {
-        renderer.renderToTexture(streamer->drawList(), *store, cam, fbw, fbh, settings, &timings);
-        glBlitNamedFramebuffer(renderer.outputFramebuffer(), 0, 0, 0, fbw, fbh, 0, 0, fbw, fbh,
-                               GL_COLOR_BUFFER_BIT, GL_NEAREST);
-      }
-
-      // The panel.
-      ImGui_ImplOpenGL3_NewFrame();
-      ImGui_ImplGlfw_NewFrame();
-      ImGui::NewFrame();
-      ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
-      ImGui::Begin("nestlight");
-      ImGui::Text("%s", title.c_str());
-      if (method && !reader) {
-        ImGui::Text("%s (GI frame; the scene has no scan)", method->name().c_str());
-      } else if (method) {
-        int view = showMethod ? 0 : 1;
-        const std::string views = method->name() + " (GI frame)" + '\0' + "points" + '\0';
-        if (ImGui::Combo("view", &view, views.c_str())) showMethod = view == 0;
-      }
-      if (method && !methodNote.empty()) ImGui::TextUnformatted(methodNote.c_str());
-      if (method && (showMethod || !reader)) methodPanel(*method, exposure, methodStats);
-      int camMode = cc.mode == CameraController::Mode::Orbit ? 0 : 1;
-      if (ImGui::Combo("camera", &camMode, "orbit (drag, wheel)\0fly (WASD QE, drag)\0"))
-        cc.mode = camMode == 0 ? CameraController::Mode::Orbit : CameraController::Mode::Fly;
-      if (reader) pointsPanel(settings, colours, *reader, *store, streamer, budgets, st, timings);
-      bool shot = ImGui::Button("screenshot");
-      if (!status.empty()) ImGui::TextUnformatted(status.c_str());
-      ImGui::End();
-      ImGui::Render();
-      glBindFramebuffer(GL_FRAMEBUFFER, 0);
-      glViewport(0, 0, fbw, fbh);
-      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-
-      ++frame;
-      const bool last = opt.frames > 0 && frame >= opt.frames;
-      if (shot || (last && !opt.screenshot.empty())) {
-        // The last frame's goes where asked; a button's gets the time in its name.
-        const std::string file =
-            last && !opt.screenshot.empty() ? opt.screenshot : timedScreenshotName();
-        saveScreenshot(file, showMethod ? method.get() : nullptr, sceneCam, exposure, renderer,
-                       streamer.get(), store.get(), cam, fbw, fbh, settings);
-        status = "saved " + file;
-        std::printf("view: %s (%dx%d, %llu points drawn)\n", status.c_str(), fbw, fbh,
-                    (unsigned long long)st.drawPoints);
-      }
-      glfwSwapBuffers(w);
-      if (last) break;
-    }
-    streamer.reset();
-    method.reset();  // its GL objects go while the context lives
   }
-  return exitCode;
+  return 0;
 }
 
 }  // namespace nestlight::viewer

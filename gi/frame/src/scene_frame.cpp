@@ -21,6 +21,7 @@ RasterMethod::RasterMethod(const Scene& scene, const MethodContext& mc,
     context_ = gl::createHeadlessContext();
     if (!quiet_) std::fprintf(stderr, "raster: %s\n", context_->description().c_str());
   }
+  mc.report("streaming the scans' lights' cuts", 0.05);
   loadScans();
   if (params_.computeRasteriser)
     for (const auto& o : scene_.octrees)
@@ -32,10 +33,17 @@ RasterMethod::RasterMethod(const Scene& scene, const MethodContext& mc,
                     "give every octree the "
                     "same colour_scale and the same kind of colour (recorded or a layer), or use "
                     "\"points\"");
+  mc.report("reading the meshes", 0.3);
   loadMeshes();
+  mc.report("lights", 0.45);
   setUpLights();
+  mc.report("environment", 0.5);
   setUpEnvironment();
   uploadMaterials();
+  // Compiling the passes' programs is most of a GL method's set-up on a CPU rasteriser.
+  mc.report(
+      extension_ ? "compiling shaders, setting up " + extension_->name() : "compiling shaders",
+      0.6);
   buildGraph();
 }
 

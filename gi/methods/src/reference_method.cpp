@@ -74,6 +74,32 @@ class ReferenceMethod : public Method {
     return f;
   }
 
+  bool rendersInBatches() const override { return true; }
+
+  // A batch is a render of `samples` passes with a seed of its own: the path tracer's samples of
+  // pixel p in pass k hash (seed, p, k), so another seed gives independent samples (seeds that
+  // differ by d collide only where d times the hash's odd constant lands within the image's pixel
+  // count of 0 mod 2^64, which no batch count reaches).
+  MethodFrame renderBatch(const SceneCamera& camera, int samples, uint64_t batch,
+                          const std::function<bool()>& keepGoing) override {
+    ReferenceOptions o = options_;
+    o.maxSamplesPerPixel = std::max(samples, 1);
+    o.targetRelativeError = 0;
+    o.timeLimitSeconds = 0;
+    o.seed = options_.seed + 1 + batch;
+    if (environment_) scene_->setEnvironment(environment_->at(camera.time));
+    ReferenceResult r = renderReference(
+        *scene_, camera, o, [&](const ReferenceProgress&) { return !keepGoing || keepGoing(); });
+    MethodFrame f;
+    f.image = std::move(r.image);
+    f.seconds = r.seconds;
+    f.samplesPerPixel = r.samplesPerPixel;
+    f.rays = r.rays;
+    f.nonFiniteSamples = r.nonFiniteSamples;
+    f.stopReason = r.stopReason;
+    return f;
+  }
+
   uint64_t discs() const { return scene_->discs(); }
 
  private:

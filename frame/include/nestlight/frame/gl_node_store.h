@@ -49,6 +49,11 @@ glm::vec3 unpackNormal(uint32_t word);
 // Hdr: the octree's colour layer "hdr" (or another given to the store), linear HDR.
 enum class ColourMode { Rgb, Intensity, Classification, Elevation, Normal, Hdr };
 const char* colourModeName(ColourMode m);
+// The elevation colouring's ramp (dark blue - teal - yellow, perceptually ordered) at t in [0, 1]
+// (the scan's lowest to highest point), RGBA8 as the colour word holds it: for legends too.
+uint32_t elevationRamp(double t);
+// The intensity colouring: grey sqrt(intensity / 65535), since most returns are dark.
+double intensityGrey(double intensity);
 // Parses "rgb", "intensity", "classification", "elevation", "normal", "hdr"; throws on others.
 ColourMode parseColourMode(const std::string& name);
 // The modes this scan can show (elevation always; the rest when it has the attribute, hdr when

@@ -20,13 +20,16 @@ struct ViewerOptions {
   streaming::Budgets budgets;
   std::optional<frame::ColourMode> colour;
   std::string colourLayer = frame::kHdrLayerName;  // what ColourMode::Hdr draws
-  // A scene file (`nestlight view scene.json`): its GI method renders the window (the scene's
-  // gi.method when it has an interactive GL mode, else `raster`), with the method, its
-  // parameters and per-pass GPU timings in the panel; the point view stays one click away.
+  // A scene file (`nestlight view scene.json`): its gi.method (the command line's --method,
+  // variant and parameters applied) renders the window, a GL method in real time, the path tracer
+  // progressively; the panel switches between every registered method, variant and parameter
+  // (re-making the method), and the point view stays one click away. The panel's state is kept in
+  // $XDG_CONFIG_HOME/nestlight/imgui.ini (else ~/.config/nestlight/).
   std::shared_ptr<const gi::Scene> scene;
   bool startWithPoints = false;  // with a scene: open on the point view instead of the method
   // Scripted runs (tests, demos): stop after this many frames (0: run until closed), turn the
-  // orbit camera by this many degrees per frame, and save a screenshot at the end.
+  // orbit camera by this many degrees per frame, and save a screenshot at the end (a progressive
+  // view once it holds the scene's samples per pixel, --spp).
   int frames = 0;
   double orbitDegreesPerFrame = 0;
   std::string screenshot;

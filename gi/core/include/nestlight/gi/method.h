@@ -52,6 +52,22 @@ class Method {
   }
   // The method's parameters as it resolved them (defaults included), for panels and logs.
   virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
+
+  // Progressive previews of methods that sample (the path tracer; the viewer accumulates while
+  // the camera rests): whether renderBatch works.
+  virtual bool rendersInBatches() const { return false; }
+  // `samples` more samples per pixel of `camera`, drawn independently of every other `batch`'s
+  // (the batch number picks the random sequence), so that the mean of batches 0..n-1 converges as
+  // one render of all their samples would. `keepGoing` is asked after every sample per pixel:
+  // once it says no the call returns early, its image the mean of the samples done
+  // (MethodFrame::samplesPerPixel, at least 1). One caller at a time, which may be a worker thread
+  // (nothing else may use the method meanwhile). Methods that do not render in batches return an
+  // empty frame.
+  virtual MethodFrame renderBatch(const SceneCamera& camera, int samples, uint64_t batch,
+                                  const std::function<bool()>& keepGoing) {
+    (void)camera, (void)samples, (void)batch, (void)keepGoing;
+    return {};
+  }
 };
 
 // How a method was asked for: progress lines (stderr) unless quiet; GL methods make a headless
@@ -66,6 +82,13 @@ struct MethodContext {
   // nestlight:pass_wall_ms:<pass>), which a CPU rasteriser needs for per-pass figures; costs the
   // overlap of passes. `bench gi` sets it.
   bool syncPassTiming = false;
+  // Set-up progress, for a window that shows its last frame while a method builds: what the
+  // method is doing and how far along it is (0 to 1). Called on the creating thread, between
+  // stages (GL state as the method left it: the callee restores what it changes).
+  std::function<void(const std::string& stage, double fraction)> progress;
+  void report(const std::string& stage, double fraction) const {
+    if (progress) progress(stage, fraction);
+  }
 };
 
 }  // namespace nestlight::gi
