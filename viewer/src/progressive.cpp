@@ -97,7 +97,7 @@ void ProgressiveView::run() {
   uint64_t accumulating = ~0ull, batch = 0;
   gi::SceneCamera cam;
   std::vector<double> sum;  // sums of samples: float would lose small ones after thousands
-  int spp = 0, divisor = 1;
+  int spp = 0, divisor = 1, holdUntil = 1;
   Clock::time_point start = Clock::now();
   bool failed = false;
   while (!stop_) {
@@ -106,15 +106,23 @@ void ProgressiveView::run() {
       changed_.wait(lock, [&] { return stop_ || (hasCamera_ && generation_.load() != g); });
       continue;
     }
-    if (g != accumulating) {
+    // A camera at rest at a reduced resolution: once the coarse mean holds 16 samples and a finer
+    // sample per pixel would take at most a second, accumulate again at twice the resolution;
+    // the coarse mean stays on screen until the finer one holds 4 samples.
+    const bool refine =
+        g == accumulating && divisorSetting_ == 0 && divisor > 1 && spp >= 16 &&
+        secondsPerPixelSample_ * double(camera_.width) * camera_.height / (divisor * divisor / 4) <=
+            4 * kBatchSeconds;
+    if (g != accumulating || refine) {
+      if (g != accumulating) start = Clock::now();
       accumulating = g, failed = false;
-      divisor = pickDivisor(camera_);
+      divisor = refine ? divisor / 2 : pickDivisor(camera_);
+      holdUntil = refine ? 4 : 1;
       cam = camera_;
       cam.width = std::max(1, (camera_.width + divisor - 1) / divisor);
       cam.height = std::max(1, (camera_.height + divisor - 1) / divisor);
       sum.assign(size_t(cam.width) * cam.height * 3, 0.0);
       spp = 0;
-      start = Clock::now();
     }
     const double pixels = double(cam.width) * cam.height;
     int k = 1;
@@ -144,6 +152,7 @@ void ProgressiveView::run() {
     const double n = f.samplesPerPixel;
     for (size_t i = 0; i < sum.size(); ++i) sum[i] += double(f.image.rgb[i]) * n;
     spp += f.samplesPerPixel;
+    if (spp < holdUntil) continue;
     published_.mean = gi::HdrImage(cam.width, cam.height);
     for (size_t i = 0; i < sum.size(); ++i) published_.mean.rgb[i] = float(sum[i] / spp);
     published_.samplesPerPixel = spp;
