@@ -107,7 +107,8 @@ void addView(CLI::App& app, int& exitCode) {
   cmd->add_option("--orbit", opt->orbitDegreesPerFrame,
                   "Turn the camera by this many degrees per frame");
   cmd->add_option("--screenshot", opt->screenshot,
-                  "Save the last frame to this PNG/EXR (with --frames)");
+                  "Save the last frame to this PNG/EXR (with --frames; the path tracer's "
+                  "progressive view once it holds --spp samples per pixel)");
   auto show = std::make_shared<std::string>("gi");
   cmd->add_option("--show", *show,
                   "Scene files: open on the GI method's frame (gi) or the scan's points (points)")
