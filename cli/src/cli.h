@@ -85,4 +85,28 @@ using bench::humanCount;
 // --progress: "terminal", "json", "quiet" (or "none"); anything else is Auto.
 ProgressMode parseProgress(const std::string& s);
 
+// The exit codes (README "Exit codes", `nestlight --help`): 0 done; 1 a user error (an unknown
+// command or option, a bad value, an input file that is missing, of the wrong kind or damaged:
+// every CLI11 parse error and every nestlight::Error); 2 a check failed (verify, stress,
+// gl-info's programs, the demo's verify, an unusable colour-match); 3 the program or the system
+// failed (out of memory, a file system error, an internal error).
+enum ExitCode : int { kExitOk = 0, kExitUserError = 1, kExitCheckFailed = 2, kExitFailure = 3 };
+// Parses and runs the command line (cli_errors.cpp): US spellings of the options and commands
+// (--color, --rasterizer, color-match) are read as the UK ones; parse errors name the
+// sub-command and suggest the nearest command, option or value; returns the exit code (the one
+// the sub-command stored in `exitCode` when it ran).
+int runCommandLine(CLI::App& app, int argc, char** argv, const int& exitCode);
+// Edit distance (insertions, deletions, substitutions, swaps of neighbours) for suggestions.
+size_t editDistance(const std::string& a, const std::string& b);
+// The nearest of `candidates` to `word` within a few edits ("" when none is near).
+std::string nearestName(const std::string& word, const std::vector<std::string>& candidates);
+// `path` as an input that must exist: Error naming it, and a near name in its folder (a typo).
+void requireExists(const std::string& path);
+// `path` as the octree `command` reads (info, verify, render, view, export): Error when it is
+// missing (a near name in its folder), a scan file (with the `nestlight convert` command for it),
+// a scene file where none is taken, or a folder of scans or a scene's folder.
+void requireOctreeFolder(const std::string& path, const std::string& command);
+// "scan.las" or, with spaces and quotes, 'my scan.las': a path as a shell command takes it.
+std::string shellQuoted(const std::string& path);
+
 }  // namespace nestlight::cli

@@ -6,7 +6,11 @@
 namespace nestlight::cli {
 
 void addBench(CLI::App& app, int& exitCode) {
-  auto* bench = app.add_subcommand("bench", "Benchmarks: speed against size (and, later, error)");
+  auto* bench = app.add_subcommand(
+      "bench",
+      "Benchmarks: conversion, LAZ decoding, streaming, point rendering and the GI frame's passes "
+      "against\n"
+      "size; the GI methods, IBL estimators and HDR expansion against error (docs/PERFORMANCE.md)");
   bench->require_subcommand(1);
   auto* cmd = bench->add_subcommand(
       "convert", "Conversion speed, peak RSS, bytes/point per codec, time to open the root");

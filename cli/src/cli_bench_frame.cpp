@@ -15,7 +15,13 @@ void addBenchFrame(CLI::App& app, int& exitCode) {
                                     "Example: nestlight bench frame --width 1280 --height 720");
   auto o = std::make_shared<bench::BenchFrameOptions>();
   cmd->add_option("scene", o->scene, "Scene file (default: make-scene cornell in --dir)");
-  cmd->add_option("--method", o->method, "A real-time method (" + gi::methodList() + ")")
+  std::vector<std::string> realTime;  // the GL methods, which have a frame of passes
+  for (const auto& m : gi::registeredMethods())
+    if (m.gpu) realTime.push_back(m.name);
+  std::string names;
+  for (const auto& n : realTime) names += (names.empty() ? "" : ", ") + n;
+  cmd->add_option("--method", o->method, "A real-time method (" + names + ")")
+      ->check(CLI::IsMember(realTime))
       ->capture_default_str();
   cmd->add_option("--mode", o->mode, "radiance_cache or albedo")
       ->check(CLI::IsMember({"radiance_cache", "albedo"}))

@@ -25,7 +25,8 @@ void addColourMatch(CLI::App& app, int& exitCode) {
       "RGB\n"
       "(gamma 2.2) and writes the photograph through it; --composite brings an image made in the\n"
       "scan's space (a render with inserted objects) back into the photograph's with the inverse.\n"
-      "Example: nestlight colour-match scan.octree --photo p.png --views cam.json -o p_scan.exr");
+      "Example: nestlight colour-match scan.octree --photo p.png --views cam.json -o p_scan.exr\n"
+      "Exits 2 when the fit is unusable (the identity map is kept and written).");
   auto dir = std::make_shared<std::string>();
   auto photo = std::make_shared<std::string>();
   auto views = std::make_shared<std::string>();
@@ -53,6 +54,7 @@ void addColourMatch(CLI::App& app, int& exitCode) {
       ->capture_default_str();
   cmd->add_flag("--json", *json, "Print the matrices and pair statistics as JSON");
   cmd->callback([=, &exitCode]() {
+    requireOctreeFolder(*dir, "colour-match");
     if (composite->empty() != compositeOut->empty())
       throw Error("", "", "--composite and --composite-output go together");
     const bool linearPhoto = fs::path(*photo).extension() != ".png";
@@ -121,7 +123,7 @@ void addColourMatch(CLI::App& app, int& exitCode) {
       std::printf("  wrote %s%s%s\n", out->c_str(), composite->empty() ? "" : " and ",
                   compositeOut->c_str());
     }
-    exitCode = c.usable ? 0 : 3;
+    exitCode = c.usable ? kExitOk : kExitCheckFailed;
   });
 }
 

@@ -63,7 +63,7 @@ std::vector<std::string> expandInputs(const std::vector<std::string>& inputs) {
                                                 ".xyz", ".pts", ".txt", ".csv"};
   std::vector<std::string> out;
   for (const auto& in : inputs) {
-    if (!fs::exists(in)) throw Error(in, "", "no such file or directory");
+    requireExists(in);  // names a near file in its folder (a typo)
     if (fs::is_directory(in)) {
       std::vector<std::string> found;
       for (const auto& e : fs::directory_iterator(in)) {
@@ -117,10 +117,12 @@ void printBuildSummary(const BuildReport& r, const fs::path& out) {
 void addConvert(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand("convert", "Build a nested octree from scans, in bounded memory");
   cmd->footer(
-      "Inputs: LAS 1.0-1.4 (.las), PLY (.ply), PCD (.pcd), text (.xyz .pts .txt .csv); a "
-      "directory\n"
-      "stands for the point files in it. Every input point is kept, merged as an exact duplicate\n"
-      "(--dedup) or rejected with a reason; `nestlight info` shows the counts.\n"
+      "Inputs: LAS 1.0-1.4 (.las), LAZ (.laz, LASzip 1-3, decoded on every core), COPC\n"
+      "(.copc.laz), PLY (.ply), PCD (.pcd), text (.xyz .pts .txt .csv; --columns names the\n"
+      "columns); a directory stands for the point files in it, sorted by name. Every input\n"
+      "point is kept, merged as an exact duplicate (--dedup) or rejected with a reason;\n"
+      "`nestlight info` shows the counts. Progress: each phase's share done and rate, and the\n"
+      "ETA of the whole conversion (--progress json: one JSON line at a time, for logs).\n"
       "Normals (--estimate-normals) are fitted to the k nearest neighbours by a closed-form plane\n"
       "fit and oriented away from the scan's centre (outward: objects and buildings seen from\n"
       "outside), towards it (inward: interiors) or upwards (up: terrain).");

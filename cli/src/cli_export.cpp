@@ -76,6 +76,7 @@ void addExport(CLI::App& app, int& exitCode) {
       ->check(CLI::IsMember({"auto", "terminal", "json", "quiet"}))
       ->capture_default_str();
   cmd->callback([=, &exitCode]() {
+    requireOctreeFolder(*dir, "export");
     const std::string f = format->empty() ? formatOf(*out) : *format;
     if (f == "potree") {
       if (*level >= 0)

@@ -73,12 +73,15 @@ void addGenerate(CLI::App& app, int& exitCode) {
 }
 
 void addDemo(CLI::App& app, int& exitCode) {
-  auto* cmd = app.add_subcommand("demo",
-                                 "Generate a synthetic scan, convert it, verify it, render it "
-                                 "headless and say what was built\n"
-                                 "and how fast; then light a generated room scan with an inserted "
-                                 "sphere by path tracing; opens\n"
-                                 "the viewer when a display is present");
+  auto* cmd = app.add_subcommand(
+      "demo",
+      "Generate a synthetic scan, convert it, verify it, render it headless and say what was "
+      "built\n"
+      "and how fast; then light a generated room scan with an inserted sphere by path tracing "
+      "and in\n"
+      "real time through the GI frame (direct light; GI with VPLs beside the path tracer's image "
+      "of the\n"
+      "albedo mode); opens the viewer when a display is present. Exits 2 when the verify fails");
   auto pointsText = std::make_shared<std::string>("3M");
   auto dir = std::make_shared<std::string>();
   auto keep = std::make_shared<bool>(false);
@@ -214,7 +217,7 @@ void addDemo(CLI::App& app, int& exitCode) {
       fs::remove_all(work);
     else
       std::printf("  kept      %s\n", work.string().c_str());
-    exitCode = v.ok() ? 0 : 2;
+    exitCode = v.ok() ? kExitOk : kExitCheckFailed;
   });
 }
 

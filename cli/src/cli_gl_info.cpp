@@ -103,7 +103,7 @@ void addGlInfo(CLI::App& app, int& exitCode) {
       std::ofstream f(*json);
       if (!(f << out.dump(1) << "\n")) throw Error(*json, "", "cannot write");
     }
-    exitCode = failed ? 2 : 0;
+    exitCode = failed ? kExitCheckFailed : kExitOk;
   });
 }
 

@@ -195,6 +195,7 @@ void addExpandHdr(CLI::App& app, int& exitCode) {
   cmd->add_flag("--json", *json, "Print the report as JSON");
   cmd->add_flag("-q,--quiet", *quiet, "No progress output");
   cmd->callback([=, &exitCode]() {
+    requireOctreeFolder(*dir, "expand-hdr");
     if (!viewsFile->empty()) o->views = gi::hdr::readViews(*viewsFile);
     if (!photoViewFile->empty()) {
       const auto v = gi::hdr::readViews(*photoViewFile);

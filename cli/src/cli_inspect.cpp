@@ -18,6 +18,7 @@ void addInfo(CLI::App& app, int& exitCode) {
   cmd->add_option("octree", *dir, "Octree folder")->required();
   cmd->add_flag("--json", *json, "Print the metadata as JSON");
   cmd->callback([=, &exitCode]() {
+    requireOctreeFolder(*dir, "info");
     OctreeReader r(*dir);
     const Metadata& m = r.metadata();
     if (*json) {
@@ -118,6 +119,7 @@ void addVerify(CLI::App& app, int& exitCode) {
   auto dir = std::make_shared<std::string>();
   cmd->add_option("octree", *dir, "Octree folder")->required();
   cmd->callback([=, &exitCode]() {
+    requireOctreeFolder(*dir, "verify");
     VerifyReport r = verifyOctree(*dir);
     for (const auto& f : r.failures) std::fprintf(stderr, "FAIL %s\n", f.c_str());
     for (const auto& n : r.notes) std::fprintf(stderr, "note %s\n", n.c_str());
@@ -131,7 +133,7 @@ void addVerify(CLI::App& app, int& exitCode) {
     } else {
       std::fprintf(stderr, "verify failed: %zu problem(s) in %s\n", r.failures.size(),
                    dir->c_str());
-      exitCode = 2;
+      exitCode = kExitCheckFailed;
     }
   });
 }

@@ -26,7 +26,7 @@ void addStress(CLI::App& app, int& exitCode) {
                                  "Stress-test the streaming scheduler: random teleports, fast "
                                  "flights, orbits and stops over an\n"
                                  "octree with a memory store and small budgets; checks every frame "
-                                 "and exits 1 on a violation");
+                                 "and exits 2 on a violation");
   auto dir = std::make_shared<std::string>();
   auto opt = std::make_shared<streaming::StressOptions>();
   auto text =
@@ -158,7 +158,7 @@ void addStress(CLI::App& app, int& exitCode) {
       std::error_code ec;
       fs::remove_all(temp, ec);
     }
-    exitCode = r.ok() ? 0 : 1;
+    exitCode = r.ok() ? kExitOk : kExitCheckFailed;
   });
 }
 

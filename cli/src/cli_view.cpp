@@ -126,6 +126,11 @@ void addView(CLI::App& app, int& exitCode) {
                 "Check the input and the options, print the method and parameters the window "
                 "would open with, and exit without opening one");
   cmd->callback([=, &exitCode]() {
+    // A missing input names a near file; a scan file, the convert command for it.
+    if (std::filesystem::path(*input).extension() == ".json")
+      requireExists(*input);
+    else
+      requireOctreeFolder(*input, "view");
     job->octree = *input;
     applyRenderOptions(*job, *text);
     opt->octree = job->octree;

@@ -1,9 +1,5 @@
 // nestlight: explore and light laser scans far larger than memory.
-#include <cstdio>
-#include <exception>
-
 #include "cli.h"
-#include "nestlight/octree/error.h"
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -30,7 +26,15 @@ int main(int argc, char** argv) {
       "  nestlight bench ibl                            IBL estimators under video light probes\n"
       "  nestlight gl-info --programs                   the GL driver, and every shader compiled "
       "by it\n"
-      "  nestlight expand-hdr scan.octree --photo p.exr HDR colour layer from one HDR photograph\n",
+      "  nestlight expand-hdr scan.octree --photo p.exr HDR colour layer from one HDR photograph\n"
+      "\n"
+      "`nestlight <command> --help` describes a command. US spellings are read as the UK ones\n"
+      "(--color, --rasterizer, --normal-neighbors, color-match).\n"
+      "\n"
+      "Exit codes: 0 done; 1 a user error (an unknown command or option, a bad value, an input\n"
+      "file that is missing, of the wrong kind or damaged); 2 a check failed (verify, stress,\n"
+      "gl-info, the demo's verify, an unusable colour-match); 3 the program or the system failed\n"
+      "(out of memory, a file system error).\n",
       "nestlight"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "nestlight 0.1.0");
@@ -58,16 +62,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addBenchIbl(app, code);
   nestlight::cli::addBenchLaz(app, code);
   nestlight::cli::addGlInfo(app, code);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  } catch (const nestlight::Error& e) {
-    std::fprintf(stderr, "nestlight: error: %s\n", e.what());
-    return 1;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "nestlight: error: %s\n", e.what());
-    return 1;
-  }
-  return code;
+  // Parse errors and user errors exit 1, failed checks 2, failures of the program or the
+  // system 3 (cli.h: ExitCode); --help and --version 0.
+  return nestlight::cli::runCommandLine(app, argc, argv, code);
 }

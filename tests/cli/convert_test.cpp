@@ -179,9 +179,11 @@ TEST(Cli, VerifyFailsOnDamageWithNonZeroExit) {
   ASSERT_EQ(runCli("convert " + t.file("s.las") + " -o " + t.file("o") + " --progress quiet", &out),
             0);
   fs::resize_file(t.file("o") + "/octree.bin", fs::file_size(t.file("o") + "/octree.bin") - 10);
-  EXPECT_NE(runCli("verify " + t.file("o"), &out), 0);
+  // A failed check exits 2, a missing input (a user error) 1.
+  EXPECT_EQ(runCli("verify " + t.file("o"), &out), 2);
   EXPECT_NE(out.find("FAIL"), std::string::npos) << out;
-  EXPECT_NE(runCli("verify " + t.file("nothing-here"), &out), 0);
+  EXPECT_EQ(runCli("verify " + t.file("nothing-here"), &out), 1);
+  EXPECT_NE(out.find("nothing-here: no such file or directory"), std::string::npos) << out;
 }
 
 TEST(Cli, DirectoryInputAndUnknownFormat) {

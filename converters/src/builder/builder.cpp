@@ -49,6 +49,9 @@ BuildReport Builder::run() {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   threads_ = threads;
 
+  // The phases with progress, and the share of the time each takes (measured: see
+  // kPhaseShares), for an ETA across them; "bounds" runs only where a header declares none.
+  progress_.plan(kPhaseShares);
   planLayout();
   planQuantisation(report);
   // Built beside the output and swapped in at the end: a failed, full-disk or killed run leaves
