@@ -1,5 +1,6 @@
 // The progressive view of the path tracer (nestlight/viewer/progressive.h) without a window: its
-// running mean converges to the method's own render of the view, and a camera move restarts it.
+// running mean converges to the method's own render of the view, a camera move restarts it, and
+// paused it samples nothing.
 #include "nestlight/viewer/progressive.h"
 
 #include <cmath>
@@ -21,7 +22,7 @@ double relativeL2Error(const nestlight::gi::HdrImage& a, const nestlight::gi::Hd
 
 }  // namespace
 
-TEST(Progressive, ConvergesToTheRenderAndRestartsWhenTheCameraMoves) {
+TEST(Progressive, ConvergesRestartsWhenTheCameraMovesAndPauses) {
   nestlight::test::TempDir tmp;
   std::string out;
   ASSERT_EQ(nestlight::test::runCli(
@@ -67,4 +68,13 @@ TEST(Progressive, ConvergesToTheRenderAndRestartsWhenTheCameraMoves) {
   EXPECT_EQ(after.samplesPerPixel, 32);
   EXPECT_LT(relativeL2Error(after.mean, truthMoved), 0.6 * relativeL2Error(after.mean, truth));
   EXPECT_LT(relativeL2Error(after.mean, truthMoved), 1.2 * errorDone);
+
+  // Paused (the window shows the points), nothing is sampled for a new view; resumed, it is.
+  view.setPaused(true);
+  view.setCamera(cam);
+  EXPECT_FALSE(view.waitFor(1, 1.0));
+  EXPECT_EQ(view.snapshot().version, after.version);
+  view.setPaused(false);
+  ASSERT_TRUE(view.waitFor(32, 60));
+  EXPECT_LT(relativeL2Error(view.snapshot().mean, truth), 1.2 * errorDone);
 }

@@ -35,6 +35,10 @@ class MethodView {
   bool buildPending() const { return pending_; }
   const std::string& methodName() const { return settings_.method; }
   bool progressive() const { return progressive_ != nullptr; }
+  // Whether the window shows the method: a progressive view shown no more stops sampling.
+  void setShown(bool shown) {
+    if (progressive_) progressive_->setPaused(!shown);
+  }
 
   // Draws the view into the window (framebuffer 0) at fbw x fbh.
   void draw(const gi::SceneCamera& camera, int fbw, int fbh);

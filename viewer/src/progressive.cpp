@@ -66,6 +66,16 @@ void ProgressiveView::setDivisor(int divisor) {
   changed_.notify_all();
 }
 
+void ProgressiveView::setPaused(bool paused) {
+  {
+    std::lock_guard lock(mutex_);
+    if (paused == paused_) return;
+    paused_ = paused;
+    ++generation_;  // the batch in flight stops
+  }
+  changed_.notify_all();
+}
+
 ProgressiveView::Snapshot ProgressiveView::snapshot() const {
   std::lock_guard lock(mutex_);
   return published_;
@@ -102,8 +112,10 @@ void ProgressiveView::run() {
   bool failed = false;
   while (!stop_) {
     const uint64_t g = generation_.load();
-    if (!hasCamera_ || (failed && g == accumulating) || (g == accumulating && spp >= maxSpp_)) {
-      changed_.wait(lock, [&] { return stop_ || (hasCamera_ && generation_.load() != g); });
+    if (!hasCamera_ || paused_ || (failed && g == accumulating) ||
+        (g == accumulating && spp >= maxSpp_)) {
+      changed_.wait(lock,
+                    [&] { return stop_ || (hasCamera_ && !paused_ && generation_.load() != g); });
       continue;
     }
     // A camera at rest at a reduced resolution: once the coarse mean holds 16 samples and a finer

@@ -488,6 +488,7 @@ bool Viewer::step() {
   streaming::FrameStats st{};
   if (streamer_) st = streamer_->update(cam.view(fbw, fbh));
   DrawTimings timings;
+  if (methods_) methods_->setShown(showMethod_);
   if (methods_ && showMethod_) {
     methods_->draw(sceneCam, fbw, fbh);
   } else {

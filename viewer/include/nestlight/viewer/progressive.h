@@ -34,6 +34,9 @@ class ProgressiveView {
   // Pixels per accumulated pixel along each axis: 0 picks it (the smallest power of two that
   // keeps one sample per pixel under a quarter of a second, as measured), else 1, 2, 4 or 8.
   void setDivisor(int divisor);
+  // Paused (the window shows something else), the worker leaves the cores alone; resumed, it
+  // starts the accumulation again.
+  void setPaused(bool paused);
 
   struct Snapshot {
     gi::HdrImage mean;  // empty before the first batch completes
@@ -63,7 +66,7 @@ class ProgressiveView {
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
   gi::SceneCamera camera_;
-  bool hasCamera_ = false;
+  bool hasCamera_ = false, paused_ = false;
   std::atomic<bool> stop_{false};
   int divisorSetting_ = 0;
   std::atomic<uint64_t> generation_{0};  // camera or divisor changes; a batch of an old one stops
