@@ -62,7 +62,7 @@ void applySceneScanOptions(const CLI::App& cmd, const std::string& file,
   auto given = [&](const char* o) { return cmd.count(o) > 0; };
   std::vector<std::string> notForScenes;
   for (const char* o :
-       {"--camera", "--view", "--colour", "--layer", "--exposure", "--fixed-point-size", "--edl",
+       {"--camera", "--view", "--colour", "--layer", "--fixed-point-size", "--edl",
         "--upload-budget", "--spacing-pixels", "--loaders", "--path", "--stats", "--wait-complete"})
     if (given(o)) notForScenes.push_back(o);
   if (!notForScenes.empty()) {
@@ -73,6 +73,8 @@ void applySceneScanOptions(const CLI::App& cmd, const std::string& file,
                 "from the file "
                 "(docs/SCENE.md); they are options of octree renders");
   }
+  // The PNG's exposure: wins over the scene's output.exposure and the automatic one.
+  if (given("--exposure")) sc.exposure = double(job.settings.exposureStops);
   nlohmann::json p;
   if (given("--point-budget"))
     p["point_budget"] = double(parseCount(text.pointBudget, "--point-budget"));
@@ -141,8 +143,14 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
       "lighting is off unless --edl is given");
   cmd->add_option("--layer", job.colourLayer, "The colour layer --colour hdr draws")
       ->capture_default_str();
-  cmd->add_option("--exposure", job.settings.exposureStops,
-                  "Exposure in stops: colour times 2^stops (HDR highlights lie above 1)")
+  cmd->add_option(
+         "--exposure", job.settings.exposureStops,
+         "Exposure in stops: colour times 2^stops before the PNG's clamp and sRGB curve. Scenes: "
+         "the PNG only (the EXR stays linear and unscaled); given, it wins over the scene's "
+         "output.exposure, and without either the PNG is exposed automatically: the 99th "
+         "percentile of the lit pixels' luminance (finite, above black, Rec. 709) lands at 0.8, "
+         "just below white (docs/SCENE.md). Octrees: 0 by default, no automatic exposure (scan "
+         "colours are display colours already); with --colour hdr the EXR too is times 2^stops")
       ->capture_default_str()
       ->check(CLI::Range(-64.0, 64.0));
   cmd->add_option(

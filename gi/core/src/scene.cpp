@@ -416,7 +416,10 @@ Scene parseScene(const json& j, const std::filesystem::path& file) {
     o.expectObject({"exr", "png", "exposure"});
     if (o.has("exr")) s.output.exr = resolvePath(o.at("exr"), file);
     if (o.has("png")) s.output.png = resolvePath(o.at("png"), file);
-    if (o.has("exposure")) s.output.exposure = o.at("exposure").number(-64, 64);
+    if (o.has("exposure")) {
+      s.output.exposure = o.at("exposure").number(-64, 64);
+      s.output.exposureSet = true;
+    }
   }
   if (s.octrees.empty() && s.meshes.empty()) root.fail("a scene needs at least one octree or mesh");
   return s;

@@ -68,6 +68,10 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
   fs::create_directories(fs::absolute(scene.output.exr).parent_path());
   MethodFrame r;
   fs::path exr;
+  // The PNG's exposure: --exposure, else the scene's output.exposure, else automatic from the
+  // first frame, kept for the rest so that a camera path's images do not flicker. The EXR is the
+  // method's linear image as it is, whatever the exposure.
+  std::optional<PngExposure> pngExposure;
   for (size_t f = 0; f < cameras.size(); ++f) {
     if (!ov.quiet && cameras.size() > 1)
       std::fprintf(stderr, "render: frame %zu of %zu\n", f + 1, cameras.size());
@@ -79,14 +83,24 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
     attrs["nestlight:scene"] = fs::absolute(file).string();
     exr = numbered(scene.output.exr, f);
     writeExr(exr.string(), r.image, attrs);
-    if (!scene.output.png.empty())
-      writeToneMappedPng(numbered(scene.output.png, f).string(), r.image, scene.output.exposure);
+    if (!scene.output.png.empty()) {
+      if (!pngExposure) {
+        pngExposure = choosePngExposure(
+            r.image, ov.exposure,
+            scene.output.exposureSet ? std::optional<double>(scene.output.exposure) : std::nullopt);
+        if (!ov.quiet)
+          std::printf("render: PNG exposure %s%s\n", pngExposure->description.c_str(),
+                      cameras.size() > 1 ? ", every frame" : "");
+      }
+      writeToneMappedPng(numbered(scene.output.png, f).string(), r.image, pngExposure->stops);
+    }
   }
   SceneRenderReport rep;
   rep.exr = exr;
   rep.frames = int(cameras.size());
   rep.result = std::move(r);
   rep.loadSeconds = loadSeconds;
+  if (pngExposure) rep.pngExposure = pngExposure->stops;
   rep.scene = std::move(scene);
   if (!ov.quiet) std::printf("render: wrote %s: %s\n", rep.exr.c_str(), rep.result.summary.c_str());
   return rep;

@@ -91,7 +91,9 @@ struct GiSettings {
 struct SceneOutput {
   std::filesystem::path exr;  // linear HDR
   std::filesystem::path png;  // tone-mapped, optional
-  double exposure = 0;        // stops, for the PNG
+  double exposure = 0;        // stops, for the PNG, when exposureSet
+  bool exposureSet = false;   // the file gives output.exposure; else the PNG's is automatic
+                              // (gi/tone_map.h choosePngExposure; the viewer starts at 0)
 };
 
 // How `nestlight view scene.json` draws the scene's scans (the real-time point rendering; the

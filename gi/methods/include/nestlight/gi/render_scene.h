@@ -20,8 +20,9 @@ struct SceneRenderOverrides {
   std::optional<int> bounces, spp;
   std::optional<double> targetError, timeLimit;
   std::optional<uint64_t> seed;
-  nlohmann::json parameters;     // merged into the scene's gi.parameters (method options)
-  std::filesystem::path output;  // .exr; empty: the scene's output
+  std::optional<double> exposure;  // the PNG's stops (--exposure): wins over the scene file's
+  nlohmann::json parameters;       // merged into the scene's gi.parameters (method options)
+  std::filesystem::path output;    // .exr; empty: the scene's output
   bool quiet = false;
   bool still = false;  // ignore the scene's camera path: one image from its camera
 };
@@ -31,7 +32,8 @@ struct SceneRenderReport {
   MethodFrame result;         // the last frame's
   std::filesystem::path exr;  // the last frame's
   int frames = 1;
-  double loadSeconds = 0;  // reading the scene and making the method
+  double loadSeconds = 0;             // reading the scene and making the method
+  std::optional<double> pngExposure;  // the stops the PNG was written with (none: no PNG)
 };
 
 // Loads `file`, applies `overrides`, renders every frame (the camera, or each frame of the

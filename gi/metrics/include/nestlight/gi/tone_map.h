@@ -9,6 +9,7 @@
 // HDR metrics are the ones that still see them.
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "nestlight/gi/hdr_image.h"
@@ -28,5 +29,36 @@ HdrImage toneMap(const HdrImage& linear, double exposureStops);
 
 // toneMap then writePng: what renders write beside their EXR.
 void writeToneMappedPng(const std::string& path, const HdrImage& linear, double exposureStops);
+
+// Automatic exposure of scene PNGs (docs/SCENE.md, "PNG exposure"): the stops that put the
+// kAutoExposurePercentile of the image's luminance (Rec. 709 weights) at kAutoExposureWhite, just
+// below white. Only finite pixels with luminance above 0 count: NaN and infinite pixels are no
+// brightness, and a scan or object seen against a black background must not be exposed for the
+// background. The 99th percentile keeps the brightest 1% of those pixels free to clip (a visible
+// lamp, the sun's specular highlight) while everything lit, a sunlit plinth included, stays below
+// white; aimed at 0.8 linear (sRGB 0.91, 8-bit 231) rather than 1, a warm or coloured pixel of that
+// luminance keeps its largest channel unclipped up to 1.25 times its luminance. A dim room is
+// brightened by the same rule (its brightest walls land at 0.8). No counted pixel (all black, all
+// non-finite): 0 stops. The result is clamped to the range --exposure and output.exposure accept.
+inline constexpr double kAutoExposurePercentile = 0.99;
+inline constexpr double kAutoExposureWhite = 0.8;
+inline constexpr double kExposureLimit = 64;  // |stops| that --exposure and output.exposure take
+
+struct AutoExposure {
+  double stops = 0;
+  double luminance = 0;  // the percentile's luminance (0 when no pixel counted)
+  size_t pixels = 0;     // the finite pixels with luminance above 0 that were counted
+};
+AutoExposure autoExposure(const HdrImage& linear);
+
+// The exposure a scene's PNG is written with: the command line's if given, else the scene file's
+// output.exposure, else autoExposure of `linear`. `description` says which and why, for the log
+// ("+1.30 EV (auto: the lit pixels' 99th luminance percentile, 0.325, put at 0.8)").
+struct PngExposure {
+  double stops = 0;
+  std::string description;
+};
+PngExposure choosePngExposure(const HdrImage& linear, std::optional<double> commandLine,
+                              std::optional<double> sceneFile);
 
 }  // namespace nestlight::gi
