@@ -91,6 +91,36 @@ TEST(Spacing, IndicesSelectTheSetAndDegenerateSetsAreUnknown) {
   EXPECT_EQ(medianNeighbourSpacing(xyz.data(), nullptr, 0), 0.0);
 }
 
+// Stray returns in bunches (the two "points" above the Takanawa lion are 4 and 6 returns within
+// 1 cm, 0.4 m apart, in a node of little else): each bunch's own density counts, not the distance
+// to the next bunch, which sized them as discs 65 pixels wide (issue 30).
+TEST(Spacing, BunchedStrayReturnsMeasureTheirBunchNotTheGapBetween) {
+  std::vector<std::array<uint32_t, 3>> pts;
+  for (uint32_t b = 0; b < 20; ++b)
+    for (uint32_t k = 0; k < 4; ++k)  // 4 returns 2 units apart, bunches 1000 units apart
+      pts.push_back({1000 * (b % 5) + 2 * (k & 1), 1000 * (b / 5) + 2 * (k >> 1), 7});
+  const auto xyz = sortedPlane(pts);
+  const double s = medianNeighbourSpacing(xyz.data(), nullptr, pts.size());
+  // Without the rule: the 6th neighbour is the next bunch, 1000 sqrt(pi / 6) = 724. With it: the
+  // bunch's own, its 3rd neighbour (the square's diagonal, 2 sqrt(2)) giving sqrt(8 pi / 3) = 2.9.
+  EXPECT_NEAR(s, std::sqrt(8 * M_PI / 3), 1e-9);
+}
+
+// Points scattered at random on a plane (a 2D Poisson process of density 1/100, spacing 10): the
+// bunch rule applies to about 1% of queries, so the median stays the k-th-neighbour one's: pi r_6^2
+// density follows Gamma(6, 1), median 5.67, so the estimate's median is sqrt(5.67 / 6) = 0.97 of
+// the spacing; the window's missed neighbours add a few percent. Within [0.9, 1.1] x 10.
+TEST(Spacing, RandomPlaneKeepsItsDensityUnderTheBunchCap) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<uint32_t> u(0, 1999);
+  std::vector<std::array<uint32_t, 3>> pts;
+  for (int i = 0; i < 40000; ++i) pts.push_back({u(rng), u(rng), 7});  // 4e6 / 4e4 = 100 per point
+  const auto xyz = sortedPlane(pts);
+  const double s = medianNeighbourSpacing(xyz.data(), nullptr, pts.size(), 4096);
+  EXPECT_GT(s, 9.0);
+  EXPECT_LT(s, 11.0);
+}
+
 TEST(Spacing, OneByteCodeKeepsTheRatioWithinHalfAStep) {
   const double step = std::exp2(1.0 / 16);
   for (double ratio = 1.0 / 200; ratio < 200; ratio *= 1.37) {
