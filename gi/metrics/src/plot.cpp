@@ -301,6 +301,13 @@ Chart makeChart(const std::vector<PlotSeries>& series, bool logX, bool logY) {
   return c;
 }
 
+// The centre of a line of text under the plot, moved inward where it would run off the chart.
+double centredX(const Chart& c, const std::string& text, double size) {
+  const double w = textWidth(text, size), mid = c.left + kPlotW / 2;
+  if (mid + w / 2 > c.layout.width - 5) return std::max(c.layout.width - w / 2 - 5, w / 2 + 5);
+  return std::max(mid, w / 2 + 5);
+}
+
 std::string svgText(double x, double y, const std::string& anchor, const std::string& body,
                     const std::string& attrs = "") {
   return "<text " + attrs + (attrs.empty() ? "" : " ") + "x=\"" + num(x) + "\" y=\"" + num(y) +
@@ -389,10 +396,10 @@ std::string svgPlot(const std::string& title, const std::string& xLabel, const s
     << "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\" font-size=\"12\">\n";
   o << "<rect x=\"0\" y=\"0\" width=\"" << num(L.width) << "\" height=\"" << num(L.height)
     << "\" fill=\"white\"/>\n";
-  o << svgText(c.left + kPlotW / 2, c.top - 20, "middle", xmlEscape(title),
+  o << svgText(centredX(c, title, kTitleFontSize), c.top - 20, "middle", xmlEscape(title),
                "class=\"title\" font-size=\"15\"");
   svgAxes(o, c);
-  o << svgText(c.left + kPlotW / 2, c.bottom + 45, "middle", xmlEscape(xLabel),
+  o << svgText(centredX(c, xLabel, kFontSize), c.bottom + 45, "middle", xmlEscape(xLabel),
                "class=\"axis-label\"");
   o << "<text class=\"axis-label\" transform=\"translate(" << num(c.left - 58) << ","
     << num(c.top + kPlotH / 2) << ") rotate(-90)\" text-anchor=\"middle\">" << xmlEscape(yLabel)
@@ -586,9 +593,11 @@ void writePngPlot(const std::string& path, const std::string& title, const std::
   const PlotLayout& L = c.layout;
   Canvas cv(int(L.width), int(L.height));
   const auto black = Canvas::rgb("#000000"), white = Canvas::rgb("#ffffff");
-  cv.textAnchored(c.left + kPlotW / 2, c.top - 20, title, kTitleFontSize, black, "middle");
+  cv.textAnchored(centredX(c, title, kTitleFontSize), c.top - 20, title, kTitleFontSize, black,
+                  "middle");
   pngAxes(cv, c);
-  cv.textAnchored(c.left + kPlotW / 2, c.bottom + 45, xLabel, kFontSize, black, "middle");
+  cv.textAnchored(centredX(c, xLabel, kFontSize), c.bottom + 45, xLabel, kFontSize, black,
+                  "middle");
   cv.text(c.left - 58 + 4, c.top + kPlotH / 2 + textWidth(yLabel, kFontSize) / 2, yLabel, kFontSize,
           black, true);
   for (size_t s = 0; s < series.size(); ++s) {

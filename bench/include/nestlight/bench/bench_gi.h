@@ -71,9 +71,10 @@ struct BenchGiReport {
 // of the straight line fitted to log error against log time over the last kTimeFitPoints points,
 // made only where that slope is at most kTimeFitSlope (the error clearly falls with time: a Monte
 // Carlo estimator's is -1/2) and the time it gives is at most kTimeFitReach times the longest
-// measured; otherwise not reached (ms empty). One rule for every method.
+// measured, and only where those points span at least kTimeFitSpan in time (over a narrower span
+// the slope is the times' noise); otherwise not reached (ms empty). One rule for every method.
 constexpr int kTimeFitPoints = 3;
-constexpr double kTimeFitSlope = -0.2, kTimeFitReach = 10;
+constexpr double kTimeFitSlope = -0.2, kTimeFitReach = 10, kTimeFitSpan = 2;
 struct ErrorPoint {
   double ms = 0, error = 0;
   std::string label;  // "32 spp"
