@@ -108,11 +108,10 @@ void applySceneScanOptions(const CLI::App& cmd, const std::string& file,
 
 void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
                       std::shared_ptr<RenderOptionText> text) {
-  cmd->add_option("--width", job.width,
-                  "Image width in pixels (up to 16384; large images render in tiles)")
+  cmd->add_option("--width", job.width, "Width in pixels of the image (view: of the window)")
       ->capture_default_str()
       ->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", job.height, "Image height in pixels")
+  cmd->add_option("--height", job.height, "Height in pixels of the image (view: of the window)")
       ->capture_default_str()
       ->check(CLI::Range(1, 16384));
   cmd->add_option(
@@ -197,23 +196,48 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
   if (job.settings.rasteriser == frame::Rasteriser::Compute) job.settings.fixedPointSize = 1;
 }
 
-void addRender(CLI::App& app, int& exitCode) {
-  auto* cmd = app.add_subcommand(
-      "render",
+namespace {
+
+// `render --help`: every registered method, with the choices of the flags it declares, from the
+// registry (gi/methods), so that the list cannot fall behind it.
+std::string renderDescription() {
+  std::string s =
       "Render an octree headless to PNG or EXR (EGL: an NVIDIA GPU, or Mesa's llvmpipe on the "
       "CPU).\n"
       "A still by default; --path renders a camera path (JSON keyframes) to an image sequence.\n"
       "Example: nestlight render scan.octree -o view.png --width 1920 --height 1080 "
       "--wait-complete\n\n"
-      "Given a scene file (.json, docs/SCENE.md) it renders the scene's GI instead, with the "
-      "method the\n"
-      "scene or --method names, to linear EXR: the Embree path-traced reference (progressive "
-      "until\n"
-      "--target-error, --time-limit or --spp), `direct` (its first bounce), or `raster` "
-      "(real-time\n"
-      "direct light with shadow maps through the GI frame, on the GPU or Mesa's llvmpipe).\n"
-      "Example: nestlight render cornell/scene.json --target-error 0.01 -o cornell.exr\n"
-      "         nestlight render cornell/scene.json --method raster -o cornell-raster.exr");
+      "Given a scene file (.json, docs/SCENE.md) it renders the scene's GI instead, to linear EXR "
+      "(and the\n"
+      "scene's PNG), with the method the scene's gi.method or --method names:\n";
+  size_t width = 0;
+  for (const auto& m : gi::registeredMethods()) width = std::max(width, m.name.size());
+  for (const auto& m : gi::registeredMethods()) {
+    s += "  " + m.name + std::string(width + 2 - m.name.size(), ' ') + m.summary;
+    for (const auto& p : m.parameters)
+      if (p.flag && p.type == gi::ParameterType::Choice && !p.choices.empty()) {
+        std::string dashed = p.name;
+        std::replace(dashed.begin(), dashed.end(), '_', '-');
+        std::string choices;
+        for (const auto& c : p.choices) choices += (choices.empty() ? "" : "|") + c;
+        s += "; --" + dashed + " " + choices;
+      }
+    s += "\n";
+  }
+  s += "The path tracer (reference, direct) refines until --target-error, --time-limit or the "
+       "sample cap\n"
+       "(--spp, else the scene's gi.samples_per_pixel, default 256), whichever comes first; a "
+       "--time-limit\n"
+       "given without --spp lifts the cap, so that the time limit decides.\n"
+       "Example: nestlight render cornell/scene.json --target-error 0.01 -o cornell.exr\n"
+       "         nestlight render cornell/scene.json --method raster -o cornell-raster.exr";
+  return s;
+}
+
+}  // namespace
+
+void addRender(CLI::App& app, int& exitCode) {
+  auto* cmd = app.add_subcommand("render", renderDescription());
   auto job = std::make_shared<viewer::RenderJob>();
   auto text = std::make_shared<RenderOptionText>();
   auto octree = std::make_shared<std::string>();
@@ -234,6 +258,9 @@ void addRender(CLI::App& app, int& exitCode) {
   cmd->add_option("--timeout", job->timeoutSeconds, "Seconds to wait for a complete cut")
       ->capture_default_str();
   addRenderOptions(cmd, *job, text);
+  cmd->get_option("--width")->description(
+      "Image width in pixels, up to 16384 (large octree images render in tiles)");
+  cmd->get_option("--height")->description("Image height in pixels, up to 16384");
   auto sc = std::make_shared<gi::SceneRenderOverrides>();
   auto methodText = std::make_shared<SceneMethodText>();
   std::string group = "Scene files";
@@ -243,7 +270,9 @@ void addRender(CLI::App& app, int& exitCode) {
          "Scenes: stop when the estimated relative error (two half-sample images) falls below")
       ->check(CLI::Range(0.0, 1.0))
       ->group(group);
-  cmd->add_option("--time-limit", sc->timeLimit, "Scenes: stop after this many seconds")
+  cmd->add_option("--time-limit", sc->timeLimit,
+                  "Scenes: stop after this many seconds; without --spp the scene's sample cap "
+                  "(gi.samples_per_pixel) is lifted, so the time limit decides")
       ->check(CLI::Range(0.0, 1e7))
       ->group(group);
   addSceneBounceOptions(cmd, *sc, group);
@@ -253,7 +282,8 @@ void addRender(CLI::App& app, int& exitCode) {
                 "a sequence's frame follows each image's time)")
       ->group(group);
   cmd->callback([=, &exitCode]() {
-    if (fs::path(*octree).extension() == ".json") {
+    requireExists(*octree);  // a typo names the near file in its folder
+    if (fs::path(*octree).extension() == ".json" && !fs::is_directory(*octree)) {
       if (cmd->count("--width")) sc->width = job->width;
       if (cmd->count("--height")) sc->height = job->height;
       if (cmd->count("--fov")) {
@@ -265,11 +295,28 @@ void addRender(CLI::App& app, int& exitCode) {
       applySceneScanOptions(*cmd, *octree, *job, *text, *sc);
       makeOutputFolder(job->output);
       sc->output = job->output;
-      gi::renderSceneFile(*octree, *sc);
+      // An explicit --time-limit wins over the scene's sample cap: without --spp the cap is
+      // lifted to the most --spp takes, and the time limit (or --target-error) stops the render.
+      const bool capLifted = sc->timeLimit && *sc->timeLimit > 0 && !sc->spp;  // 0: no limit
+      if (capLifted) sc->spp = 1 << 24;
+      const gi::SceneRenderReport rep = gi::renderSceneFile(*octree, *sc);
+      // Say when a limit given on the command line did not decide.
+      const bool timeLimit = sc->timeLimit && *sc->timeLimit > 0;
+      if (rep.result.stopReason == "samples" &&
+          (timeLimit || (sc->targetError && *sc->targetError > 0)))
+        std::printf("render: the sample cap stopped it at %d spp (%s), before %s did\n",
+                    rep.result.samplesPerPixel,
+                    capLifted ? "the most --spp takes"
+                    : sc->spp
+                        ? "--spp"
+                        : "the scene's gi.samples_per_pixel, default 256; raise it with --spp",
+                    timeLimit ? "--time-limit" : "--target-error");
       exitCode = 0;
       return;
     }
-    if (job->output.empty()) throw Error("render: -o/--output is required for an octree");
+    requireOctreeFolder(*octree, "render");
+    if (job->output.empty())
+      throw Error("render: -o/--output is required for an octree (a PNG or EXR file)");
     makeOutputFolder(job->output);
     job->octree = *octree;
     applyRenderOptions(*job, *text);
