@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "nestlight/gi/methods.h"
+#include "nestlight/gi/scene_overrides.h"
 #include "nestlight/gi/tone_map.h"
 #include "nestlight/octree/error.h"
 
@@ -18,20 +19,7 @@ SceneRenderReport renderSceneFile(const fs::path& file, const SceneRenderOverrid
   Scene scene = loadScene(file);
   // The file's own method must exist even when --method replaces it, as any field of the file.
   checkSceneMethod(scene);
-  if (ov.width) scene.camera.width = *ov.width;
-  if (ov.height) scene.camera.height = *ov.height;
-  if (ov.fov) scene.camera.fovYDegrees = *ov.fov;
-  if (ov.method) scene.gi.method = *ov.method;
-  if (ov.mode) scene.gi.mode = *ov.mode;
-  if (ov.bounces) scene.gi.maxBounces = *ov.bounces;
-  if (ov.spp) scene.gi.samplesPerPixel = *ov.spp;
-  if (ov.targetError) scene.gi.targetRelativeError = *ov.targetError;
-  if (ov.timeLimit) scene.gi.timeLimitSeconds = *ov.timeLimit;
-  if (ov.seed) scene.gi.seed = *ov.seed;
-  if (ov.parameters.is_object() && !ov.parameters.empty()) {
-    if (!scene.gi.parameters.is_object()) scene.gi.parameters = nlohmann::json::object();
-    scene.gi.parameters.update(ov.parameters);
-  }
+  applySceneOverrides(scene, ov);
   if (!ov.output.empty()) scene.output.exr = ov.output;
   if (scene.output.exr.empty())
     scene.output.exr = file.parent_path() / (file.stem().string() + ".exr");
