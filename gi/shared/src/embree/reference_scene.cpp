@@ -1,6 +1,9 @@
 // Scan points as oriented discs, meshes as triangles, in one Embree 3 scene (Embree's
-// RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT and RTC_GEOMETRY_TYPE_TRIANGLE). Disc radii follow local
-// point spacing (issue 4; the surfel view of points of paper 004 section 6).
+// RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT and RTC_GEOMETRY_TYPE_TRIANGLE). Disc radii close the
+// sampled surface whatever its sampling (issue 30): each disc covers its Voronoi cell in its
+// tangent plane, the hole-free condition of splats (Zwicker, Pfister, van Baar, Gross, "Surface
+// Splatting", 2001) met exactly rather than by a spacing estimate; the surfel view of points
+// is paper 004 section 6.
 #include "nestlight/gi/shared/reference_scene.h"
 
 #include <embree3/rtcore.h>
@@ -10,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <nanoflann.hpp>
+#include <numbers>
 #include <tuple>
 
 #include "nestlight/gi/scan_colour.h"
@@ -21,20 +25,44 @@ namespace {
 
 constexpr size_t kBytesPerDisc =
     sizeof(glm::vec4) + sizeof(glm::vec3) + sizeof(Rgb) + sizeof(float);
+// Neighbours of a disc's thickness, and the spacing that sizes a disc where its cell is open.
 constexpr int kRadiusNeighbours = 8;
-// Discs must close an evenly sampled surface, or rays leak through it and the reference renders
-// too dark (a Poisson-disk sampled room: 1 to 3% darker than the same room as meshes, up to 8% on
-// walls in albedo mode). A maximal Poisson-disk sample with minimum distance r leaves no surface
-// point farther than r from a sample (else one more sample would fit), so discs of radius r close
-// it. Its density is about 0.7 / r^2 (random close packing of the r/2 exclusion discs covers
-// ~55% of the plane), so 9 samples (a point and its 8 neighbours) fill a disc of radius
-// sqrt(9 / (0.7 pi)) r = 2.0 r on average and half the 8th-neighbour distance is about r; it is
-// less where the neighbours crowd, and gaps open there. On a square grid of step a the covering
-// radius is a / sqrt(2), exactly half the 8th-neighbour distance. A factor of 1.5 on half the
-// 8th-neighbour distance leaves a margin of 50% over both (the test
-// `Reference.ClosedPoissonSampledBoxLeaksNoRay` checks the Poisson-disk case and that the old
-// factor leaks); the cost is overlap, which discs that share a plane do not see.
+// Neighbours that bound a disc's cell: a Poisson-process sample's cells have 6 sides on average
+// and up to about 12, which 24 neighbours hold except at a surface's boundary; a cell not
+// settled with 24 is cut again with 48, then 96 (stripes of a scanner whose lines lie far
+// apart).
+constexpr size_t kCellNeighbours[] = {24, 48, 96};
+// A neighbour belongs to the disc's surface when its normal is within 30 degrees of the disc's
+// and it lies within 30 degrees of the disc's plane (seen from the disc's centre): 1 mm of scan
+// noise at 1 cm spacing tilts neighbours by 8 degrees, a crease or a thin wall's far side by 90.
+constexpr float kSameSurfaceCos = 0.8660254f, kSameSurfaceTan = 0.57735027f;
+// Discs cover their cells with a margin: three discs meet at a point at each cell corner (float
+// rounding decides there), and where neighbours sit off a disc's plane (scan noise, curvature)
+// a ray crossing the seam between two discs at different heights passes under one and over the
+// other unless they overlap by the height difference times the tangent of its angle. So the
+// radius is 1.2 x the cell's plus 3 x the RMS height of the disc's neighbours over its plane
+// (0 on a noiseless plane). Closed boxes of 60,000 random or striped points with 1 and 2 mm of
+// noise at 1 cm spacing leak none of 200,000 rays with these; with 1.25 x the cell and no
+// height term, 1 to 9 rays at 70 to 82 degrees of incidence leaked (docs/SCENE.md).
+constexpr float kCellMargin = 1.2f, kHeightMargin = 3.0f;
+// Where a disc's cell stays open (a surface's boundary, with nothing beyond to bound it), its
+// radius is at least the rule of earlier versions: 1.5 times half the distance to the 8th
+// nearest point, which closes evenly sampled surfaces (Poisson disk: no surface point farther
+// than r from a sample, density about 0.7 / r^2, so half the 8th-neighbour distance is about
+// r; a square grid of step a: covering radius a / sqrt(2), exactly half the 8th-neighbour
+// distance; 1.5 leaves 50% over both).
 constexpr float kDiscCoverage = 1.5f;
+// No disc is wider than this many times the median 8th-neighbour distance of its neighbours: a
+// cell at a surface's boundary reaches about 1.1 of them (the crease or the open rule), a
+// scanner's stripes 3 times as far apart as their points about 0.5.
+constexpr float kOutlierCap = 3.0f;
+// A cell reaching farther than this many times the 8th-neighbour distance is open there: a
+// boundary's Voronoi cell runs off the surface between two nearly parallel bisectors. Scanner
+// stripes 20 times as far apart as their points still close within it.
+constexpr float kOpenBound = 3.0f;
+// A crease does not bound a surface whose own points lie beyond it by more than this many
+// 8th-neighbour distances (noise moves a surface's points across a crease that is not square).
+constexpr float kCreaseTolerance = 0.1f;
 
 struct DiscAdaptor {
   const std::vector<glm::vec4>& d;
@@ -70,6 +98,141 @@ DistinctPositions distinctPositions(const std::vector<glm::vec4>& discs) {
   return d;
 }
 
+// A convex polygon in a disc's tangent plane, relative to the disc's centre.
+using Polygon = std::vector<glm::vec2>;
+
+// Keeps the part of `poly` where dot(a, x) <= c (one step of Sutherland-Hodgman).
+void clipHalfPlane(Polygon& poly, Polygon& scratch, glm::vec2 a, float c) {
+  scratch.clear();
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const glm::vec2 p = poly[i], q = poly[(i + 1) % n];
+    const float fp = glm::dot(a, p) - c, fq = glm::dot(a, q) - c;
+    if (fp <= 0) scratch.push_back(p);
+    if ((fp <= 0) != (fq <= 0)) scratch.push_back(p + (fp / (fp - fq)) * (q - p));
+  }
+  poly.swap(scratch);
+}
+
+// How far a cell reaches: its farthest vertex that two constraints make, and whether it still
+// touches the bounding square of half-side `bound` it was cut from (open there).
+struct CellExtent {
+  float radius = 0;
+  bool open = false;
+  float heightRms = 0;
+};
+CellExtent extentOf(const Polygon& poly, float bound) {
+  CellExtent e;
+  for (const glm::vec2& v : poly) {
+    if (std::max(std::abs(v.x), std::abs(v.y)) >= 0.999f * bound)
+      e.open = true;
+    else
+      e.radius = std::max(e.radius, glm::length(v));
+  }
+  return e;
+}
+
+// The unit normal of the plane that fits `count` points best (least squares): the eigenvector
+// of their covariance with the smallest eigenvalue, from the closed-form eigenvalues of a
+// symmetric 3 x 3 matrix (Smith, "Eigenvalues of a symmetric 3 x 3 matrix", 1961) and the
+// largest cross product of two rows of C - lambda I. For scans without normals.
+glm::vec3 fittedNormal(const glm::vec4* const* pts, size_t count) {
+  glm::dvec3 mean(0.0);
+  for (size_t i = 0; i < count; ++i) mean += glm::dvec3(*pts[i]);
+  mean /= double(std::max<size_t>(count, 1));
+  glm::dmat3 c(0.0);
+  for (size_t i = 0; i < count; ++i) {
+    const glm::dvec3 d = glm::dvec3(*pts[i]) - mean;
+    c += glm::outerProduct(d, d);
+  }
+  const double q = (c[0][0] + c[1][1] + c[2][2]) / 3;
+  const double p1 = c[0][1] * c[0][1] + c[0][2] * c[0][2] + c[1][2] * c[1][2];
+  const double p2 = (c[0][0] - q) * (c[0][0] - q) + (c[1][1] - q) * (c[1][1] - q) +
+                    (c[2][2] - q) * (c[2][2] - q) + 2 * p1;
+  const double p = std::sqrt(p2 / 6);
+  if (!(p > 0)) return glm::vec3(0, 0, 1);  // isotropic or a single point: no plane
+  const glm::dmat3 b = (c - q * glm::dmat3(1.0)) / p;
+  const double phi = std::acos(std::clamp(glm::determinant(b) / 2, -1.0, 1.0)) / 3;
+  const double smallest = q + 2 * p * std::cos(phi + 2 * std::numbers::pi / 3);
+  const glm::dmat3 m = c - smallest * glm::dmat3(1.0);
+  glm::dvec3 best(0.0);
+  for (int i = 0; i < 3; ++i) {
+    const glm::dvec3 x = glm::cross(m[i], m[(i + 1) % 3]);  // rows: m is symmetric
+    if (glm::dot(x, x) > glm::dot(best, best)) best = x;
+  }
+  const double len = glm::length(best);
+  return len > 0 ? glm::vec3(best / len) : glm::vec3(0, 0, 1);
+}
+
+// Neighbours of one disc, nearest first (its own position among them).
+struct Neighbourhood {
+  std::vector<uint32_t> idx;
+  std::vector<float> d2;
+  size_t found = 0;
+};
+
+// A neighbour's plane where it meets a disc's tangent plane: g(x) = g0 + a . x, the disc's
+// centre on the side g0 gives.
+struct Crease {
+  glm::vec2 a;
+  float g0;
+};
+struct CellScratch {
+  Polygon poly, clipped;
+  std::vector<glm::vec2> same;
+  std::vector<Crease> creases;
+};
+
+// The extent of disc i's cell (see assignDiscRadii): its Voronoi cell among the neighbours on
+// its own surface, in its tangent plane, cut by other surfaces' planes where its surface ends
+// (a crease). Cut from a square of half-side `bound`: where it still reaches that, it is open.
+CellExtent cellOf(size_t i, const std::vector<glm::vec4>& pos, const std::vector<glm::vec3>& normal,
+                  bool oriented, const Neighbourhood& nb, float bound, float tolerance,
+                  CellScratch& cs) {
+  const glm::vec3 p(pos[i]), n = normal[i];
+  const Frame f = Frame::fromNormal(n);
+  cs.same.clear();
+  cs.creases.clear();
+  double h2 = 0;
+  for (size_t k = 0; k < nb.found; ++k) {
+    const uint32_t j = nb.idx[k];
+    if (j == i) continue;
+    const glm::vec3 w = glm::vec3(pos[j]) - p, nj = normal[j];
+    const glm::vec2 u(glm::dot(w, f.s), glm::dot(w, f.t));
+    const float c = glm::dot(nj, n);
+    if ((oriented ? c : std::abs(c)) >= kSameSurfaceCos &&
+        std::abs(glm::dot(w, n)) <= kSameSurfaceTan * glm::length(u)) {
+      cs.same.push_back(u);
+      h2 += double(glm::dot(w, n)) * glm::dot(w, n);
+      continue;
+    }
+    const Crease crease{{glm::dot(nj, f.s), glm::dot(nj, f.t)}, -glm::dot(nj, w)};
+    // Planes within 30 degrees of this one meet it far away or not at all; a plane through
+    // the centre leaves no side to keep.
+    if (glm::length(crease.a) >= 0.5f && std::abs(crease.g0) > 1e-3f * tolerance)
+      cs.creases.push_back(crease);
+  }
+  Polygon& poly = cs.poly;
+  poly = {{-bound, -bound}, {bound, -bound}, {bound, bound}, {-bound, bound}};
+  // The perpendicular bisector of i and j in the tangent plane: x . u <= |u|^2 / 2.
+  for (const glm::vec2& u : cs.same) clipHalfPlane(poly, cs.clipped, u, 0.5f * glm::dot(u, u));
+  // Another surface's plane bounds the cell where this surface ends there (a box's edge): the
+  // disc must reach that line, or rays pass the crease; a Voronoi cell at a boundary otherwise
+  // runs far off the surface. A plane that the surface's own points cross (a pole standing on
+  // a floor: the floor goes on beyond the pole's tangent plane) bounds nothing.
+  for (const Crease& c : cs.creases) {
+    const float side = c.g0 > 0 ? 1.0f : -1.0f;
+    bool crossed = false;
+    for (const glm::vec2& u : cs.same) crossed |= side * (c.g0 + glm::dot(c.a, u)) < -tolerance;
+    // Shifted out by the tolerance: each noisy neighbour puts the crease elsewhere, and the
+    // nearest of them would cut the disc short of the surface's edge.
+    if (!crossed) clipHalfPlane(poly, cs.clipped, -side * c.a, side * c.g0 + tolerance);
+  }
+  CellExtent e = extentOf(poly, bound);
+  e.heightRms = cs.same.empty() ? 0.0f : float(std::sqrt(h2 / cs.same.size()));
+  return e;
+}
+
 void embreeError(void*, RTCError code, const char* message) {
   // Embree reports misuse here; it is a programming error (bad buffers), never user input.
   nestlight::checkFailed(
@@ -79,34 +242,89 @@ void embreeError(void*, RTCError code, const char* message) {
 
 }  // namespace
 
-void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale,
-                     const std::vector<float>* maxRadius) {
-  NL_CHECK(!maxRadius || maxRadius->size() == discs.size());
+void assignDiscRadii(std::vector<glm::vec4>& discs, const std::vector<glm::vec3>& normals,
+                     float radiusScale) {
+  NL_CHECK(normals.empty() || normals.size() == discs.size());
   if (discs.empty()) return;
   // Spacing is measured between distinct positions: coincident copies (merged scans, a
   // million duplicates) neither shrink their neighbours' discs nor degrade the k-d tree.
   DistinctPositions distinct = distinctPositions(discs);
   std::vector<glm::vec4>& unique = distinct.unique;
-  const std::vector<uint32_t>& uniqueOf = distinct.uniqueOf;
   DiscAdaptor adaptor{unique};
   DiscTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
   tree.buildIndex();
-  const size_t k = std::min<size_t>(kRadiusNeighbours + 1, unique.size());  // +1: the point itself
+  const bool oriented = !normals.empty();
+  std::vector<glm::vec3> normal(unique.size());
+  // Pass 1: each position's normal (the scan's, or a plane fitted to its neighbours) and the
+  // distance to its 8th nearest neighbour.
+  std::vector<float> d8(unique.size(), 0.0f);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, unique.size(), 4096),
                     [&](const tbb::blocked_range<size_t>& r) {
+                      const size_t k = std::min<size_t>(2 * kRadiusNeighbours + 1, unique.size());
                       std::vector<uint32_t> idx(k);
                       std::vector<float> d2(k);
+                      std::vector<const glm::vec4*> pts(k);
                       for (size_t i = r.begin(); i < r.end(); ++i) {
                         float q[3] = {unique[i].x, unique[i].y, unique[i].z};
-                        size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
-                        float dk = found > 1 ? std::sqrt(d2[found - 1]) : 0.0f;
-                        unique[i].w = radiusScale * kDiscCoverage * 0.5f * dk;
+                        const size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
+                        const size_t k8 = std::min<size_t>(kRadiusNeighbours, found - 1);
+                        d8[i] = std::sqrt(d2[k8]);
+                        if (oriented) {
+                          const glm::vec3 n = normals[distinct.firstOf[i]];
+                          const float len = glm::length(n);
+                          normal[i] = len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 0, 1);
+                        } else {
+                          for (size_t j = 0; j < found; ++j) pts[j] = &unique[idx[j]];
+                          normal[i] = fittedNormal(pts.data(), found);
+                        }
                       }
                     });
-  for (size_t i = 0; i < discs.size(); ++i) {
-    discs[i].w = unique[uniqueOf[i]].w;
-    if (maxRadius) discs[i].w = std::min(discs[i].w, (*maxRadius)[i]);
-  }
+  // Pass 2: each position's cell.
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, unique.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+        Neighbourhood nb;
+        nb.idx.resize(kCellNeighbours[2] + 1);
+        nb.d2.resize(kCellNeighbours[2] + 1);
+        CellScratch cs;
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          float q[3] = {unique[i].x, unique[i].y, unique[i].z};
+          float radius = 0;
+          for (size_t want : kCellNeighbours) {
+            const size_t k = std::min(want + 1, unique.size());  // +1: the point itself
+            nb.found = tree.knnSearch(q, k, nb.idx.data(), nb.d2.data());
+            if (nb.found < 2 || !(d8[i] > 0)) break;  // alone, or among copies: no extent
+            const CellExtent cell = cellOf(i, unique, normal, oriented, nb, kOpenBound * d8[i],
+                                           kCreaseTolerance * d8[i], cs);
+            radius = kCellMargin * cell.radius + kHeightMargin * cell.heightRms;
+            // Where the cell stays open (a surface's boundary with nothing beyond), the disc is
+            // at least as wide as the rule for evenly sampled surfaces.
+            if (cell.open) radius = std::max(radius, kDiscCoverage * 0.5f * d8[i]);
+            // A neighbour farther than the last one found cuts only cells that reach beyond
+            // half its distance in the plane (30 degrees off it at most): a cell that does is
+            // cut again with more neighbours (an uncut cell only overestimates).
+            const bool settled = !cell.open && cell.radius <= 0.5f * kSameSurfaceCos *
+                                                                  std::sqrt(nb.d2[nb.found - 1]);
+            if (settled || k == unique.size()) break;
+          }
+          // An outlier (a point in the air, a flying pixel) has an open cell sized by its far
+          // neighbours: a disc no wider than a few of its neighbours' spacings keeps it from
+          // becoming metres wide.
+          float nbSpacing[kRadiusNeighbours];
+          size_t m = 0;
+          for (size_t k = 1; k < nb.found && m < kRadiusNeighbours; ++k)
+            nbSpacing[m++] = d8[nb.idx[k]];
+          if (m > 0) {
+            std::nth_element(nbSpacing, nbSpacing + m / 2, nbSpacing + m);
+            radius = std::min(radius, kOutlierCap * nbSpacing[m / 2]);
+          }
+          unique[i].w = radiusScale * radius;
+        }
+      });
+  for (size_t i = 0; i < discs.size(); ++i) discs[i].w = unique[distinct.uniqueOf[i]].w;
+}
+
+void assignDiscRadii(DiscCloud& cloud, float radiusScale) {
+  assignDiscRadii(cloud.discs, cloud.normals, radiusScale);
 }
 
 void assignDiscThickness(DiscCloud& c) {
@@ -200,23 +418,16 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin,
   cloud.colour.reserve(total);
   if (normal >= 0) cloud.normals.reserve(total);
   const glm::dvec3 base = glm::dvec3(meta.offset.x, meta.offset.y, meta.offset.z) - origin;
-  std::vector<float> maxRadius;
-  maxRadius.reserve(total);
   for (auto& [key, e] : nodes) {
     if (int(key.level) > level || e.numPoints == 0) continue;
     PointBuffer pts = reader.readNode(key);
     colours.linear(key, pts, rgb);
     stats.nodes++;
-    // A node's sample keeps points at least its spacing apart, so it leaves no surface point
-    // farther than that from a sample: no disc needs to be wider (with the same margin).
-    const float nodeSpacing =
-        float(meta.levelSpacing(key.level)) * octree.radiusScale * kDiscCoverage;
     for (size_t i = 0; i < pts.size(); ++i) {
       const uint32_t* p = &pts.pos[3 * i];
       glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) *
                                     glm::dvec3(meta.scale.x, meta.scale.y, meta.scale.z);
       cloud.discs.emplace_back(glm::vec3(local), 0.0f);
-      maxRadius.push_back(nodeSpacing);
       const uint8_t* a = pts.attrsOf(i);
       cloud.colour.push_back(Rgb(rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]) * octree.colourScale);
       if (normal >= 0) {
@@ -227,7 +438,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin,
       }
     }
   }
-  assignDiscRadii(cloud.discs, octree.radiusScale, &maxRadius);
+  assignDiscRadii(cloud, octree.radiusScale);
   stats.points = cloud.discs.size();
   stats.bytes = stats.points * kBytesPerDisc;
   for (const auto& d : cloud.discs) stats.zeroRadius += d.w <= 0;

@@ -35,19 +35,23 @@ struct DiscCloudStats {
 };
 
 // Loads whole levels of an octree, from the root down to `octree.maxLevel` or the deepest level
-// whose points fit in `octree.memoryBudget` (40 bytes per point here). A disc's radius follows
-// the local spacing of the loaded points: with d8 the distance to the 8th nearest distinct
-// neighbour, r = radiusScale * 1.5 * d8 / 2, which closes an evenly sampled surface (Poisson
-// disk or grid: the derivation is at kDiscCoverage in reference_scene.cpp); discs then cover
-// about 4.5 times the surface on average.
+// whose points fit in `octree.memoryBudget` (40 bytes per point here), and sizes the discs by
+// assignDiscRadii with `octree.radiusScale`.
 DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin,
                         DiscCloudStats* stats = nullptr);
-// Radii for `discs` from their neighbours as above (positions in .xyz; writes .w). With
-// `maxRadius` (one per disc), a radius never exceeds it: the loader passes the spacing of the
-// node a point came from, so an isolated outlier, whose neighbours are far, does not become a
-// disc metres wide.
-void assignDiscRadii(std::vector<glm::vec4>& discs, float radiusScale,
-                     const std::vector<float>* maxRadius = nullptr);
+// Radii that close the sampled surface for rays whatever its sampling (random, striped, even):
+// each disc covers its cell, the part of its tangent plane nearer to it than to any neighbour
+// on the same surface (normals and directions within 30 degrees of its plane), cut where its
+// surface meets another (a crease) by that surface's planes; radius 1.2 x the cell's plus 3 x
+// the RMS height of the neighbours over its plane (scan noise). Where the cell stays open (a
+// surface's boundary), the disc is at least 1.5 x half the distance to the 8th nearest point
+// (the rule of earlier versions); no disc exceeds 3 x the median 8th-neighbour distance of its
+// neighbours (outliers). Writes .w of `discs` (positions in .xyz), times `radiusScale`;
+// `normals` empty: planes fitted to the 16 nearest points. docs/SCENE.md gives the reasons and
+// the measurements.
+void assignDiscRadii(std::vector<glm::vec4>& discs, const std::vector<glm::vec3>& normals,
+                     float radiusScale);
+void assignDiscRadii(DiscCloud& cloud, float radiusScale);
 // The thickness of a scanned surface at each oriented disc (radii assigned): over its 8 nearest
 // neighbours that lie on the same surface (normals within 30 degrees), the height each one's
 // disc reaches above (and below) this disc's plane, h = |n . (p_j - p_i)| + r_j sin(angle), as
@@ -62,7 +66,8 @@ void assignDiscThickness(DiscCloud& cloud);
 // that images cached under an older model (`bench gi`'s reference) are not taken for current.
 // 2: disc radius 1.5 x half the 8th-neighbour distance (evenly sampled surfaces closed).
 // 3: rays leave a disc from its surface's thickness (no self-shadowing by scan noise).
-inline constexpr int kReferenceModelVersion = 3;
+// 4: discs cover their tangent-plane Voronoi cells (unevenly sampled surfaces closed).
+inline constexpr int kReferenceModelVersion = 4;
 
 struct SurfaceHit {
   enum class Kind { None, Disc, Triangle } kind = Kind::None;
