@@ -86,6 +86,10 @@ void expectClosed(BoxSampling how) {
     EXPECT_EQ(escaped, 0) << "noise " << noise;
   }
   EXPECT_GT(escapingRays(sampledBox(how, 60000, 5, 0.0f), 0.8f, 200000, 7), 0);
+  // A scan without normals: planes fitted to the neighbours, discs facing each ray.
+  nestlight::gi::DiscCloud noNormals = sampledBox(how, 60000, 5, 0.001f);
+  noNormals.normals.clear();
+  EXPECT_EQ(escapingRays(std::move(noNormals), 1.0f, 200000, 7), 0) << "without normals";
 }
 
 }  // namespace

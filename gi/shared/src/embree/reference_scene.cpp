@@ -258,27 +258,29 @@ void assignDiscRadii(std::vector<glm::vec4>& discs, const std::vector<glm::vec3>
   // Pass 1: each position's normal (the scan's, or a plane fitted to its neighbours) and the
   // distance to its 8th nearest neighbour.
   std::vector<float> d8(unique.size(), 0.0f);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, unique.size(), 4096),
-                    [&](const tbb::blocked_range<size_t>& r) {
-                      const size_t k = std::min<size_t>(2 * kRadiusNeighbours + 1, unique.size());
-                      std::vector<uint32_t> idx(k);
-                      std::vector<float> d2(k);
-                      std::vector<const glm::vec4*> pts(k);
-                      for (size_t i = r.begin(); i < r.end(); ++i) {
-                        float q[3] = {unique[i].x, unique[i].y, unique[i].z};
-                        const size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
-                        const size_t k8 = std::min<size_t>(kRadiusNeighbours, found - 1);
-                        d8[i] = std::sqrt(d2[k8]);
-                        if (oriented) {
-                          const glm::vec3 n = normals[distinct.firstOf[i]];
-                          const float len = glm::length(n);
-                          normal[i] = len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 0, 1);
-                        } else {
-                          for (size_t j = 0; j < found; ++j) pts[j] = &unique[idx[j]];
-                          normal[i] = fittedNormal(pts.data(), found);
-                        }
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, unique.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        // 8 neighbours for the spacing, 16 for a plane (+1: the point itself).
+        const size_t k =
+            std::min<size_t>((oriented ? 1 : 2) * kRadiusNeighbours + 1, unique.size());
+        std::vector<uint32_t> idx(k);
+        std::vector<float> d2(k);
+        std::vector<const glm::vec4*> pts(k);
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          float q[3] = {unique[i].x, unique[i].y, unique[i].z};
+          const size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
+          const size_t k8 = std::min<size_t>(kRadiusNeighbours, found - 1);
+          d8[i] = std::sqrt(d2[k8]);
+          if (oriented) {
+            const glm::vec3 n = normals[distinct.firstOf[i]];
+            const float len = glm::length(n);
+            normal[i] = len > 0 && std::isfinite(len) ? n / len : glm::vec3(0, 0, 1);
+          } else {
+            for (size_t j = 0; j < found; ++j) pts[j] = &unique[idx[j]];
+            normal[i] = fittedNormal(pts.data(), found);
+          }
+        }
+      });
   // Pass 2: each position's cell.
   tbb::parallel_for(
       tbb::blocked_range<size_t>(0, unique.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
