@@ -843,7 +843,9 @@ void checkUpgrade(bool laz, int first, int second) {
   auto r = openReader(path);
   EXPECT_EQ(r->header().details["point_format"], 6);
   EXPECT_EQ(r->header().details["version"], "1.4");
-  if (laz) EXPECT_EQ(r->header().details["laszip"]["compressor"], "layered chunked");
+  if (laz) {
+    EXPECT_EQ(r->header().details["laszip"]["compressor"], "layered chunked");
+  }
   EXPECT_EQ(r->header().details["global_encoding"].get<int>() & 16, 16);  // WKT
   EXPECT_EQ(r->header().crs["wkt"], "PROJCS[\"x\"]");
   const AllPoints out = readLasPoints(*r);
