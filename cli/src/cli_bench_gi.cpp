@@ -89,9 +89,10 @@ void addBenchGi(CLI::App& app, int& exitCode) {
       ->check(CLI::IsMember({"albedo", "radiance_cache"}));
   auto noVariants = std::make_shared<bool>(false);
   cmd->add_flag("--no-variants", *noVariants,
-                "Only each method as the scene sets it (default: also its variants: vpl at 1 to 3 "
-                "bounces and with exact "
-                "visibility, the ablation that separates the ISMs' error from the VPLs')");
+                "Only each method as the scene sets it (default: also the variants each method "
+                "declares in the registry, e.g. vpl at 1 to 3 bounces and with exact visibility, "
+                "pbgi's traversals, ibl's estimators; those that cannot apply to the scene are "
+                "skipped with their reason)");
   cmd->callback([=, &exitCode]() {
     bench::BenchGiOptions opt = *o;
     opt.variants = !*noVariants;

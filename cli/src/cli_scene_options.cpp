@@ -70,7 +70,9 @@ void addSceneMethodOptions(CLI::App* cmd, gi::SceneRenderOverrides& sc, SceneMet
                   "Scenes: KEY=VALUE sets gi.parameters.KEY (VALUE as JSON, else a string); the "
                   "method checks it as it checks the scene file's (docs/SCENE.md lists them)")
       ->group(group);
-  cmd->add_option("--spp", sc.spp, "Scenes: samples per pixel at most")
+  cmd->add_option("--spp", sc.spp,
+                  "Scenes: samples per pixel at most (render: without it a --time-limit lifts the "
+                  "scene's cap)")
       ->check(CLI::Range(1, 1 << 24))
       ->group(group);
 }
