@@ -56,6 +56,12 @@ constexpr float kDiscCoverage = 1.5f;
 // cell at a surface's boundary reaches about 1.1 of them (the crease or the open rule), a
 // scanner's stripes 3 times as far apart as their points about 0.5.
 constexpr float kOutlierCap = 3.0f;
+// For the cap a neighbour's 8th-neighbour distance is read as the octree's spacing is measured
+// (octree/src/spacing.cpp): a point whose 8th neighbour lies more than this many times farther
+// than its 2nd implies (on a surface r_k grows as sqrt(k)) sits in a bunch of a few returns (a
+// bird, a flying pixel pair beside another), and its bunch's own neighbours measure it. Without
+// it two bunches of 4 and 6 returns 0.4 m apart made each other's discs up to 0.49 m wide.
+constexpr float kBunchFactor = 3.0f;
 // A cell reaching farther than this many times the 8th-neighbour distance is open there: a
 // boundary's Voronoi cell runs off the surface between two nearly parallel bisectors. Scanner
 // stripes 20 times as far apart as their points still close within it.
@@ -257,7 +263,7 @@ void assignDiscRadii(std::vector<glm::vec4>& discs, const std::vector<glm::vec3>
   std::vector<glm::vec3> normal(unique.size());
   // Pass 1: each position's normal (the scan's, or a plane fitted to its neighbours) and the
   // distance to its 8th nearest neighbour.
-  std::vector<float> d8(unique.size(), 0.0f);
+  std::vector<float> d8(unique.size(), 0.0f), d8Bunch(unique.size(), 0.0f);
   tbb::parallel_for(
       tbb::blocked_range<size_t>(0, unique.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
         // 8 neighbours for the spacing, 16 for a plane (+1: the point itself).
@@ -271,6 +277,18 @@ void assignDiscRadii(std::vector<glm::vec4>& discs, const std::vector<glm::vec3>
           const size_t found = tree.knnSearch(q, k, idx.data(), d2.data());
           const size_t k8 = std::min<size_t>(kRadiusNeighbours, found - 1);
           d8[i] = std::sqrt(d2[k8]);
+          d8Bunch[i] = d8[i];
+          // r_j sqrt(8 / j): the j-th neighbour's distance scaled to the 8th's on a surface.
+          const auto scaled = [&](size_t j) {
+            return std::sqrt(d2[j] * float(kRadiusNeighbours) / float(j));
+          };
+          if (k8 >= 2 && d8[i] > kBunchFactor * scaled(2)) {
+            const float bound = kBunchFactor * scaled(2);
+            float bunch = 0;
+            for (size_t j = 2; j <= std::min<size_t>(5, k8); ++j)
+              if (scaled(j) <= bound) bunch = std::max(bunch, scaled(j));
+            d8Bunch[i] = bunch;
+          }
           if (oriented) {
             const glm::vec3 n = normals[distinct.firstOf[i]];
             const float len = glm::length(n);
@@ -314,7 +332,7 @@ void assignDiscRadii(std::vector<glm::vec4>& discs, const std::vector<glm::vec3>
           float nbSpacing[kRadiusNeighbours];
           size_t m = 0;
           for (size_t k = 1; k < nb.found && m < kRadiusNeighbours; ++k)
-            nbSpacing[m++] = d8[nb.idx[k]];
+            nbSpacing[m++] = d8Bunch[nb.idx[k]];
           if (m > 0) {
             std::nth_element(nbSpacing, nbSpacing + m / 2, nbSpacing + m);
             radius = std::min(radius, kOutlierCap * nbSpacing[m / 2]);

@@ -67,7 +67,8 @@ void assignDiscThickness(DiscCloud& cloud);
 // 2: disc radius 1.5 x half the 8th-neighbour distance (evenly sampled surfaces closed).
 // 3: rays leave a disc from its surface's thickness (no self-shadowing by scan noise).
 // 4: discs cover their tangent-plane Voronoi cells (unevenly sampled surfaces closed).
-inline constexpr int kReferenceModelVersion = 4;
+// 5: the outlier cap reads bunches of a few returns by their own spacing.
+inline constexpr int kReferenceModelVersion = 5;
 
 struct SurfaceHit {
   enum class Kind { None, Disc, Triangle } kind = Kind::None;
