@@ -6,21 +6,9 @@
 #include <cmath>
 
 #include "nestlight/gi/methods.h"
+#include "nestlight/gi/metrics.h"
 #include "nestlight/gi/scene.h"
 #include "test_support.h"
-
-namespace {
-
-double relativeL2Error(const nestlight::gi::HdrImage& a, const nestlight::gi::HdrImage& b) {
-  double d = 0, n = 0;
-  for (size_t i = 0; i < b.rgb.size(); ++i) {
-    d += double(a.rgb[i] - b.rgb[i]) * (a.rgb[i] - b.rgb[i]);
-    n += double(b.rgb[i]) * b.rgb[i];
-  }
-  return std::sqrt(d / n);
-}
-
-}  // namespace
 
 TEST(Progressive, ConvergesRestartsWhenTheCameraMovesAndPauses) {
   nestlight::test::TempDir tmp;
@@ -51,8 +39,8 @@ TEST(Progressive, ConvergesRestartsWhenTheCameraMovesAndPauses) {
   EXPECT_EQ(done.samplesPerPixel, 32);
   EXPECT_TRUE(done.complete);
   EXPECT_EQ(done.mean.width, 48);  // small enough for full resolution
-  const double errorFirst = relativeL2Error(first.mean, truth);
-  const double errorDone = relativeL2Error(done.mean, truth);
+  const double errorFirst = nestlight::gi::relativeL2(first.mean, truth);
+  const double errorDone = nestlight::gi::relativeL2(done.mean, truth);
   // A mean of n samples has 1 / sqrt(n) of one sample's error: at least twice the samples must
   // show (a factor sqrt(2) expected; 0.85 keeps clear of the noise of the estimate itself).
   if (first.samplesPerPixel <= 16) {
@@ -66,8 +54,9 @@ TEST(Progressive, ConvergesRestartsWhenTheCameraMovesAndPauses) {
   ASSERT_TRUE(view.waitFor(32, 60));
   const nestlight::viewer::ProgressiveView::Snapshot after = view.snapshot();
   EXPECT_EQ(after.samplesPerPixel, 32);
-  EXPECT_LT(relativeL2Error(after.mean, truthMoved), 0.6 * relativeL2Error(after.mean, truth));
-  EXPECT_LT(relativeL2Error(after.mean, truthMoved), 1.2 * errorDone);
+  EXPECT_LT(nestlight::gi::relativeL2(after.mean, truthMoved),
+            0.6 * nestlight::gi::relativeL2(after.mean, truth));
+  EXPECT_LT(nestlight::gi::relativeL2(after.mean, truthMoved), 1.2 * errorDone);
 
   // Paused (the window shows the points), nothing is sampled for a new view; resumed, it is.
   view.setPaused(true);
@@ -76,5 +65,5 @@ TEST(Progressive, ConvergesRestartsWhenTheCameraMovesAndPauses) {
   EXPECT_EQ(view.snapshot().version, after.version);
   view.setPaused(false);
   ASSERT_TRUE(view.waitFor(32, 60));
-  EXPECT_LT(relativeL2Error(view.snapshot().mean, truth), 1.2 * errorDone);
+  EXPECT_LT(nestlight::gi::relativeL2(view.snapshot().mean, truth), 1.2 * errorDone);
 }

@@ -8,6 +8,7 @@
 
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/methods.h"
+#include "nestlight/gi/metrics.h"
 #include "nestlight/viewer/image.h"
 #include "test_support.h"
 
@@ -61,16 +62,6 @@ double meanAbsoluteDifference(const nestlight::viewer::Image& a,
     for (int x = 0; x < a.width; ++x)
       for (int c = 0; c < 3; ++c) sum += std::fabs(a.at(x, y)[c] - b.at(x, y)[c]);
   return sum / (3.0 * a.width * a.height);
-}
-
-// ||a - b|| / ||b|| over all pixels and channels (linear radiance).
-double relativeError(const nestlight::gi::HdrImage& a, const nestlight::gi::HdrImage& b) {
-  double d = 0, n = 0;
-  for (size_t i = 0; i < b.rgb.size(); ++i) {
-    d += double(a.rgb[i] - b.rgb[i]) * (a.rgb[i] - b.rgb[i]);
-    n += double(b.rgb[i]) * b.rgb[i];
-  }
-  return std::sqrt(d / n);
 }
 
 }  // namespace
@@ -151,7 +142,7 @@ TEST(WindowMethods, ProgressiveReferenceConvergesAsItAccumulates) {
     ASSERT_EQ(img.width, truth.width);
     ASSERT_EQ(img.height, truth.height);
     EXPECT_EQ(attrs["nestlight:samples"], std::to_string(spp[i]));
-    error[i] = relativeError(img, truth);
+    error[i] = nestlight::gi::relativeL2(img, truth);
   }
   // Expected ratio 4 (less the truth's own noise, 1/16 of the 32-sample image's variance); 0.5
   // leaves room for the camera's round trip through the orbit controller (sub-pixel).
