@@ -13,6 +13,7 @@
 #include "nestlight/viewer/headless.h"
 #include "nestlight/viewer/image.h"
 #include "test_support.h"
+#include "viewer/small_scan.h"
 
 using namespace nestlight;
 using namespace nestlight::viewer;
@@ -39,34 +40,12 @@ fs::path gridPlane(const test::TempDir& tmp, const std::string& name, int n, dou
         f << line;
       }
   }
-  ReadOptions ro;
-  ro.columns = "x,y,z,r,g,b";
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openReader(xyz.string(), ro));
-  BuildOptions o;
-  o.output = tmp.path() / (name + ".octree");
-  o.progress = ProgressMode::Quiet;
-  o.maxNodePoints = maxNodePoints;
-  buildOctree(std::move(r), o);
-  return o.output;
+  return test_scan::convertXyz(xyz, name, maxNodePoints);
 }
 
 RenderJob job(const fs::path& octree, const std::string& out, const glm::dvec3& eye,
               const glm::dvec3& target) {
-  RenderJob j;
-  j.octree = octree;
-  j.output = out;
-  j.width = 128;
-  j.height = 96;
-  j.waitComplete = true;
-  j.timeoutSeconds = 60;
-  j.quiet = true;
-  j.settings.edlStrength = 0;  // covered pixels are exactly those not of the background colour
-  Camera c;
-  c.eye = eye;
-  c.target = target;
-  j.camera = c;
-  return j;
+  return test_scan::headlessJob(octree, out, eye, target);
 }
 
 bool isBackground(const float* p, const glm::vec3& bg) {

@@ -15,6 +15,7 @@
 #include "nestlight/viewer/headless.h"
 #include "nestlight/viewer/image.h"
 #include "test_support.h"
+#include "viewer/small_scan.h"
 
 namespace nestlight::viewer {
 namespace {
@@ -47,34 +48,14 @@ fs::path planeWithStrays(const test::TempDir& tmp) {
       }
     f << "0.9 0.9 0.95 255 0 0\n";
   }
-  ReadOptions ro;
-  ro.columns = "x,y,z,r,g,b";
-  std::vector<std::unique_ptr<PointReader>> r;
-  r.push_back(openReader(xyz.string(), ro));
-  BuildOptions o;
-  o.output = tmp.path() / "strays.octree";
-  o.progress = ProgressMode::Quiet;
-  o.maxNodePoints = 2000;  // several levels: the strays sit in coarse nodes of little else
-  buildOctree(std::move(r), o);
-  return o.output;
+  // Several levels: the strays sit in coarse nodes of little else.
+  return test_scan::convertXyz(xyz, "strays", 2000);
 }
 
 RenderJob strayJob(const fs::path& octree, const std::string& out, const glm::dvec3& eye,
                    const glm::dvec3& target) {
-  RenderJob j;
-  j.octree = octree;
-  j.output = out;
-  j.width = 128;
-  j.height = 96;
-  j.waitComplete = true;
-  j.timeoutSeconds = 60;
-  j.quiet = true;
-  j.settings.edlStrength = 0;
+  RenderJob j = test_scan::headlessJob(octree, out, eye, target);
   j.settings.splatting = frame::Splatting::Basic;  // each pixel one splat's colour, unblended
-  frame::Camera c;
-  c.eye = eye;
-  c.target = target;
-  j.camera = c;
   return j;
 }
 
