@@ -14,6 +14,19 @@ namespace nestlight::gi {
 
 namespace {
 
+// A path-traced image as a method's frame (its image moved out of `r`).
+MethodFrame frameOf(ReferenceResult& r) {
+  MethodFrame f;
+  f.image = std::move(r.image);
+  f.seconds = r.seconds;
+  f.samplesPerPixel = r.samplesPerPixel;
+  f.relativeError = r.relativeError;
+  f.rays = r.rays;
+  f.nonFiniteSamples = r.nonFiniteSamples;
+  f.stopReason = r.stopReason;
+  return f;
+}
+
 void logLine(const std::string& line) {
   std::fprintf(stderr, "  %s\n", line.c_str());
 }
@@ -47,14 +60,7 @@ class ReferenceMethod : public Method {
       scene_->setEnvironment(environment_->at(camera.time));
     }
     ReferenceResult r = renderReference(*scene_, camera, options_, progress);
-    MethodFrame f;
-    f.image = std::move(r.image);
-    f.seconds = r.seconds;
-    f.samplesPerPixel = r.samplesPerPixel;
-    f.relativeError = r.relativeError;
-    f.rays = r.rays;
-    f.nonFiniteSamples = r.nonFiniteSamples;
-    f.stopReason = r.stopReason;
+    MethodFrame f = frameOf(r);
     f.attributes = {{"nestlight:samples", std::to_string(r.samplesPerPixel)},
                     {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
                     {"nestlight:seconds", std::to_string(r.seconds)},
@@ -90,14 +96,7 @@ class ReferenceMethod : public Method {
     if (environment_) scene_->setEnvironment(environment_->at(camera.time));
     ReferenceResult r = renderReference(
         *scene_, camera, o, [&](const ReferenceProgress&) { return !keepGoing || keepGoing(); });
-    MethodFrame f;
-    f.image = std::move(r.image);
-    f.seconds = r.seconds;
-    f.samplesPerPixel = r.samplesPerPixel;
-    f.rays = r.rays;
-    f.nonFiniteSamples = r.nonFiniteSamples;
-    f.stopReason = r.stopReason;
-    return f;
+    return frameOf(r);
   }
 
   uint64_t discs() const { return scene_->discs(); }
