@@ -255,7 +255,7 @@ SceneOctree parseOctree(Field o, const std::filesystem::path& file) {
 SceneMesh parseMesh(Field o, size_t i, const std::filesystem::path& file,
                     const std::map<std::string, uint32_t>& materialIndex,
                     std::vector<Material>& materials) {
-  o.expectObject({"path", "transform", "material", "surfels"});
+  o.expectObject({"path", "transform", "material", "surfels", "inserted"});
   SceneMesh mesh;
   if (!o.has("path")) o.fail("missing \"path\" (a .ply or .obj file)");
   mesh.path = resolvePath(o.at("path"), file);
@@ -284,6 +284,7 @@ SceneMesh parseMesh(Field o, size_t i, const std::filesystem::path& file,
                               : SurfelSampling::AreaUniform;
     if (sf.has("count")) mesh.surfelCount = size_t(sf.at("count").integer(1, 100'000'000));
   }
+  if (o.has("inserted")) mesh.inserted = o.at("inserted").boolean();
   return mesh;
 }
 

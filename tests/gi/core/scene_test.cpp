@@ -93,6 +93,34 @@ TEST(Scene, FullSceneParses) {
   EXPECT_NEAR(l.y, 0.002f, 1e-6);
 }
 
+// Differential rendering tells inserted objects from meshes of the captured scene (a lamp that
+// was there when the scan was made); a mesh that says nothing is an inserted object.
+TEST(Scene, MeshesAreInsertedUnlessMarkedCaptured) {
+  json j = minimal();
+  j["meshes"].push_back(json{{"path", "panel.obj"}, {"inserted", false}});
+  j["meshes"].push_back(json{{"path", "statue.obj"}, {"inserted", true}});
+  const Scene s = parseScene(j, "/scenes/test.json");
+  ASSERT_EQ(s.meshes.size(), 3u);
+  EXPECT_TRUE(s.meshes[0].inserted);  // the default
+  EXPECT_FALSE(s.meshes[1].inserted);
+  EXPECT_TRUE(s.meshes[2].inserted);
+
+  // Only a JSON boolean: "false" as a string or 0 would otherwise read as a truthy or falsy
+  // accident, so each is an error naming the field.
+  for (const json& bad : {json("false"), json(0), json(nullptr), json::array({false})}) {
+    json b = minimal();
+    b["meshes"][0]["inserted"] = bad;
+    try {
+      parseScene(b, "/scenes/test.json");
+      ADD_FAILURE() << "no error for inserted = " << bad.dump();
+    } catch (const Error& e) {
+      EXPECT_EQ(e.position(), "scene.meshes[0].inserted") << bad.dump();
+      EXPECT_NE(std::string(e.what()).find("expected true or false"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(Scene, DisplaySettingsParse) {
   json j = minimal();
   Scene d = parseScene(j, "/scenes/test.json");

@@ -41,6 +41,9 @@ struct SceneMesh {
   uint32_t material = 0;  // index into Scene::materials
   SurfelSampling surfelMethod = SurfelSampling::AreaUniform;
   size_t surfelCount = 20000;
+  // False: the mesh was there when the scan was made (a lamp, a light panel), so differential
+  // rendering counts it as part of the captured scene; only inserted meshes make the difference.
+  bool inserted = true;
 };
 
 enum class LightType { Point, Spot, Directional };
