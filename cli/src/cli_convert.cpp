@@ -124,7 +124,8 @@ void addConvert(CLI::App& app, int& exitCode) {
       "`nestlight info` shows the counts. Progress: each phase's share done and rate, and the\n"
       "ETA of the whole conversion (--progress json: one JSON line at a time, for logs).\n"
       "Normals (--estimate-normals) are fitted to the k nearest neighbours by a closed-form plane\n"
-      "fit and oriented away from the scan's centre (outward: objects and buildings seen from\n"
+      "fit (neighbours more than --normal-depth-limit off a first fit's plane are left out) and\n"
+      "oriented away from the scan's centre (outward: objects and buildings seen from\n"
       "outside), towards it (inward: interiors) or upwards (up: terrain).");
   auto inputs = std::make_shared<std::vector<std::string>>();
   auto opt = std::make_shared<BuildOptions>();
@@ -155,6 +156,14 @@ void addConvert(CLI::App& app, int& exitCode) {
   cmd->add_flag("--estimate-normals", opt->estimateNormals, "Fit normals where the scan has none");
   cmd->add_option("--normal-neighbours", opt->normalNeighbours, "k for normal estimation")
       ->capture_default_str();
+  cmd->add_option("--normal-depth-limit", opt->normalDepthLimit,
+                  "Normal estimation: neighbours whose depth (along a first fit's normal) differs "
+                  "from the point's by more\n"
+                  "than this, in the scan's units, are left out of its plane, so a fit does not "
+                  "straddle a thin wall or\n"
+                  "a step (0: keep all k)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e9));
   cmd->add_option("--normal-orientation", *orient, "outward, inward or up")
       ->check(CLI::IsMember({"outward", "inward", "up"}))
       ->capture_default_str();

@@ -2,6 +2,8 @@
 // nested octree of its subtree built bottom-up (Schütz, Ohrhallinger, Wimmer, "Fast Out-of-Core
 // Octree Generation for Massive Point Clouds", 2020; the nested octree of Wimmer and
 // Scheiblauer, "Instant Points", 2006).
+#include <algorithm>
+
 #include "builder_passes.h"
 
 namespace nestlight::build_passes {
@@ -177,7 +179,12 @@ void Builder::estimateMissingNormals(PointBuffer& pts) const {
   int orient = opt_.normalOrientation == NormalOrientation::Up       ? 2
                : opt_.normalOrientation == NormalOrientation::Inward ? 1
                                                                      : 0;
-  estimateNormals(pts.pos.data(), n, opt_.normalNeighbours, orient, c, normals.data());
+  // The fit works in integer units. Axes of different scales (inputs of different LAS scales)
+  // make that frame anisotropic; the finest scale gives the widest limit, erring towards keeping
+  // neighbours as the fit without the rule does.
+  const double finest = std::min({meta_.scale.x, meta_.scale.y, meta_.scale.z});
+  const double depthLimit = opt_.normalDepthLimit > 0 ? opt_.normalDepthLimit / finest : 0;
+  estimateNormals(pts.pos.data(), n, opt_.normalNeighbours, orient, c, normals.data(), depthLimit);
   const size_t off = layout_.offset(normalIndex_);
   for (size_t i = 0; i < n; ++i) {
     float cur[3];

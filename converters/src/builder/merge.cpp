@@ -100,6 +100,7 @@ void Builder::finishMetadata() {
     meta_.normalEstimation = {
         {"method", "closed-form plane fit (Rohmer et al., section 5)"},
         {"neighbours", opt_.normalNeighbours},
+        {"depth_limit", opt_.normalDepthLimit},
         {"orientation", opt_.normalOrientation == NormalOrientation::Up       ? "up"
                         : opt_.normalOrientation == NormalOrientation::Inward ? "inward"
                                                                               : "outward"},

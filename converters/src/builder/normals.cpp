@@ -6,6 +6,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <nanoflann.hpp>
 
@@ -64,10 +65,44 @@ struct Cloud {
 };
 using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>, Cloud,
                                                  3, size_t>;
+
+// Moves the points of `xyz` that lie within `limit` of `q` along `n` to its front; returns how
+// many.
+size_t keepWithinDepth(double* xyz, size_t count, const double q[3], const float n[3],
+                       double limit) {
+  size_t kept = 0;
+  for (size_t j = 0; j < count; ++j) {
+    double depth = 0;
+    for (int a = 0; a < 3; ++a) depth += (xyz[3 * j + a] - q[a]) * n[a];
+    if (std::abs(depth) > limit) continue;
+    for (int a = 0; a < 3; ++a) xyz[3 * kept + a] = xyz[3 * j + a];
+    ++kept;
+  }
+  return kept;
+}
+
+// Section 5's depth rule on one neighbourhood (`xyz`, nearest first; `normal` holds the fit to all
+// of it, and receives the fit to the neighbours kept). The paper drops the samples whose depth
+// along the view ray differs by more than the limit from that of the sample nearest the pixel.
+// A converted scan has no scanner position, so the reference is the point itself (its own nearest
+// sample) and depth is measured along the first fit's normal, the direction a scanner sees the
+// surface from at best. Across a discontinuity that fit lies between the two surfaces, yet where
+// the point's own surface holds most of the neighbours its normal is near enough to theirs that
+// depth along it tells the surfaces apart (tests/converters/normals_test.cpp: a thin wall).
+// Where its own surface holds about half of them the first fit can lie anywhere (in the wall's
+// plane, even) and the rule cannot help: that needs the scanner's view direction.
+void applyDepthRule(double* xyz, size_t count, const double q[3], double limit, float normal[3]) {
+  const size_t kept = keepWithinDepth(xyz, count, q, normal, limit);
+  if (kept == count) return;  // a smooth surface: nothing dropped
+  float refit[3];
+  // Fewer than three kept, or all in a line: the first fit stands.
+  if (fitPlaneNormal(xyz, kept, refit)) std::copy(refit, refit + 3, normal);
+}
+
 }  // namespace
 
 void estimateNormals(const uint32_t* pos, size_t n, unsigned k, int orientation,
-                     const double centre[3], float* normals) {
+                     const double centre[3], float* normals, double depthLimit) {
   if (n == 0) return;
   Cloud cloud{pos, n};
   Tree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
@@ -84,6 +119,7 @@ void estimateNormals(const uint32_t* pos, size_t n, unsigned k, int orientation,
             for (int a = 0; a < 3; ++a) xyz[3 * j + a] = pos[3 * idx[j] + a];
           float* nrm = normals + 3 * i;
           if (!fitPlaneNormal(xyz.data(), found, nrm)) continue;
+          if (depthLimit > 0) applyDepthRule(xyz.data(), found, q, depthLimit, nrm);
           // A plane fit has no sign. Orient by the scan's shape: statues and buildings seen from
           // outside face away from their centre; interiors face it; terrain faces up.
           double d;

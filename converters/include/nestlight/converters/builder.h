@@ -34,6 +34,9 @@ struct BuildOptions {
   bool dedup = false;    // merge exact duplicates (position and attributes)
   bool estimateNormals = false;
   unsigned normalNeighbours = 16;
+  // Neighbours further than this (world units) from the point along a first fit's normal are
+  // left out of its plane fit (Rohmer et al. 2017, section 5: 0.1 m); 0: every neighbour.
+  double normalDepthLimit = 0.1;
   NormalOrientation normalOrientation = NormalOrientation::Outward;
   bool overwrite = false;
   uint32_t maxNodePoints = 20000;  // leaf size and cap on an inner node's sample
