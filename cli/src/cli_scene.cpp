@@ -19,6 +19,12 @@ void addMakeScene(CLI::App& app, int& exitCode) {
       "sphere\n"
       "  nave     a 40 m nave with two colonnades and a marble statue on a pedestal\n"
       "  object   the synthetic town scan with a gold torus, under a sky and a sun (albedo mode)\n"
+      "  diffrender  differential rendering's ground truth: the cornell room's scan lit by a\n"
+      "           captured emissive ceiling panel (a mesh with \"inserted\": false; with\n"
+      "           --light spot, a spot light instead) and an inserted bronze object on the floor:\n"
+      "           the Stanford bunny where --shared-data has meshes/bunny.ply (copied into DIR),\n"
+      "           else a generated sphere; albedo mode, gi.method diffrender (`nestlight render\n"
+      "           DIR/scene.json --method reference` renders its ground truth)\n"
       "  hdr-room the HDR expansion protocol: a textured room whose true HDR colour is known (the\n"
       "           octree's 'truth' layer), clipped to LDR by an exposure, and an HDR photograph of "
       "it\n"
@@ -29,9 +35,11 @@ void addMakeScene(CLI::App& app, int& exitCode) {
   auto dir = std::make_shared<std::string>();
   auto opt = std::make_shared<TestSceneOptions>();
   auto points = std::make_shared<std::string>("1M");
-  cmd->add_option("kind", *kind, "cornell, nave, object or hdr-room")
+  auto light = std::make_shared<std::string>();
+  auto shared = std::make_shared<std::string>("../shared/data");
+  cmd->add_option("kind", *kind, "cornell, nave, object, diffrender or hdr-room")
       ->required()
-      ->check(CLI::IsMember({"cornell", "nave", "object", "hdr-room"}));
+      ->check(CLI::IsMember({"cornell", "nave", "object", "diffrender", "hdr-room"}));
   cmd->add_option("-o,--output", *dir, "Folder to write (created)")->required();
   cmd->add_option("-n,--points", *points, "Points in the scan (e.g. 200k, 2M)")
       ->capture_default_str();
@@ -47,7 +55,28 @@ void addMakeScene(CLI::App& app, int& exitCode) {
                 "make-scene refuses a folder\n"
                 "whose scene differs from the one it writes, and rebuilds nothing it can reuse)");
   cmd->add_flag("-q,--quiet", opt->quiet, "No progress output");
+  auto* lightOpt =
+      cmd->add_option(
+             "--light", *light,
+             "diffrender: what lights the room, panel (an emissive mesh under the ceiling, "
+             "part of the captured scene)\n"
+             "or spot (a spot light under the ceiling pointing down) [default: panel]")
+          ->check(CLI::IsMember({"panel", "spot"}));
+  auto* sharedOpt =
+      cmd->add_option("--shared-data", *shared,
+                      "diffrender: the shared data folder whose meshes/bunny.ply is the inserted "
+                      "object; without that file\n"
+                      "the object is a generated sphere")
+          ->capture_default_str();
   cmd->callback([=, &exitCode]() {
+    // Options of one kind given to another are mistakes, not silently ignored.
+    if (*kind != "diffrender")
+      for (const auto* given : {lightOpt, sharedOpt})
+        if (given->count() > 0)
+          throw Error(given->get_name() + ": only make-scene diffrender takes it (the " + *kind +
+                      " scene's lights and meshes are fixed)");
+    opt->light = *light == "spot" ? DiffrenderLight::Spot : DiffrenderLight::Panel;
+    opt->sharedData = *shared;
     opt->points = parseCount(*points, "--points");
     if (*kind == "hdr-room") {
       bench::ProtocolOptions po;

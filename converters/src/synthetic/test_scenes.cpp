@@ -115,8 +115,95 @@ void writeBoxObj(const fs::path& path) {
   writeObj(path, m, "unit box [0,1]^3 (nestlight)");
 }
 
+namespace {
+
+using MeshWrites = std::vector<std::function<void()>>;
+
+json cameraJson(std::array<double, 3> eye, std::array<double, 3> target, double fov,
+                const TestSceneOptions& o) {
+  return json{
+      {"eye", eye}, {"target", target}, {"fov", fov}, {"width", o.width}, {"height", o.height}};
+}
+
+// The cornell room's scan: a 4 m room whose recorded colour is its albedo (the ceiling patch,
+// the cornell scene's light, is the brightest).
+void cornellScan(SyntheticSpec& spec) {
+  spec.shape = SyntheticShape::Room;
+  spec.size = 4;
+  spec.noise = 0.001;
+}
+
+// Differential rendering's ground truth (Rohmer, Jendersie, Grosch, "Natural Environment
+// Illumination: Coherent Interactive Augmented Reality for Mobile and non-Mobile Devices", 2017):
+// the captured room and its light are one scene, the object on the floor is what is inserted.
+// The room is rendered in albedo mode, so its light must come from something that emits: the
+// captured panel (a mesh that is not inserted) or a spot light.
+void diffrenderScene(json& scene, SyntheticSpec& spec, MeshWrites& meshWrites, const fs::path& dir,
+                     const TestSceneOptions& o) {
+  cornellScan(spec);
+  // The room's free floor is the corner x, y > 2.2 beyond its two blocks; the object stands at
+  // (2.6, 2.6) (the cornell sphere's place), the light hangs over the room's centre, under the
+  // scan's ceiling patch (z 3.98).
+  const fs::path bunny = o.sharedData.empty() ? fs::path() : o.sharedData / "meshes" / "bunny.ply";
+  json object;
+  if (!bunny.empty() && fs::is_regular_file(bunny)) {
+    meshWrites.push_back([bunny, dir] {
+      // A fresh, writable copy: the shared file may be read-only, and its mode comes with it.
+      fs::remove(dir / "bunny.ply");
+      fs::copy_file(bunny, dir / "bunny.ply");
+      fs::permissions(dir / "bunny.ply", fs::perms::owner_write, fs::perm_options::add);
+    });
+    // The Stanford bunny is y-up in metres, x -0.095..0.061, y 0.033..0.187, z -0.062..0.059:
+    // turned z-up, scaled to 0.62 m tall, turned to show the camera its face in three-quarter
+    // view, its feet on the floor (z 0.033 * 4) and its box centred at (2.6, 2.6).
+    object = {
+        {"path", "bunny.ply"},
+        {"transform",
+         {{"translate", {2.639, 2.688, -0.132}}, {"rotate", {90.0, 0.0, 75.0}}, {"scale", 4.0}}}};
+  } else {
+    meshWrites.push_back([dir] { writeIcosphereObj(dir / "object.obj", 3); });
+    object = {{"path", "object.obj"},
+              {"transform", {{"translate", {2.6, 2.6, 0.3}}, {"scale", 0.3}}}};
+  }
+  object["material"] = "bronze";
+  object["inserted"] = true;
+  scene["materials"] = {{"bronze", {{"type", "lambert"}, {"base_color", {0.7, 0.6, 0.45}}}}};
+  scene["meshes"] = json::array({object});
+  if (o.light == DiffrenderLight::Spot) {
+    // Straight down: the inner cone (30 degrees) covers the object, the outer (60) the floor.
+    scene["lights"] = json::array({json{{"type", "spot"},
+                                        {"position", {2.0, 2.0, 3.9}},
+                                        {"direction", {0.0, 0.0, -1.0}},
+                                        {"intensity", 10.0},
+                                        {"inner_angle", 30.0},
+                                        {"outer_angle", 60.0}}});
+  } else {
+    // A 2 m square panel 5 cm thick: straight down as bright as the spot (radiance x area =
+    // 10 W/sr). Wide and dim rather than small and bright: a path tracer that finds it only by
+    // hitting it converges four times faster than on a 1 m panel of the same power.
+    meshWrites.push_back([dir] { writeBoxObj(dir / "panel.obj"); });
+    scene["materials"]["panel"] = {
+        {"type", "lambert"}, {"base_color", 0.8}, {"emission", {2.5, 2.5, 2.5}}};
+    scene["meshes"].push_back(
+        json{{"path", "panel.obj"},
+             {"transform", {{"translate", {1.0, 1.0, 3.9}}, {"scale", {2.0, 2.0, 0.05}}}},
+             {"material", "panel"},
+             {"inserted", false}});
+  }
+  // From the free corner, down at the object and the floor round it, the blocks behind.
+  scene["camera"] = cameraJson({3.7, 3.7, 1.5}, {2.5, 2.5, 0.25}, 50, o);
+  scene["gi"] = {{"method", "diffrender"},
+                 {"mode", "albedo"},
+                 {"max_bounces", 3},
+                 {"samples_per_pixel", 1024},
+                 {"target_relative_error", 0.01}};
+}
+
+}  // namespace
+
 std::optional<TestSceneKind> parseTestSceneKind(const std::string& name) {
   if (name == "cornell") return TestSceneKind::Cornell;
+  if (name == "diffrender") return TestSceneKind::Diffrender;
   if (name == "nave") return TestSceneKind::Nave;
   if (name == "object") return TestSceneKind::Object;
   return std::nullopt;
@@ -130,13 +217,14 @@ const char* testSceneKindName(TestSceneKind kind) {
       return "nave";
     case TestSceneKind::Object:
       return "object";
+    case TestSceneKind::Diffrender:
+      return "diffrender";
   }
   return "?";
 }
 
 fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneOptions& o) {
-  std::vector<std::function<void()>>
-      meshWrites;  // after the checks below: nothing is touched before
+  MeshWrites meshWrites;  // after the checks below: nothing is touched before
   SyntheticSpec spec;
   spec.points = o.points;
   spec.seed = o.seed;
@@ -146,15 +234,11 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
   scene["version"] = 1;
   scene["octrees"] = json::array({json{{"path", "scan.octree"}}});
   auto camera = [&](std::array<double, 3> eye, std::array<double, 3> target, double fov) {
-    return json{
-        {"eye", eye}, {"target", target}, {"fov", fov}, {"width", o.width}, {"height", o.height}};
+    return cameraJson(eye, target, fov, o);
   };
   switch (kind) {
     case TestSceneKind::Cornell: {
-      // A 4 m room; the ceiling patch is the light (its recorded colour is the brightest).
-      spec.shape = SyntheticShape::Room;
-      spec.size = 4;
-      spec.noise = 0.001;
+      cornellScan(spec);
       meshWrites.push_back([dir] { writeIcosphereObj(dir / "sphere.obj", 3); });
       scene["materials"] = {{"glossy",
                              {{"type", "ggx"},
@@ -233,6 +317,9 @@ fs::path makeTestScene(TestSceneKind kind, const fs::path& dir, const TestSceneO
                      {"target_relative_error", 0.01}};
       break;
     }
+    case TestSceneKind::Diffrender:
+      diffrenderScene(scene, spec, meshWrites, dir, o);
+      break;
   }
   scene["output"] = {{"exr", std::string(testSceneKindName(kind)) + ".exr"},
                      {"png", std::string(testSceneKindName(kind)) + ".png"}};

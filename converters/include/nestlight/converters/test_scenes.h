@@ -16,7 +16,15 @@ enum class TestSceneKind {
   Nave,     // a nave with two colonnades, an inserted statue-like object; radiance-cache mode
   Object,   // the synthetic town scan with an inserted metal torus, under a sky and a sun;
             // albedo mode
+  // The ground truth of differential rendering (Rohmer, Jendersie, Grosch 2017): the cornell
+  // room's scan, lit by a captured emissive ceiling panel (a mesh with "inserted": false) or a
+  // spot light, and one inserted object on the floor (the Stanford bunny where the shared data
+  // have it, else a generated sphere); albedo mode, gi.method "diffrender"
+  Diffrender,
 };
+
+// What lights the diffrender scene.
+enum class DiffrenderLight { Panel, Spot };
 
 struct TestSceneOptions {
   uint64_t points = 1'000'000;
@@ -24,6 +32,11 @@ struct TestSceneOptions {
   int width = 320, height = 240;
   bool overwrite = false;
   bool quiet = false;
+  DiffrenderLight light = DiffrenderLight::Panel;  // diffrender only
+  // diffrender: the inserted object is sharedData/meshes/bunny.ply, copied into the folder, where
+  // that file exists; otherwise (and with an empty path) a generated closed mesh, so the scene
+  // never depends on data outside the project.
+  std::filesystem::path sharedData;
 };
 
 // Writes dir/scan.octree, dir/*.obj and dir/scene.json; returns the scene file.
