@@ -47,7 +47,7 @@ Texture Texture::make(GLenum target, GLenum internalFormat, int width, int heigh
   GLuint id = 0;
   glCreateTextures(target, 1, &id);
   static_cast<Object&>(t) = Object(id);
-  if (target == GL_TEXTURE_2D_ARRAY)
+  if (target == GL_TEXTURE_2D_ARRAY || target == GL_TEXTURE_3D)
     glTextureStorage3D(id, levels, internalFormat, width, height, depth);
   else
     glTextureStorage2D(id, levels, internalFormat, width, height);
@@ -65,8 +65,12 @@ Texture::Texture(GLenum internalFormat, int width, int height, int levels) {
   *this = make(GL_TEXTURE_2D, internalFormat, width, height, 1, levels);
 }
 
-Texture Texture::cubeMap(GLenum internalFormat, int size) {
-  return make(GL_TEXTURE_CUBE_MAP, internalFormat, size, size, 1, 1);
+Texture Texture::cubeMap(GLenum internalFormat, int size, int levels) {
+  return make(GL_TEXTURE_CUBE_MAP, internalFormat, size, size, 1, levels);
+}
+
+Texture Texture::volume(GLenum internalFormat, int width, int height, int depth, int levels) {
+  return make(GL_TEXTURE_3D, internalFormat, width, height, depth, levels);
 }
 
 Texture Texture::array2d(GLenum internalFormat, int width, int height, int layers) {

@@ -96,13 +96,15 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
       test::runCli("make-scene cornell -q -n 40k --width 16 --height 12 -o " + dir.file("c"), &out),
       0)
       << out;
-  ASSERT_EQ(test::runCli("bench gi " + dir.file("c/scene.json") +
-                             " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 "
-                             "--quality pbgi=8 --quality ibl=2 --reference-error 0.05 "
-                             "--reference-spp 256 -o " +
-                             dir.file("b"),
-                         &out),
-            0)
+  ASSERT_EQ(
+      test::runCli(
+          "bench gi " + dir.file("c/scene.json") +
+              " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 "
+              "--quality pbgi=8 --quality ibl=2 --quality diffrender=8 --reference-error 0.05 "
+              "--reference-spp 256 -o " +
+              dir.file("b"),
+          &out),
+      0)
       << out;
   std::ifstream csv(dir.file("b/bench_gi.csv"));
   std::string header, line;
@@ -114,10 +116,14 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   // shadow-map sizes, vpl at 16 VPLs as the scene sets it and with exact visibility (its 1 to 3
   // bounce variants skipped: in the radiance-cache mode, with one convex mesh, every bounce count
   // renders the same image), pbgi (X-PBGI) at 8 x 8 micro-buffers and in its 5 variants
-  // (classic, mip, no pruning, conservative, no meshes); ibl skipped (no environment).
-  EXPECT_EQ(rows, 14 + 4);  // and the 4 skipped, each with its reason
+  // (classic, mip, no pruning, conservative, no meshes); ibl skipped (no environment); diffrender
+  // (the sphere is an inserted mesh) at 8 samples, and its em and low variants.
+  EXPECT_EQ(rows, 17 + 4);  // and the 4 skipped, each with its reason
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 14u);
+  ASSERT_EQ(j["rows"].size(), 17u);
+  EXPECT_EQ(j["rows"][14]["method"], "diffrender");
+  EXPECT_EQ(j["rows"][15]["variant"], "em");
+  EXPECT_TRUE(j["rows"][14]["gpu_pass_ms"].contains("diffrender_shade")) << j["rows"][14].dump();
   ASSERT_EQ(j["skipped"].size(), 4u) << j["skipped"].dump();
   EXPECT_EQ(j["skipped"][0]["variant"], "1 bounce");
   EXPECT_NE(j["skipped"][0]["reason"].get<std::string>().find("radiance-cache"), std::string::npos);

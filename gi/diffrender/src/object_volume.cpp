@@ -408,6 +408,32 @@ void writeSurface(const std::vector<Overlap>& overlaps, const std::vector<Volume
   }
 }
 
+// Shell voxels whose centre lies outside, next to the interior, are the conservative surface's
+// excess: half a voxel all round, which rays marched through the volume would see as an object
+// grown by that much (a sphere's shadow 5% too dark at 64^3). They become kShell, which the
+// marching passes through; shell voxels away from any interior (thin sheets, open meshes) stay
+// solid so that such objects still block.
+void markOuterShell(const std::vector<uint8_t>& parity, ObjectVolume& v) {
+  const glm::ivec3 n = v.size;
+  auto index = [&](int x, int y, int z) {
+    return (size_t(z) * size_t(n.y) + size_t(y)) * size_t(n.x) + size_t(x);
+  };
+  for (int z = 0; z < n.z; ++z)
+    for (int y = 0; y < n.y; ++y)
+      for (int x = 0; x < n.x; ++x) {
+        const size_t i = index(x, y, z);
+        if (v.surface[i] == 0 || parity[i] == 255) continue;
+        const int nb[6][3] = {{x - 1, y, z}, {x + 1, y, z}, {x, y - 1, z},
+                              {x, y + 1, z}, {x, y, z - 1}, {x, y, z + 1}};
+        for (const auto& q : nb)
+          if (q[0] >= 0 && q[1] >= 0 && q[2] >= 0 && q[0] < n.x && q[1] < n.y && q[2] < n.z &&
+              parity[index(q[0], q[1], q[2])] == 255) {
+            v.occupancy[i] = ObjectVolume::kShell;
+            break;
+          }
+      }
+}
+
 }  // namespace
 }  // namespace voxelization
 
@@ -435,8 +461,10 @@ ObjectVolume voxelizeSolid(const std::vector<VolumeMesh>& meshes, glm::ivec3 siz
                          "is solid there");
   }
   v.parityVoxels = uint64_t(std::count(v.occupancy.begin(), v.occupancy.end(), uint8_t(255)));
+  const std::vector<uint8_t> parity = v.occupancy;
   voxelization::writeSurface(voxelization::collectOverlaps(g, prepared), meshes, v);
-  v.solidVoxels = uint64_t(std::count(v.occupancy.begin(), v.occupancy.end(), uint8_t(255)));
+  voxelization::markOuterShell(parity, v);
+  v.solidVoxels = uint64_t(voxels - size_t(std::count(v.occupancy.begin(), v.occupancy.end(), 0)));
   v.boundaryVoxels = uint64_t(voxels - size_t(std::count(v.surface.begin(), v.surface.end(), 0u)));
   return v;
 }

@@ -154,6 +154,8 @@ class RasterMethod : public Method, public SceneFrame {
   void uploadMaterials();
   void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
                   bool materials) override;
+  void drawMeshesWhere(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
+                       bool materials, const std::function<bool(size_t)>& include) override;
 
   // scene_frame_lights.cpp: the lights and their shadow maps.
   void setUpLights();

@@ -66,9 +66,16 @@ void RasterMethod::uploadMaterials() {
 
 void RasterMethod::drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
                               bool materials) {
+  drawMeshesWhere(program, clipFromWorld, materials, [](size_t) { return true; });
+}
+
+void RasterMethod::drawMeshesWhere(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
+                                   bool materials, const std::function<bool(size_t)>& include) {
   program.use();
   glUniformMatrix4fv(program.uniform("uClipFromWorld"), 1, GL_FALSE, &clipFromWorld[0][0]);
-  for (const auto& m : meshes_) {
+  for (size_t i = 0; i < meshes_.size(); ++i) {
+    if (!include(i)) continue;
+    const GpuMesh& m = meshes_[i];
     if (materials) {
       const Material& mat = scene_.materials.at(m.material);
       glUniform3f(program.uniform("uBaseColor"), mat.baseColor.r, mat.baseColor.g, mat.baseColor.b);

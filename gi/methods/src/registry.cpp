@@ -1,3 +1,4 @@
+#include "nestlight/gi/diffrender/diffrender_method.h"
 #include "nestlight/gi/ibl/ibl_method.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/pbgi/pbgi_method.h"
@@ -11,9 +12,9 @@ namespace nestlight::gi {
 // The one list of methods; each declares itself (name, parameters, quality levels, variants) in
 // its own library.
 const std::vector<MethodInfo>& registeredMethods() {
-  static const std::vector<MethodInfo> methods = {referenceMethodInfo(), directMethodInfo(),
-                                                  rasterMethodInfo(),    vplMethodInfo(),
-                                                  pbgiMethodInfo(),      iblMethodInfo()};
+  static const std::vector<MethodInfo> methods = {
+      referenceMethodInfo(), directMethodInfo(), rasterMethodInfo(),    vplMethodInfo(),
+      pbgiMethodInfo(),      iblMethodInfo(),    diffrenderMethodInfo()};
   return methods;
 }
 

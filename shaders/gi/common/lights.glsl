@@ -52,7 +52,9 @@ int shadowLayer(int i, vec3 wi) {
 // the splat radius of a scan point (a splat is flat in the light's view, so its neighbours
 // within a radius lie behind it): a surface does not shadow itself. A 3 x 3 PCF of
 // hardware-filtered compares softens the texel edges.
-float visibility(int i, vec3 p, vec3 n, float splatRadius, LightSample s) {
+// `maps`: the frame's shadow maps, or another set drawn from the same light views (differential
+// rendering's, without the inserted meshes).
+float visibilityIn(sampler2DArrayShadow maps, int i, vec3 p, vec3 n, float splatRadius, LightSample s) {
   int layer = shadowLayer(i, s.wi);
   if (layer < 0) return 1.0;
   LightRecord l = lights[i];
@@ -66,10 +68,14 @@ float visibility(int i, vec3 p, vec3 n, float splatRadius, LightSample s) {
   if (any(greaterThan(abs(ndc.xy), vec2(1.0)))) return 1.0;  // outside the light's view: lit
   vec2 uv = ndc.xy * 0.5 + 0.5;
   float ref = clamp(ndc.z * 0.5 + 0.5, 0.0, 1.0);
-  vec2 size = vec2(textureSize(uShadowMaps, 0).xy);
+  vec2 size = vec2(textureSize(maps, 0).xy);
   float sum = 0.0;
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx)
-      sum += texture(uShadowMaps, vec4(uv + vec2(dx, dy) / size, float(layer), ref));
+      sum += texture(maps, vec4(uv + vec2(dx, dy) / size, float(layer), ref));
   return sum / 9.0;
+}
+
+float visibility(int i, vec3 p, vec3 n, float splatRadius, LightSample s) {
+  return visibilityIn(uShadowMaps, i, p, n, splatRadius, s);
 }

@@ -84,7 +84,9 @@ class Texture : public Object<TextureDeleter> {
   Texture(GLenum internalFormat, int width, int height, int levels = 1);
   Texture(Texture&&) noexcept = default;
   Texture& operator=(Texture&&) noexcept = default;
-  static Texture cubeMap(GLenum internalFormat, int size);
+  static Texture cubeMap(GLenum internalFormat, int size, int levels = 1);
+  // A 3D texture (voxel grids).
+  static Texture volume(GLenum internalFormat, int width, int height, int depth, int levels = 1);
   static Texture array2d(GLenum internalFormat, int width, int height, int layers);
   int width() const { return width_; }
   int height() const { return height_; }

@@ -29,14 +29,17 @@ struct ObjectVolume {
   // lo + (x, y, z) * (hi - lo) / size to one voxel further.
   glm::vec3 lo{0.0f}, hi{0.0f};
   // Per voxel, x fastest then y then z: 255 where the voxel is solid (its centre inside a closed
-  // mesh, or a triangle crosses it), else 0.
+  // mesh, or a triangle crosses it away from any interior: thin sheets, open meshes), kShell where
+  // a triangle crosses it but its centre lies outside next to the interior (the conservative
+  // shell's excess, which rays pass), else 0.
   std::vector<uint8_t> occupancy;
   // Per voxel, RGBA8 packed in a uint32 (R in the low byte): boundary voxels (crossed by a
   // triangle) hold the mean of the crossing triangles' area-weighted outward normals, normalised,
   // as rgb = n * 0.5 + 0.5, and alpha = material + 1 (the material of the mesh whose triangles
   // there have the most area; the first such mesh on a tie); every other voxel 0.
   std::vector<uint32_t> surface;
-  uint64_t solidVoxels = 0;     // occupancy 255
+  static constexpr uint8_t kShell = 128;
+  uint64_t solidVoxels = 0;     // occupancy not 0 (255 or kShell)
   uint64_t boundaryVoxels = 0;  // surface != 0 (all of them are solid)
   // Voxels whose centre is inside a mesh by parity alone (the interior without the surface
   // shell): the grid's estimate of the enclosed volume, parityVoxels * voxel volume.

@@ -89,6 +89,10 @@ class SceneFrame {
   // Draws the meshes (shaders/gi/raster/mesh.vert), with their materials' uniforms or without.
   virtual void drawMeshes(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
                           bool materials) = 0;
+  // The same for the scene's meshes `include` accepts (by index in Scene::meshes): differential
+  // rendering draws the captured scene's meshes apart from the inserted ones.
+  virtual void drawMeshesWhere(const gl::ShaderProgram& program, const glm::mat4& clipFromWorld,
+                               bool materials, const std::function<bool(size_t)>& include) = 0;
   // The lights' cut of every scan, parents before children; changes only when the cut does
   // (cutGeneration() counts the changes).
   virtual const std::vector<CutNode>& lightsCut() const = 0;

@@ -1,0 +1,52 @@
+// `diffrender`: inserted meshes that belong in the scan, by differential rendering after Rohmer,
+// Jendersie and Grosch, "Natural Environment Illumination: Coherent Interactive Augmented Reality
+// for Mobile and non-Mobile Devices" (IEEE TVCG 2017), sections 5 to 7. The scan's captured
+// radiance holds all the light of the place: an inserted mesh is lit from it (a distance impostor
+// of the scene rendered at the meshes' centre, queried by direction or traced), and what the mesh
+// changes on the scan (its shadow, its bounce) is dL = L_with - L_without, added to the capture.
+// docs/DIFFRENDER.md gives the parameters and the deviations.
+#pragma once
+
+#include <glm/glm.hpp>
+#include <memory>
+#include <string>
+
+#include "nestlight/gi/method.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/gi/method_parameters.h"
+#include "nestlight/gi/scene.h"
+
+namespace nestlight::gi {
+
+struct DiffrenderParameters {
+  // How a ray or cone finds the scene's radiance: the environment map's lookup by direction
+  // alone (em), distance impostor tracing (dit, Szirmay-Kalos et al. 2005), voxel cones (vct) or
+  // exact rays (exact). vct and exact are not built yet.
+  enum class Query { Em, Dit, Vct, Exact } query = Query::Dit;
+  enum class Quality { Low, Med, High } quality = Quality::Med;
+  int samples = 16;        // N: cosine directions per scan pixel (material and dL)
+  int objectSamples = 16;  // BRDF samples per object pixel
+  int cache = 8;           // |H_a|: box hits traced per scan pixel (eq. 9)
+  glm::ivec3 objectVoxels{32};
+  bool selfShadow = true;
+  bool secondaryBounce = false;
+  int impostorSize = 256;        // texels of a distance impostor's face
+  int sceneVoxels = 256;         // vct's scene volume
+  int deltaScale = 2;            // dL at 1 / delta_scale of the image's resolution
+  float ambient = 0;             // radiance of a self-shadowed object ray
+  float rhoMax = 1;              // the material estimate's clamp
+  bool materialEstimate = true;  // false: the recorded colour as rho (an ablation)
+  int ditIterations = 6;         // DIT's refinements of a ray's lookup direction
+};
+
+const ParameterSpecs& diffrenderParameterSpecs();
+MethodInfo diffrenderMethodInfo();
+// From scene.gi.parameters with the quality preset's values for the keys not given; throws
+// nestlight::Error naming scene.gi.parameters.<key>.
+DiffrenderParameters diffrenderParameters(const Scene& scene);
+const char* queryName(DiffrenderParameters::Query q);
+const char* qualityName(DiffrenderParameters::Quality q);
+
+std::unique_ptr<Method> createDiffrenderMethod(const Scene& scene, const MethodContext& ctx);
+
+}  // namespace nestlight::gi

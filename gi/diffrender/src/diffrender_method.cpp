@@ -1,0 +1,398 @@
+// The `diffrender` method (nestlight/gi/diffrender/diffrender_method.h): Rohmer, Jendersie and
+// Grosch, "Natural Environment Illumination: Coherent Interactive Augmented Reality for Mobile and
+// non-Mobile Devices" (IEEE TVCG 2017), sections 5 to 7, as passes of the raster frame: a
+// distance impostor of the captured scene at the inserted meshes' centre (rebuilt when the
+// lights' cut or the environment changes), the meshes' solid voxel volume (built once), dL on the
+// scan at 1 / delta_scale, and the composite with the inserted meshes' own light
+// (shaders/gi/diffrender/).
+#include "nestlight/gi/diffrender/diffrender_method.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "nestlight/frame/frame_graph.h"
+#include "nestlight/gi/diffrender/object_volume.h"
+#include "nestlight/gi/frame/scene_frame.h"
+#include "nestlight/gl/program.h"
+#include "nestlight/gl/resources.h"
+#include "nestlight/octree/error.h"
+
+// The passes' counters and slots (shaders/gi/diffrender/diffrender_interface.glsl).
+#include "gi/diffrender/diffrender_interface.glsl"
+
+namespace nestlight::gi {
+
+namespace {
+
+int levelsFor(int size) {
+  int levels = 1;
+  while ((size >> levels) > 0) ++levels;
+  return levels;
+}
+
+class DiffrenderExtension : public FrameExtension {
+ public:
+  explicit DiffrenderExtension(const Scene& scene)
+      : params_(diffrenderParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
+
+  std::string name() const override { return "diffrender"; }
+  // The scene's lights are raster's direct light, read at the camera's pixels only.
+  bool shadowsForTheCameraOnly() const override { return true; }
+  std::vector<std::string> parameterKeys() const override {
+    return parameterNames(diffrenderParameterSpecs());
+  }
+
+  std::vector<std::pair<std::string, std::string>> parameters() const override {
+    const glm::ivec3 v = params_.objectVoxels;
+    return {{"query", queryName(params_.query)},
+            {"quality", qualityName(params_.quality)},
+            {"samples", std::to_string(params_.samples)},
+            {"object_samples", std::to_string(params_.objectSamples)},
+            {"cache", std::to_string(params_.cache)},
+            {"object_voxels",
+             std::to_string(v.x) + "x" + std::to_string(v.y) + "x" + std::to_string(v.z)},
+            {"self_shadow", params_.selfShadow ? "true" : "false"},
+            {"secondary_bounce", params_.secondaryBounce ? "true" : "false"},
+            {"impostor_size", std::to_string(params_.impostorSize)},
+            {"delta_scale", std::to_string(params_.deltaScale)},
+            {"ambient", std::to_string(params_.ambient)},
+            {"rho_max", std::to_string(params_.rhoMax)},
+            {"material", params_.materialEstimate ? "estimate" : "colour"},
+            {"dit_iterations", std::to_string(params_.ditIterations)}};
+  }
+
+  std::string setUp(SceneFrame& f) override {
+    // The objects gather the sky through the impostor, whose empty texels show it: direct light
+    // must not add its unshadowed light too.
+    f.setSkyInDirectLight(false);
+    buildVolume(f);
+    const int S = params_.impostorSize;
+    raw_ = gl::Texture::array2d(GL_RGBA32F, S, S, 6);
+    rawDepth_ = gl::Texture(GL_DEPTH_COMPONENT32F, S, S);
+    impostorLevels_ = levelsFor(S);
+    impostor_ = gl::Texture::cubeMap(GL_RGBA32F, S, impostorLevels_);
+    impostor_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
+    glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
+    impostorFbo_ = gl::Framebuffer::create();
+    impostorScan_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "points/points.vert"},
+                                       {GL_FRAGMENT_SHADER, "gi/diffrender/impostor_scan.frag"}},
+                                      {{"NL_SCENE_FRAME", "1"}});
+    impostorMesh_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
+                                       {GL_FRAGMENT_SHADER, "gi/diffrender/impostor_mesh.frag"}});
+    fill_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/impostor_fill.comp"}});
+    delta_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/diffrender_delta.comp"}});
+    compose_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/diffrender_compose.comp"}});
+    stats_ = gl::Buffer(DR_STAT_COUNT * 4);
+    meshShadow_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
+                                     {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
+    scanShadow_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "points/points.vert"},
+                                     {GL_FRAGMENT_SHADER, "gi/raster/shadow_scan.frag"}},
+                                    {{"NL_SCENE_FRAME", "1"}});
+    shadowFbo_ = gl::Framebuffer::create();
+    frame::FrameGraph& g = f.graph();
+    g.addBuffer("diffrender_shadows");
+    g.addPass(
+        "diffrender_shadows", frame::Scope::Frame,
+        [](frame::PassBuilder& b) {
+          b.read("shadow_maps");
+          b.write("diffrender_shadows");
+        },
+        [this, &f](const frame::PassContext&) { renderShadowsWithout(f); });
+    g.addBuffer("diffrender_impostor");
+    g.addPass(
+        "diffrender_impostor", frame::Scope::Frame,
+        [](frame::PassBuilder& b) { b.write("diffrender_impostor"); },
+        [this, &f](const frame::PassContext&) { renderImpostor(f); });
+    g.addTarget("radiance_diffrender", {GL_RGBA32F});
+    g.addPass(
+        "diffrender_shade", frame::Scope::Tile,
+        [](frame::PassBuilder& b) {
+          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance",
+                                "shadow_maps", "diffrender_shadows", "diffrender_impostor"})
+            b.read(t);
+          b.write("radiance_diffrender");
+        },
+        [this, &f](const frame::PassContext& ctx) { shade(f, ctx); });
+    return "radiance_diffrender";
+  }
+
+  void beforeFrame(SceneFrame&) override {
+    std::array<uint32_t, DR_STAT_COUNT> zeros{};
+    stats_.upload(zeros.data(), sizeof zeros);
+  }
+
+  void describe(const SceneFrame&, MethodFrame& mf) const override {
+    std::array<uint32_t, DR_STAT_COUNT> s{};
+    glGetNamedBufferSubData(stats_.id(), 0, sizeof s, s.data());
+    auto& a = mf.attributes;
+    a["nestlight:diffrender_query"] = queryName(params_.query);
+    a["nestlight:diffrender_scan_pixels"] = std::to_string(s[DR_STAT_SCAN_PIXELS]);
+    a["nestlight:diffrender_object_pixels"] = std::to_string(s[DR_STAT_OBJECT_PIXELS]);
+    a["nestlight:diffrender_rho_clamped"] = std::to_string(s[DR_STAT_RHO_CLAMPED]);
+    a["nestlight:diffrender_dit_unconverged"] = std::to_string(s[DR_STAT_UNCONVERGED]);
+    a["nestlight:diffrender_dit_hidden"] = std::to_string(s[DR_STAT_HIDDEN]);
+    a["nestlight:diffrender_box_hits"] = std::to_string(s[DR_STAT_BOX_HITS]);
+    a["nestlight:diffrender_traced"] = std::to_string(s[DR_STAT_TRACED]);
+    a["nestlight:diffrender_object_first"] = std::to_string(s[DR_STAT_OBJECT_FIRST]);
+    a["nestlight:diffrender_self_shadowed"] = std::to_string(s[DR_STAT_SELF_SHADOWED]);
+    a["nestlight:diffrender_solid_voxels"] = std::to_string(solidVoxels_);
+    a["nestlight:diffrender_impostor_builds"] = std::to_string(impostorBuilds_);
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "; diffrender %s: %u scan samples (%u box hits, %u traced), %u object pixels, "
+                  "%u rho clamped, DIT lookups: %u unconverged, %u from points the impostor hides",
+                  queryName(params_.query), s[DR_STAT_SCAN_PIXELS], s[DR_STAT_BOX_HITS],
+                  s[DR_STAT_TRACED], s[DR_STAT_OBJECT_PIXELS], s[DR_STAT_RHO_CLAMPED],
+                  s[DR_STAT_UNCONVERGED], s[DR_STAT_HIDDEN]);
+    mf.summary += line;
+    for (const std::string& w : warnings_) mf.summary += "; warning: " + w;
+  }
+
+ private:
+  // The inserted meshes' solid voxels (object_volume.h), uploaded with the occupancy's mips.
+  void buildVolume(SceneFrame& f) {
+    const Scene& scene = f.scene();
+    std::vector<VolumeMesh> inserted;
+    for (size_t i = 0; i < scene.meshes.size() && i < f.meshes().size(); ++i) {
+      if (!scene.meshes[i].inserted) continue;
+      VolumeMesh v;
+      v.mesh = &f.meshes()[i];
+      v.localFromObject = scene.localFromObject(scene.meshes[i]);
+      v.material = scene.meshes[i].material;
+      v.name = "meshes[" + std::to_string(i) + "].path (" +
+               scene.meshes[i].path.filename().string() + ")";
+      inserted.push_back(v);
+      insertedMesh_.push_back(true);
+    }
+    insertedMesh_.assign(scene.meshes.size(), false);
+    for (size_t i = 0; i < scene.meshes.size(); ++i) insertedMesh_[i] = scene.meshes[i].inserted;
+    if (inserted.empty())
+      throw Error(scene.file.string(), "scene.meshes",
+                  "diffrender renders the change inserted meshes make, and the scene has none "
+                  "(every mesh has \"inserted\": false, or there are no meshes)");
+    for (const VolumeMesh& v : inserted)
+      if (v.material > 254)
+        throw Error(scene.file.string(), "scene.materials",
+                    "diffrender keeps at most 255 materials on inserted meshes");
+    const ObjectVolume vol = voxelizeSolid(inserted, params_.objectVoxels);
+    warnings_ = vol.warnings;
+    if (!f.quiet())
+      for (const std::string& w : warnings_)
+        std::fprintf(stderr, "diffrender: warning: %s\n", w.c_str());
+    solidVoxels_ = vol.solidVoxels;
+    volumeLo_ = vol.lo, volumeHi_ = vol.hi, volumeSize_ = vol.size;
+    const glm::ivec3 n = vol.size;
+    occupancy_ = gl::Texture::volume(GL_R8, n.x, n.y, n.z, levelsFor(std::max({n.x, n.y, n.z})));
+    glTextureSubImage3D(occupancy_.id(), 0, 0, 0, 0, n.x, n.y, n.z, GL_RED, GL_UNSIGNED_BYTE,
+                        vol.occupancy.data());
+    glGenerateTextureMipmap(occupancy_.id());
+    surface_ = gl::Texture::volume(GL_RGBA8, n.x, n.y, n.z);
+    glTextureSubImage3D(surface_.id(), 0, 0, 0, 0, n.x, n.y, n.z, GL_RGBA, GL_UNSIGNED_BYTE,
+                        vol.surface.data());
+    centre_ = 0.5f * (vol.lo + vol.hi);
+    // The farthest corner of the scene's bounds from the centre: DIT's search ends there.
+    reach_ = 0;
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec3 corner((c & 1) ? f.boundsHi().x : f.boundsLo().x,
+                             (c & 2) ? f.boundsHi().y : f.boundsLo().y,
+                             (c & 4) ? f.boundsHi().z : f.boundsLo().z);
+      reach_ = std::max(reach_, glm::length(corner - centre_));
+    }
+    reach_ = std::max(reach_ * 1.01f, 1e-3f);
+  }
+
+  // The six faces of the captured scene as seen from the objects' centre: the lights' cut (the
+  // whole scan at about a shadow map's resolution) and the captured scene's meshes, with their
+  // distances; then the gaps and the environment filled in and the mips made.
+  void renderImpostor(SceneFrame& f) {
+    if (builtCut_ == f.cutGeneration() && builtEnv_ == f.environmentGeneration()) return;
+    builtCut_ = f.cutGeneration(), builtEnv_ = f.environmentGeneration();
+    impostorBuilds_++;
+    const int S = params_.impostorSize;
+    static const std::array<glm::vec3, 6> dirs = {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0),
+                                                  glm::vec3(0, 1, 0), glm::vec3(0, -1, 0),
+                                                  glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)};
+    static const std::array<glm::vec3, 6> ups = {glm::vec3(0, -1, 0), glm::vec3(0, -1, 0),
+                                                 glm::vec3(0, 0, 1),  glm::vec3(0, 0, -1),
+                                                 glm::vec3(0, -1, 0), glm::vec3(0, -1, 0)};
+    const glm::vec3 extent = f.boundsHi() - f.boundsLo();
+    const float far = 4.0f * std::max(glm::length(extent), 1e-3f) +
+                      glm::length(centre_ - 0.5f * (f.boundsLo() + f.boundsHi()));
+    const float near = std::max(far * 1e-6f, 1e-4f);
+    const glm::mat4 clipFromView = glm::perspective(glm::radians(90.0f), 1.0f, near, far);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    glViewport(0, 0, S, S);
+    f.bindSceneBuffers();
+    for (int face = 0; face < 6; ++face) {
+      impostorFbo_.attachLayer(GL_COLOR_ATTACHMENT0, raw_, face);
+      impostorFbo_.attach(GL_DEPTH_ATTACHMENT, rawDepth_);
+      if (face == 0) impostorFbo_.finish(1, "diffrender distance impostor");
+      glBindFramebuffer(GL_FRAMEBUFFER, impostorFbo_.id());
+      const float zero[4] = {0, 0, 0, 0}, one = 1.0f;
+      glClearBufferfv(GL_COLOR, 0, zero);
+      glClearBufferfv(GL_DEPTH, 0, &one);
+      const glm::mat4 viewFromWorld =
+          glm::lookAt(centre_, centre_ + dirs[size_t(face)], ups[size_t(face)]);
+      const glm::mat4 clip = clipFromView * viewFromWorld;
+      // A 90-degree face: S / 2 texels per unit at distance 1.
+      impostorScan_.use();
+      glUniform1f(impostorScan_.uniform("uFaceSize"), float(S));
+      glUniform1f(impostorScan_.uniform("uNear"), near);
+      glUniform1f(impostorScan_.uniform("uFar"), far);
+      f.drawScans(impostorScan_, clip, viewFromWorld, 0.5f * float(S), false, true);
+      impostorMesh_.use();
+      glUniform3fv(impostorMesh_.uniform("uCentre"), 1, &centre_[0]);
+      f.drawMeshesWhere(impostorMesh_, clip, true, [this](size_t i) {
+        return i >= insertedMesh_.size() || !insertedMesh_[i];
+      });
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glMemoryBarrier(GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    fill_.use();
+    f.bindEnvironment(fill_);
+    glBindTextureUnit(0, raw_.id());
+    glBindImageTexture(0, impostor_.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glUniform1i(fill_.uniform("uSize"), S);
+    glDispatchCompute(GLuint((S + 7) / 8), GLuint((S + 7) / 8), 6);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    glGenerateTextureMipmap(impostor_.id());
+  }
+
+  // The lights' shadow maps as the frame draws them (the same views, resolution and offsets) but
+  // without the inserted meshes: the visibility the capture was lit with.
+  void renderShadowsWithout(SceneFrame& f) {
+    const std::vector<glm::mat4>& views = f.lightClipFromWorld();
+    const int S = f.frameParameters().shadowMapSize;
+    const int layers = std::max<int>(int(views.size()), 1);
+    if (shadowWithout_.width() != S || shadowLayers_ != layers) {
+      shadowWithout_ = gl::Texture::array2d(GL_DEPTH_COMPONENT32F, S, S, layers);
+      shadowWithout_.setFilter(GL_LINEAR, GL_LINEAR);
+      shadowWithout_.setDepthCompare(true);
+      shadowLayers_ = layers;
+    }
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    glViewport(0, 0, S, S);
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.5f, 2.0f);
+    for (size_t layer = 0; layer < size_t(layers); ++layer) {
+      shadowFbo_.attachLayer(GL_DEPTH_ATTACHMENT, shadowWithout_, int(layer));
+      if (layer == 0) shadowFbo_.finish(0, "diffrender shadow maps");
+      glBindFramebuffer(GL_FRAMEBUFFER, shadowFbo_.id());
+      const float one = 1.0f;
+      glClearBufferfv(GL_DEPTH, 0, &one);
+      if (layer >= views.size()) continue;
+      f.drawMeshesWhere(meshShadow_, views[layer], false, [this](size_t i) {
+        return i >= insertedMesh_.size() || !insertedMesh_[i];
+      });
+      const frame::LightRecord* owner = nullptr;
+      for (const auto& r : f.lights())
+        if (size_t(r.shadow.x) <= layer) owner = &r;
+      if (!owner) continue;
+      const bool ortho = int(owner->position.w) == NL_LIGHT_DIRECTIONAL;
+      f.drawScans(scanShadow_, views[layer], f.lightViewFromWorld()[layer], 1.0f / owner->shadow.y,
+                  ortho, true);
+    }
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
+
+  void bindCommon(SceneFrame& f, const gl::ShaderProgram& p) {
+    f.bindSceneBuffers();
+    p.use();
+    f.bindEnvironment(p);
+    glBindTextureUnit(DR_UNIT_IMPOSTOR, impostor_.id());
+    glBindTextureUnit(DR_UNIT_OCCUPANCY, occupancy_.id());
+    glBindTextureUnit(DR_UNIT_SURFACE, surface_.id());
+    stats_.bindBase(GL_SHADER_STORAGE_BUFFER, DR_SSBO_STATS);
+    glUniform3fv(p.uniform("uImpostorCentre"), 1, &centre_[0]);
+    glUniform1i(p.uniform("uImpostorSize"), params_.impostorSize);
+    glUniform1i(p.uniform("uImpostorLevels"), impostorLevels_);
+    glUniform1f(p.uniform("uImpostorReach"), reach_);
+    glUniform1i(p.uniform("uQuery"),
+                params_.query == DiffrenderParameters::Query::Em ? DR_QUERY_EM : DR_QUERY_DIT);
+    glUniform1i(p.uniform("uDitIterations"), params_.ditIterations);
+    glUniform3fv(p.uniform("uVolumeLo"), 1, &volumeLo_[0]);
+    glUniform3fv(p.uniform("uVolumeHi"), 1, &volumeHi_[0]);
+    glUniform3i(p.uniform("uVolumeSize"), volumeSize_.x, volumeSize_.y, volumeSize_.z);
+    glUniform1ui(p.uniform("uSeed"), seed_);
+    glUniform1i(p.uniform("uScale"), params_.deltaScale);
+  }
+
+  void shade(SceneFrame& f, const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    const int s = params_.deltaScale;
+    const int lw = (tile.width + s - 1) / s, lh = (tile.height + s - 1) / s;
+    if (deltaLow_.width() != lw || deltaLow_.height() != lh) {
+      deltaLow_ = gl::Texture(GL_RGBA32F, lw, lh);
+      guideLow_ = gl::Texture(GL_RGBA32F, lw, lh);
+    }
+    const GLbitfield barriers = GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                                GL_TEXTURE_FETCH_BARRIER_BIT;
+    ctx.bindTexture("depth", 0);
+    ctx.bindTexture("base_colour", 1);
+    ctx.bindTexture("normal", 2);
+    ctx.bindTexture("material", 3);
+    glBindTextureUnit(DR_UNIT_DIRECT, ctx.target("radiance").id());
+    const gl::Texture& maps = ctx.target("shadow_maps");
+    maps.setFilter(GL_LINEAR, GL_LINEAR);
+    maps.setDepthCompare(true);
+    glBindTextureUnit(4, maps.id());
+    glBindTextureUnit(DR_UNIT_SHADOW_WITHOUT, shadowWithout_.id());
+    bindCommon(f, delta_);
+    glUniform1i(delta_.uniform("uSamples"), params_.samples);
+    glUniform1i(delta_.uniform("uCache"), params_.cache);
+    glUniform1i(delta_.uniform("uEstimateMaterial"), params_.materialEstimate ? 1 : 0);
+    glUniform1f(delta_.uniform("uRhoMax"), params_.rhoMax);
+    glBindImageTexture(0, deltaLow_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(1, guideLow_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glDispatchCompute(GLuint((lw + 7) / 8), GLuint((lh + 7) / 8), 1);
+    glMemoryBarrier(barriers);
+    bindCommon(f, compose_);
+    glBindTextureUnit(DR_UNIT_DELTA, deltaLow_.id());
+    glBindTextureUnit(DR_UNIT_GUIDE, guideLow_.id());
+    glUniform1i(compose_.uniform("uObjectSamples"), params_.objectSamples);
+    glUniform1i(compose_.uniform("uSelfShadow"), params_.selfShadow ? 1 : 0);
+    glUniform1f(compose_.uniform("uAmbient"), params_.ambient);
+    glUniform1f(compose_.uniform("uDeltaGain"), 1.0f);
+    glBindImageTexture(0, ctx.target("radiance_diffrender").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+    glMemoryBarrier(barriers | GL_FRAMEBUFFER_BARRIER_BIT);
+  }
+
+  DiffrenderParameters params_;
+  uint32_t seed_ = 1;
+  std::vector<bool> insertedMesh_;
+  std::vector<std::string> warnings_;
+  uint64_t solidVoxels_ = 0, impostorBuilds_ = 0;
+  uint64_t builtCut_ = ~0ull, builtEnv_ = ~0ull;
+  glm::vec3 volumeLo_{0.0f}, volumeHi_{0.0f}, centre_{0.0f};
+  glm::ivec3 volumeSize_{1};
+  int impostorLevels_ = 1;
+  float reach_ = 1;
+  gl::Texture raw_, rawDepth_, impostor_, occupancy_, surface_, deltaLow_, guideLow_;
+  gl::Texture shadowWithout_;
+  int shadowLayers_ = 0;
+  gl::Framebuffer impostorFbo_, shadowFbo_;
+  gl::ShaderProgram impostorScan_, impostorMesh_, fill_, delta_, compose_, meshShadow_, scanShadow_;
+  gl::Buffer stats_;
+};
+
+}  // namespace
+
+std::unique_ptr<Method> createDiffrenderMethod(const Scene& scene, const MethodContext& ctx) {
+  return createRasterMethod(scene, ctx, std::make_unique<DiffrenderExtension>(scene));
+}
+
+}  // namespace nestlight::gi

@@ -1,0 +1,190 @@
+// `diffrender`'s declaration: its parameters, the quality presets of the paper's Table 2 and its
+// entry in the registry.
+#include <algorithm>
+
+#include "nestlight/gi/diffrender/diffrender_method.h"
+#include "nestlight/gi/frame/frame_parameters.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/octree/json_field.h"
+
+namespace nestlight::gi {
+
+namespace {
+
+// A grid of object voxels is at most this many bytes on the GPU (occupancy and surface words with
+// their mips): one SSBO range's worth, as every buffer of the frame.
+constexpr double kMaxVolumeBytes = double(128 << 20);
+
+// Table 2 of the paper: what a preset sets when the scene does not set it itself.
+nlohmann::json presetValues(DiffrenderParameters::Quality q) {
+  using Q = DiffrenderParameters::Quality;
+  if (q == Q::Low)
+    return {{"samples", 16}, {"cache", 8}, {"object_voxels", 32}, {"self_shadow", false}};
+  if (q == Q::Med)
+    return {{"samples", 16}, {"cache", 8}, {"object_voxels", 32}, {"self_shadow", true}};
+  return {{"samples", 64},         {"cache", 32},
+          {"object_samples", 128}, {"object_voxels", {128, 96, 96}},
+          {"self_shadow", true},   {"secondary_bounce", true}};
+}
+
+glm::ivec3 parseVoxels(const JsonField& f) {
+  if (f.value().is_array()) {
+    if (f.arraySize() != 3) f.fail("expected an integer or [x, y, z]");
+    return {int(f.at(size_t(0)).integer(2, 1024)), int(f.at(size_t(1)).integer(2, 1024)),
+            int(f.at(size_t(2)).integer(2, 1024))};
+  }
+  return glm::ivec3(int(f.integer(2, 1024)));
+}
+
+}  // namespace
+
+const char* queryName(DiffrenderParameters::Query q) {
+  switch (q) {
+    case DiffrenderParameters::Query::Em:
+      return "em";
+    case DiffrenderParameters::Query::Dit:
+      return "dit";
+    case DiffrenderParameters::Query::Vct:
+      return "vct";
+    case DiffrenderParameters::Query::Exact:
+      return "exact";
+  }
+  return "?";
+}
+
+const char* qualityName(DiffrenderParameters::Quality q) {
+  switch (q) {
+    case DiffrenderParameters::Quality::Low:
+      return "low";
+    case DiffrenderParameters::Quality::Med:
+      return "med";
+    case DiffrenderParameters::Quality::High:
+      return "high";
+  }
+  return "?";
+}
+
+const ParameterSpecs& diffrenderParameterSpecs() {
+  using P = ParameterSpec;
+  static const ParameterSpecs specs = {
+      P::choice("query", {"dit", "em", "vct", "exact"}, "dit",
+                "how rays find the scene's light: dit (distance impostor tracing, default), em "
+                "(lookup by direction), vct (voxel cones), exact (rays)")
+          .asFlag(),
+      P::choice("quality", {"low", "med", "high"}, "med",
+                "the paper's presets (Table 2) for the keys not given: low 16 samples, cache 8, "
+                "32^3 voxels, no self-shadow; med adds self-shadow; high 64 samples, cache 32, 128 "
+                "object samples, 128x96x96 voxels, a secondary bounce")
+          .asFlag(),
+      P::integer("samples", 1, 1024, 16,
+                 "N: cosine directions per scan pixel, for the material and dL"),
+      P::integer("object_samples", 1, 1024, 16, "BRDF samples per pixel of an inserted mesh"),
+      P::integer("cache", 1, 1024, 8,
+                 "hits of the objects' box traced per scan pixel, the rest counted (eq. 9)"),
+      P::integer("object_voxels", 2, 1024, 32,
+                 "the inserted meshes' solid voxel grid: n (n^3) or [x, y, z]"),
+      P::boolean("self_shadow", true, "object rays march the object volume (blocked: ambient)"),
+      P::boolean("secondary_bounce", false,
+                 "a second ray from a hit voxel's normal and material (not built yet: ignored)"),
+      P::integer("impostor_size", 16, 4096, 256, "texels of a distance impostor's cube face"),
+      P::integer("scene_voxels", 16, 512, 256, "vct: the scene volume's voxels per axis"),
+      P::integer("delta_scale", 1, 8, 2, "dL is computed at 1/delta_scale of the resolution"),
+      P::number("ambient", 0, 1e30, 0, "radiance of an object ray its own mesh blocks"),
+      P::number("rho_max", 0.01, 1e3, 1, "the material estimate is clamped here (counted)"),
+      P::choice("material", {"estimate", "colour"}, "estimate",
+                "the scan's reflectance: estimate (eq. 5) or the recorded colour (an ablation)"),
+      P::integer("dit_iterations", 1, 64, 8,
+                 "DIT: refinements of a ray's lookup direction before it counts as unconverged"),
+  };
+  return specs;
+}
+
+DiffrenderParameters diffrenderParameters(const Scene& scene) {
+  const nlohmann::json& given =
+      scene.gi.parameters.is_object() ? scene.gi.parameters : nlohmann::json::object();
+  // object_voxels may be [x, y, z], which the integer declaration does not read: resolve the rest
+  // without it.
+  Scene rest = scene;
+  const JsonField params(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+  if (given.contains("object_voxels")) rest.gi.parameters.erase("object_voxels");
+  const ResolvedParameters r = resolveParameterValues(rest, diffrenderParameterSpecs());
+  DiffrenderParameters p;
+  const std::string q = r.string("query"), quality = r.string("quality");
+  using Q = DiffrenderParameters::Query;
+  p.query = q == "dit" ? Q::Dit : q == "em" ? Q::Em : q == "vct" ? Q::Vct : Q::Exact;
+  using L = DiffrenderParameters::Quality;
+  p.quality = quality == "low" ? L::Low : quality == "med" ? L::Med : L::High;
+  const nlohmann::json preset = presetValues(p.quality);
+  auto pick = [&](const char* key) -> nlohmann::json {
+    if (given.contains(key)) return given.at(key);
+    if (preset.contains(key)) return preset.at(key);
+    return r.value(key);
+  };
+  p.samples = pick("samples").get<int>();
+  p.objectSamples = pick("object_samples").get<int>();
+  p.cache = pick("cache").get<int>();
+  if (given.contains("object_voxels")) {
+    p.objectVoxels = parseVoxels(params.at("object_voxels"));
+  } else {
+    const nlohmann::json v = preset.value("object_voxels", nlohmann::json(32));
+    p.objectVoxels = v.is_array() ? glm::ivec3(v[0].get<int>(), v[1].get<int>(), v[2].get<int>())
+                                  : glm::ivec3(v.get<int>());
+  }
+  p.selfShadow = pick("self_shadow").get<bool>();
+  p.secondaryBounce = pick("secondary_bounce").get<bool>();
+  p.impostorSize = int(r.integer("impostor_size"));
+  p.sceneVoxels = int(r.integer("scene_voxels"));
+  p.deltaScale = int(r.integer("delta_scale"));
+  p.ambient = float(r.number("ambient"));
+  p.rhoMax = float(r.number("rho_max"));
+  p.materialEstimate = r.string("material") == "estimate";
+  p.ditIterations = int(r.integer("dit_iterations"));
+  if (p.query == Q::Vct || p.query == Q::Exact)
+    params.at("query").fail(std::string("'") + queryName(p.query) +
+                            "' is not built yet: use dit or em");
+  if (p.cache > p.samples)
+    (given.contains("cache") ? params.at("cache") : params)
+        .fail("cache (" + std::to_string(p.cache) + ") must not exceed samples (" +
+              std::to_string(p.samples) + "): it is how many of the samples' hits are traced");
+  const double voxels = double(p.objectVoxels.x) * p.objectVoxels.y * p.objectVoxels.z;
+  // R8 occupancy and RGBA8 surface, each with its mips (8/7 of the finest level).
+  if (voxels * 5.0 * 8.0 / 7.0 > kMaxVolumeBytes)
+    (given.contains("object_voxels") ? params.at("object_voxels") : params)
+        .fail("the object volume would take " +
+              std::to_string(int(voxels * 5.0 * 8.0 / 7.0 / 1e6)) +
+              " MB, over the 128 MiB bound: use fewer voxels");
+  return p;
+}
+
+MethodInfo diffrenderMethodInfo() {
+  MethodInfo m;
+  m.name = "diffrender";
+  m.summary =
+      "differential rendering: inserted meshes lit from the captured scan, their shadows and "
+      "bounce added to it (distance impostors; GL)";
+  m.gpu = true;
+  m.qualityName = "samples per scan pixel";
+  m.defaultQualities = {8, 16, 64};
+  m.applyQuality = [](GiSettings& g, int q) {
+    setParameter(g, "samples", q);
+    const int cache = g.parameters.value("cache", 8);
+    if (cache > q) setParameter(g, "cache", q);
+  };
+  m.create = createDiffrenderMethod;
+  // The capture is the scan's recorded colour: its light.
+  m.albedoMode = false;
+  m.whyNotApplicable = [](const Scene& s) -> std::string {
+    for (const SceneMesh& mesh : s.meshes)
+      if (mesh.inserted) return "";
+    return "the scene has no inserted mesh (meshes[].inserted), and diffrender's work is the "
+           "change an inserted mesh makes";
+  };
+  m.variants = {{"em", [](GiSettings& g) { g.parameters["query"] = "em"; }},
+                {"low", [](GiSettings& g) { g.parameters["quality"] = "low"; }}};
+  m.parameters = rasterParameterSpecs();
+  m.parameters.insert(m.parameters.end(), diffrenderParameterSpecs().begin(),
+                      diffrenderParameterSpecs().end());
+  return m;
+}
+
+}  // namespace nestlight::gi

@@ -1,0 +1,201 @@
+// What the diffrender passes share: the distance impostor's queries (Rohmer, Jendersie and Grosch
+// 2017, section 6: EM, a lookup by direction as from a distant environment; DIT, distance impostor
+// tracing after Szirmay-Kalos, Aszodi, Lazanyi and Premecz, "Approximate Ray-Tracing on the GPU
+// with Distance Impostors", 2005), the inserted meshes' solid voxel volume marched by rays, and
+// the random numbers. Include diffrender_interface.glsl, brdf.glsl and environment.glsl first.
+#include "impostor_direction.glsl"
+
+layout(binding = DR_UNIT_IMPOSTOR) uniform samplerCube uImpostor;  // rgb radiance, a distance
+layout(binding = DR_UNIT_OCCUPANCY) uniform sampler3D uOccupancy;  // 1 solid, 0.5 shell, mips the mean
+layout(binding = DR_UNIT_SURFACE) uniform sampler3D uSurface;      // n * 0.5 + 0.5, (material + 1) / 255
+layout(std430, binding = DR_SSBO_STATS) buffer DiffrenderStats { uint stats[]; };
+
+uniform vec3 uImpostorCentre;
+uniform int uImpostorSize;
+uniform int uImpostorLevels;
+uniform float uImpostorReach;  // the scene's farthest extent from the centre
+uniform int uQuery;
+uniform int uDitIterations;
+uniform vec3 uVolumeLo, uVolumeHi;
+uniform ivec3 uVolumeSize;
+uniform uint uSeed;
+
+// PCG's output permutation (O'Neill 2014) hashes a seed and steps the stream.
+uint rngState;
+uint pcgHash(uint v) {
+  uint s = v * 747796405u + 2891336453u;
+  uint w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
+  return (w >> 22u) ^ w;
+}
+float rnd() {
+  rngState = pcgHash(rngState);
+  return float(rngState >> 8) * (1.0 / 16777216.0);
+}
+vec2 rnd2() { return vec2(rnd(), rnd()); }
+
+uint unconverged = 0u, hidden = 0u;
+
+// The mip level whose texels span `solidAngle` (a cone's, or a sample's 1 / (N pdf): Colbert and
+// Krivanek, "GPU-Based Importance Sampling", 2007), from a face texel's solid angle 4 pi / (6 w^2).
+float impostorLod(float solidAngle) {
+  float texel = 4.0 * kPi / (6.0 * float(uImpostorSize * uImpostorSize));
+  return clamp(0.5 * log2(max(solidAngle, 1e-12) / texel), 0.0, float(uImpostorLevels - 1));
+}
+
+float impostorDistance(vec3 dir) { return textureLod(uImpostor, dir, 0.0).a; }
+
+// Where the ray x + t d (x relative to the centre) is `dist` from the centre: the far root of
+// |x + t d| = dist; -1 when the ray misses that sphere.
+float sphereExit(vec3 x, vec3 d, float dist) {
+  if (dist >= kImpostorFar * 0.5) return kImpostorFar;
+  float b = dot(x, d), c = dot(x, x) - dist * dist;
+  float disc = b * b - c;
+  if (disc < 0.0) return -1.0;
+  return -b + sqrt(disc);
+}
+
+// Two face texels' footprint at a point relative to the centre (a texel spans about 2 / size
+// radians).
+float footprint(vec3 p) { return 4.0 * length(p) / float(uImpostorSize); }
+
+// How far the point x + t d (x relative to the centre) lies beyond the captured surface in its
+// direction: positive past it.
+float beyondSurface(vec3 x, vec3 d, float t) {
+  vec3 p = x + t * d;
+  return length(p) - impostorDistance(p);
+}
+
+// The scene's radiance along the ray o + t d (scene-local) and the distance it meets the scene at
+// (kImpostorFar: the environment), at mip `lod`. EM reads the direction alone. DIT finds where the
+// ray passes the captured surface as the impostor stores it: a search in steps that grow with the
+// distance (the surface's first crossing), then `uDitIterations` secant steps; a crossing the
+// secant does not pin down to a texel's footprint is counted unconverged (grazing rays) and keeps
+// its last estimate.
+vec3 queryScene(vec3 o, vec3 d, float lod, out float tScene) {
+  vec3 x = o - uImpostorCentre;
+  if (uQuery == DR_QUERY_EM) {
+    float t = sphereExit(x, d, impostorDistance(d));
+    tScene = t < 0.0 ? kImpostorFar : t;
+    return textureLod(uImpostor, d, lod).rgb;
+  }
+  // Steps out to the far side of the scene's bounds (uImpostorReach from the centre).
+  float tMax = sphereExit(x, d, uImpostorReach);
+  if (!(tMax > 0.0)) tMax = uImpostorReach;
+  const int kSteps = 16;
+  // A ray that starts behind the stored surface (a point the centre does not see, hidden by
+  // something nearer the centre) first has to come out in front of it; only a crossing from in
+  // front to beyond is the surface it meets.
+  float ta = 0.0, fa = 0.0, tb = -1.0, fb = 0.0;
+  bool inFront = false;
+  for (int k = 1; k <= kSteps; ++k) {
+    float u = float(k) / float(kSteps);
+    float t = tMax * u * u;
+    float f = beyondSurface(x, d, t);
+    if (f <= 0.0) {
+      ta = t, fa = f, inFront = true;
+    } else if (inFront && f > footprint(x + t * d)) {
+      // Past the surface by more than a texel's footprint: the surface the ray leaves, seen from
+      // the centre, stands a little off its own position in the stored distances.
+      tb = t, fb = f;
+      break;
+    }
+  }
+  if (!inFront) {
+    // Behind the stored surface all the way: the impostor cannot say; the direction's lookup.
+    hidden++;
+    float t = sphereExit(x, d, impostorDistance(d));
+    tScene = t < 0.0 ? kImpostorFar : t;
+    return textureLod(uImpostor, d, lod).rgb;
+  }
+  if (tb < 0.0) {  // no crossing: the ray leaves to the environment
+    tScene = kImpostorFar;
+    return textureLod(uImpostor, d, lod).rgb;
+  }
+  // Regula falsi with the Illinois rule (an end kept twice has its value halved), so that a
+  // curved or stepped distance does not hold one end for every step.
+  float t = tb;
+  bool converged = false;
+  int side = 0;
+  for (int k = 0; k < uDitIterations; ++k) {
+    t = ta + (tb - ta) * (-fa) / max(fb - fa, 1e-20);
+    float f = beyondSurface(x, d, t);
+    if (abs(f) <= footprint(x + t * d)) { converged = true; break; }
+    if (f > 0.0) {
+      tb = t, fb = f;
+      if (side == 1) fa *= 0.5;
+      side = 1;
+    } else {
+      ta = t, fa = f;
+      if (side == -1) fb *= 0.5;
+      side = -1;
+    }
+  }
+  if (!converged) unconverged++;
+  tScene = t;
+  return textureLod(uImpostor, normalize(x + t * d), lod).rgb;
+}
+
+// The ray's span [t0, t1] inside the objects' box; false when it misses.
+bool volumeSpan(vec3 o, vec3 d, out float t0, out float t1) {
+  vec3 inv = 1.0 / d;
+  vec3 a = (uVolumeLo - o) * inv, b = (uVolumeHi - o) * inv;
+  vec3 lo = min(a, b), hi = max(a, b);
+  t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
+  t1 = min(min(hi.x, hi.y), hi.z);
+  return t0 <= t1;
+}
+
+// The first solid voxel the ray meets in [tStart, tMax] (Amanatides and Woo's traversal): its
+// distance, and its surface normal and material (material -1: an interior voxel).
+bool marchObjects(vec3 o, vec3 d, float tStart, float tMax, out float tHit, out vec3 n, out int material) {
+  tHit = 0.0, n = -d, material = -1;
+  float t0, t1;
+  if (!volumeSpan(o, d, t0, t1)) return false;
+  t0 = max(t0, tStart);
+  t1 = min(t1, tMax);
+  if (t0 > t1) return false;
+  vec3 cell = (uVolumeHi - uVolumeLo) / vec3(uVolumeSize);
+  vec3 p = (o + d * t0 - uVolumeLo) / cell;
+  ivec3 v = clamp(ivec3(floor(p)), ivec3(0), uVolumeSize - 1);
+  ivec3 step = ivec3(sign(d));
+  vec3 safe = vec3(abs(d.x) > 1e-12 ? d.x : 1e-12, abs(d.y) > 1e-12 ? d.y : 1e-12, abs(d.z) > 1e-12 ? d.z : 1e-12);
+  vec3 next = (uVolumeLo + (vec3(v) + max(vec3(step), 0.0)) * cell - o) / safe;
+  vec3 delta = abs(cell / safe);
+  float t = t0;
+  ivec3 before = v;
+  for (int k = 0; k < 3 * 1024; ++k) {
+    if (any(lessThan(v, ivec3(0))) || any(greaterThanEqual(v, uVolumeSize)) || t > t1) return false;
+    if (texelFetch(uOccupancy, v, 0).r > 0.75) {
+      // The surface crosses this voxel or the one the ray came from (a solid voxel whose centre
+      // the surface passed just before).
+      vec4 s = texelFetch(uSurface, v, 0);
+      if (s.a == 0.0) s = texelFetch(uSurface, before, 0);
+      tHit = t;
+      material = int(s.a * 255.0 + 0.5) - 1;
+      if (material >= 0) n = normalize(s.xyz * 2.0 - 1.0);
+      return true;
+    }
+    before = v;
+    if (next.x < next.y && next.x < next.z) v.x += step.x, t = next.x, next.x += delta.x;
+    else if (next.y < next.z) v.y += step.y, t = next.y, next.y += delta.y;
+    else v.z += step.z, t = next.z, next.z += delta.z;
+  }
+  return false;
+}
+
+// Whether a scene-local point lies in a solid voxel (or one next to it): pixels of the inserted
+// meshes, which the G-buffer does not tell from the captured scene's meshes.
+bool inObjects(vec3 x) {
+  vec3 cell = (uVolumeHi - uVolumeLo) / vec3(uVolumeSize);
+  vec3 p = (x - uVolumeLo) / cell;
+  if (any(lessThan(p, vec3(-0.5))) || any(greaterThan(p, vec3(uVolumeSize) + 0.5))) return false;
+  ivec3 c = ivec3(floor(p));
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        ivec3 v = c + ivec3(dx, dy, dz);
+        if (all(greaterThanEqual(v, ivec3(0))) && all(lessThan(v, uVolumeSize)) && texelFetch(uOccupancy, v, 0).r > 0.4)
+          return true;
+      }
+  return false;
+}

@@ -1,0 +1,200 @@
+// The `diffrender` method against closed forms: a black sphere of radius r whose centre is D above
+// a scanned floor (radiance-cache mode: the scan's colour is its captured radiance) under a
+// constant sky L. A floor point at distance d from the centre sees the sphere, wholly above its
+// horizon, with the cosine-weighted solid angle pi (r/d)^2 cos(theta) = pi r^2 D / d^3; the black
+// sphere takes that share of the sky, so dL = -rho L r^2 D / d^3 (-rho L (r/D)^2 at its foot).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "gi/floor_scene.h"
+#include "nestlight/converters/test_scenes.h"
+#include "nestlight/gi/diffrender/diffrender_method.h"
+#include "nestlight/gi/method.h"
+#include "nestlight/gi/methods.h"
+#include "nestlight/gi/scene.h"
+#include "nestlight/gi/srgb.h"
+#include "nestlight/octree/error.h"
+#include "test_support.h"
+
+namespace nestlight::gi {
+namespace {
+
+using json = nlohmann::json;
+constexpr int kGrey = 160;    // the floor's recorded colour (8-bit sRGB)
+constexpr float kSky = 2.0f;  // the sky's radiance
+constexpr float kR = 0.5f, kD = 1.5f;
+
+// An 8 x 8 m grid of scan points 4 cm apart at z = 0, normals up.
+void buildFloor(const test::TempDir& t) {
+  std::ofstream ply(t.file("floor.ply"));
+  const int n = 201;
+  ply << "ply\nformat ascii 1.0\nelement vertex " << n * n
+      << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
+         "float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
+         "blue\nend_header\n";
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      ply << -4.0 + 0.04 * i << " " << -4.0 + 0.04 * j << " 0 0 0 1 " << kGrey << " " << kGrey
+          << " " << kGrey << "\n";
+  ply.close();
+  test::buildOctreeFrom(t.file("floor.ply"), t.path() / "floor.octree");
+  writeIcosphereObj(t.file("sphere.obj"), 4);
+}
+
+// The floor's captured radiance is rho L: colour_scale L with rho the recorded colour.
+json sceneJson(const json& parameters, const std::string& method, int size) {
+  return {
+      {"version", 1},
+      {"origin", {0.0, 0.0, 0.0}},
+      {"octrees", {{{"path", "floor.octree"}, {"colour_scale", kSky}}}},
+      {"materials", {{"black", {{"type", "lambert"}, {"base_color", 0.0}}}}},
+      {"meshes",
+       {{{"path", "sphere.obj"},
+         {"transform", {{"scale", kR}, {"translate", {0.0, 0.0, kD}}}},
+         {"material", "black"}}}},
+      {"environment", {{"constant", {kSky, kSky, kSky}}}},
+      {"camera",
+       {{"eye", {0.0, -3.2, 2.4}},
+        {"target", {0.0, 0.4, 0.0}},
+        {"up", {0.0, 0.0, 1.0}},
+        {"fov", 50.0},
+        {"width", size},
+        {"height", size}}},
+      {"gi",
+       {{"method", method}, {"mode", "radiance_cache"}, {"seed", 3}, {"parameters", parameters}}}};
+}
+
+Scene writeScene(const test::TempDir& t, const json& j) {
+  std::ofstream(t.file("scene.json")) << j.dump(2);
+  return loadScene(t.file("scene.json"));
+}
+
+MethodFrame renderWith(const test::TempDir& t, const json& parameters, const std::string& method,
+                       int size) {
+  const Scene s = writeScene(t, sceneJson(parameters, method, size));
+  auto m = createMethod(s, MethodContext(true));
+  return m->render(s.camera);
+}
+
+class DiffrenderSphere : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(DiffrenderSphere, BlackSphereTakesItsShareOfTheSkyFromTheFloor) {
+  test::TempDir t;
+  buildFloor(t);
+  const int size = 96;
+  const json params = {{"query", GetParam()},
+                       {"samples", 64},
+                       {"cache", 64},
+                       {"object_voxels", 64},
+                       {"delta_scale", 1}};
+  const MethodFrame with = renderWith(t, params, "diffrender", size);
+  const MethodFrame without = renderWith(t, json::object(), "raster", size);
+  const Scene s = writeScene(t, sceneJson(params, "diffrender", size));
+  const float rho = srgbDecode(kGrey / 255.0f);
+  double measured = 0, expected = 0;
+  int pixels = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      glm::vec3 p;
+      if (!floorPoint(s, x, y, &p, 3.5f)) continue;
+      const float h = std::hypot(p.x, p.y);
+      if (h > 2.0f) continue;
+      const Rgb b = without.image.get(x, y);
+      // Pixels where the camera sees the floor (not the sphere) and its capture.
+      if (std::abs(b.r - rho * kSky) > 0.02f * rho * kSky) continue;
+      const float d = std::sqrt(h * h + kD * kD);
+      expected += -rho * kSky * kR * kR * kD / (d * d * d);
+      measured += with.image.get(x, y).r - b.r;
+      ++pixels;
+    }
+  ASSERT_GT(pixels, 1000);
+  // 5%: the bound; the estimator's noise over these pixels is under 1% (64 samples, all
+  // traced), the 64^3 voxels' silhouette about 1%, the rest is the impostor's.
+  EXPECT_NEAR(measured / expected, 1.0, 0.05)
+      << GetParam() << ": " << pixels << " floor pixels, " << with.summary;
+}
+
+INSTANTIATE_TEST_SUITE_P(Queries, DiffrenderSphere, ::testing::Values("dit", "em"));
+
+// Eq. 9 traces `cache` of a pixel's |H| box hits and scales their sum by |H| / cache: unbiased,
+// so its mean over many independent pixels (each its own random sequence) equals the uncached
+// estimator's (every hit traced) within 3 standard errors of the mean difference.
+TEST(DiffrenderCache, ScaledSumOfTracedHitsIsUnbiased) {
+  test::TempDir t;
+  buildFloor(t);
+  const int size = 64;
+  const json common = {{"query", "em"}, {"samples", 32}, {"object_voxels", 32}, {"delta_scale", 1}};
+  json cached = common, uncached = common;
+  cached["cache"] = 1;
+  uncached["cache"] = 32;
+  const MethodFrame a = renderWith(t, cached, "diffrender", size);
+  const MethodFrame b = renderWith(t, uncached, "diffrender", size);
+  const Scene s = writeScene(t, sceneJson(common, "diffrender", size));
+  EXPECT_LT(std::stod(a.attributes.at("nestlight:diffrender_traced")),
+            0.5 * std::stod(a.attributes.at("nestlight:diffrender_box_hits")));
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      glm::vec3 p;
+      if (!floorPoint(s, x, y, &p, 3.5f) || std::hypot(p.x, p.y) > 1.5f) continue;
+      if (a.image.get(x, y).r == b.image.get(x, y).r) continue;  // no box hit: both exact
+      const double d = a.image.get(x, y).r - b.image.get(x, y).r;
+      sum += d, sum2 += d * d, ++n;
+    }
+  ASSERT_GT(n, 300);
+  const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / (n - 1));
+  EXPECT_LT(std::abs(mean), 3 * se) << n << " pixels, mean difference " << mean << ", SE " << se;
+  EXPECT_GT(se, 0.0);
+}
+
+TEST(DiffrenderParameters, ErrorsNameTheField) {
+  test::TempDir t;
+  buildFloor(t);
+  auto fails = [&](const json& params, const std::string& field) {
+    const Scene s = writeScene(t, sceneJson(params, "diffrender", 32));
+    try {
+      diffrenderParameters(s);
+      ADD_FAILURE() << params.dump() << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  fails({{"query", "rays"}}, "scene.gi.parameters.query");
+  fails({{"samples", 8}, {"cache", 16}}, "scene.gi.parameters.cache");
+  fails({{"object_voxels", {1024, 1024, 1024}}}, "scene.gi.parameters.object_voxels");
+  fails({{"object_voxels", {8, 8}}}, "scene.gi.parameters.object_voxels");
+  // Presets fill what is not given; given values win.
+  const Scene high =
+      writeScene(t, sceneJson({{"quality", "high"}, {"samples", 48}}, "diffrender", 32));
+  const DiffrenderParameters p = diffrenderParameters(high);
+  EXPECT_EQ(p.samples, 48);
+  EXPECT_EQ(p.cache, 32);
+  EXPECT_EQ(p.objectSamples, 128);
+  EXPECT_EQ(p.objectVoxels, glm::ivec3(128, 96, 96));
+  EXPECT_TRUE(p.secondaryBounce);
+  const DiffrenderParameters low =
+      diffrenderParameters(writeScene(t, sceneJson({{"quality", "low"}}, "diffrender", 32)));
+  EXPECT_FALSE(low.selfShadow);
+  EXPECT_EQ(low.objectVoxels, glm::ivec3(32));
+}
+
+TEST(DiffrenderMethod, NoInsertedMeshIsAnError) {
+  test::TempDir t;
+  buildFloor(t);
+  json j = sceneJson(json::object(), "diffrender", 32);
+  j["meshes"][0]["inserted"] = false;
+  const Scene s = writeScene(t, j);
+  try {
+    auto m = createMethod(s, MethodContext(true));
+    m->render(s.camera);
+    ADD_FAILURE() << "a scene without inserted meshes rendered";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("scene.meshes"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace nestlight::gi
