@@ -64,6 +64,7 @@ void addMakeScene(CLI::App& app, int& exitCode);
 void addSurfels(CLI::App& app, int& exitCode);
 void addCompare(CLI::App& app, int& exitCode);
 void addExpandHdr(CLI::App& app, int& exitCode);
+void addBakeRadiance(CLI::App& app, int& exitCode);
 void addColourMatch(CLI::App& app, int& exitCode);
 void addBenchHdr(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 void addBenchIbl(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`

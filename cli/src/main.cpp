@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addSurfels(app, code);
   nestlight::cli::addCompare(app, code);
   nestlight::cli::addExpandHdr(app, code);
+  nestlight::cli::addBakeRadiance(app, code);
   nestlight::cli::addColourMatch(app, code);
   nestlight::cli::addBenchHdr(app, code);
   nestlight::cli::addBenchIbl(app, code);

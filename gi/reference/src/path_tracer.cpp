@@ -71,8 +71,14 @@ void cameraRay(const SceneCamera& c, const glm::dvec3& origin, float x, float y,
   *rd = glm::vec3(glm::normalize(f + sx * r + sy * u));
 }
 
-Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const glm::vec3& direction,
-                  Rng& rng, const ReferenceOptions& opt, uint64_t* raysOut) {
+namespace {
+
+// One path along the ray (origin, direction), or, with `start`, from that surface point as if
+// the ray had just reached it: the same vertex code serves the camera's paths and the radiance
+// leaving a given point (the baked capture).
+Rgb tracePath(const ReferenceScene& scene, const SurfaceHit* start, const glm::vec3& origin,
+              const glm::vec3& direction, Rng& rng, const ReferenceOptions& opt,
+              uint64_t* raysOut) {
   Rgb L(0.0f), beta(1.0f);
   glm::vec3 o = origin, d = direction;
   float prevBsdfPdf = 0;  // 0: the previous vertex was the camera (no MIS weight)
@@ -83,8 +89,9 @@ Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const gl
   Material discMaterial;  // albedo mode: Lambert with the disc's colour
   for (int depth = 0;; ++depth) {
     SurfaceHit hit;
-    ++rays;
-    if (!scene.intersect(o, d, inf, &hit)) {
+    if (depth == 0 && start) {
+      hit = *start;
+    } else if (++rays; !scene.intersect(o, d, inf, &hit)) {
       if (hasEnv) {
         Rgb Le = env.eval(d);
         float w = prevBsdfPdf > 0 ? powerHeuristic(prevBsdfPdf, env.pdf(d)) : 1.0f;
@@ -189,6 +196,18 @@ Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const gl
   }
   if (raysOut) *raysOut += rays;
   return L;
+}
+
+}  // namespace
+
+Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const glm::vec3& direction,
+                  Rng& rng, const ReferenceOptions& opt, uint64_t* rays) {
+  return tracePath(scene, nullptr, origin, direction, rng, opt, rays);
+}
+
+Rgb traceFromSurface(const ReferenceScene& scene, const SurfaceHit& surface, const glm::vec3& wo,
+                     Rng& rng, const ReferenceOptions& opt, uint64_t* rays) {
+  return tracePath(scene, &surface, surface.position, -wo, rng, opt, rays);
 }
 
 double halfBufferRelativeError(const HdrImage& a, const HdrImage& b) {

@@ -689,6 +689,22 @@ bool ReferenceScene::intersect(const glm::vec3& o, const glm::vec3& d, float tMa
   return true;
 }
 
+SurfaceHit ReferenceScene::discHit(size_t cloud, size_t disc) const {
+  NL_CHECK(cloud < clouds_.size() && disc < clouds_[cloud].discs.size());
+  const DiscCloud& c = clouds_[cloud];
+  SurfaceHit hit;
+  hit.kind = SurfaceHit::Kind::Disc;
+  hit.position = glm::vec3(c.discs[disc]);
+  hit.orientedDisc = !c.normals.empty();
+  // A ray-facing disc has no normal of its own: +z stands in (callers choose the side).
+  hit.geometricNormal = hit.orientedDisc ? c.normals[disc] : glm::vec3(0, 0, 1);
+  hit.shadingNormal = hit.geometricNormal;
+  hit.colour = c.colour[disc];
+  hit.radius = c.discs[disc].w;
+  hit.thickness = c.thickness.empty() ? 0.0f : c.thickness[disc];
+  return hit;
+}
+
 bool ReferenceScene::occluded(const glm::vec3& o, const glm::vec3& d, float tMax) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);

@@ -69,6 +69,14 @@ ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& 
 Rgb traceRadiance(const ReferenceScene& scene, const glm::vec3& origin, const glm::vec3& direction,
                   Rng& rng, const ReferenceOptions& options, uint64_t* rays = nullptr);
 
+// One path's radiance leaving `surface` towards `wo` (unit, on the side it is seen from), as
+// traceRadiance would return it for a ray that reached `surface` from there: the surface's
+// emission, if any, plus up to maxBounces scattering events, the first at `surface`. `surface`
+// is a hit as ReferenceScene::intersect fills it (kind, position, normals, colour, radius and
+// thickness, which set the offset its rays leave from). For the radiance of given scan points.
+Rgb traceFromSurface(const ReferenceScene& scene, const SurfaceHit& surface, const glm::vec3& wo,
+                     Rng& rng, const ReferenceOptions& options, uint64_t* rays = nullptr);
+
 // The camera ray through image position (x, y) in pixels (top row first, x to the right).
 void cameraRay(const SceneCamera& camera, const glm::dvec3& origin, float x, float y,
                glm::vec3* rayOrigin, glm::vec3* rayDirection);

@@ -102,6 +102,11 @@ class ReferenceScene {
   bool intersect(const glm::vec3& origin, const glm::vec3& direction, float tMax,
                  SurfaceHit* hit) const;
   bool occluded(const glm::vec3& origin, const glm::vec3& direction, float tMax) const;
+  // What intersect() reports for a ray that meets disc `disc` of cloud `cloud` at its centre (the
+  // scan point itself): where the radiance of given scan points is estimated.
+  SurfaceHit discHit(size_t cloud, size_t disc) const;
+  // The scans' discs, in the order loadDiscCloud read them (radii and thicknesses assigned).
+  const std::vector<DiscCloud>& clouds() const { return clouds_; }
 
   const std::vector<Material>& materials() const { return materials_; }
   const std::vector<Light>& lights() const { return lights_; }
