@@ -11,11 +11,13 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/diffrender/object_volume.h"
 #include "nestlight/gi/frame/scene_frame.h"
+#include "nestlight/gi/hdr_image.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -61,7 +63,8 @@ class DiffrenderExtension : public FrameExtension {
             {"ambient", std::to_string(params_.ambient)},
             {"rho_max", std::to_string(params_.rhoMax)},
             {"material", params_.materialEstimate ? "estimate" : "colour"},
-            {"dit_iterations", std::to_string(params_.ditIterations)}};
+            {"dit_iterations", std::to_string(params_.ditIterations)},
+            {"aovs", params_.aovs}};
   }
 
   std::string setUp(SceneFrame& f) override {
@@ -117,6 +120,17 @@ class DiffrenderExtension : public FrameExtension {
         },
         [this, &f](const frame::PassContext& ctx) { shade(f, ctx); });
     return "radiance_diffrender";
+  }
+
+  void afterReadBack(const std::vector<float>&, MethodFrame& f) override {
+    if (params_.aovs.empty() || aovMask_.width == 0) return;
+    std::error_code ec;
+    std::filesystem::create_directories(params_.aovs, ec);
+    const std::filesystem::path dir(params_.aovs);
+    writeExr((dir / "diffrender_delta.exr").string(), aovDelta_);
+    writeExr((dir / "diffrender_rho.exr").string(), aovRho_);
+    writeExr((dir / "diffrender_mask.exr").string(), aovMask_);
+    f.attributes["nestlight:diffrender_aovs"] = params_.aovs;
   }
 
   void beforeFrame(SceneFrame&) override {
@@ -336,7 +350,10 @@ class DiffrenderExtension : public FrameExtension {
     if (deltaLow_.width() != lw || deltaLow_.height() != lh) {
       deltaLow_ = gl::Texture(GL_RGBA32F, lw, lh);
       guideLow_ = gl::Texture(GL_RGBA32F, lw, lh);
+      rhoLow_ = gl::Texture(GL_RGBA32F, lw, lh);
     }
+    if (mask_.width() != tile.width || mask_.height() != tile.height)
+      mask_ = gl::Texture(GL_R32F, tile.width, tile.height);
     const GLbitfield barriers = GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
                                 GL_TEXTURE_FETCH_BARRIER_BIT;
     ctx.bindTexture("depth", 0);
@@ -356,6 +373,7 @@ class DiffrenderExtension : public FrameExtension {
     glUniform1f(delta_.uniform("uRhoMax"), params_.rhoMax);
     glBindImageTexture(0, deltaLow_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glBindImageTexture(1, guideLow_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(2, rhoLow_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glDispatchCompute(GLuint((lw + 7) / 8), GLuint((lh + 7) / 8), 1);
     glMemoryBarrier(barriers);
     bindCommon(f, compose_);
@@ -367,8 +385,41 @@ class DiffrenderExtension : public FrameExtension {
     glUniform1f(compose_.uniform("uDeltaGain"), 1.0f);
     glBindImageTexture(0, ctx.target("radiance_diffrender").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_RGBA32F);
+    glBindImageTexture(1, mask_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
     glMemoryBarrier(barriers | GL_FRAMEBUFFER_BARRIER_BIT);
+    if (!params_.aovs.empty()) keepAovs(tile, lw, lh);
+  }
+
+  // The tile's AOVs into the full image's (GL rows bottom up; the images' top down).
+  void keepAovs(const frame::Tile& tile, int lw, int lh) {
+    const int s = params_.deltaScale;
+    const int fw = (tile.fullWidth + s - 1) / s, fh = (tile.fullHeight + s - 1) / s;
+    if (aovDelta_.width != fw || aovDelta_.height != fh) {
+      aovDelta_ = HdrImage(fw, fh), aovRho_ = HdrImage(fw, fh);
+    }
+    if (aovMask_.width != tile.fullWidth || aovMask_.height != tile.fullHeight)
+      aovMask_ = HdrImage(tile.fullWidth, tile.fullHeight);
+    std::vector<float> delta(size_t(lw) * size_t(lh) * 4), rho(delta.size()),
+        mask(size_t(tile.width) * size_t(tile.height));
+    glGetTextureImage(deltaLow_.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(delta.size() * 4),
+                      delta.data());
+    glGetTextureImage(rhoLow_.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(rho.size() * 4), rho.data());
+    glGetTextureImage(mask_.id(), 0, GL_RED, GL_FLOAT, GLsizei(mask.size() * 4), mask.data());
+    for (int y = 0; y < lh; ++y)
+      for (int x = 0; x < lw; ++x) {
+        const int gx = tile.x0 / s + x, gy = tile.y0 / s + y;
+        if (gx >= fw || gy >= fh) continue;
+        const float* d = &delta[(size_t(y) * size_t(lw) + size_t(x)) * 4];
+        const float* r = &rho[(size_t(y) * size_t(lw) + size_t(x)) * 4];
+        aovDelta_.set(gx, fh - 1 - gy, Rgb(d[0], d[1], d[2]));
+        aovRho_.set(gx, fh - 1 - gy, Rgb(r[0], r[1], r[2]));
+      }
+    for (int y = 0; y < tile.height; ++y)
+      for (int x = 0; x < tile.width; ++x) {
+        const float m = mask[size_t(y) * size_t(tile.width) + size_t(x)];
+        aovMask_.set(tile.x0 + x, tile.fullHeight - 1 - (tile.y0 + y), Rgb(m));
+      }
   }
 
   DiffrenderParameters params_;
@@ -381,7 +432,9 @@ class DiffrenderExtension : public FrameExtension {
   glm::ivec3 volumeSize_{1};
   int impostorLevels_ = 1;
   float reach_ = 1;
-  gl::Texture raw_, rawDepth_, impostor_, occupancy_, surface_, deltaLow_, guideLow_;
+  gl::Texture raw_, rawDepth_, impostor_, occupancy_, surface_, deltaLow_, guideLow_, rhoLow_,
+      mask_;
+  HdrImage aovDelta_, aovRho_, aovMask_;
   gl::Texture shadowWithout_;
   int shadowLayers_ = 0;
   gl::Framebuffer impostorFbo_, shadowFbo_;
@@ -392,7 +445,8 @@ class DiffrenderExtension : public FrameExtension {
 }  // namespace
 
 std::unique_ptr<Method> createDiffrenderMethod(const Scene& scene, const MethodContext& ctx) {
-  return createRasterMethod(scene, ctx, std::make_unique<DiffrenderExtension>(scene));
+  const Scene drawn = diffrenderCaptureScene(scene, diffrenderParameters(scene));
+  return createRasterMethod(drawn, ctx, std::make_unique<DiffrenderExtension>(drawn));
 }
 
 }  // namespace nestlight::gi

@@ -1,11 +1,14 @@
 // `diffrender`'s declaration: its parameters, the quality presets of the paper's Table 2 and its
 // entry in the registry.
 #include <algorithm>
+#include <filesystem>
 
 #include "nestlight/gi/diffrender/diffrender_method.h"
 #include "nestlight/gi/frame/frame_parameters.h"
 #include "nestlight/gi/method_info.h"
+#include "nestlight/octree/error.h"
 #include "nestlight/octree/json_field.h"
+#include "nestlight/octree/octree_reader.h"
 
 namespace nestlight::gi {
 
@@ -34,6 +37,28 @@ glm::ivec3 parseVoxels(const JsonField& f) {
             int(f.at(size_t(2)).integer(2, 1024))};
   }
   return glm::ivec3(int(f.integer(2, 1024)));
+}
+
+ParameterSpec captureSpec() {
+  ParameterSpec p;
+  p.name = "capture";
+  p.type = ParameterType::String;
+  p.defaultValue = "";
+  p.help =
+      "the colour layer of captured radiance (nestlight bake-radiance writes one), whatever "
+      "gi.mode; empty: the scan's colour in the radiance-cache mode";
+  return p;
+}
+
+ParameterSpec aovsSpec() {
+  ParameterSpec p;
+  p.name = "aovs";
+  p.type = ParameterType::String;
+  p.defaultValue = "";
+  p.help =
+      "a folder for each still's dL, rho and mask EXRs (diffrender_delta.exr, diffrender_rho.exr, "
+      "diffrender_mask.exr), relative to the scene file; empty: none";
+  return p;
 }
 
 }  // namespace
@@ -93,6 +118,8 @@ const ParameterSpecs& diffrenderParameterSpecs() {
       P::number("rho_max", 0.01, 1e3, 1, "the material estimate is clamped here (counted)"),
       P::choice("material", {"estimate", "colour"}, "estimate",
                 "the scan's reflectance: estimate (eq. 5) or the recorded colour (an ablation)"),
+      aovsSpec(),
+      captureSpec(),
       P::integer("dit_iterations", 1, 64, 8,
                  "DIT: refinements of a ray's lookup direction before it counts as unconverged"),
   };
@@ -139,6 +166,11 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   p.rhoMax = float(r.number("rho_max"));
   p.materialEstimate = r.string("material") == "estimate";
   p.ditIterations = int(r.integer("dit_iterations"));
+  if (const std::string a = r.string("aovs"); !a.empty()) {
+    const std::filesystem::path dir(a);
+    p.aovs = (dir.is_absolute() ? dir : scene.file.parent_path() / dir).string();
+  }
+  p.capture = r.string("capture");
   if (p.query == Q::Vct || p.query == Q::Exact)
     params.at("query").fail(std::string("'") + queryName(p.query) +
                             "' is not built yet: use dit or em");
@@ -156,6 +188,33 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   return p;
 }
 
+Scene diffrenderCaptureScene(const Scene& scene, const DiffrenderParameters& p) {
+  if (p.capture.empty()) {
+    if (scene.gi.mode == RadianceMode::Albedo)
+      throw Error(scene.file.string(), "scene.gi.mode",
+                  "diffrender adds to a capture of the scan's radiance, and in the albedo mode "
+                  "the scan's colour is its albedo: give gi.parameters.capture, a colour layer of "
+                  "captured radiance (nestlight bake-radiance scene.json --layer captured), or use "
+                  "the radiance-cache mode");
+    return scene;
+  }
+  Scene s = scene;
+  const JsonField field(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+  for (size_t i = 0; i < s.octrees.size(); ++i) {
+    const OctreeReader reader(s.octrees[i].path);
+    const LayerRecord* layer = reader.metadata().layer(p.capture);
+    if (!layer || layer->kind != "colour")
+      field.at("capture").fail("octrees[" + std::to_string(i) + "] (" + s.octrees[i].path.string() +
+                               ") has no colour layer '" + p.capture +
+                               "' (nestlight bake-radiance scene.json --layer " + p.capture +
+                               " writes it)");
+    s.octrees[i].colour = p.capture;
+    s.octrees[i].colourScale = 1;  // the layer holds radiance
+  }
+  s.gi.mode = RadianceMode::RadianceCache;
+  return s;
+}
+
 MethodInfo diffrenderMethodInfo() {
   MethodInfo m;
   m.name = "diffrender";
@@ -171,9 +230,12 @@ MethodInfo diffrenderMethodInfo() {
     if (cache > q) setParameter(g, "cache", q);
   };
   m.create = createDiffrenderMethod;
-  // The capture is the scan's recorded colour: its light.
-  m.albedoMode = false;
+  // The capture is the scan's recorded colour (radiance-cache mode) or a layer of it.
   m.whyNotApplicable = [](const Scene& s) -> std::string {
+    if (s.gi.mode == RadianceMode::Albedo &&
+        !(s.gi.parameters.is_object() && s.gi.parameters.contains("capture")))
+      return "in the albedo mode it needs gi.parameters.capture, a layer of captured radiance "
+             "(nestlight bake-radiance)";
     for (const SceneMesh& mesh : s.meshes)
       if (mesh.inserted) return "";
     return "the scene has no inserted mesh (meshes[].inserted), and diffrender's work is the "

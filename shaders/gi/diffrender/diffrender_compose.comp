@@ -19,6 +19,7 @@ layout(binding = DR_UNIT_DIRECT) uniform sampler2D uDirect;
 layout(binding = DR_UNIT_DELTA) uniform sampler2D uDeltaLow;
 layout(binding = DR_UNIT_GUIDE) uniform sampler2D uGuideLow;
 layout(rgba32f, binding = 0) uniform writeonly image2D uOut;
+layout(r32f, binding = 1) uniform writeonly image2D uMask;  // 1 scan, 2 inserted mesh, 0 else (an AOV)
 uniform int uScale;
 uniform int uObjectSamples;
 uniform bool uSelfShadow;
@@ -91,6 +92,7 @@ void main() {
   float depth = texelFetch(uDepth, px, 0).r;
   if (!(depth < 1.0)) {
     imageStore(uOut, px, direct);
+    imageStore(uMask, px, vec4(0.0));
     return;
   }
   uvec4 m = texelFetch(uMaterial, px, 0);
@@ -103,10 +105,13 @@ void main() {
   if (dot(n, wo) < 0.0) n = -n;
   vec3 L = direct.rgb;
   int source = gbufferSource(m);
+  float mask = 0.0;
   if (source == NL_SOURCE_SCAN) {
+    mask = 1.0;
     L += uDeltaGain * upsampledDelta(px, n, length(x - frame.eye.xyz));
   } else if (source == NL_SOURCE_MESH && inObjects(x)) {
     atomicAdd(stats[DR_STAT_OBJECT_PIXELS], 1u);
+    mask = 2.0;
     ivec2 gpx = px + ivec2(frame.tile.xy);
     rngState = pcgHash(uint(gpx.x) * 7919u + uint(gpx.y) * 104729u + pcgHash(uSeed * 3u + uint(frame.counts.z) * 26699u));
     L += shadeObject(x, n, wo, texelFetch(uBaseColour, px, 0).rgb, m);
@@ -115,4 +120,5 @@ void main() {
   if (hidden > 0u) atomicAdd(stats[DR_STAT_HIDDEN], hidden);
   if (any(isnan(L)) || any(isinf(L))) L = direct.rgb;
   imageStore(uOut, px, vec4(L, direct.a));
+  imageStore(uMask, px, vec4(mask));
 }

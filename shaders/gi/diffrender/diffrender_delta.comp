@@ -26,6 +26,7 @@ layout(binding = DR_UNIT_DIRECT) uniform sampler2D uDirect;
 layout(binding = DR_UNIT_SHADOW_WITHOUT) uniform sampler2DArrayShadow uShadowWithout;
 layout(rgba32f, binding = 0) uniform writeonly image2D uDelta;  // dL, a: 1 where computed
 layout(rgba32f, binding = 1) uniform writeonly image2D uGuide;  // the normal, the view distance
+layout(rgba32f, binding = 2) uniform writeonly image2D uRho;    // the material estimate (an AOV)
 uniform int uScale;        // delta_scale
 uniform int uSamples;      // N
 uniform int uCache;        // |H_a| at most
@@ -78,6 +79,7 @@ void main() {
   imageStore(uGuide, lp, vec4(n, depth < 1.0 ? length(x - frame.eye.xyz) : -1.0));
   if (!(depth < 1.0) || gbufferSource(m) != NL_SOURCE_SCAN) {
     imageStore(uDelta, lp, vec4(0.0));
+    imageStore(uRho, lp, vec4(0.0));
     return;
   }
   atomicAdd(stats[DR_STAT_SCAN_PIXELS], 1u);
@@ -131,6 +133,7 @@ void main() {
   }
   if (any(greaterThan(rho, vec3(uRhoMax))) || any(isnan(rho))) atomicAdd(stats[DR_STAT_RHO_CLAMPED], 1u);
   rho = clamp(rho, vec3(0.0), vec3(uRhoMax));
+  imageStore(uRho, lp, vec4(rho, 1.0));
   vec3 delta = vec3(0.0);
   uint traced = min(uint(uCache), hits);
   if (hits > 0u) {

@@ -16,6 +16,7 @@
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/srgb.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/node_key.h"
 #include "test_support.h"
 
 namespace nestlight::gi {
@@ -84,11 +85,8 @@ TEST_P(DiffrenderSphere, BlackSphereTakesItsShareOfTheSkyFromTheFloor) {
   test::TempDir t;
   buildFloor(t);
   const int size = 96;
-  const json params = {{"query", GetParam()},
-                       {"samples", 64},
-                       {"cache", 64},
-                       {"object_voxels", 64},
-                       {"delta_scale", 1}};
+  const json params = {{"query", GetParam()}, {"samples", 64},    {"cache", 64},
+                       {"object_voxels", 64}, {"delta_scale", 1}, {"aovs", "aovs"}};
   const MethodFrame with = renderWith(t, params, "diffrender", size);
   const MethodFrame without = renderWith(t, json::object(), "raster", size);
   const Scene s = writeScene(t, sceneJson(params, "diffrender", size));
@@ -110,6 +108,24 @@ TEST_P(DiffrenderSphere, BlackSphereTakesItsShareOfTheSkyFromTheFloor) {
       ++pixels;
     }
   ASSERT_GT(pixels, 1000);
+  // The material estimate (eq. 5) on the floor: the capture over the impostor's mean sky, which the
+  // sphere (not in the impostor) does not take: rho everywhere, within 3% on average (the
+  // impostor's texels at the horizon mix floor and sky) and 10% at any pixel.
+  const HdrImage rhoAov = readHdrImage((t.path() / "aovs" / "diffrender_rho.exr").string());
+  const HdrImage mask = readHdrImage((t.path() / "aovs" / "diffrender_mask.exr").string());
+  ASSERT_EQ(rhoAov.width, size);
+  double rhoSum = 0;
+  int rhoPixels = 0, objectPixels = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      objectPixels += mask.get(x, y).r == 2.0f;
+      if (mask.get(x, y).r != 1.0f) continue;
+      rhoSum += rhoAov.get(x, y).r, ++rhoPixels;
+      EXPECT_NEAR(rhoAov.get(x, y).r / rho, 1.0, 0.1) << x << "," << y;
+    }
+  ASSERT_GT(rhoPixels, 1000);
+  EXPECT_GT(objectPixels, 50);
+  EXPECT_NEAR(rhoSum / rhoPixels / rho, 1.0, 0.03);
   // 5%: the bound; the estimator's noise over these pixels is under 1% (64 samples, all
   // traced), the 64^3 voxels' silhouette about 1%, the rest is the impostor's.
   EXPECT_NEAR(measured / expected, 1.0, 0.05)
@@ -117,6 +133,82 @@ TEST_P(DiffrenderSphere, BlackSphereTakesItsShareOfTheSkyFromTheFloor) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Queries, DiffrenderSphere, ::testing::Values("dit", "em"));
+
+// The scene's lights lit the capture but are no surface of it: a sun straight down (irradiance E,
+// no sky) over the floor, whose captured radiance is then rho E / pi; the black sphere's umbra (the
+// disc of radius r under it) loses all of it, dL = -rho E / pi, and the floor outside keeps its
+// capture exactly (nothing else changes: the sphere is black and the impostor holds no light).
+TEST(DiffrenderLights, InsertedMeshShadowsTheSunOnTheCapture) {
+  test::TempDir t;
+  buildFloor(t);
+  const float E = 3.0f;
+  const int size = 96;
+  json j = sceneJson({{"samples", 16}, {"cache", 8}, {"object_voxels", 32}, {"delta_scale", 1}},
+                     "diffrender", size);
+  j.erase("environment");
+  j["octrees"][0]["colour_scale"] = E / kPi;
+  j["lights"] = json::array(
+      {json{{"type", "directional"}, {"direction", {0.0, 0.0, -1.0}}, {"irradiance", {E, E, E}}}});
+  const Scene s = writeScene(t, j);
+  const MethodFrame with = createMethod(s, MethodContext(true))->render(s.camera);
+  j["gi"]["method"] = "raster";
+  j["gi"]["parameters"] = json::object();
+  const Scene r = writeScene(t, j);
+  const MethodFrame without = createMethod(r, MethodContext(true))->render(r.camera);
+  const float capture = srgbDecode(kGrey / 255.0f) * E / kPi;
+  int umbra = 0, lit = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      glm::vec3 p;
+      if (!floorPoint(s, x, y, &p, 3.5f)) continue;
+      const Rgb b = without.image.get(x, y);
+      if (std::abs(b.r - capture) > 0.02f * capture) continue;  // the sphere, not the floor
+      const float h = std::hypot(p.x, p.y), got = with.image.get(x, y).r;
+      if (h < 0.8f * kR) {
+        // The shadow maps' 3 x 3 filter softens the edge only.
+        EXPECT_LT(got, 0.05f * capture) << x << "," << y << " h " << h;
+        ++umbra;
+      } else if (h > 1.4f * kR) {
+        EXPECT_NEAR(got, capture, 0.01f * capture) << x << "," << y << " h " << h;
+        ++lit;
+      }
+    }
+  EXPECT_GT(umbra, 30);
+  EXPECT_GT(lit, 1000);
+}
+
+// A capture layer (what bake-radiance writes) stands for the scan's colour whatever gi.mode says:
+// the floor's radiance rho L as a layer, in the albedo mode, renders as the radiance-cache scene
+// whose colour is that radiance. Without one, the albedo mode is an error naming the field, and a
+// layer the octree lacks names gi.parameters.capture.
+TEST(DiffrenderCapture, LayerOfCapturedRadianceInTheAlbedoMode) {
+  test::TempDir t;
+  buildFloor(t);
+  const float radiance = srgbDecode(kGrey / 255.0f) * kSky;
+  test::writeColourLayer(t.path() / "floor.octree", "captured", [&](const NodeKey&, size_t) {
+    return std::array<float, 3>{radiance, radiance, radiance};
+  });
+  const json params = {{"samples", 16}, {"object_voxels", 32}};
+  const int size = 48;
+  const MethodFrame cached = renderWith(t, params, "diffrender", size);
+  json j = sceneJson(params, "diffrender", size);
+  j["gi"]["mode"] = "albedo";
+  const Error missing = test::errorOf([&] { createMethod(writeScene(t, j), MethodContext(true)); });
+  EXPECT_NE(std::string(missing.what()).find("scene.gi.mode"), std::string::npos) << missing.what();
+  j["gi"]["parameters"]["capture"] = "nope";
+  const Error nope = test::errorOf([&] { createMethod(writeScene(t, j), MethodContext(true)); });
+  EXPECT_NE(std::string(nope.what()).find("scene.gi.parameters.capture"), std::string::npos)
+      << nope.what();
+  j["gi"]["parameters"]["capture"] = "captured";
+  const Scene s = writeScene(t, j);
+  const MethodFrame layered = createMethod(s, MethodContext(true))->render(s.camera);
+  double diff = 0, sum = 0;
+  for (size_t i = 0; i < cached.image.rgb.size(); ++i)
+    diff += std::abs(cached.image.rgb[i] - layered.image.rgb[i]), sum += cached.image.rgb[i];
+  // The layer's half floats against the 8-bit colour decoded: 1e-3 of the image.
+  EXPECT_LT(diff / sum, 1e-3);
+  EXPECT_GT(sum, 0.0);
+}
 
 // Eq. 9 traces `cache` of a pixel's |H| box hits and scales their sum by |H| / cache: unbiased,
 // so its mean over many independent pixels (each its own random sequence) equals the uncached

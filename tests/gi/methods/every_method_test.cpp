@@ -60,8 +60,8 @@ TEST_P(EveryMethod, PointLightOverPlane) {
       t, json::array({json{{"type", "point"}, {"position", {1.0, 0.5, h}}, {"intensity", I}}}), 32);
   const MethodInfo* info = findMethod(GetParam());
   ASSERT_NE(info, nullptr);
-  if (!info->albedoMode)
-    GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
+  if (const std::string why = whyNotApplicable(*info, s); !why.empty())
+    GTEST_SKIP() << info->name << ": " << why;
   s.gi.method = info->name;
   // The lowest quality a sampling method needs here: 16 samples per pixel jitter over the pixel.
   info->applyQuality(s.gi,
@@ -94,8 +94,8 @@ TEST_P(EveryMethod, VideoLightProbeFollowsTheCameraTime) {
   Scene s = lambertFloorScene(t, json::array(), 16);
   const MethodInfo* info = findMethod(GetParam());
   ASSERT_NE(info, nullptr);
-  if (!info->albedoMode)
-    GTEST_SKIP() << info->name << " renders the radiance-cache mode only so far";
+  if (const std::string why = whyNotApplicable(*info, s); !why.empty())
+    GTEST_SKIP() << info->name << ": " << why;
   const float sky[3] = {1.0f, 3.0f, 0.5f};
   for (int i = 0; i < 3; ++i) {
     HdrImage img(16, 8);

@@ -36,7 +36,14 @@ struct DiffrenderParameters {
   float ambient = 0;             // radiance of a self-shadowed object ray
   float rhoMax = 1;              // the material estimate's clamp
   bool materialEstimate = true;  // false: the recorded colour as rho (an ablation)
-  int ditIterations = 6;         // DIT's refinements of a ray's lookup direction
+  int ditIterations = 8;         // DIT's secant steps after its search
+  // A folder (relative to the scene file) for each still's images beside the composite:
+  // diffrender_delta.exr (dL on the scan), diffrender_rho.exr (the material estimate), both at
+  // 1 / delta_scale, and diffrender_mask.exr (1 scan, 2 inserted mesh, 0 else). Empty: none.
+  std::string aovs;
+  // The colour layer holding the scan's captured radiance (`nestlight bake-radiance` writes one),
+  // whatever gi.mode says; empty: the scan's own colour in the radiance-cache mode.
+  std::string capture;
 };
 
 const ParameterSpecs& diffrenderParameterSpecs();
@@ -44,6 +51,11 @@ MethodInfo diffrenderMethodInfo();
 // From scene.gi.parameters with the quality preset's values for the keys not given; throws
 // nestlight::Error naming scene.gi.parameters.<key>.
 DiffrenderParameters diffrenderParameters(const Scene& scene);
+// The scene as the frame draws it: with `capture`, every scan's colour is that layer, its
+// radiance, in the radiance-cache mode. Throws nestlight::Error naming
+// scene.gi.parameters.capture when a scan lacks the layer, or scene.gi.mode in the albedo mode
+// without a capture.
+Scene diffrenderCaptureScene(const Scene& scene, const DiffrenderParameters& p);
 const char* queryName(DiffrenderParameters::Query q);
 const char* qualityName(DiffrenderParameters::Quality q);
 
