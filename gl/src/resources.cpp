@@ -73,8 +73,8 @@ Texture Texture::volume(GLenum internalFormat, int width, int height, int depth,
   return make(GL_TEXTURE_3D, internalFormat, width, height, depth, levels);
 }
 
-Texture Texture::array2d(GLenum internalFormat, int width, int height, int layers) {
-  return make(GL_TEXTURE_2D_ARRAY, internalFormat, width, height, layers, 1);
+Texture Texture::array2d(GLenum internalFormat, int width, int height, int layers, int levels) {
+  return make(GL_TEXTURE_2D_ARRAY, internalFormat, width, height, layers, levels);
 }
 
 void Texture::setFilter(GLenum minFilter, GLenum magFilter) const {

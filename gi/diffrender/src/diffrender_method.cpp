@@ -29,6 +29,10 @@ namespace nestlight::gi {
 
 namespace {
 
+// Holes up to 2^5 = 32 texels wide are filled from their surroundings; wider empty regions are
+// the environment (impostor_fill.comp).
+constexpr int kFillLevels = 5;
+
 int levelsFor(int size) {
   int levels = 1;
   while ((size >> levels) > 0) ++levels;
@@ -74,6 +78,11 @@ class DiffrenderExtension : public FrameExtension {
     buildVolume(f);
     const int S = params_.impostorSize;
     raw_ = gl::Texture::array2d(GL_RGBA32F, S, S, 6);
+    colourSum_ = gl::Texture::array2d(GL_RGBA32F, S, S, 6, levelsFor(S));
+    distanceSum_ = gl::Texture::array2d(GL_R32F, S, S, 6, levelsFor(S));
+    // Mipmapped filters: texelFetch of a level beyond the base is undefined without them.
+    colourSum_.setFilter(GL_NEAREST_MIPMAP_NEAREST, GL_NEAREST);
+    distanceSum_.setFilter(GL_NEAREST_MIPMAP_NEAREST, GL_NEAREST);
     rawDepth_ = gl::Texture(GL_DEPTH_COMPONENT32F, S, S);
     impostorLevels_ = levelsFor(S);
     impostor_ = gl::Texture::cubeMap(GL_RGBA32F, S, impostorLevels_);
@@ -85,6 +94,7 @@ class DiffrenderExtension : public FrameExtension {
                                       {{"NL_SCENE_FRAME", "1"}});
     impostorMesh_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
                                        {GL_FRAGMENT_SHADER, "gi/diffrender/impostor_mesh.frag"}});
+    pull_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/impostor_pull.comp"}});
     fill_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/impostor_fill.comp"}});
     delta_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/diffrender_delta.comp"}});
     compose_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/diffrender_compose.comp"}});
@@ -269,12 +279,26 @@ class DiffrenderExtension : public FrameExtension {
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glMemoryBarrier(GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    const GLuint groups = GLuint((S + 7) / 8);
+    pull_.use();
+    glBindTextureUnit(0, raw_.id());
+    glBindImageTexture(0, colourSum_.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(1, distanceSum_.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R32F);
+    glUniform1i(pull_.uniform("uSize"), S);
+    glDispatchCompute(groups, groups, 6);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                    GL_TEXTURE_UPDATE_BARRIER_BIT);
+    glGenerateTextureMipmap(colourSum_.id());
+    glGenerateTextureMipmap(distanceSum_.id());
     fill_.use();
     f.bindEnvironment(fill_);
     glBindTextureUnit(0, raw_.id());
+    glBindTextureUnit(1, colourSum_.id());
+    glBindTextureUnit(2, distanceSum_.id());
     glBindImageTexture(0, impostor_.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
     glUniform1i(fill_.uniform("uSize"), S);
-    glDispatchCompute(GLuint((S + 7) / 8), GLuint((S + 7) / 8), 6);
+    glUniform1i(fill_.uniform("uFillLevels"), kFillLevels);
+    glDispatchCompute(groups, groups, 6);
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
     glGenerateTextureMipmap(impostor_.id());
   }
@@ -432,13 +456,15 @@ class DiffrenderExtension : public FrameExtension {
   glm::ivec3 volumeSize_{1};
   int impostorLevels_ = 1;
   float reach_ = 1;
+  gl::Texture colourSum_, distanceSum_;  // the pull-push's coverage-weighted sums and their mips
   gl::Texture raw_, rawDepth_, impostor_, occupancy_, surface_, deltaLow_, guideLow_, rhoLow_,
       mask_;
   HdrImage aovDelta_, aovRho_, aovMask_;
   gl::Texture shadowWithout_;
   int shadowLayers_ = 0;
   gl::Framebuffer impostorFbo_, shadowFbo_;
-  gl::ShaderProgram impostorScan_, impostorMesh_, fill_, delta_, compose_, meshShadow_, scanShadow_;
+  gl::ShaderProgram impostorScan_, impostorMesh_, pull_, fill_, delta_, compose_, meshShadow_,
+      scanShadow_;
   gl::Buffer stats_;
 };
 

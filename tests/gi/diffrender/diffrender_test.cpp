@@ -210,6 +210,58 @@ TEST(DiffrenderCapture, LayerOfCapturedRadianceInTheAlbedoMode) {
   EXPECT_GT(sum, 0.0);
 }
 
+// A closed room of scan points (a 4 m cube, 9,600 at random, all of one radiance c) about the
+// sphere, under a sky ten times brighter: every direction from the floor meets a wall, so the
+// material estimate is c / c = 1 wherever the impostor is closed. Gaps between the splats that
+// showed the sky (the pull-push fill closes them) would pull it below 1.
+TEST(DiffrenderImpostor, ClosedRoomShowsNoSkyThroughItsSplats) {
+  test::TempDir t;
+  {
+    std::ofstream ply(t.file("room.ply"));
+    const int n = 40;
+    Rng rng(7);
+    ply << "ply\nformat ascii 1.0\nelement vertex " << 6 * n * n
+        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
+           "float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
+           "blue\nend_header\n";
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side)
+        for (int j = 0; j < n; ++j)
+          for (int i = 0; i < n; ++i) {
+            double p[3], nn[3] = {0, 0, 0};
+            p[axis] = side ? 4.0 : 0.0;
+            // Uniformly random: the gaps between splats that a regular grid would not leave.
+            const glm::vec2 u = rng.uniform2();
+            p[(axis + 1) % 3] = 4.0 * u.x;
+            p[(axis + 2) % 3] = 4.0 * u.y;
+            (void)i, (void)j;
+            nn[axis] = side ? -1.0 : 1.0;
+            ply << p[0] - 2 << " " << p[1] - 2 << " " << p[2] << " " << nn[0] << " " << nn[1] << " "
+                << nn[2] << " 128 128 128\n";
+          }
+  }
+  test::buildOctreeFrom(t.file("room.ply"), t.path() / "floor.octree");
+  writeIcosphereObj(t.file("sphere.obj"), 3);
+  json j = sceneJson({{"samples", 32}, {"object_voxels", 32}, {"rho_max", 4.0}, {"aovs", "aovs"}},
+                     "diffrender", 48);
+  j["environment"] = {{"constant", {10.0, 10.0, 10.0}}};
+  j["camera"] = {{"eye", {0.0, -1.8, 3.0}},
+                 {"target", {0.0, 0.5, 0.0}},
+                 {"up", {0.0, 0.0, 1.0}},
+                 {"fov", 70.0},
+                 {"width", 48},
+                 {"height", 48}};
+  const Scene s = writeScene(t, j);
+  createMethod(s, MethodContext(true))->render(s.camera);
+  const HdrImage rhoAov = readHdrImage((t.path() / "aovs" / "diffrender_rho.exr").string());
+  double sum = 0;
+  int n = 0;
+  for (float v : rhoAov.rgb)
+    if (v > 0) sum += v, ++n;
+  ASSERT_GT(n, 300);
+  EXPECT_NEAR(sum / n, 1.0, 0.03);
+}
+
 // Eq. 9 traces `cache` of a pixel's |H| box hits and scales their sum by |H| / cache: unbiased,
 // so its mean over many independent pixels (each its own random sequence) equals the uncached
 // estimator's (every hit traced) within 3 standard errors of the mean difference.

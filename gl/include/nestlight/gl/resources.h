@@ -87,7 +87,7 @@ class Texture : public Object<TextureDeleter> {
   static Texture cubeMap(GLenum internalFormat, int size, int levels = 1);
   // A 3D texture (voxel grids).
   static Texture volume(GLenum internalFormat, int width, int height, int depth, int levels = 1);
-  static Texture array2d(GLenum internalFormat, int width, int height, int layers);
+  static Texture array2d(GLenum internalFormat, int width, int height, int layers, int levels = 1);
   int width() const { return width_; }
   int height() const { return height_; }
   GLenum format() const { return format_; }
