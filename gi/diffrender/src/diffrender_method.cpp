@@ -406,6 +406,7 @@ class DiffrenderExtension : public FrameExtension {
     glUniform1i(compose_.uniform("uObjectSamples"), params_.objectSamples);
     glUniform1i(compose_.uniform("uSelfShadow"), params_.selfShadow ? 1 : 0);
     glUniform1f(compose_.uniform("uAmbient"), params_.ambient);
+    glUniform1i(compose_.uniform("uSecondaryBounce"), params_.secondaryBounce ? 1 : 0);
     glUniform1f(compose_.uniform("uDeltaGain"), 1.0f);
     glBindImageTexture(0, ctx.target("radiance_diffrender").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_RGBA32F);

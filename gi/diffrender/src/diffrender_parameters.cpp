@@ -110,7 +110,8 @@ const ParameterSpecs& diffrenderParameterSpecs() {
                  "the inserted meshes' solid voxel grid: n (n^3) or [x, y, z]"),
       P::boolean("self_shadow", true, "object rays march the object volume (blocked: ambient)"),
       P::boolean("secondary_bounce", false,
-                 "a second ray from a hit voxel's normal and material (not built yet: ignored)"),
+                 "object rays their own volume blocks see the light the hit voxel sends back (its "
+                 "normal and material) instead of ambient"),
       P::integer("impostor_size", 16, 4096, 256, "texels of a distance impostor's cube face"),
       P::integer("scene_voxels", 16, 512, 256, "vct: the scene volume's voxels per axis"),
       P::integer("delta_scale", 1, 8, 2, "dL is computed at 1/delta_scale of the resolution"),

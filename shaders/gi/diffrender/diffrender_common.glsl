@@ -2,7 +2,8 @@
 // 2017, section 6: EM, a lookup by direction as from a distant environment; DIT, distance impostor
 // tracing after Szirmay-Kalos, Aszodi, Lazanyi and Premecz, "Approximate Ray-Tracing on the GPU
 // with Distance Impostors", 2005), the inserted meshes' solid voxel volume marched by rays, and
-// the random numbers. Include diffrender_interface.glsl, brdf.glsl and environment.glsl first.
+// the random numbers, and the light an object's voxel sends back. Include gbuffer_in.glsl (the
+// materials), brdf_sample.glsl, environment.glsl, lights.glsl and diffrender_interface.glsl first.
 #include "impostor_direction.glsl"
 
 layout(binding = DR_UNIT_IMPOSTOR) uniform samplerCube uImpostor;  // rgb radiance, a distance
@@ -198,4 +199,31 @@ bool inObjects(vec3 x) {
           return true;
       }
   return false;
+}
+
+// The light an inserted mesh's voxel sends back, taken as diffuse: its material's diffuse albedo
+// times the impostor's radiance over the hemisphere about its normal (four cosine lookups at the
+// level of a quarter hemisphere), plus its emission.
+vec3 objectRadiance(vec3 p, vec3 n, int material) {
+  if (material < 0) return vec3(0.0);
+  MaterialRecord r = materials[material];
+  vec3 albedo = int(r.baseColor.w) == NL_MATERIAL_LAMBERT ? r.baseColor.rgb : (1.0 - r.params.y) * r.baseColor.rgb;
+  vec3 E = vec3(0.0);
+  mat3 F = frameFromNormal(n);
+  float lod = impostorLod(kPi / 4.0);
+  for (int k = 0; k < 4; ++k) {
+    vec3 w = F * sampleCosineHemisphereGl(vec2((float(k) + 0.5) / 4.0, fract(0.618034 * float(k) + 0.25)));
+    float t;
+    E += queryScene(p + n * 1e-3, w, lod, t);
+  }
+  E *= kPi / 4.0;  // irradiance: pi times the mean radiance of cosine-distributed directions
+  // The scene's lights, shadowed by the frame's maps (the inserted meshes in them), the lookup a
+  // voxel off the hit (which lies on the voxel's face, not the mesh).
+  vec3 q = p + n * length((uVolumeHi - uVolumeLo) / vec3(uVolumeSize));
+  for (int i = 0; i < frame.counts.x; ++i) {
+    LightSample s = sampleLight(i, q);
+    float c = dot(n, s.wi);
+    if (c > 0.0) E += s.radiance * c * visibility(i, q, n, 0.0, s);
+  }
+  return albedo * kInvPi * E + r.emission.rgb;
 }

@@ -2,12 +2,14 @@
 // capture plus dL, upsampled from 1 / delta_scale by a joint bilateral weight (the neighbours'
 // view distance and normal); pixels of the inserted meshes their light gathered from the distance
 // impostor by BRDF importance sampling, each sample read at the mip level of its solid angle
-// (eq. 3; Colbert and Krivanek 2007), rays their own volume blocks given `ambient`; the scene's
+// (eq. 3; Colbert and Krivanek 2007), rays their own volume blocks given `ambient` (or, with the
+// secondary bounce of the high preset, the light the hit voxel sends back); the scene's
 // lights come from the raster frame's direct light on every pixel.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "../common/gbuffer_in.glsl"
 #include "../common/brdf_sample.glsl"
 #include "../common/environment.glsl"
+#include "../common/lights.glsl"
 #include "diffrender_interface.glsl"
 #include "diffrender_common.glsl"
 
@@ -23,6 +25,7 @@ layout(r32f, binding = 1) uniform writeonly image2D uMask;  // 1 scan, 2 inserte
 uniform int uScale;
 uniform int uObjectSamples;
 uniform bool uSelfShadow;
+uniform bool uSecondaryBounce;  // a blocked ray sees the light its own voxel sends back
 uniform float uAmbient;
 uniform float uDeltaGain;  // 1; 0 renders the capture without dL (tests, the "without" image)
 
@@ -73,7 +76,7 @@ vec3 shadeObject(vec3 x, vec3 n, vec3 wo, vec3 base, uvec4 m) {
     vec3 hn;
     int hm;
     if (uSelfShadow && marchObjects(xo, w, leave, kImpostorFar, tHit, hn, hm)) {
-      Li = vec3(uAmbient);
+      Li = uSecondaryBounce ? objectRadiance(xo + w * tHit, hn, hm) : vec3(uAmbient);
       blocked++;
     } else {
       float t;

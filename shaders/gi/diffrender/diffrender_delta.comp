@@ -35,33 +35,6 @@ uniform float uRhoMax;
 
 #define DR_SAMPLES_MAX 1024
 
-// The light an inserted mesh's voxel sends back, taken as diffuse: its material's diffuse albedo
-// times the impostor's radiance over the hemisphere about its normal (four cosine lookups at the
-// level of a quarter hemisphere), plus its emission.
-vec3 objectRadiance(vec3 p, vec3 n, int material) {
-  if (material < 0) return vec3(0.0);
-  MaterialRecord r = materials[material];
-  vec3 albedo = int(r.baseColor.w) == NL_MATERIAL_LAMBERT ? r.baseColor.rgb : (1.0 - r.params.y) * r.baseColor.rgb;
-  vec3 E = vec3(0.0);
-  mat3 F = frameFromNormal(n);
-  float lod = impostorLod(kPi / 4.0);
-  for (int k = 0; k < 4; ++k) {
-    vec3 w = F * sampleCosineHemisphereGl(vec2((float(k) + 0.5) / 4.0, fract(0.618034 * float(k) + 0.25)));
-    float t;
-    E += queryScene(p + n * 1e-3, w, lod, t);
-  }
-  E *= kPi / 4.0;  // irradiance: pi times the mean radiance of cosine-distributed directions
-  // The scene's lights, shadowed by the frame's maps (the inserted meshes in them), the lookup a
-  // voxel off the hit (which lies on the voxel's face, not the mesh).
-  vec3 q = p + n * length((uVolumeHi - uVolumeLo) / vec3(uVolumeSize));
-  for (int i = 0; i < frame.counts.x; ++i) {
-    LightSample s = sampleLight(i, q);
-    float c = dot(n, s.wi);
-    if (c > 0.0) E += s.radiance * c * visibility(i, q, n, 0.0, s);
-  }
-  return albedo * kInvPi * E + r.emission.rgb;
-}
-
 void main() {
   ivec2 lp = ivec2(gl_GlobalInvocationID.xy);
   ivec2 lowSize = (ivec2(frame.tile.zw) + uScale - 1) / uScale;

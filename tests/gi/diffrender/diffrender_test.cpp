@@ -262,6 +262,71 @@ TEST(DiffrenderImpostor, ClosedRoomShowsNoSkyThroughItsSplats) {
   EXPECT_NEAR(sum / n, 1.0, 0.03);
 }
 
+// An inserted white Lambert sphere is lit by what the impostor holds: at a point of normal n,
+// rho_s times the cosine-weighted mean of the sky (L) and of the floor's captured radiance below
+// (integrated here over the 8 m floor's true extent). Its own volume must not shadow a convex
+// surface: with self-shadowing on, the voxels a grazing ray passes near the surface it leaves are
+// skipped (within 5% of the unshadowed light on the upper half).
+TEST(DiffrenderObject, WhiteSphereIsLitByTheSkyAndTheFloor) {
+  test::TempDir t;
+  buildFloor(t);
+  const int size = 64;
+  const float rhoS = 0.8f, floorL = srgbDecode(kGrey / 255.0f) * kSky;
+  for (const bool selfShadow : {false, true}) {
+    SCOPED_TRACE(selfShadow ? "self-shadow" : "no self-shadow");
+    json j = sceneJson({{"object_samples", 64},
+                        {"object_voxels", 64},
+                        {"self_shadow", selfShadow},
+                        {"aovs", "aovs"}},
+                       "diffrender", size);
+    j["materials"]["black"]["base_color"] = rhoS;
+    j["camera"]["eye"] = {0.0, -3.0, 3.2};
+    j["camera"]["target"] = {0.0, 0.0, kD};
+    j["camera"]["fov"] = 30.0;
+    const Scene s = writeScene(t, j);
+    const MethodFrame f = createMethod(s, MethodContext(true))->render(s.camera);
+    const HdrImage mask = readHdrImage((t.path() / "aovs" / "diffrender_mask.exr").string());
+    double got = 0, want = 0;
+    int pixels = 0;
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        if (mask.get(x, y).r != 2.0f) continue;
+        glm::vec3 o, d;
+        cameraRay(s.camera, s.origin, x + 0.5f, y + 0.5f, &o, &d);
+        const glm::vec3 oc = o - glm::vec3(0, 0, kD);
+        const float b = glm::dot(oc, d), c = glm::dot(oc, oc) - kR * kR, disc = b * b - c;
+        if (disc < 0) continue;
+        const glm::vec3 p = o + d * (-b - std::sqrt(disc)),
+                        n = glm::normalize(p - glm::vec3(0, 0, kD));
+        if (n.z < 0.0f) continue;
+        // The cosine-weighted mean over the hemisphere about n: sky, or the floor where the
+        // direction meets it within its 8 m square.
+        const glm::vec3 t1 = glm::normalize(glm::cross(
+                            std::abs(n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0), n)),
+                        t2 = glm::cross(n, t1);
+        double sum = 0;
+        const int k = 48;
+        for (int a = 0; a < k; ++a)
+          for (int bb = 0; bb < k; ++bb) {
+            const float r = std::sqrt((a + 0.5f) / k), phi = 2 * kPi * (bb + 0.5f) / k;
+            const glm::vec3 w = r * std::cos(phi) * t1 + r * std::sin(phi) * t2 +
+                                std::sqrt(std::max(0.0f, 1 - r * r)) * n;
+            bool floorHit = false;
+            if (w.z < 0) {
+              const glm::vec3 q = p + w * (-p.z / w.z);
+              floorHit = std::abs(q.x) < 4 && std::abs(q.y) < 4;
+            }
+            sum += floorHit ? floorL : kSky;
+          }
+        want += rhoS * sum / (k * k);
+        got += f.image.get(x, y).r;
+        ++pixels;
+      }
+    ASSERT_GT(pixels, 100);
+    EXPECT_NEAR(got / want, 1.0, 0.05) << pixels << " pixels";
+  }
+}
+
 // Eq. 9 traces `cache` of a pixel's |H| box hits and scales their sum by |H| / cache: unbiased,
 // so its mean over many independent pixels (each its own random sequence) equals the uncached
 // estimator's (every hit traced) within 3 standard errors of the mean difference.
