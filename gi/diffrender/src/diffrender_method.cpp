@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "nestlight/frame/frame_graph.h"
@@ -99,6 +100,7 @@ class DiffrenderExtension : public FrameExtension {
     delta_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/diffrender_delta.comp"}});
     compose_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/diffrender_compose.comp"}});
     stats_ = gl::Buffer(DR_STAT_COUNT * 4);
+    if (!params_.background.empty()) loadBackground(f);
     meshShadow_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "gi/raster/mesh.vert"},
                                      {GL_FRAGMENT_SHADER, "gi/raster/depth_only.frag"}});
     scanShadow_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "points/points.vert"},
@@ -176,6 +178,27 @@ class DiffrenderExtension : public FrameExtension {
   }
 
  private:
+  // The photograph, linear (a PNG's display values decoded with gamma 2.2, colour-match's
+  // convention), rows bottom up as the frame's.
+  void loadBackground(SceneFrame& f) {
+    const std::filesystem::path file(params_.background);
+    HdrImage photo =
+        file.extension() == ".png" ? readPng(file.string()) : readHdrImage(file.string());
+    if (file.extension() == ".png")
+      for (float& v : photo.rgb) v = std::pow(std::max(v, 0.0f), 2.2f);
+    std::vector<float> rgba(size_t(photo.width) * size_t(photo.height) * 4);
+    for (int y = 0; y < photo.height; ++y)
+      for (int x = 0; x < photo.width; ++x) {
+        const Rgb c = photo.get(x, photo.height - 1 - y);
+        float* o = &rgba[(size_t(y) * size_t(photo.width) + size_t(x)) * 4];
+        o[0] = c.r, o[1] = c.g, o[2] = c.b, o[3] = 1;
+      }
+    background_ = gl::Texture(GL_RGBA32F, photo.width, photo.height);
+    glTextureSubImage2D(background_.id(), 0, 0, 0, photo.width, photo.height, GL_RGBA, GL_FLOAT,
+                        rgba.data());
+    backgroundFile_ = f.scene().file.string();
+  }
+
   // The inserted meshes' solid voxels (object_volume.h), uploaded with the occupancy's mips.
   void buildVolume(SceneFrame& f) {
     const Scene& scene = f.scene();
@@ -407,6 +430,18 @@ class DiffrenderExtension : public FrameExtension {
     glUniform1i(compose_.uniform("uSelfShadow"), params_.selfShadow ? 1 : 0);
     glUniform1f(compose_.uniform("uAmbient"), params_.ambient);
     glUniform1i(compose_.uniform("uSecondaryBounce"), params_.secondaryBounce ? 1 : 0);
+    const bool photo = !params_.background.empty();
+    if (photo && (background_.width() != tile.fullWidth || background_.height() != tile.fullHeight))
+      throw Error(backgroundFile_, "scene.gi.parameters.background",
+                  params_.background + " is " + std::to_string(background_.width()) + "x" +
+                      std::to_string(background_.height()) + ", the image " +
+                      std::to_string(tile.fullWidth) + "x" + std::to_string(tile.fullHeight) +
+                      ": the photograph must be the camera's view at its resolution");
+    glUniform1i(compose_.uniform("uHasBackground"), photo ? 1 : 0);
+    if (photo) glBindTextureUnit(DR_UNIT_BACKGROUND, background_.id());
+    const glm::mat3 toScan = params_.backgroundMap, toPhoto = glm::inverse(params_.backgroundMap);
+    glUniformMatrix3fv(compose_.uniform("uPhotoToScan"), 1, GL_FALSE, &toScan[0][0]);
+    glUniformMatrix3fv(compose_.uniform("uScanToPhoto"), 1, GL_FALSE, &toPhoto[0][0]);
     glUniform1f(compose_.uniform("uDeltaGain"), 1.0f);
     glBindImageTexture(0, ctx.target("radiance_diffrender").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_RGBA32F);
@@ -461,6 +496,8 @@ class DiffrenderExtension : public FrameExtension {
   gl::Texture raw_, rawDepth_, impostor_, occupancy_, surface_, deltaLow_, guideLow_, rhoLow_,
       mask_;
   HdrImage aovDelta_, aovRho_, aovMask_;
+  gl::Texture background_;
+  std::string backgroundFile_;
   gl::Texture shadowWithout_;
   int shadowLayers_ = 0;
   gl::Framebuffer impostorFbo_, shadowFbo_;

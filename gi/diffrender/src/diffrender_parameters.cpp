@@ -2,6 +2,7 @@
 // entry in the registry.
 #include <algorithm>
 #include <filesystem>
+#include <glm/gtc/matrix_inverse.hpp>
 
 #include "nestlight/gi/diffrender/diffrender_method.h"
 #include "nestlight/gi/frame/frame_parameters.h"
@@ -48,6 +49,48 @@ ParameterSpec captureSpec() {
       "the colour layer of captured radiance (nestlight bake-radiance writes one), whatever "
       "gi.mode; empty: the scan's colour in the radiance-cache mode";
   return p;
+}
+
+ParameterSpec stringSpec(const char* name, const char* help) {
+  ParameterSpec p;
+  p.name = name;
+  p.type = ParameterType::String;
+  p.defaultValue = "";
+  p.help = help;
+  return p;
+}
+
+// colour-match's C as 3 rows of 3 numbers, or a file holding colour-match --json's report (its
+// "matrix").
+glm::mat3 parseColourMap(const JsonField& f) {
+  if (f.value().is_string()) {
+    std::filesystem::path file(f.string());
+    if (file.is_relative()) file = std::filesystem::path(f.file()).parent_path() / file;
+    nlohmann::json report;
+    try {
+      report = readJsonFile(file);
+    } catch (const Error& e) {
+      f.fail(std::string("cannot read the colour map: ") + e.what());
+    }
+    if (!report.is_object() || !report.contains("matrix"))
+      f.fail(file.string() + " has no \"matrix\" (colour-match --json writes one)");
+    const JsonField matrix(report.at("matrix"), "matrix", file.string());
+    if (!matrix.value().is_array()) matrix.fail("expected 3 rows of 3 numbers");
+    return parseColourMap(matrix);
+  }
+  if (!f.value().is_array() || f.arraySize() != 3)
+    f.fail("expected 3 rows of 3 numbers (colour-match's C) or a colour-match --json file");
+  glm::mat3 m(1.0f);
+  for (size_t r = 0; r < 3; ++r) {
+    const JsonField row = f.at(r);
+    if (!row.value().is_array() || row.arraySize() != 3) row.fail("expected 3 numbers");
+    for (size_t c = 0; c < 3; ++c) m[int(c)][int(r)] = float(row.at(c).number());
+  }
+  if (!(std::abs(glm::determinant(m)) > 1e-9f))
+    f.fail(
+        "the map is singular: the composite could not be brought back into the photograph's "
+        "colours");
+  return m;
 }
 
 ParameterSpec aovsSpec() {
@@ -121,6 +164,12 @@ const ParameterSpecs& diffrenderParameterSpecs() {
                 "the scan's reflectance: estimate (eq. 5) or the recorded colour (an ablation)"),
       aovsSpec(),
       captureSpec(),
+      stringSpec("background",
+                 "a photograph of the camera's view (.exr/.hdr linear, .png display) to composite "
+                 "onto instead of the capture; empty: the capture"),
+      stringSpec("background_map",
+                 "colour-match's 3x3 map C from the photograph's colours into the scan's (3 rows "
+                 "of 3 numbers, or a colour-match --json file); default identity"),
       P::integer("dit_iterations", 1, 64, 8,
                  "DIT: refinements of a ray's lookup direction before it counts as unconverged"),
   };
@@ -135,6 +184,7 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   Scene rest = scene;
   const JsonField params(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
   if (given.contains("object_voxels")) rest.gi.parameters.erase("object_voxels");
+  if (given.contains("background_map")) rest.gi.parameters.erase("background_map");
   const ResolvedParameters r = resolveParameterValues(rest, diffrenderParameterSpecs());
   DiffrenderParameters p;
   const std::string q = r.string("query"), quality = r.string("quality");
@@ -172,6 +222,15 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
     p.aovs = (dir.is_absolute() ? dir : scene.file.parent_path() / dir).string();
   }
   p.capture = r.string("capture");
+  if (const std::string b = r.string("background"); !b.empty()) {
+    const std::filesystem::path photo(b);
+    p.background = (photo.is_absolute() ? photo : scene.file.parent_path() / photo).string();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(p.background, ec))
+      params.at("background").fail("no such file: " + p.background);
+  }
+  if (given.contains("background_map"))
+    p.backgroundMap = parseColourMap(params.at("background_map"));
   if (p.query == Q::Vct || p.query == Q::Exact)
     params.at("query").fail(std::string("'") + queryName(p.query) +
                             "' is not built yet: use dit or em");

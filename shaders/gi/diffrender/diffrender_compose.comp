@@ -4,7 +4,9 @@
 // impostor by BRDF importance sampling, each sample read at the mip level of its solid angle
 // (eq. 3; Colbert and Krivanek 2007), rays their own volume blocks given `ambient` (or, with the
 // secondary bounce of the high preset, the light the hit voxel sends back); the scene's
-// lights come from the raster frame's direct light on every pixel.
+// lights come from the raster frame's direct light on every pixel. With a photograph (section 7,
+// Fig. 8) the photo, brought into the scan's colour space by colour-match's C, stands for the
+// capture on every pixel but the inserted meshes', and the composite goes back through C^-1.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "../common/gbuffer_in.glsl"
 #include "../common/brdf_sample.glsl"
@@ -20,6 +22,9 @@ layout(binding = 3) uniform usampler2D uMaterial;
 layout(binding = DR_UNIT_DIRECT) uniform sampler2D uDirect;
 layout(binding = DR_UNIT_DELTA) uniform sampler2D uDeltaLow;
 layout(binding = DR_UNIT_GUIDE) uniform sampler2D uGuideLow;
+layout(binding = DR_UNIT_BACKGROUND) uniform sampler2D uBackground;  // the full image's pixels
+uniform bool uHasBackground;
+uniform mat3 uPhotoToScan, uScanToPhoto;
 layout(rgba32f, binding = 0) uniform writeonly image2D uOut;
 layout(r32f, binding = 1) uniform writeonly image2D uMask;  // 1 scan, 2 inserted mesh, 0 else (an AOV)
 uniform int uScale;
@@ -93,8 +98,10 @@ void main() {
   if (any(greaterThanEqual(px, ivec2(frame.tile.zw)))) return;
   vec4 direct = texelFetch(uDirect, px, 0);
   float depth = texelFetch(uDepth, px, 0).r;
+  // The photograph in the scan's colours, where it stands for the capture.
+  vec3 photo = uHasBackground ? uPhotoToScan * texelFetch(uBackground, px + ivec2(frame.tile.xy), 0).rgb : vec3(0.0);
   if (!(depth < 1.0)) {
-    imageStore(uOut, px, direct);
+    imageStore(uOut, px, uHasBackground ? vec4(uScanToPhoto * photo, direct.a) : direct);
     imageStore(uMask, px, vec4(0.0));
     return;
   }
@@ -106,13 +113,14 @@ void main() {
   vec4 nn = texelFetch(uNormal, px, 0);
   vec3 n = nn.w > 0.0 ? normalize(nn.xyz) : wo;
   if (dot(n, wo) < 0.0) n = -n;
-  vec3 L = direct.rgb;
   int source = gbufferSource(m);
+  bool object = source == NL_SOURCE_MESH && inObjects(x);
+  vec3 L = uHasBackground && !object ? photo : direct.rgb;
   float mask = 0.0;
   if (source == NL_SOURCE_SCAN) {
     mask = 1.0;
     L += uDeltaGain * upsampledDelta(px, n, length(x - frame.eye.xyz));
-  } else if (source == NL_SOURCE_MESH && inObjects(x)) {
+  } else if (object) {
     atomicAdd(stats[DR_STAT_OBJECT_PIXELS], 1u);
     mask = 2.0;
     ivec2 gpx = px + ivec2(frame.tile.xy);
@@ -122,6 +130,7 @@ void main() {
   if (unconverged > 0u) atomicAdd(stats[DR_STAT_UNCONVERGED], unconverged);
   if (hidden > 0u) atomicAdd(stats[DR_STAT_HIDDEN], hidden);
   if (any(isnan(L)) || any(isinf(L))) L = direct.rgb;
+  if (uHasBackground) L = uScanToPhoto * L;
   imageStore(uOut, px, vec4(L, direct.a));
   imageStore(uMask, px, vec4(mask));
 }

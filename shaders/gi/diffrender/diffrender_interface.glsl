@@ -24,6 +24,7 @@
 #define DR_UNIT_GUIDE 10
 #define DR_UNIT_DIRECT 11          // the frame's direct light (scan pixels: the capture)
 #define DR_UNIT_SHADOW_WITHOUT 12  // shadow maps of the lights' views without the inserted meshes
+#define DR_UNIT_BACKGROUND 13      // the photograph (`background`)
 
 // Queries (DiffrenderParameters::Query).
 #define DR_QUERY_EM 0

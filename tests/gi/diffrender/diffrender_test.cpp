@@ -11,6 +11,7 @@
 #include "gi/floor_scene.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/diffrender/diffrender_method.h"
+#include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/scene.h"
@@ -327,6 +328,57 @@ TEST(DiffrenderObject, WhiteSphereIsLitByTheSkyAndTheFloor) {
   }
 }
 
+// Fig. 8's check: a photograph of the view in other colours, a known 3x3 map M away from the
+// capture's (a camera's white balance and primaries), composites back into its own colours: with
+// C = M^-1 as colour-match would find it, the composite equals M times the capture's composite
+// within 1%. The photograph is the capture itself (raster's image of the scan), so with the
+// identity map the composite is the capture's.
+TEST(DiffrenderBackground, PhotographInOtherColoursCompositesBackThroughTheMap) {
+  test::TempDir t;
+  buildFloor(t);
+  const int size = 48;
+  const json params = {{"samples", 16}, {"object_voxels", 32}};
+  json rasterScene = sceneJson(json::object(), "raster", size);
+  const Scene rs = writeScene(t, rasterScene);
+  const HdrImage capture = createMethod(rs, MethodContext(true))->render(rs.camera).image;
+  writeExr(t.file("photo.exr"), capture);
+  const glm::mat3 M(glm::vec3(0.9f, 0.05f, 0.0f), glm::vec3(0.1f, 0.8f, 0.2f),
+                    glm::vec3(0.0f, 0.1f, 1.1f));  // columns
+  HdrImage altered = capture;
+  for (size_t i = 0; i < altered.rgb.size(); i += 3) {
+    const glm::vec3 v = M * glm::vec3(capture.rgb[i], capture.rgb[i + 1], capture.rgb[i + 2]);
+    altered.rgb[i] = v.x, altered.rgb[i + 1] = v.y, altered.rgb[i + 2] = v.z;
+  }
+  writeExr(t.file("photo_m.exr"), altered);
+  const MethodFrame plain = renderWith(t, params, "diffrender", size);
+  json p1 = params;
+  p1["background"] = "photo.exr";
+  const MethodFrame same = renderWith(t, p1, "diffrender", size);
+  const glm::mat3 C = glm::inverse(M);
+  json p2 = params;
+  p2["background"] = "photo_m.exr";
+  p2["background_map"] = json::array();
+  for (int r = 0; r < 3; ++r) p2["background_map"].push_back({C[0][r], C[1][r], C[2][r]});
+  const MethodFrame back = renderWith(t, p2, "diffrender", size);
+  double d1 = 0, d2 = 0, sum = 0;
+  for (size_t i = 0; i < plain.image.rgb.size(); i += 3) {
+    const glm::vec3 a(plain.image.rgb[i], plain.image.rgb[i + 1], plain.image.rgb[i + 2]);
+    const glm::vec3 b(same.image.rgb[i], same.image.rgb[i + 1], same.image.rgb[i + 2]);
+    const glm::vec3 c(back.image.rgb[i], back.image.rgb[i + 1], back.image.rgb[i + 2]);
+    d1 += glm::length(a - b), d2 += glm::length(M * a - c), sum += glm::length(M * a);
+  }
+  EXPECT_LT(d1 / sum, 1e-3);
+  EXPECT_LT(d2 / sum, 0.01);
+  // A photograph of another size is an error naming the field.
+  HdrImage small(8, 8);
+  writeExr(t.file("small.exr"), small);
+  json p3 = params;
+  p3["background"] = "small.exr";
+  const Error e = test::errorOf([&] { renderWith(t, p3, "diffrender", size); });
+  EXPECT_NE(std::string(e.what()).find("scene.gi.parameters.background"), std::string::npos)
+      << e.what();
+}
+
 // Eq. 9 traces `cache` of a pixel's |H| box hits and scales their sum by |H| / cache: unbiased,
 // so its mean over many independent pixels (each its own random sequence) equals the uncached
 // estimator's (every hit traced) within 3 standard errors of the mean difference.
@@ -375,6 +427,10 @@ TEST(DiffrenderParameters, ErrorsNameTheField) {
   fails({{"samples", 8}, {"cache", 16}}, "scene.gi.parameters.cache");
   fails({{"object_voxels", {1024, 1024, 1024}}}, "scene.gi.parameters.object_voxels");
   fails({{"object_voxels", {8, 8}}}, "scene.gi.parameters.object_voxels");
+  fails({{"background", "no_such_photo.exr"}}, "scene.gi.parameters.background");
+  fails({{"background_map", {{1, 0, 0}, {0, 1, 0}}}}, "scene.gi.parameters.background_map");
+  fails({{"background_map", {{1, 0, 0}, {0, 1, 0}, {0, 2, 0}}}},
+        "scene.gi.parameters.background_map");  // singular
   // Presets fill what is not given; given values win.
   const Scene high =
       writeScene(t, sceneJson({{"quality", "high"}, {"samples", 48}}, "diffrender", 32));

@@ -44,6 +44,12 @@ struct DiffrenderParameters {
   // The colour layer holding the scan's captured radiance (`nestlight bake-radiance` writes one),
   // whatever gi.mode says; empty: the scan's own colour in the radiance-cache mode.
   std::string capture;
+  // A photograph of the camera's view (linear .exr/.hdr, or a .png of display values decoded with
+  // gamma 2.2 as colour-match does) that stands for the capture on the scan's pixels and behind
+  // the scene, brought into the scan's colour space by `backgroundMap` (colour-match's C, rows)
+  // and the composite back into the photograph's by its inverse. Empty: the capture.
+  std::string background;
+  glm::mat3 backgroundMap{1.0f};
 };
 
 const ParameterSpecs& diffrenderParameterSpecs();
