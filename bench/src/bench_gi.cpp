@@ -10,6 +10,7 @@
 #include <functional>
 #include <optional>
 
+#include "bench_gi_differential.h"
 #include "nestlight/bench/harness.h"
 #include "nestlight/gi/environment_sequence.h"
 #include "nestlight/gi/methods.h"
@@ -85,6 +86,16 @@ struct Setup {
   double exposure = 0;
   Scene prepared(const std::string& method) const {
     Scene s = probe;
+    // The scene's gi.parameters are its own method's: another method keeps only the keys it
+    // declares (diffrender's capture is no parameter of pbgi, which would refuse it).
+    if (const MethodInfo* m = findMethod(method);
+        m && method != probe.gi.method && s.gi.parameters.is_object()) {
+      const std::vector<std::string> known = parameterNames(m->parameters);
+      for (auto it = s.gi.parameters.begin(); it != s.gi.parameters.end();)
+        it = std::find(known.begin(), known.end(), it.key()) == known.end()
+                 ? s.gi.parameters.erase(it)
+                 : std::next(it);
+    }
     s.gi.method = method;
     if (o.mode == "albedo") s.gi.mode = RadianceMode::Albedo;
     if (o.mode == "radiance_cache") s.gi.mode = RadianceMode::RadianceCache;
@@ -122,13 +133,16 @@ struct Reference {
   json info;
 };
 
-// The reference, cached in refPath under a key of everything that changes it.
-Reference loadOrRenderReference(const Setup& setup, const fs::path& refPath, std::FILE* log) {
+// The reference, cached in refPath under a key of everything that changes it; `withoutInserted`:
+// R0, the scene as it was captured (the meshes marked inserted left out).
+Reference loadOrRenderReference(const Setup& setup, const fs::path& refPath, std::FILE* log,
+                                bool withoutInserted = false) {
   const BenchGiOptions& o = setup.o;
   const std::string key = "model" + std::to_string(kReferenceModelVersion) + ":" +
                           fileHash(setup.sceneFile) + ":" + assetStamp(setup.probe) + ":" +
                           std::to_string(setup.W) + "x" + std::to_string(setup.H) + ":" +
-                          std::to_string(o.referenceError) + ":" + o.mode;
+                          std::to_string(o.referenceError) + ":" + o.mode +
+                          (withoutInserted ? ":without-inserted" : "");
   Reference ref;
   if (!o.forceReference && fs::exists(refPath)) {
     ImageAttributes attrs;
@@ -142,9 +156,12 @@ Reference loadOrRenderReference(const Setup& setup, const fs::path& refPath, std
       return ref;
     }
   }
-  say(log, "bench gi: rendering the reference to %.4g relative error (at most %.0f s, %d spp)...\n",
-      o.referenceError, o.referenceTimeLimit, o.referenceSpp);
+  say(log,
+      "bench gi: rendering the reference%s to %.4g relative error (at most %.0f s, %d spp)...\n",
+      withoutInserted ? " without the inserted meshes (R0)" : "", o.referenceError,
+      o.referenceTimeLimit, o.referenceSpp);
   Scene s = setup.prepared("reference");
+  if (withoutInserted) s = differential::withoutInserted(std::move(s));
   s.gi.targetRelativeError = o.referenceError;
   s.gi.timeLimitSeconds = o.referenceTimeLimit;
   s.gi.samplesPerPixel = o.referenceSpp;
@@ -189,25 +206,85 @@ double msSince(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
+std::string fixed(double v, int digits) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+BenchGiRow newRow(const MethodInfo& m, const std::string& variant, int level) {
+  BenchGiRow row;
+  row.method = m.name;
+  row.variant = variant;
+  row.qualityName = m.qualityName;
+  row.qualityUnit = qualityUnit(m);
+  row.quality = level;
+  return row;
+}
+
+std::string rowStem(const BenchGiRow& row) {
+  std::string stem = row.method + (row.variant.empty() ? "" : "_" + row.variant) + "_" +
+                     std::to_string(row.quality);
+  std::replace(stem.begin(), stem.end(), ' ', '_');
+  return stem;
+}
+
+// The timed runs' summary and the last frame, written and compared with the reference.
+void finishRow(BenchGiRow& row, const Setup& setup, const MethodFrame& last,
+               const HdrImage& reference, const fs::path& refPath, const fs::path& dir) {
+  row.medianMs = median(row.ms);
+  row.raysPerSecond = last.raysPerSecond();
+  row.samplesPerSecond = last.samplesPerSecond();
+  row.passMs = last.passMs;
+  row.attributes = last.attributes;
+  writeExr((dir / (rowStem(row) + ".exr")).string(), last.image, last.attributes);
+  CompareOptions co;
+  co.testName = row.method + " " + std::to_string(row.quality);
+  co.referenceName = refPath.string();
+  co.exposureStops = setup.exposure;
+  row.cmp = compareImages(last.image, reference, co);
+  row.relativeL2 = relativeL2(last.image, reference);
+  row.relativeL2Box4 = relativeL2(boxFilter(last.image, 4), boxFilter(reference, 4));
+}
+
+void sayRow(std::FILE* log, const BenchGiRow& row) {
+  std::string extra;
+  if (row.deltaL2) extra += ", dL L2 " + fixed(*row.deltaL2, 4);
+  if (row.objectL2) extra += ", object L2 " + fixed(*row.objectL2, 4);
+  if (row.rhoL2) extra += ", rho L2 " + fixed(*row.rhoL2, 4);
+  say(log, "  %s%s, %d %s: set-up %.0f ms, median %.1f ms, relative L2 %.4f%s\n",
+      row.method.c_str(), row.variant.empty() ? "" : (" (" + row.variant + ")").c_str(),
+      row.quality, row.qualityUnit.c_str(), row.setupMs, row.medianMs, row.relativeL2,
+      extra.c_str());
+}
+
+// diffrender's dL and material estimate, from one more frame with its AOVs, untimed: reading
+// them back costs what the timed frames must not pay.
+void diffrenderMetrics(BenchGiRow& row, Scene s, const HdrImage& composite,
+                       const differential::Truth& truth, const fs::path& dir) {
+  const fs::path aovs = dir / "differential" / rowStem(row);
+  differential::setGiParameter(s, "aovs", aovs.string());
+  createMethod(s, {true, false, true})->render(s.camera);
+  const HdrImage delta = readHdrImage((aovs / "diffrender_delta.exr").string());
+  const HdrImage rho = readHdrImage((aovs / "diffrender_rho.exr").string());
+  const differential::Metrics m = differential::measure(composite, delta, &rho, truth);
+  row.deltaL2 = m.deltaL2, row.objectL2 = m.objectL2, row.rhoL2 = m.rhoL2;
+}
+
 // One configuration (method, variant, quality level): set up (the method made, and a GL
 // method's first frame, which compiles its shaders and fills its caches, rendered untimed), then
 // timed over the runs; the last timed frame is written and compared with the reference.
 BenchGiRow runConfiguration(const Setup& setup, const MethodInfo& m,
                             const MethodInfo::Variant& variant, int level,
                             const HdrImage& reference, const fs::path& refPath, const fs::path& dir,
-                            std::FILE* log) {
+                            const differential::Truth* truth, std::FILE* log) {
   Scene s = setup.prepared(m.name);
   s.gi.seed = 1;
   // The variant first: a quality level may mean different settings under it (ibl's
   // estimators).
   variant.apply(s.gi);
   m.applyQuality(s.gi, level);
-  BenchGiRow row;
-  row.method = m.name;
-  row.variant = variant.name;
-  row.qualityName = m.qualityName;
-  row.qualityUnit = qualityUnit(m);
-  row.quality = level;
+  BenchGiRow row = newRow(m, variant.name, level);
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<Method> method = createMethod(s, {true, false, true});
   // A CPU method's first frame costs what any other does (its scene is built when it is made).
@@ -218,25 +295,51 @@ BenchGiRow runConfiguration(const Setup& setup, const MethodInfo& m,
     last = method->render(s.camera);
     row.ms.push_back(last.seconds * 1e3);
   }
-  row.medianMs = median(row.ms);
-  row.raysPerSecond = last.raysPerSecond();
-  row.samplesPerSecond = last.samplesPerSecond();
-  row.passMs = last.passMs;
-  row.attributes = last.attributes;
-  std::string stem =
-      m.name + (variant.name.empty() ? "" : "_" + variant.name) + "_" + std::to_string(level);
-  std::replace(stem.begin(), stem.end(), ' ', '_');
-  writeExr((dir / (stem + ".exr")).string(), last.image, last.attributes);
-  CompareOptions co;
-  co.testName = m.name + " " + std::to_string(level);
-  co.referenceName = refPath.string();
-  co.exposureStops = setup.exposure;
-  row.cmp = compareImages(last.image, reference, co);
-  row.relativeL2 = relativeL2(last.image, reference);
-  row.relativeL2Box4 = relativeL2(boxFilter(last.image, 4), boxFilter(reference, 4));
-  say(log, "  %s%s, %d %s: set-up %.0f ms, median %.1f ms, relative L2 %.4f\n", m.name.c_str(),
-      variant.name.empty() ? "" : (" (" + variant.name + ")").c_str(), level,
-      row.qualityUnit.c_str(), row.setupMs, row.medianMs, row.relativeL2);
+  method.reset();
+  finishRow(row, setup, last, reference, refPath, dir);
+  if (truth && m.name == "diffrender") diffrenderMetrics(row, s, last.image, *truth, dir);
+  sayRow(log, row);
+  return row;
+}
+
+// Two-simulation differential rendering, the baseline of a method that renders a whole scene
+// (pbgi, vpl): the method with the inserted meshes and without them, the difference added to the
+// capture on the scan's pixels, the meshes' pixels as rendered with them. A run's time is the
+// two frames'.
+BenchGiRow runTwoSimulation(const Setup& setup, const MethodInfo& m, int level,
+                            const HdrImage& reference, const fs::path& refPath, const fs::path& dir,
+                            const differential::Truth& truth, std::FILE* log) {
+  Scene with = setup.prepared(m.name);
+  with.gi.seed = 1;
+  m.applyQuality(with.gi, level);
+  const Scene without = differential::withoutInserted(with);
+  BenchGiRow row = newRow(m, "two-simulation", level);
+  // One method at a time: a GL method's context is its own while it lives.
+  auto timed = [&](const Scene& s, std::vector<double>& ms) {
+    const auto start = std::chrono::steady_clock::now();
+    std::unique_ptr<Method> method = createMethod(s, {true, false, true});
+    if (m.gpu) method->render(s.camera);
+    row.setupMs += msSince(start);
+    MethodFrame f;
+    for (int run = 0; run < setup.o.runs; ++run) {
+      f = method->render(s.camera);
+      ms.push_back(f.seconds * 1e3);
+    }
+    return f;
+  };
+  std::vector<double> msWith, msWithout;
+  const MethodFrame fa = timed(with, msWith), fb = timed(without, msWithout);
+  for (size_t run = 0; run < msWith.size(); ++run) row.ms.push_back(msWith[run] + msWithout[run]);
+  HdrImage delta;
+  MethodFrame last = fa;
+  last.image = differential::twoSimulation(fa.image, fb.image, truth, delta);
+  last.seconds = fa.seconds + fb.seconds;
+  last.rays = fa.rays + fb.rays;
+  last.passMs.clear();
+  finishRow(row, setup, last, reference, refPath, dir);
+  const differential::Metrics dm = differential::measure(last.image, delta, nullptr, truth);
+  row.deltaL2 = dm.deltaL2, row.objectL2 = dm.objectL2;
+  sayRow(log, row);
   return row;
 }
 
@@ -251,6 +354,16 @@ std::string csvField(const std::string& text) {
   return q + "\"";
 }
 
+std::string optionalNumber(const std::optional<double>& v) {
+  char buf[32] = "";
+  if (v) std::snprintf(buf, sizeof buf, "%.6g", *v);
+  return buf;
+}
+
+json optionalJson(const std::optional<double>& v) {
+  return v ? json(*v) : json(nullptr);
+}
+
 std::string csvLine(const BenchGiRow& r) {
   auto [lo, hi] = std::minmax_element(r.ms.begin(), r.ms.end());
   char rays[40] = "";
@@ -258,12 +371,14 @@ std::string csvLine(const BenchGiRow& r) {
   char line[640];
   std::snprintf(line, sizeof line,
                 "%s,%s,%d,%s,%zu,%.3f,%.3f,%.3f,%.3f,%s,%.6g,%.6g,%.6g,%.6g,%.4f,%.6f,%.6g,%.4f,"
-                "%.6f,%llu,\n",
+                "%.6f,%llu,%s,%s,%s,\n",
                 r.method.c_str(), csvField(r.variant).c_str(), r.quality, r.qualityName.c_str(),
                 r.ms.size(), r.setupMs, r.medianMs, *lo, *hi, rays, r.samplesPerSecond,
                 r.relativeL2, r.cmp.linear.rmse, r.cmp.linear.relativeMse, r.cmp.linear.psnr,
                 r.cmp.linear.ssim, r.cmp.toneMapped.rmse, r.cmp.toneMapped.psnr,
-                r.cmp.toneMapped.ssim, (unsigned long long)r.cmp.test.pixels);
+                r.cmp.toneMapped.ssim, (unsigned long long)r.cmp.test.pixels,
+                optionalNumber(r.deltaL2).c_str(), optionalNumber(r.objectL2).c_str(),
+                optionalNumber(r.rhoL2).c_str());
   return line;
 }
 
@@ -286,13 +401,10 @@ json rowJson(const BenchGiRow& r) {
           {"gpu_pass_ms", passes},
           {"relative_l2", r.relativeL2},
           {"relative_l2_box4", r.relativeL2Box4},
+          {"delta_l2", optionalJson(r.deltaL2)},
+          {"object_l2", optionalJson(r.objectL2)},
+          {"rho_l2", optionalJson(r.rhoL2)},
           {"comparison", toJson(r.cmp)}};
-}
-
-std::string fixed(double v, int digits) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
 }
 
 // The text table, its columns as wide as their cells; then the skipped rows with their reasons.
@@ -307,9 +419,23 @@ void sayTable(std::FILE* log, const BenchGiReport& report) {
                  r.raysPerSecond > 0 ? humanCount(r.raysPerSecond) : "—", fixed(r.relativeL2, 4),
                  shortNumber(r.cmp.linear.rmse), fixed(r.cmp.linear.psnr, 2),
                  fixed(r.cmp.linear.ssim, 4), fixed(r.cmp.toneMapped.ssim, 4)});
-  say(log, "%s",
-      alignedTable(t, {false, false, true, true, true, true, true, true, true, true, true, true})
-          .c_str());
+  std::vector<bool> right = {false, false, true, true, true, true,
+                             true,  true,  true, true, true, true};
+  // Differential rendering's columns, where a row has them.
+  if (std::any_of(report.rows.begin(), report.rows.end(),
+                  [](const BenchGiRow& r) { return r.deltaL2.has_value(); })) {
+    t[0].insert(t[0].end(), {"dL L2", "object L2", "rho L2"});
+    for (size_t i = 1; i < t.size(); ++i) {
+      const BenchGiRow& r = report.rows[i - 1];
+      for (const auto& v : {r.deltaL2, r.objectL2, r.rhoL2}) t[i].push_back(v ? fixed(*v, 4) : "—");
+    }
+    right.insert(right.end(), {true, true, true});
+  }
+  say(log, "%s", alignedTable(t, right).c_str());
+  if (report.r0RelativeL2)
+    say(log,
+        "R0 (the reference without the inserted meshes: no differential rendering): rel L2 %.4f\n",
+        *report.r0RelativeL2);
   if (report.skipped.empty()) return;
   say(log, "skipped:\n");
   std::vector<std::vector<std::string>> k = {{"method", "variant", "why"}};
@@ -342,7 +468,8 @@ std::vector<PlotSeries> plotSeries(const BenchGiReport& report) {
 }
 
 // bench_gi.csv, .json (also report.json), .svg and .png, and the times to 10% and 1% error.
-void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo, std::FILE* log) {
+void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo,
+                 const json& differentialInfo, std::FILE* log) {
   const fs::path& dir = report.dir;
   const std::string device =
       (setup.o.device.empty() ? std::string("unknown CPU") : setup.o.device) + ", " +
@@ -351,7 +478,8 @@ void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo,
   std::ofstream csv(dir / "bench_gi.csv");
   csv << "method,variant,quality,quality_name,runs,setup_ms,median_ms,min_ms,max_ms,rays_per_"
          "second,samples_per_second,relative_l2,rmse,relative_mse,psnr_db,ssim,rmse_tonemapped,"
-         "psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels,skipped\n";
+         "psnr_tonemapped_db,ssim_tonemapped,nonfinite_pixels,delta_l2_scan,object_l2,rho_l2,"
+         "skipped\n";
   json jrows = json::array(), jskipped = json::array();
   json timeTo1, timeTo10, timeTo10Box4;
   for (const PlotSeries& ps : plotSeries(report)) {
@@ -369,8 +497,8 @@ void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo,
     timeTo10Box4[ps.name] = timeJson(timeToError(box4, 0.1));
   }
   for (const BenchGiSkip& sk : report.skipped) {
-    csv << sk.method << "," << csvField(sk.variant) << ",,,0,,,,,,,,,,,,,,,," << csvField(sk.reason)
-        << "\n";
+    csv << sk.method << "," << csvField(sk.variant) << ",,,0,,,,,,,,,,,,,,,,,,,"
+        << csvField(sk.reason) << "\n";
     jskipped.push_back({{"method", sk.method}, {"variant", sk.variant}, {"reason", sk.reason}});
   }
   report.json = {
@@ -385,6 +513,7 @@ void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo,
        "median of the runs' frame times, after the set-up (making the method and, for a GL "
        "method, one untimed frame that compiles its shaders), reported apart as setup_ms"},
       {"reference", refInfo},
+      {"differential", differentialInfo},
       {"exposure_stops", setup.exposure},
       {"rows", jrows},
       {"skipped", jskipped},
@@ -417,6 +546,24 @@ void writeReport(BenchGiReport& report, const Setup& setup, const json& refInfo,
   sayTimesTo(log, "1% relative error", timeTo1);
   say(log, "bench gi: wrote %s/bench_gi.{csv,json,svg,png} (device: %s)\n", dir.c_str(),
       device.c_str());
+}
+
+// R0 (cached as the reference is) and the images diffrender's metrics and the two-simulation
+// baselines need (bench_gi_differential.h).
+differential::Truth makeDifferentialTruth(const Setup& setup, const HdrImage& r1,
+                                          const fs::path& dir, std::FILE* log) {
+  const fs::path r0Path = dir / "reference_without.exr";
+  Reference r0 = loadOrRenderReference(setup, r0Path, log, true);
+  writeToneMappedPng((dir / "reference_without.png").string(), r0.image, setup.exposure);
+  differential::Truth t = differential::makeTruth(
+      setup.prepared("diffrender"), r1, std::move(r0.image), dir / "differential" / "truth");
+  t.info["r0"] = r0.info;
+  say(log,
+      "  R0 against R1 (no differential rendering): relative L2 %.4f, on the inserted meshes' "
+      "pixels %.4f, dL on scan blocks %.4f (%s scan blocks of %dx%d pixels)\n",
+      t.r0Error, t.r0ObjectError, t.r0ChangeError,
+      std::to_string(t.info["scan_blocks"].get<size_t>()).c_str(), t.scale, t.scale);
+  return t;
 }
 
 }  // namespace
@@ -504,6 +651,18 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
   say(log, "  reference.png and the tone-mapped metrics: exposure %s\n",
       exposure.description.c_str());
 
+  // Differential rendering's ground truth, where a method it measures is asked for.
+  std::optional<differential::Truth> truth;
+  json differentialInfo = nullptr;
+  if (differential::applies(setup.probe) &&
+      std::any_of(methods.begin(), methods.end(), [](const MethodInfo* m) {
+        return m->name == "diffrender" || m->name == "pbgi" || m->name == "vpl";
+      })) {
+    truth = makeDifferentialTruth(setup, reference.image, dir, log);
+    report.r0RelativeL2 = truth->r0Error;
+    differentialInfo = truth->info;
+  }
+
   say(log, "bench gi: %d timed runs per setting after the set-up\n", o.runs);
   for (const MethodInfo* m : methods) {
     const Scene scene = setup.prepared(m->name);
@@ -523,11 +682,15 @@ BenchGiReport runBenchGi(const BenchGiOptions& o, std::FILE* log) {
         continue;
       }
       for (int level : levels)
-        report.rows.push_back(
-            runConfiguration(setup, *m, variant, level, reference.image, refPath, dir, log));
+        report.rows.push_back(runConfiguration(setup, *m, variant, level, reference.image, refPath,
+                                               dir, truth ? &*truth : nullptr, log));
     }
+    if (truth && (m->name == "pbgi" || m->name == "vpl"))
+      for (int level : levels)
+        report.rows.push_back(
+            runTwoSimulation(setup, *m, level, reference.image, refPath, dir, *truth, log));
   }
-  writeReport(report, setup, reference.info, log);
+  writeReport(report, setup, reference.info, differentialInfo, log);
   return report;
 }
 

@@ -192,11 +192,14 @@ void diffrenderScene(json& scene, SyntheticSpec& spec, MeshWrites& meshWrites, c
   }
   // From the free corner, down at the object and the floor round it, the blocks behind.
   scene["camera"] = cameraJson({3.7, 3.7, 1.5}, {2.5, 2.5, 0.25}, 50, o);
+  // The scan's colours are albedos; the capture diffrender adds to is the colour layer
+  // `captured` that make-scene bakes with the reference (nestlight bake-radiance).
   scene["gi"] = {{"method", "diffrender"},
                  {"mode", "albedo"},
                  {"max_bounces", 3},
                  {"samples_per_pixel", 1024},
-                 {"target_relative_error", 0.01}};
+                 {"target_relative_error", 0.01},
+                 {"parameters", {{"capture", "captured"}}}};
 }
 
 }  // namespace

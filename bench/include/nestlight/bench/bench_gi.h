@@ -52,6 +52,11 @@ struct BenchGiRow {
   double relativeL2 = 0;
   double relativeL2Box4 = 0;       // of 4 x 4-pixel block means (shading, not pixel sampling)
   gi::ImageAttributes attributes;  // the first run's (clamp loss, ISM agreement, ...)
+  // Differential rendering (a scene with inserted meshes and gi.parameters.capture; diffrender
+  // and the two-simulation variants only): relative L2 of dL on whole scan blocks against
+  // R1 - R0, of the inserted meshes' pixels against R1, and of diffrender's material estimate
+  // against the scan's albedo. Empty elsewhere.
+  std::optional<double> deltaL2, objectL2, rhoL2;
 };
 
 // A method or variant not measured, and why (gi::whyNotApplicable).
@@ -62,6 +67,9 @@ struct BenchGiSkip {
 struct BenchGiReport {
   std::vector<BenchGiRow> rows;
   std::vector<BenchGiSkip> skipped;
+  // R0 (the reference without the inserted meshes: differential rendering not done) against R1,
+  // where the scene has inserted meshes and a capture; empty elsewhere.
+  std::optional<double> r0RelativeL2;
   nlohmann::json json;  // what bench_gi.json holds
   std::filesystem::path dir;
 };
@@ -86,6 +94,12 @@ struct TimeToError {
 };
 TimeToError timeToError(const std::vector<ErrorPoint>& curve, double target);
 
+// With a capture layer (gi.parameters.capture) and inserted meshes, the reference is rendered
+// also without the inserted meshes (R0, cached beside the other as reference_without.exr), and
+// diffrender's rows get dL, object and material errors (bench_gi_differential.h); pbgi and vpl
+// get a "two-simulation" variant: rendered with and without the inserted meshes, the difference
+// added to the capture on scan pixels, the row's time the two frames' (a baseline, run with or
+// without `variants`).
 // Throws nestlight::Error for unknown methods (before any rendering), bad scenes and failed
 // renders. Progress and the table go to `log` (nullptr: silent).
 BenchGiReport runBenchGi(const BenchGiOptions& options, std::FILE* log = stdout);

@@ -32,7 +32,9 @@ struct TestSceneOptions {
   int width = 320, height = 240;
   bool overwrite = false;
   bool quiet = false;
-  DiffrenderLight light = DiffrenderLight::Panel;  // diffrender only
+  // diffrender only. The spot by default: the reference finds it by next-event estimation, the
+  // panel only when a path happens to hit it, so the panel's baked capture is far noisier.
+  DiffrenderLight light = DiffrenderLight::Spot;
   // diffrender: the inserted object is sharedData/meshes/bunny.ply, copied into the folder, where
   // that file exists; otherwise (and with an empty path) a generated closed mesh, so the scene
   // never depends on data outside the project.
