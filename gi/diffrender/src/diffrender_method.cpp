@@ -199,7 +199,7 @@ class DiffrenderExtension : public FrameExtension {
     backgroundFile_ = f.scene().file.string();
   }
 
-  // The inserted meshes' solid voxels (object_volume.h), uploaded with the occupancy's mips.
+  // The inserted meshes' solid voxels (object_volume.h), one grid each.
   void buildVolume(SceneFrame& f) {
     const Scene& scene = f.scene();
     std::vector<VolumeMesh> inserted;
@@ -212,7 +212,6 @@ class DiffrenderExtension : public FrameExtension {
       v.name = "meshes[" + std::to_string(i) + "].path (" +
                scene.meshes[i].path.filename().string() + ")";
       inserted.push_back(v);
-      insertedMesh_.push_back(true);
     }
     insertedMesh_.assign(scene.meshes.size(), false);
     for (size_t i = 0; i < scene.meshes.size(); ++i) insertedMesh_[i] = scene.meshes[i].inserted;
@@ -224,22 +223,55 @@ class DiffrenderExtension : public FrameExtension {
       if (v.material > 254)
         throw Error(scene.file.string(), "scene.materials",
                     "diffrender keeps at most 255 materials on inserted meshes");
-    const ObjectVolume vol = voxelizeSolid(inserted, params_.objectVoxels);
-    warnings_ = vol.warnings;
+    // One grid per mesh, each over its own box (one grid over distant meshes' joint box spends
+    // its voxels on the air between them), stacked along z in one texture.
+    if (inserted.size() > size_t(DR_VOLUMES_MAX))
+      throw Error(scene.file.string(), "scene.meshes",
+                  std::to_string(inserted.size()) +
+                      " inserted meshes: diffrender voxelises at most " +
+                      std::to_string(DR_VOLUMES_MAX));
+    const glm::ivec3 n = params_.objectVoxels;
+    GLint maxSize = 0;
+    glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &maxSize);
+    const double bytes = double(n.x) * n.y * n.z * 5.0 * double(inserted.size());
+    if (n.z * int(inserted.size()) > maxSize || bytes > double(128 << 20))
+      throw Error(scene.file.string(), "scene.gi.parameters.object_voxels",
+                  "the inserted meshes' grids (" + std::to_string(inserted.size()) + " of " +
+                      std::to_string(n.x) + "x" + std::to_string(n.y) + "x" + std::to_string(n.z) +
+                      ") exceed the 3D texture limit or 128 MiB: use fewer "
+                      "voxels");
+    const size_t per = size_t(n.x) * size_t(n.y) * size_t(n.z);
+    std::vector<uint8_t> occupancy(per * inserted.size());
+    std::vector<uint32_t> surface(per * inserted.size());
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    volumeLo_.clear(), volumeHi_.clear();
+    solidVoxels_ = 0;
+    warnings_.clear();
+    for (size_t k = 0; k < inserted.size(); ++k) {
+      const ObjectVolume vol = voxelizeSolid({inserted[k]}, n);
+      std::copy(vol.occupancy.begin(), vol.occupancy.end(),
+                occupancy.begin() + std::ptrdiff_t(k * per));
+      std::copy(vol.surface.begin(), vol.surface.end(), surface.begin() + std::ptrdiff_t(k * per));
+      volumeLo_.push_back(vol.lo), volumeHi_.push_back(vol.hi);
+      lo = glm::min(lo, vol.lo), hi = glm::max(hi, vol.hi);
+      solidVoxels_ += vol.solidVoxels;
+      warnings_.insert(warnings_.end(), vol.warnings.begin(), vol.warnings.end());
+    }
     if (!f.quiet())
       for (const std::string& w : warnings_)
         std::fprintf(stderr, "diffrender: warning: %s\n", w.c_str());
-    solidVoxels_ = vol.solidVoxels;
-    volumeLo_ = vol.lo, volumeHi_ = vol.hi, volumeSize_ = vol.size;
-    const glm::ivec3 n = vol.size;
-    occupancy_ = gl::Texture::volume(GL_R8, n.x, n.y, n.z, levelsFor(std::max({n.x, n.y, n.z})));
-    glTextureSubImage3D(occupancy_.id(), 0, 0, 0, 0, n.x, n.y, n.z, GL_RED, GL_UNSIGNED_BYTE,
-                        vol.occupancy.data());
-    glGenerateTextureMipmap(occupancy_.id());
-    surface_ = gl::Texture::volume(GL_RGBA8, n.x, n.y, n.z);
-    glTextureSubImage3D(surface_.id(), 0, 0, 0, 0, n.x, n.y, n.z, GL_RGBA, GL_UNSIGNED_BYTE,
-                        vol.surface.data());
-    centre_ = 0.5f * (vol.lo + vol.hi);
+    volumeSize_ = n;
+    const int depth = n.z * int(inserted.size());
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    occupancy_ = gl::Texture::volume(GL_R8, n.x, n.y, depth);
+    glTextureSubImage3D(occupancy_.id(), 0, 0, 0, 0, n.x, n.y, depth, GL_RED, GL_UNSIGNED_BYTE,
+                        occupancy.data());
+    surface_ = gl::Texture::volume(GL_RGBA8, n.x, n.y, depth);
+    glTextureSubImage3D(surface_.id(), 0, 0, 0, 0, n.x, n.y, depth, GL_RGBA, GL_UNSIGNED_BYTE,
+                        surface.data());
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    // The impostor's centre: the middle of all inserted meshes' boxes.
+    centre_ = 0.5f * (lo + hi);
     // The farthest corner of the scene's bounds from the centre: DIT's search ends there.
     reach_ = 0;
     for (int c = 0; c < 8; ++c) {
@@ -383,8 +415,9 @@ class DiffrenderExtension : public FrameExtension {
     glUniform1i(p.uniform("uQuery"),
                 params_.query == DiffrenderParameters::Query::Em ? DR_QUERY_EM : DR_QUERY_DIT);
     glUniform1i(p.uniform("uDitIterations"), params_.ditIterations);
-    glUniform3fv(p.uniform("uVolumeLo"), 1, &volumeLo_[0]);
-    glUniform3fv(p.uniform("uVolumeHi"), 1, &volumeHi_[0]);
+    glUniform1i(p.uniform("uVolumeCount"), GLint(volumeLo_.size()));
+    glUniform3fv(p.uniform("uVolumeLo"), GLsizei(volumeLo_.size()), &volumeLo_[0][0]);
+    glUniform3fv(p.uniform("uVolumeHi"), GLsizei(volumeHi_.size()), &volumeHi_[0][0]);
     glUniform3i(p.uniform("uVolumeSize"), volumeSize_.x, volumeSize_.y, volumeSize_.z);
     glUniform1ui(p.uniform("uSeed"), seed_);
     glUniform1i(p.uniform("uScale"), params_.deltaScale);
@@ -488,7 +521,8 @@ class DiffrenderExtension : public FrameExtension {
   std::vector<std::string> warnings_;
   uint64_t solidVoxels_ = 0, impostorBuilds_ = 0;
   uint64_t builtCut_ = ~0ull, builtEnv_ = ~0ull;
-  glm::vec3 volumeLo_{0.0f}, volumeHi_{0.0f}, centre_{0.0f};
+  std::vector<glm::vec3> volumeLo_, volumeHi_;  // each inserted mesh's grid's box
+  glm::vec3 centre_{0.0f};
   glm::ivec3 volumeSize_{1};
   int impostorLevels_ = 1;
   float reach_ = 1;

@@ -17,7 +17,10 @@ uniform int uImpostorLevels;
 uniform float uImpostorReach;  // the scene's farthest extent from the centre
 uniform int uQuery;
 uniform int uDitIterations;
-uniform vec3 uVolumeLo, uVolumeHi;
+// One solid voxel grid per inserted mesh, each over its own box, stacked along z in the two
+// textures (grid k's voxels at z + k uVolumeSize.z).
+uniform int uVolumeCount;
+uniform vec3 uVolumeLo[DR_VOLUMES_MAX], uVolumeHi[DR_VOLUMES_MAX];
 uniform ivec3 uVolumeSize;
 uniform uint uSeed;
 
@@ -136,41 +139,54 @@ vec3 queryScene(vec3 o, vec3 d, float lod, out float tScene) {
   return textureLod(uImpostor, normalize(x + t * d), lod).rgb;
 }
 
-// The ray's span [t0, t1] inside the objects' box; false when it misses.
-bool volumeSpan(vec3 o, vec3 d, out float t0, out float t1) {
+// The ray's span [t0, t1] inside grid k's box; false when it misses.
+bool volumeSpan(int k, vec3 o, vec3 d, out float t0, out float t1) {
   vec3 inv = 1.0 / d;
-  vec3 a = (uVolumeLo - o) * inv, b = (uVolumeHi - o) * inv;
+  vec3 a = (uVolumeLo[k] - o) * inv, b = (uVolumeHi[k] - o) * inv;
   vec3 lo = min(a, b), hi = max(a, b);
   t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
   t1 = min(min(hi.x, hi.y), hi.z);
   return t0 <= t1;
 }
 
-// The first solid voxel the ray meets in [tStart, tMax] (Amanatides and Woo's traversal): its
-// distance, and its surface normal and material (material -1: an interior voxel).
-bool marchObjects(vec3 o, vec3 d, float tStart, float tMax, out float tHit, out vec3 n, out int material) {
+// Whether the ray meets any inserted mesh's box (the set H of section 7).
+bool meetsObjectBoxes(vec3 o, vec3 d) {
+  for (int k = 0; k < uVolumeCount; ++k) {
+    float t0, t1;
+    if (volumeSpan(k, o, d, t0, t1)) return true;
+  }
+  return false;
+}
+
+vec3 volumeCell(int k) { return (uVolumeHi[k] - uVolumeLo[k]) / vec3(uVolumeSize); }
+float occupancyAt(int k, ivec3 v) { return texelFetch(uOccupancy, v + ivec3(0, 0, k * uVolumeSize.z), 0).r; }
+vec4 surfaceAt(int k, ivec3 v) { return texelFetch(uSurface, v + ivec3(0, 0, k * uVolumeSize.z), 0); }
+
+// The first solid voxel of grid k the ray meets in [tStart, tMax] (Amanatides and Woo's
+// traversal): its distance, and its surface normal and material (material -1: an interior voxel).
+bool marchVolume(int k, vec3 o, vec3 d, float tStart, float tMax, out float tHit, out vec3 n, out int material) {
   tHit = 0.0, n = -d, material = -1;
   float t0, t1;
-  if (!volumeSpan(o, d, t0, t1)) return false;
+  if (!volumeSpan(k, o, d, t0, t1)) return false;
   t0 = max(t0, tStart);
   t1 = min(t1, tMax);
   if (t0 > t1) return false;
-  vec3 cell = (uVolumeHi - uVolumeLo) / vec3(uVolumeSize);
-  vec3 p = (o + d * t0 - uVolumeLo) / cell;
+  vec3 cell = volumeCell(k);
+  vec3 p = (o + d * t0 - uVolumeLo[k]) / cell;
   ivec3 v = clamp(ivec3(floor(p)), ivec3(0), uVolumeSize - 1);
   ivec3 step = ivec3(sign(d));
   vec3 safe = vec3(abs(d.x) > 1e-12 ? d.x : 1e-12, abs(d.y) > 1e-12 ? d.y : 1e-12, abs(d.z) > 1e-12 ? d.z : 1e-12);
-  vec3 next = (uVolumeLo + (vec3(v) + max(vec3(step), 0.0)) * cell - o) / safe;
+  vec3 next = (uVolumeLo[k] + (vec3(v) + max(vec3(step), 0.0)) * cell - o) / safe;
   vec3 delta = abs(cell / safe);
   float t = t0;
   ivec3 before = v;
-  for (int k = 0; k < 3 * 1024; ++k) {
+  for (int i = 0; i < 3 * 1024; ++i) {
     if (any(lessThan(v, ivec3(0))) || any(greaterThanEqual(v, uVolumeSize)) || t > t1) return false;
-    if (texelFetch(uOccupancy, v, 0).r > 0.75) {
+    if (occupancyAt(k, v) > 0.75) {
       // The surface crosses this voxel or the one the ray came from (a solid voxel whose centre
       // the surface passed just before).
-      vec4 s = texelFetch(uSurface, v, 0);
-      if (s.a == 0.0) s = texelFetch(uSurface, before, 0);
+      vec4 s = surfaceAt(k, v);
+      if (s.a == 0.0) s = surfaceAt(k, before);
       tHit = t;
       material = int(s.a * 255.0 + 0.5) - 1;
       if (material >= 0) n = normalize(s.xyz * 2.0 - 1.0);
@@ -184,30 +200,60 @@ bool marchObjects(vec3 o, vec3 d, float tStart, float tMax, out float tHit, out 
   return false;
 }
 
+// The nearest solid voxel of any inserted mesh along the ray in [tStart, tMax].
+bool marchObjects(vec3 o, vec3 d, float tStart, float tMax, out float tHit, out vec3 n, out int material) {
+  bool hit = false;
+  tHit = 0.0, n = -d, material = -1;
+  for (int k = 0; k < uVolumeCount; ++k) {
+    float t;
+    vec3 nk;
+    int mk;
+    if (marchVolume(k, o, d, tStart, tMax, t, nk, mk)) {
+      hit = true, tMax = t, tHit = t, n = nk, material = mk;
+    }
+  }
+  return hit;
+}
+
+// The grid whose box holds x, -1 when none does (within half a voxel).
+int volumeAt(vec3 x) {
+  for (int k = 0; k < uVolumeCount; ++k) {
+    vec3 p = (x - uVolumeLo[k]) / volumeCell(k);
+    if (all(greaterThanEqual(p, vec3(-0.5))) && all(lessThanEqual(p, vec3(uVolumeSize) + 0.5))) return k;
+  }
+  return -1;
+}
+
 // Whether a scene-local point lies in a solid voxel (or one next to it): pixels of the inserted
 // meshes, which the G-buffer does not tell from the captured scene's meshes.
 bool inObjects(vec3 x) {
-  vec3 cell = (uVolumeHi - uVolumeLo) / vec3(uVolumeSize);
-  vec3 p = (x - uVolumeLo) / cell;
-  if (any(lessThan(p, vec3(-0.5))) || any(greaterThan(p, vec3(uVolumeSize) + 0.5))) return false;
-  ivec3 c = ivec3(floor(p));
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        ivec3 v = c + ivec3(dx, dy, dz);
-        if (all(greaterThanEqual(v, ivec3(0))) && all(lessThan(v, uVolumeSize)) && texelFetch(uOccupancy, v, 0).r > 0.4)
-          return true;
-      }
+  for (int k = 0; k < uVolumeCount; ++k) {
+    vec3 p = (x - uVolumeLo[k]) / volumeCell(k);
+    if (any(lessThan(p, vec3(-0.5))) || any(greaterThan(p, vec3(uVolumeSize) + 0.5))) continue;
+    ivec3 c = ivec3(floor(p));
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          ivec3 v = c + ivec3(dx, dy, dz);
+          if (all(greaterThanEqual(v, ivec3(0))) && all(lessThan(v, uVolumeSize)) && occupancyAt(k, v) > 0.4)
+            return true;
+        }
+  }
   return false;
 }
 
-// The light an inserted mesh's voxel sends back, taken as diffuse: its material's diffuse albedo
-// times the impostor's radiance over the hemisphere about its normal (four cosine lookups at the
-// level of a quarter hemisphere), plus its emission.
+// The light an inserted mesh's voxel sends back, taken as diffuse: its material's albedo times the
+// impostor's radiance over the hemisphere about its normal (four cosine lookups at the level of a
+// quarter hemisphere) and the scene's lights, plus its emission.
 vec3 objectRadiance(vec3 p, vec3 n, int material) {
   if (material < 0) return vec3(0.0);
   MaterialRecord r = materials[material];
-  vec3 albedo = int(r.baseColor.w) == NL_MATERIAL_LAMBERT ? r.baseColor.rgb : (1.0 - r.params.y) * r.baseColor.rgb;
+  // Taken as diffuse, all the light the material reflects: its diffuse albedo and its specular
+  // reflectance at normal incidence (a metal's, its base colour: a bronze object tints the scan
+  // it bounces light onto, as the paper's diffuse bounce would lose).
+  vec3 base = r.baseColor.rgb;
+  float metallic = r.params.y;
+  vec3 albedo = int(r.baseColor.w) == NL_MATERIAL_LAMBERT ? base : (1.0 - metallic) * base + mix(vec3(0.04), base, metallic);
   vec3 E = vec3(0.0);
   mat3 F = frameFromNormal(n);
   float lod = impostorLod(kPi / 4.0);
@@ -219,7 +265,8 @@ vec3 objectRadiance(vec3 p, vec3 n, int material) {
   E *= kPi / 4.0;  // irradiance: pi times the mean radiance of cosine-distributed directions
   // The scene's lights, shadowed by the frame's maps (the inserted meshes in them), the lookup a
   // voxel off the hit (which lies on the voxel's face, not the mesh).
-  vec3 q = p + n * length((uVolumeHi - uVolumeLo) / vec3(uVolumeSize));
+  int k = max(volumeAt(p), 0);
+  vec3 q = p + n * length(volumeCell(k));
   for (int i = 0; i < frame.counts.x; ++i) {
     LightSample s = sampleLight(i, q);
     float c = dot(n, s.wi);

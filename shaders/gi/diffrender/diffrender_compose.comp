@@ -64,8 +64,8 @@ vec3 shadeObject(vec3 x, vec3 n, vec3 wo, vec3 base, uvec4 m) {
   MaterialParams mat = gbufferMaterial(base, m, emission);
   mat3 F = frameFromNormal(n);
   vec3 woL = vec3(dot(wo, F[0]), dot(wo, F[1]), dot(wo, F[2]));
-  vec3 cell = (uVolumeHi - uVolumeLo) / vec3(uVolumeSize);
-  float leave = 1.5 * length(cell);  // past the boundary voxels of the shaded surface itself
+  // Past the boundary voxels of the shaded surface itself.
+  float leave = 1.5 * length(volumeCell(max(volumeAt(x), 0)));
   vec3 xo = x + n * max(1e-4 * max(length(x - frame.eye.xyz), 1e-3), 1e-4);
   vec3 sum = vec3(0.0);
   uint blocked = 0u;
@@ -119,7 +119,9 @@ void main() {
   float mask = 0.0;
   if (source == NL_SOURCE_SCAN) {
     mask = 1.0;
-    L += uDeltaGain * upsampledDelta(px, n, length(x - frame.eye.xyz));
+    // The objects can take away at most all the light there was: eq. 9's estimate is unbiased
+    // but not bounded by the capture, and a neighbour's dL can be larger than a dark pixel's.
+    L = max(L + uDeltaGain * upsampledDelta(px, n, length(x - frame.eye.xyz)), vec3(0.0));
   } else if (object) {
     atomicAdd(stats[DR_STAT_OBJECT_PIXELS], 1u);
     mask = 2.0;

@@ -75,8 +75,7 @@ void main() {
     // Stratified by a rank-1 lattice (the golden ratio) with one random shift per pixel.
     vec2 u = fract(vec2((float(i) + 0.5) / float(N), float(i) * 0.618034) + jitter);
     vec3 d = F * sampleCosineHemisphereGl(u);
-    float t0, t1;
-    if (volumeSpan(o, d, t0, t1)) {
+    if (meetsObjectBoxes(o, d)) {
       hitBits[i >> 5] |= 1u << (i & 31);
       hits++;
     }

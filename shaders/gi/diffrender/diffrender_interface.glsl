@@ -26,6 +26,9 @@
 #define DR_UNIT_SHADOW_WITHOUT 12  // shadow maps of the lights' views without the inserted meshes
 #define DR_UNIT_BACKGROUND 13      // the photograph (`background`)
 
+// Inserted meshes at most: each its own voxel grid, stacked in one texture.
+#define DR_VOLUMES_MAX 16
+
 // Queries (DiffrenderParameters::Query).
 #define DR_QUERY_EM 0
 #define DR_QUERY_DIT 1
