@@ -40,6 +40,9 @@ void addBenchGi(CLI::App& app, int& exitCode) {
       "levels is\n"
       "timed (median of --runs; set-up reported apart) and compared with it; a method or variant "
       "that\ncannot apply to the scene (ibl without an environment) is skipped with its reason. "
+      "On a scene with\ninserted meshes and a capture layer (make-scene diffrender) the reference "
+      "is also rendered without\nthe inserted meshes (R0), diffrender's rows get dL, object and "
+      "rho errors and pbgi and vpl a\ntwo-simulation row (docs/SCENE.md). "
       "Methods:" +
           methods +
           "\nExample: nestlight make-scene cornell -o cornell && nestlight bench gi "
