@@ -126,7 +126,8 @@ void main() {
     atomicAdd(stats[DR_STAT_OBJECT_PIXELS], 1u);
     mask = 2.0;
     ivec2 gpx = px + ivec2(frame.tile.xy);
-    rngState = pcgHash(uint(gpx.x) * 7919u + uint(gpx.y) * 104729u + pcgHash(uSeed * 3u + uint(frame.counts.z) * 26699u));
+    // The same sequence every frame: no flicker under a still camera.
+    rngState = pcgHash(uint(gpx.x) * 7919u + uint(gpx.y) * 104729u + pcgHash(uSeed * 3u + 1u));
     L += shadeObject(x, n, wo, texelFetch(uBaseColour, px, 0).rgb, m);
   }
   if (unconverged > 0u) atomicAdd(stats[DR_STAT_UNCONVERGED], unconverged);

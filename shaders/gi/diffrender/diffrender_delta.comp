@@ -57,7 +57,9 @@ void main() {
   }
   atomicAdd(stats[DR_STAT_SCAN_PIXELS], 1u);
   ivec2 gpx = px + ivec2(frame.tile.xy);
-  rngState = pcgHash(uint(gpx.x) * 9781u + uint(gpx.y) * 6271u + pcgHash(uSeed + uint(frame.counts.z) * 26699u));
+  // The same sequence every frame (the pixel and the seed): a still camera's frames do not
+  // flicker in the viewer, which accumulates nothing.
+  rngState = pcgHash(uint(gpx.x) * 9781u + uint(gpx.y) * 6271u + pcgHash(uSeed));
   // The rays meet nothing of the scan itself (the impostor is looked up, the objects' volume
   // marched), so they leave from the surface: a lift would move the objects' shadow.
   vec3 o = x + n * 1e-4 * max(length(x - frame.eye.xyz), 1e-3);
