@@ -77,6 +77,7 @@ class DiffrenderExtension : public FrameExtension {
     // must not add its unshadowed light too.
     f.setSkyInDirectLight(false);
     buildVolume(f);
+    sceneLo_ = f.boundsLo(), sceneHi_ = f.boundsHi(), sceneFile_ = f.scene().file.string();
     const int S = params_.impostorSize;
     raw_ = gl::Texture::array2d(GL_RGBA32F, S, S, 6);
     colourSum_ = gl::Texture::array2d(GL_RGBA32F, S, S, 6, levelsFor(S));
@@ -121,13 +122,22 @@ class DiffrenderExtension : public FrameExtension {
         "diffrender_impostor", frame::Scope::Frame,
         [](frame::PassBuilder& b) { b.write("diffrender_impostor"); },
         [this, &f](const frame::PassContext&) { renderImpostor(f); });
+    if (params_.query == DiffrenderParameters::Query::Vct) {
+      setUpSceneVolume();
+      g.addBuffer("diffrender_scene_volume");
+      g.addPass(
+          "diffrender_scene_volume", frame::Scope::Frame,
+          [](frame::PassBuilder& b) { b.write("diffrender_scene_volume"); },
+          [this, &f](const frame::PassContext&) { buildSceneVolume(f); });
+    }
     g.addTarget("radiance_diffrender", {GL_RGBA32F});
     g.addPass(
         "diffrender_shade", frame::Scope::Tile,
-        [](frame::PassBuilder& b) {
+        [this](frame::PassBuilder& b) {
           for (const char* t : {"depth", "base_colour", "normal", "material", "radiance",
                                 "shadow_maps", "diffrender_shadows", "diffrender_impostor"})
             b.read(t);
+          if (params_.query == DiffrenderParameters::Query::Vct) b.read("diffrender_scene_volume");
           b.write("radiance_diffrender");
         },
         [this, &f](const frame::PassContext& ctx) { shade(f, ctx); });
@@ -358,6 +368,93 @@ class DiffrenderExtension : public FrameExtension {
     glGenerateTextureMipmap(impostor_.id());
   }
 
+  // The voxel cone tracer's scene volume over the scene's bounds: cubic voxels, `scene_voxels`
+  // along the longest side; R11G11B10F radiance (premultiplied) and R8 opacity with their mips
+  // (5 bytes a voxel, 8/7 with the mips: 256^3 is 91 MiB, under one 128 MiB range).
+  void setUpSceneVolume() {
+    const glm::vec3 lo = sceneLo_, extent = sceneHi_ - sceneLo_;
+    const float longest = std::max({extent.x, extent.y, extent.z, 1e-3f});
+    sceneCell_ = longest / float(params_.sceneVoxels);
+    sceneDims_ = glm::max(glm::ivec3(glm::ceil(extent / sceneCell_)) + 1, glm::ivec3(1));
+    sceneOrigin_ = lo;
+    const double bytes = double(sceneDims_.x) * sceneDims_.y * sceneDims_.z * 5.0 * 8.0 / 7.0;
+    if (bytes > double(128 << 20))
+      throw Error(sceneFile_, "scene.gi.parameters.scene_voxels",
+                  "the scene volume would take " + std::to_string(int(bytes / 1e6)) +
+                      " MB, over the 128 MiB bound: use fewer voxels");
+    const int levels = levelsFor(std::max({sceneDims_.x, sceneDims_.y, sceneDims_.z}));
+    sceneRadiance_ =
+        gl::Texture::volume(GL_R11F_G11F_B10F, sceneDims_.x, sceneDims_.y, sceneDims_.z, levels);
+    sceneOpacity_ = gl::Texture::volume(GL_R8, sceneDims_.x, sceneDims_.y, sceneDims_.z, levels);
+    for (const gl::Texture* t : {&sceneRadiance_, &sceneOpacity_}) {
+      t->setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
+      for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
+        glTextureParameteri(t->id(), w, GL_CLAMP_TO_BORDER);
+    }
+    // The fixed-point sums hold a slab of z layers at a time, within one 128 MiB range.
+    const size_t layer = size_t(sceneDims_.x) * size_t(sceneDims_.y) * 16;
+    slabDepth_ = std::clamp(int(size_t(128 << 20) / layer), 1, sceneDims_.z);
+    for (gl::Texture& t : sums_)
+      t = gl::Texture::volume(GL_R32UI, sceneDims_.x, sceneDims_.y, slabDepth_);
+    voxelize_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "points/points.vert"},
+                                   {GL_FRAGMENT_SHADER, "gi/diffrender/scene_voxelize.frag"}},
+                                  {{"NL_SCENE_FRAME", "1"}});
+    resolve_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/scene_resolve.comp"}});
+    sceneFbo_ = gl::Framebuffer::create();
+    glNamedFramebufferParameteri(sceneFbo_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, sceneDims_.x);
+    glNamedFramebufferParameteri(sceneFbo_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, sceneDims_.y);
+  }
+
+  // The lights' cut voxelised (when the cut changes): slab by slab, each point one pixel of an
+  // orthographic view down z whose fragment adds it to its voxel, then the slab resolved.
+  void buildSceneVolume(SceneFrame& f) {
+    if (sceneBuiltCut_ == f.cutGeneration()) return;
+    sceneBuiltCut_ = f.cutGeneration();
+    constexpr float kFixedPoint = 1024.0f;
+    const glm::vec3 hi = sceneOrigin_ + glm::vec3(sceneDims_) * sceneCell_;
+    const glm::mat4 clip = glm::ortho(sceneOrigin_.x, hi.x, sceneOrigin_.y, hi.y,
+                                      -(hi.z + sceneCell_), -(sceneOrigin_.z - sceneCell_));
+    glBindFramebuffer(GL_FRAMEBUFFER, sceneFbo_.id());
+    glViewport(0, 0, sceneDims_.x, sceneDims_.y);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_BLEND);
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    const GLuint zero = 0;
+    for (int first = 0; first < sceneDims_.z; first += slabDepth_) {
+      for (gl::Texture& t : sums_)
+        glClearTexImage(t.id(), 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+      for (int k = 0; k < 4; ++k)
+        glBindImageTexture(GLuint(k), sums_[size_t(k)].id(), 0, GL_TRUE, 0, GL_READ_WRITE,
+                           GL_R32UI);
+      voxelize_.use();
+      glUniform3fv(voxelize_.uniform("uVolumeOrigin"), 1, &sceneOrigin_[0]);
+      glUniform1f(voxelize_.uniform("uCell"), sceneCell_);
+      glUniform3i(voxelize_.uniform("uDims"), sceneDims_.x, sceneDims_.y, sceneDims_.z);
+      glUniform1i(voxelize_.uniform("uSlabFirst"), first);
+      glUniform1i(voxelize_.uniform("uSlabDepth"), slabDepth_);
+      glUniform1f(voxelize_.uniform("uFixedPoint"), kFixedPoint);
+      // One-pixel points: the fragment stage runs once per point.
+      f.drawScans(voxelize_, clip, glm::mat4(1.0f), 1e-9f, true, true);
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+      resolve_.use();
+      for (int k = 0; k < 4; ++k)
+        glBindImageTexture(GLuint(k), sums_[size_t(k)].id(), 0, GL_TRUE, 0, GL_READ_ONLY, GL_R32UI);
+      glBindImageTexture(4, sceneRadiance_.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R11F_G11F_B10F);
+      glBindImageTexture(5, sceneOpacity_.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_R8);
+      glUniform3i(resolve_.uniform("uDims"), sceneDims_.x, sceneDims_.y, sceneDims_.z);
+      glUniform1i(resolve_.uniform("uSlabFirst"), first);
+      glUniform1i(resolve_.uniform("uSlabDepth"), slabDepth_);
+      glUniform1f(resolve_.uniform("uFixedPoint"), kFixedPoint);
+      glDispatchCompute(GLuint((sceneDims_.x + 3) / 4), GLuint((sceneDims_.y + 3) / 4),
+                        GLuint((slabDepth_ + 3) / 4));
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                      GL_TEXTURE_UPDATE_BARRIER_BIT);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glGenerateTextureMipmap(sceneRadiance_.id());
+    glGenerateTextureMipmap(sceneOpacity_.id());
+  }
+
   // The lights' shadow maps as the frame draws them (the same views, resolution and offsets) but
   // without the inserted meshes: the visibility the capture was lit with.
   void renderShadowsWithout(SceneFrame& f) {
@@ -412,8 +509,17 @@ class DiffrenderExtension : public FrameExtension {
     glUniform1i(p.uniform("uImpostorSize"), params_.impostorSize);
     glUniform1i(p.uniform("uImpostorLevels"), impostorLevels_);
     glUniform1f(p.uniform("uImpostorReach"), reach_);
-    glUniform1i(p.uniform("uQuery"),
-                params_.query == DiffrenderParameters::Query::Em ? DR_QUERY_EM : DR_QUERY_DIT);
+    glUniform1i(p.uniform("uQuery"), params_.query == DiffrenderParameters::Query::Em ? DR_QUERY_EM
+                                     : params_.query == DiffrenderParameters::Query::Vct
+                                         ? DR_QUERY_VCT
+                                         : DR_QUERY_DIT);
+    if (params_.query == DiffrenderParameters::Query::Vct) {
+      glBindTextureUnit(DR_UNIT_SCENE_RADIANCE, sceneRadiance_.id());
+      glBindTextureUnit(DR_UNIT_SCENE_OPACITY, sceneOpacity_.id());
+    }
+    glUniform3fv(p.uniform("uSceneOrigin"), 1, &sceneOrigin_[0]);
+    glUniform1f(p.uniform("uSceneCell"), sceneCell_);
+    glUniform3i(p.uniform("uSceneDims"), sceneDims_.x, sceneDims_.y, sceneDims_.z);
     glUniform1i(p.uniform("uDitIterations"), params_.ditIterations);
     glUniform1i(p.uniform("uVolumeCount"), GLint(volumeLo_.size()));
     glUniform3fv(p.uniform("uVolumeLo"), GLsizei(volumeLo_.size()), &volumeLo_[0][0]);
@@ -532,6 +638,17 @@ class DiffrenderExtension : public FrameExtension {
   HdrImage aovDelta_, aovRho_, aovMask_;
   gl::Texture background_;
   std::string backgroundFile_;
+  // vct's scene volume and its fixed-point sums (one slab of z layers at a time).
+  gl::Texture sceneRadiance_, sceneOpacity_;
+  std::array<gl::Texture, 4> sums_;
+  gl::ShaderProgram voxelize_, resolve_;
+  gl::Framebuffer sceneFbo_;
+  glm::vec3 sceneLo_{0.0f}, sceneHi_{1.0f}, sceneOrigin_{0.0f};
+  float sceneCell_ = 1;
+  glm::ivec3 sceneDims_{1};
+  int slabDepth_ = 1;
+  uint64_t sceneBuiltCut_ = ~0ull;
+  std::string sceneFile_;
   gl::Texture shadowWithout_;
   int shadowLayers_ = 0;
   gl::Framebuffer impostorFbo_, shadowFbo_;

@@ -231,9 +231,7 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   }
   if (given.contains("background_map"))
     p.backgroundMap = parseColourMap(params.at("background_map"));
-  if (p.query == Q::Vct || p.query == Q::Exact)
-    params.at("query").fail(std::string("'") + queryName(p.query) +
-                            "' is not built yet: use dit or em");
+  if (p.query == Q::Exact) params.at("query").fail("'exact' is not built yet: use dit, em or vct");
   if (p.cache > p.samples)
     (given.contains("cache") ? params.at("cache") : params)
         .fail("cache (" + std::to_string(p.cache) + ") must not exceed samples (" +

@@ -20,6 +20,13 @@ uniform int uDitIterations;
 // One solid voxel grid per inserted mesh, each over its own box, stacked along z in the two
 // textures (grid k's voxels at z + k uVolumeSize.z).
 uniform int uVolumeCount;
+// The voxel cone tracer's scene volume: cubic voxels of uSceneCell from uSceneOrigin,
+// uSceneDims of them; radiance premultiplied by opacity, and opacity, with averaged mips.
+layout(binding = DR_UNIT_SCENE_RADIANCE) uniform sampler3D uSceneRadiance;
+layout(binding = DR_UNIT_SCENE_OPACITY) uniform sampler3D uSceneOpacity;
+uniform vec3 uSceneOrigin;
+uniform float uSceneCell;
+uniform ivec3 uSceneDims;
 uniform vec3 uVolumeLo[DR_VOLUMES_MAX], uVolumeHi[DR_VOLUMES_MAX];
 uniform ivec3 uVolumeSize;
 uniform uint uSeed;
@@ -69,13 +76,18 @@ float beyondSurface(vec3 x, vec3 d, float t) {
   return length(p) - impostorDistance(p);
 }
 
-// The scene's radiance along the ray o + t d (scene-local) and the distance it meets the scene at
-// (kImpostorFar: the environment), at mip `lod`. EM reads the direction alone. DIT finds where the
+// The scene's radiance along the ray o + t d (scene-local), over a cone of `solidAngle` about it,
+// and the distance it meets the scene at (kImpostorFar: the environment). VCT marches a cone
+// through the scene volume. EM reads the impostor by the direction alone. DIT finds where the
 // ray passes the captured surface as the impostor stores it: a search in steps that grow with the
 // distance (the surface's first crossing), then `uDitIterations` secant steps; a crossing the
 // secant does not pin down to a texel's footprint is counted unconverged (grazing rays) and keeps
 // its last estimate.
-vec3 queryScene(vec3 o, vec3 d, float lod, out float tScene) {
+vec3 coneTrace(vec3 o, vec3 d, float solidAngle, out float tScene);
+
+vec3 queryScene(vec3 o, vec3 d, float solidAngle, out float tScene) {
+  if (uQuery == DR_QUERY_VCT) return coneTrace(o, d, solidAngle, tScene);
+  float lod = impostorLod(solidAngle);
   vec3 x = o - uImpostorCentre;
   if (uQuery == DR_QUERY_EM) {
     float t = sphereExit(x, d, impostorDistance(d));
@@ -242,6 +254,44 @@ bool inObjects(vec3 x) {
   return false;
 }
 
+// Voxel cone tracing (Crassin et al. 2011): front to back through the scene volume's mips, each
+// step as wide as the cone there (the mip from its diameter), its opacity corrected for steps of
+// half a diameter; the environment behind what the cone's opacity leaves. It starts 1.5 voxels
+// out, past the voxel of the surface it leaves. The scene's distance: where the opacity passes
+// one half.
+// The surface a cone leaves (scene-local point and normal; a zero normal: none). The volume's
+// coarse mips blur that surface's own voxels upwards, by up to two texels' width (the texel and
+// the trilinear blend): a step less than two diameters above its plane is weighted down (to 0
+// within one), else a floor takes a fifth of its own sky away from itself.
+vec3 coneBase = vec3(0.0), coneNormal = vec3(0.0);
+
+vec3 coneTrace(vec3 o, vec3 d, float solidAngle, out float tScene) {
+  float cosHalf = clamp(1.0 - solidAngle / (2.0 * kPi), -1.0, 1.0 - 1e-6);
+  float tanHalf = sqrt(max(1.0 - cosHalf * cosHalf, 0.0)) / cosHalf;
+  vec3 extent = vec3(uSceneDims) * uSceneCell;
+  vec3 colour = vec3(0.0);
+  float alpha = 0.0, t = 1.5 * uSceneCell;
+  tScene = kImpostorFar;
+  for (int i = 0; i < 512 && alpha < 0.99; ++i) {
+    float diameter = max(2.0 * t * tanHalf, uSceneCell);
+    vec3 uvw = (o + t * d - uSceneOrigin) / extent;
+    if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
+    float lod = log2(diameter / uSceneCell);
+    float a = textureLod(uSceneOpacity, uvw, lod).r;
+    if (dot(coneNormal, coneNormal) > 0.0)
+      a *= clamp(dot(o + t * d - coneBase, coneNormal) / diameter - 1.0, 0.0, 1.0);
+    if (a > 1e-4) {
+      vec3 c = textureLod(uSceneRadiance, uvw, lod).rgb / a;
+      float step = 1.0 - pow(1.0 - min(a, 0.9999), 0.5);
+      colour += (1.0 - alpha) * step * c;
+      alpha += (1.0 - alpha) * step;
+      if (alpha >= 0.5 && tScene >= kImpostorFar) tScene = t;
+    }
+    t += 0.5 * diameter;
+  }
+  return colour + (1.0 - alpha) * environment(d);
+}
+
 // The light an inserted mesh's voxel sends back, taken as diffuse: its material's albedo times the
 // impostor's radiance over the hemisphere about its normal (four cosine lookups at the level of a
 // quarter hemisphere) and the scene's lights, plus its emission.
@@ -256,12 +306,15 @@ vec3 objectRadiance(vec3 p, vec3 n, int material) {
   vec3 albedo = int(r.baseColor.w) == NL_MATERIAL_LAMBERT ? base : (1.0 - metallic) * base + mix(vec3(0.04), base, metallic);
   vec3 E = vec3(0.0);
   mat3 F = frameFromNormal(n);
-  float lod = impostorLod(kPi / 4.0);
+  float cone = kPi / 4.0;
+  vec3 savedBase = coneBase, savedNormal = coneNormal;
+  coneBase = p, coneNormal = n;
   for (int k = 0; k < 4; ++k) {
     vec3 w = F * sampleCosineHemisphereGl(vec2((float(k) + 0.5) / 4.0, fract(0.618034 * float(k) + 0.25)));
     float t;
-    E += queryScene(p + n * 1e-3, w, lod, t);
+    E += queryScene(p + n * 1e-3, w, cone, t);
   }
+  coneBase = savedBase, coneNormal = savedNormal;
   E *= kPi / 4.0;  // irradiance: pi times the mean radiance of cosine-distributed directions
   // The scene's lights, shadowed by the frame's maps (the inserted meshes in them), the lookup a
   // voxel off the hit (which lies on the voxel's face, not the mesh).

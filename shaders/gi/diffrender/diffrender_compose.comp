@@ -63,6 +63,7 @@ vec3 shadeObject(vec3 x, vec3 n, vec3 wo, vec3 base, uvec4 m) {
   vec3 emission;
   MaterialParams mat = gbufferMaterial(base, m, emission);
   mat3 F = frameFromNormal(n);
+  coneBase = x, coneNormal = n;
   vec3 woL = vec3(dot(wo, F[0]), dot(wo, F[1]), dot(wo, F[2]));
   // Past the boundary voxels of the shaded surface itself.
   float leave = 1.5 * length(volumeCell(max(volumeAt(x), 0)));
@@ -85,7 +86,7 @@ vec3 shadeObject(vec3 x, vec3 n, vec3 wo, vec3 base, uvec4 m) {
       blocked++;
     } else {
       float t;
-      Li = queryScene(xo, w, impostorLod(1.0 / (float(uObjectSamples) * pdf)), t);
+      Li = queryScene(xo, w, 1.0 / (float(uObjectSamples) * pdf), t);
     }
     sum += evalBsdf(mat, woL, wiL) * wiL.z * Li / pdf;
   }

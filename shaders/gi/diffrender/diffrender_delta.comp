@@ -64,9 +64,10 @@ void main() {
   // marched), so they leave from the surface: a lift would move the objects' shadow.
   vec3 o = x + n * 1e-4 * max(length(x - frame.eye.xyz), 1e-3);
   mat3 F = frameFromNormal(n);
+  coneBase = x, coneNormal = n;
   int N = min(uSamples, DR_SAMPLES_MAX);
   // A cone per direction: the solid angle 1 / (N pdf) of a cosine sample, about 2 pi / N.
-  float lod = impostorLod(2.0 * kPi / float(N));
+  float cone = 2.0 * kPi / float(N);
   vec2 jitter = rnd2();
   vec3 incoming = vec3(0.0);
   uint hits = 0u;
@@ -83,7 +84,7 @@ void main() {
     }
     if (uEstimateMaterial) {
       float t;
-      incoming += queryScene(o, d, lod, t);
+      incoming += queryScene(o, d, cone, t);
     }
   }
   // The scene's lights at the point: what they gave it without the inserted meshes, and the
@@ -124,7 +125,7 @@ void main() {
       vec2 u = fract(vec2((float(i) + 0.5) / float(N), float(i) * 0.618034) + jitter);
       vec3 d = F * sampleCosineHemisphereGl(u);
       float tScene;
-      vec3 Lenv = queryScene(o, d, lod, tScene);
+      vec3 Lenv = queryScene(o, d, cone, tScene);
       float tHit;
       vec3 hn;
       int material;

@@ -25,6 +25,8 @@
 #define DR_UNIT_DIRECT 11          // the frame's direct light (scan pixels: the capture)
 #define DR_UNIT_SHADOW_WITHOUT 12  // shadow maps of the lights' views without the inserted meshes
 #define DR_UNIT_BACKGROUND 13      // the photograph (`background`)
+#define DR_UNIT_SCENE_RADIANCE 14  // vct: the scene volume's radiance (premultiplied) and its mips
+#define DR_UNIT_SCENE_OPACITY 15   // vct: its opacity
 
 // Inserted meshes at most: each its own voxel grid, stacked in one texture.
 #define DR_VOLUMES_MAX 16
@@ -32,3 +34,4 @@
 // Queries (DiffrenderParameters::Query).
 #define DR_QUERY_EM 0
 #define DR_QUERY_DIT 1
+#define DR_QUERY_VCT 2

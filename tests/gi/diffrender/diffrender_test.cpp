@@ -133,7 +133,7 @@ TEST_P(DiffrenderSphere, BlackSphereTakesItsShareOfTheSkyFromTheFloor) {
       << GetParam() << ": " << pixels << " floor pixels, " << with.summary;
 }
 
-INSTANTIATE_TEST_SUITE_P(Queries, DiffrenderSphere, ::testing::Values("dit", "em"));
+INSTANTIATE_TEST_SUITE_P(Queries, DiffrenderSphere, ::testing::Values("dit", "em", "vct"));
 
 // The scene's lights lit the capture but are no surface of it: a sun straight down (irradiance E,
 // no sky) over the floor, whose captured radiance is then rho E / pi; the black sphere's umbra (the
