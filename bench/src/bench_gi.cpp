@@ -560,9 +560,11 @@ differential::Truth makeDifferentialTruth(const Setup& setup, const HdrImage& r1
   t.info["r0"] = r0.info;
   say(log,
       "  R0 against R1 (no differential rendering): relative L2 %.4f, on the inserted meshes' "
-      "pixels %.4f, dL on scan blocks %.4f (%s scan blocks of %dx%d pixels)\n",
+      "pixels %.4f, dL on scan blocks %.4f (%s scan blocks of %dx%d pixels); the capture "
+      "against R0 on scan pixels %.4f (what adding to it cannot remove)\n",
       t.r0Error, t.r0ObjectError, t.r0ChangeError,
-      std::to_string(t.info["scan_blocks"].get<size_t>()).c_str(), t.scale, t.scale);
+      std::to_string(t.info["scan_blocks"].get<size_t>()).c_str(), t.scale, t.scale,
+      t.captureError);
   return t;
 }
 

@@ -129,11 +129,14 @@ Truth makeTruth(const gi::Scene& scene, const HdrImage& r1, HdrImage r0, const f
   size_t objectPixels = 0;
   t.r0ObjectError = maskedRelativeL2(
       t.r0, r1, [&](int x, int y) { return t.mask.get(x, y)[0] == 2.0f; }, &objectPixels);
+  t.captureError = maskedRelativeL2(
+      t.capture, t.r0, [&](int x, int y) { return t.mask.get(x, y)[0] == 1.0f; }, nullptr);
   const Metrics zero = measure(t.r0, HdrImage(delta.width, delta.height), nullptr, t);
   t.r0ChangeError = zero.deltaL2;
   t.info = {{"r0_relative_l2", t.r0Error},
             {"r0_object_l2", t.r0ObjectError},
             {"r0_delta_l2", t.r0ChangeError},
+            {"capture_l2_scan", t.captureError},
             {"scan_blocks", zero.scanBlocks},
             {"object_pixels", objectPixels},
             {"delta_scale", t.scale},

@@ -25,6 +25,9 @@ struct Truth {
   gi::HdrImage mask;     // diffrender's mask: 1 scan pixel, 2 inserted mesh, 0 else
   int scale = 1;         // diffrender's delta_scale, from the size of its dL image
   double r0Error = 0, r0ObjectError = 0, r0ChangeError = 1;
+  // The capture against R0 on scan pixels: the baked layer's noise and its splats' difference
+  // from the reference's discs, which no differential method adds to the capture can remove.
+  double captureError = 0;
   nlohmann::json info;
 };
 

@@ -69,6 +69,10 @@ TEST(DiffrenderBench, RowsCarryTheDifferentialErrors) {
   ASSERT_GT(d["object_pixels"].get<int>(), 0);
   // R0 has no sphere where R1 has one: its object pixels show the floor behind, far off.
   EXPECT_GT(d["r0_object_l2"].get<double>(), 0.3) << d.dump();
+  // The capture is R0's scan pixels up to the bake's noise (4 paths a point: about 0.5 a point):
+  // a black capture would be 1 off, and albedos shown as radiance (about 0.5 against a lit
+  // radiance near 0.1) several times that.
+  EXPECT_LT(d["capture_l2_scan"].get<double>(), 1.0) << d.dump();
   // R0's dL is 0: its error against R1 - R0 is 1 by definition.
   EXPECT_DOUBLE_EQ(d["r0_delta_l2"].get<double>(), 1.0);
 
