@@ -559,10 +559,11 @@ differential::Truth makeDifferentialTruth(const Setup& setup, const HdrImage& r1
       setup.prepared("diffrender"), r1, std::move(r0.image), dir / "differential" / "truth");
   t.info["r0"] = r0.info;
   say(log,
-      "  R0 against R1 (no differential rendering): relative L2 %.4f, on the inserted meshes' "
-      "pixels %.4f, dL on scan blocks %.4f (%s scan blocks of %dx%d pixels); the capture "
+      "  R0 against R1 (no differential rendering): relative L2 %.4f (of 4x4 block means %.4f), "
+      "on the inserted meshes' pixels %.4f, dL on scan blocks %.4f (%s scan blocks of %dx%d "
+      "pixels); the capture "
       "against R0 on scan pixels %.4f (what adding to it cannot remove)\n",
-      t.r0Error, t.r0ObjectError, t.r0ChangeError,
+      t.r0Error, t.info["r0_relative_l2_box4"].get<double>(), t.r0ObjectError, t.r0ChangeError,
       std::to_string(t.info["scan_blocks"].get<size_t>()).c_str(), t.scale, t.scale,
       t.captureError);
   return t;

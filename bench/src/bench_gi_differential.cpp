@@ -137,6 +137,7 @@ Truth makeTruth(const gi::Scene& scene, const HdrImage& r1, HdrImage r0, const f
             {"r0_object_l2", t.r0ObjectError},
             {"r0_delta_l2", t.r0ChangeError},
             {"capture_l2_scan", t.captureError},
+            {"r0_relative_l2_box4", gi::relativeL2(gi::boxFilter(t.r0, 4), gi::boxFilter(r1, 4))},
             {"scan_blocks", zero.scanBlocks},
             {"object_pixels", objectPixels},
             {"delta_scale", t.scale},
