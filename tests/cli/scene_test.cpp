@@ -117,10 +117,10 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   // bounce variants skipped: in the radiance-cache mode, with one convex mesh, every bounce count
   // renders the same image), pbgi (X-PBGI) at 8 x 8 micro-buffers and in its 5 variants
   // (classic, mip, no pruning, conservative, no meshes); ibl skipped (no environment); diffrender
-  // (the sphere is an inserted mesh) at 8 samples, and its em and low variants.
-  EXPECT_EQ(rows, 17 + 4);  // and the 4 skipped, each with its reason
+  // (the sphere is an inserted mesh) at 8 samples, and its em, vct, low and high variants.
+  EXPECT_EQ(rows, 19 + 4);  // and the 4 skipped, each with its reason
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 17u);
+  ASSERT_EQ(j["rows"].size(), 19u);
   EXPECT_EQ(j["rows"][14]["method"], "diffrender");
   EXPECT_EQ(j["rows"][15]["variant"], "em");
   EXPECT_TRUE(j["rows"][14]["gpu_pass_ms"].contains("diffrender_shade")) << j["rows"][14].dump();

@@ -19,6 +19,8 @@
 #include "nestlight/gi/diffrender/object_volume.h"
 #include "nestlight/gi/frame/scene_frame.h"
 #include "nestlight/gi/hdr_image.h"
+#include "nestlight/gi/shared/bsh_layer.h"
+#include "nestlight/gi/shared/cut_hierarchies.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -122,6 +124,15 @@ class DiffrenderExtension : public FrameExtension {
         "diffrender_impostor", frame::Scope::Frame,
         [](frame::PassBuilder& b) { b.write("diffrender_impostor"); },
         [this, &f](const frame::PassContext&) { renderImpostor(f); });
+    if (params_.query == DiffrenderParameters::Query::Exact) {
+      // The scan's hierarchies, unpruned (every leaf a point's disc), built per node by the
+      // loader threads and joined under a top tree when the cut changes (beforeFrame).
+      layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> c) {
+        BshOptions o;
+        o.prune = false;
+        return std::make_shared<BshLayer>(meta, o, std::move(c));
+      });
+    }
     if (params_.query == DiffrenderParameters::Query::Vct) {
       setUpSceneVolume();
       g.addBuffer("diffrender_scene_volume");
@@ -155,7 +166,11 @@ class DiffrenderExtension : public FrameExtension {
     f.attributes["nestlight:diffrender_aovs"] = params_.aovs;
   }
 
-  void beforeFrame(SceneFrame&) override {
+  void beforeFrame(SceneFrame& f) override {
+    if (params_.query == DiffrenderParameters::Query::Exact && f.cutGeneration() != hierCut_) {
+      hierCut_ = f.cutGeneration();
+      hier_.assemble(f, layer_);
+    }
     std::array<uint32_t, DR_STAT_COUNT> zeros{};
     stats_.upload(zeros.data(), sizeof zeros);
   }
@@ -509,10 +524,18 @@ class DiffrenderExtension : public FrameExtension {
     glUniform1i(p.uniform("uImpostorSize"), params_.impostorSize);
     glUniform1i(p.uniform("uImpostorLevels"), impostorLevels_);
     glUniform1f(p.uniform("uImpostorReach"), reach_);
-    glUniform1i(p.uniform("uQuery"), params_.query == DiffrenderParameters::Query::Em ? DR_QUERY_EM
-                                     : params_.query == DiffrenderParameters::Query::Vct
-                                         ? DR_QUERY_VCT
-                                         : DR_QUERY_DIT);
+    using Q = DiffrenderParameters::Query;
+    const int query = params_.query == Q::Em      ? DR_QUERY_EM
+                      : params_.query == Q::Vct   ? DR_QUERY_VCT
+                      : params_.query == Q::Exact ? DR_QUERY_EXACT
+                                                  : DR_QUERY_DIT;
+    glUniform1i(p.uniform("uQuery"), query);
+    glUniform1i(p.uniform("uTopCount"), GLint(hier_.topCount()));
+    if (params_.query == DiffrenderParameters::Query::Exact) {
+      hier_.top().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP);
+      hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
+      hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+    }
     if (params_.query == DiffrenderParameters::Query::Vct) {
       glBindTextureUnit(DR_UNIT_SCENE_RADIANCE, sceneRadiance_.id());
       glBindTextureUnit(DR_UNIT_SCENE_OPACITY, sceneOpacity_.id());
@@ -649,6 +672,10 @@ class DiffrenderExtension : public FrameExtension {
   int slabDepth_ = 1;
   uint64_t sceneBuiltCut_ = ~0ull;
   std::string sceneFile_;
+  // exact's hierarchies of the lights' cut.
+  size_t layer_ = 0;
+  CutHierarchies hier_;
+  uint64_t hierCut_ = ~0ull;
   gl::Texture shadowWithout_;
   int shadowLayers_ = 0;
   gl::Framebuffer impostorFbo_, shadowFbo_;

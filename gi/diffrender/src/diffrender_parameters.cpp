@@ -231,11 +231,13 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   }
   if (given.contains("background_map"))
     p.backgroundMap = parseColourMap(params.at("background_map"));
-  if (p.query == Q::Exact) params.at("query").fail("'exact' is not built yet: use dit, em or vct");
+  // A cache the scene gives must fit its samples; a preset's shrinks to them (high's 32 at 16
+  // samples traces all 16).
+  if (p.cache > p.samples && !given.contains("cache")) p.cache = p.samples;
   if (p.cache > p.samples)
-    (given.contains("cache") ? params.at("cache") : params)
-        .fail("cache (" + std::to_string(p.cache) + ") must not exceed samples (" +
-              std::to_string(p.samples) + "): it is how many of the samples' hits are traced");
+    params.at("cache").fail("cache (" + std::to_string(p.cache) + ") must not exceed samples (" +
+                            std::to_string(p.samples) +
+                            "): it is how many of the samples' hits are traced");
   const double voxels = double(p.objectVoxels.x) * p.objectVoxels.y * p.objectVoxels.z;
   // R8 occupancy and RGBA8 surface, each with its mips (8/7 of the finest level).
   if (voxels * 5.0 * 8.0 / 7.0 > kMaxVolumeBytes)
@@ -284,8 +286,10 @@ MethodInfo diffrenderMethodInfo() {
   m.defaultQualities = {8, 16, 64};
   m.applyQuality = [](GiSettings& g, int q) {
     setParameter(g, "samples", q);
-    const int cache = g.parameters.value("cache", 8);
-    if (cache > q) setParameter(g, "cache", q);
+    // A cache the scene gives shrinks to the samples (a preset's does so by itself).
+    if (g.parameters.contains("cache") && g.parameters["cache"].is_number_integer() &&
+        g.parameters["cache"].get<int>() > q)
+      setParameter(g, "cache", q);
   };
   m.create = createDiffrenderMethod;
   // The capture is the scan's recorded colour (radiance-cache mode) or a layer of it.
@@ -300,7 +304,9 @@ MethodInfo diffrenderMethodInfo() {
            "change an inserted mesh makes";
   };
   m.variants = {{"em", [](GiSettings& g) { g.parameters["query"] = "em"; }},
-                {"low", [](GiSettings& g) { g.parameters["quality"] = "low"; }}};
+                {"vct", [](GiSettings& g) { g.parameters["query"] = "vct"; }},
+                {"low", [](GiSettings& g) { g.parameters["quality"] = "low"; }},
+                {"high", [](GiSettings& g) { g.parameters["quality"] = "high"; }}};
   m.parameters = rasterParameterSpecs();
   m.parameters.insert(m.parameters.end(), diffrenderParameterSpecs().begin(),
                       diffrenderParameterSpecs().end());

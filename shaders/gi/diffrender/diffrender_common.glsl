@@ -84,9 +84,11 @@ float beyondSurface(vec3 x, vec3 d, float t) {
 // secant does not pin down to a texel's footprint is counted unconverged (grazing rays) and keeps
 // its last estimate.
 vec3 coneTrace(vec3 o, vec3 d, float solidAngle, out float tScene);
+vec3 exactQuery(vec3 o, vec3 d, out float tScene);
 
 vec3 queryScene(vec3 o, vec3 d, float solidAngle, out float tScene) {
   if (uQuery == DR_QUERY_VCT) return coneTrace(o, d, solidAngle, tScene);
+  if (uQuery == DR_QUERY_EXACT) return exactQuery(o, d, tScene);
   float lod = impostorLod(solidAngle);
   vec3 x = o - uImpostorCentre;
   if (uQuery == DR_QUERY_EM) {
@@ -264,6 +266,10 @@ bool inObjects(vec3 x) {
 // the trilinear blend): a step less than two diameters above its plane is weighted down (to 0
 // within one), else a floor takes a fifth of its own sky away from itself.
 vec3 coneBase = vec3(0.0), coneNormal = vec3(0.0);
+// How far above its surface (along coneNormal) a scan point's exact rays leave: its neighbours'
+// discs stand up to about a splat radius off the position the G-buffer gives it (as ibl's rays
+// leave).
+float exactLift = 0.0;
 
 vec3 coneTrace(vec3 o, vec3 d, float solidAngle, out float tScene) {
   float cosHalf = clamp(1.0 - solidAngle / (2.0 * kPi), -1.0, 1.0 - 1e-6);
@@ -308,13 +314,14 @@ vec3 objectRadiance(vec3 p, vec3 n, int material) {
   mat3 F = frameFromNormal(n);
   float cone = kPi / 4.0;
   vec3 savedBase = coneBase, savedNormal = coneNormal;
-  coneBase = p, coneNormal = n;
+  float savedLift = exactLift;
+  coneBase = p, coneNormal = n, exactLift = 0.0;
   for (int k = 0; k < 4; ++k) {
     vec3 w = F * sampleCosineHemisphereGl(vec2((float(k) + 0.5) / 4.0, fract(0.618034 * float(k) + 0.25)));
     float t;
     E += queryScene(p + n * 1e-3, w, cone, t);
   }
-  coneBase = savedBase, coneNormal = savedNormal;
+  coneBase = savedBase, coneNormal = savedNormal, exactLift = savedLift;
   E *= kPi / 4.0;  // irradiance: pi times the mean radiance of cosine-distributed directions
   // The scene's lights, shadowed by the frame's maps (the inserted meshes in them), the lookup a
   // voxel off the hit (which lies on the voxel's face, not the mesh).
@@ -327,3 +334,5 @@ vec3 objectRadiance(vec3 p, vec3 n, int material) {
   }
   return albedo * kInvPi * E + r.emission.rgb;
 }
+
+#include "diffrender_exact.glsl"

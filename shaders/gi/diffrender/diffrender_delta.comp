@@ -65,6 +65,7 @@ void main() {
   vec3 o = x + n * 1e-4 * max(length(x - frame.eye.xyz), 1e-3);
   mat3 F = frameFromNormal(n);
   coneBase = x, coneNormal = n;
+  exactLift = 1.5 * texelFetch(uBaseColour, px, 0).a;
   int N = min(uSamples, DR_SAMPLES_MAX);
   // A cone per direction: the solid angle 1 / (N pdf) of a cosine sample, about 2 pi / N.
   float cone = 2.0 * kPi / float(N);

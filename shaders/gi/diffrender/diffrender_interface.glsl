@@ -35,3 +35,4 @@
 #define DR_QUERY_EM 0
 #define DR_QUERY_DIT 1
 #define DR_QUERY_VCT 2
+#define DR_QUERY_EXACT 3

@@ -133,7 +133,7 @@ TEST_P(DiffrenderSphere, BlackSphereTakesItsShareOfTheSkyFromTheFloor) {
       << GetParam() << ": " << pixels << " floor pixels, " << with.summary;
 }
 
-INSTANTIATE_TEST_SUITE_P(Queries, DiffrenderSphere, ::testing::Values("dit", "em", "vct"));
+INSTANTIATE_TEST_SUITE_P(Queries, DiffrenderSphere, ::testing::Values("dit", "em", "vct", "exact"));
 
 // The scene's lights lit the capture but are no surface of it: a sun straight down (irradiance E,
 // no sky) over the floor, whose captured radiance is then rho E / pi; the black sphere's umbra (the
@@ -425,6 +425,11 @@ TEST(DiffrenderParameters, ErrorsNameTheField) {
   };
   fails({{"query", "rays"}}, "scene.gi.parameters.query");
   fails({{"samples", 8}, {"cache", 16}}, "scene.gi.parameters.cache");
+  // The high preset's cache (32) shrinks to fewer samples given.
+  EXPECT_EQ(diffrenderParameters(
+                writeScene(t, sceneJson({{"quality", "high"}, {"samples", 16}}, "diffrender", 32)))
+                .cache,
+            16);
   fails({{"object_voxels", {1024, 1024, 1024}}}, "scene.gi.parameters.object_voxels");
   fails({{"object_voxels", {8, 8}}}, "scene.gi.parameters.object_voxels");
   fails({{"background", "no_such_photo.exr"}}, "scene.gi.parameters.background");

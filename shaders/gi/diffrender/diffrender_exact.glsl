@@ -1,0 +1,60 @@
+// The exact query: rays against the scan's resident cut as discs (the leaves of the per-node
+// bounding-sphere hierarchies of gi/shared/cut_hierarchies.h, unpruned: every leaf a point's disc,
+// joined by their top tree), the nearest hit's radiance, so that a benchmark isolates the
+// impostor's and the volume's approximations from the rest. The captured scene's meshes
+// (`inserted` false) are not traced: only their light, which the impostor holds, is missing.
+#include "../shared/bsh_interface.glsl"
+#include "../pbgi/pbgi_nodes.glsl"
+#include "../../common/octahedral.glsl"
+uniform int uTopCount;  // 0: nothing resident
+
+// The nearest disc along o + t d, 0 < t < tMax: its radiance and distance; false when none.
+bool traceScan(vec3 o, vec3 d, float tMax, out vec3 radiance, out float tHit) {
+  radiance = vec3(0.0), tHit = kImpostorFar;
+  if (uTopCount == 0) return false;
+  bool hit = false;
+  uvec2 stack[PBGI_STACK];
+  int top = 0;
+  stack[top++] = uvec2(0u, 0u);
+  for (int guard = 0; top > 0 && guard < 60000; ++guard) {
+    uvec2 e = stack[--top];
+    BshNode A = fetchNode(e);
+    vec3 oc = A.sphere.xyz - o;
+    float tc = dot(oc, d), r = A.sphere.w;
+    float dist2 = max(dot(oc, oc) - tc * tc, 0.0);
+    if (dist2 > r * r || tc + r <= 0.0 || tc - r >= tMax) continue;
+    if (A.links.x == BSH_LEAF) {
+      if (e.y == 0u) {  // a top-tree leaf: enter that node's own hierarchy
+        if (top < PBGI_STACK) stack[top++] = uvec2(0u, A.links.y + 1u);
+        continue;
+      }
+      float disc = min(uintBitsToFloat(A.links.y), r), t = -1.0;
+      if (A.links.w == 0u) {
+        if (dist2 <= disc * disc) t = tc;  // no normal: a disc facing the ray
+      } else {
+        vec3 n = decodeNormal(A.links.w);
+        float dn = dot(d, n);
+        if (abs(dn) < 1e-8) continue;
+        t = dot(oc, n) / dn;
+        vec3 p = o + t * d - A.sphere.xyz;
+        if (dot(p, p) > disc * disc) t = -1.0;
+      }
+      if (t > 0.0 && t < tMax) tMax = t, tHit = t, radiance = A.colour.rgb, hit = true;
+      continue;
+    }
+    if (top + 2 > PBGI_STACK) break;
+    // The nearer child last, so that it is visited first and shortens the search.
+    BshNode L = fetchNode(uvec2(A.links.x, e.y)), R = fetchNode(uvec2(A.links.y, e.y));
+    bool leftFirst = dot(L.sphere.xyz - o, d) < dot(R.sphere.xyz - o, d);
+    stack[top++] = uvec2(leftFirst ? A.links.y : A.links.x, e.y);
+    stack[top++] = uvec2(leftFirst ? A.links.x : A.links.y, e.y);
+  }
+  return hit;
+}
+
+vec3 exactQuery(vec3 o, vec3 d, out float tScene) {
+  vec3 L;
+  if (traceScan(o + coneNormal * exactLift, d, kImpostorFar, L, tScene)) return L;
+  tScene = kImpostorFar;
+  return environment(d);
+}
