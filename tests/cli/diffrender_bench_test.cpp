@@ -42,7 +42,8 @@ TEST(DiffrenderBench, RowsCarryTheDifferentialErrors) {
   // make-scene baked the capture its scene names, so diffrender renders the scene as written.
   const gi::Scene s = gi::loadScene(dir.path() / "room" / "scene.json");
   ASSERT_EQ(s.gi.parameters.value("capture", ""), "captured");
-  const LayerRecord* layer = OctreeReader(s.octrees[0].path).metadata().layer("captured");
+  const OctreeReader reader(s.octrees[0].path);  // the record lives in the reader's metadata
+  const LayerRecord* layer = reader.metadata().layer("captured");
   ASSERT_NE(layer, nullptr);
   EXPECT_EQ(layer->kind, "colour");
 

@@ -36,6 +36,16 @@ namespace {
 // the environment (impostor_fill.comp).
 constexpr int kFillLevels = 5;
 
+// Depth-tested splats and triangles into a size x size target, as the frame's shadow maps draw.
+void beginDepthDraw(int size) {
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glEnable(GL_PROGRAM_POINT_SIZE);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  glViewport(0, 0, size, size);
+}
+
 int levelsFor(int size) {
   int levels = 1;
   while ((size >> levels) > 0) ++levels;
@@ -327,12 +337,7 @@ class DiffrenderExtension : public FrameExtension {
                       glm::length(centre_ - 0.5f * (f.boundsLo() + f.boundsHi()));
     const float near = std::max(far * 1e-6f, 1e-4f);
     const glm::mat4 clipFromView = glm::perspective(glm::radians(90.0f), 1.0f, near, far);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glEnable(GL_PROGRAM_POINT_SIZE);
-    glDisable(GL_BLEND);
-    glDisable(GL_CULL_FACE);
-    glViewport(0, 0, S, S);
+    beginDepthDraw(S);
     f.bindSceneBuffers();
     for (int face = 0; face < 6; ++face) {
       impostorFbo_.attachLayer(GL_COLOR_ATTACHMENT0, raw_, face);
@@ -482,12 +487,7 @@ class DiffrenderExtension : public FrameExtension {
       shadowWithout_.setDepthCompare(true);
       shadowLayers_ = layers;
     }
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    glEnable(GL_PROGRAM_POINT_SIZE);
-    glDisable(GL_BLEND);
-    glDisable(GL_CULL_FACE);
-    glViewport(0, 0, S, S);
+    beginDepthDraw(S);
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.5f, 2.0f);
     for (size_t layer = 0; layer < size_t(layers); ++layer) {
