@@ -18,6 +18,7 @@
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
+#include "seeds.h"
 
 namespace nestlight::gi {
 namespace {
@@ -25,19 +26,11 @@ namespace {
 // Points per task: large enough that the progress lock is rare, small enough to balance.
 constexpr size_t kBakeGrain = 256;
 
-// splitmix64's finaliser: neighbouring points' seeds must not give correlated PCG streams.
-uint64_t splitMix(uint64_t x) {
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
 // Point i of cloud ci gets the same paths whatever the threads do.
 Rng pointRng(uint64_t seed, size_t ci, size_t i) {
-  return Rng(splitMix(splitMix(seed * 0x9E3779B97F4A7C15ULL + i) ^ (ci * 0xD1B54A32D192ED03ULL)),
-             splitMix(i));
+  return Rng(
+      splitMix64(splitMix64(seed * 0x9E3779B97F4A7C15ULL + i) ^ (ci * 0xD1B54A32D192ED03ULL)),
+      splitMix64(i));
 }
 
 struct PointEstimate {

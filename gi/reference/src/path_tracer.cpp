@@ -13,6 +13,7 @@
 #include <cmath>
 
 #include "nestlight/octree/error.h"
+#include "seeds.h"
 
 namespace nestlight::gi {
 namespace {
@@ -24,15 +25,6 @@ bool finite(const Rgb& c) {
 }
 float maxComponent(const Rgb& c) {
   return std::max({c.r, c.g, c.b});
-}
-
-uint64_t mix64(uint64_t x) {
-  // splitmix64's finaliser: decorrelates the per-pixel seeds.
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
 }
 
 // Offsets a ray origin off the surface it leaves, on the side it leaves towards. Relative to
@@ -263,9 +255,10 @@ ReferenceResult renderReference(const ReferenceScene& scene, const SceneCamera& 
                             // in their increment are correlated, and the two half images must be
                             // independent for the error estimate.
                             const uint64_t pixel = uint64_t(y) * W + x;
-                            Rng rng(mix64(mix64(opt.seed * 0x9E3779B97F4A7C15ULL + pixel) ^
-                                          (uint64_t(pass) * 0xD1B54A32D192ED03ULL)),
-                                    mix64(pixel));
+                            Rng rng(
+                                splitMix64(splitMix64(opt.seed * 0x9E3779B97F4A7C15ULL + pixel) ^
+                                           (uint64_t(pass) * 0xD1B54A32D192ED03ULL)),
+                                splitMix64(pixel));
                             const glm::vec2 j = opt.pixelCentres ? glm::vec2(0.5f) : rng.uniform2();
                             glm::vec3 ro, rd;
                             cameraRay(camera, scene.origin(), x + j.x, y + j.y, &ro, &rd);
