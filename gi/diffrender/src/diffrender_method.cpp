@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <utility>
 
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/diffrender/object_volume.h"
@@ -54,8 +55,8 @@ int levelsFor(int size) {
 
 class DiffrenderExtension : public FrameExtension {
  public:
-  explicit DiffrenderExtension(const Scene& scene)
-      : params_(diffrenderParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
+  DiffrenderExtension(const Scene& scene, DiffrenderParameters params)
+      : params_(std::move(params)), seed_(uint32_t(scene.gi.seed)) {}
 
   std::string name() const override { return "diffrender"; }
   // The scene's lights are raster's direct light, read at the camera's pixels only.
@@ -687,8 +688,11 @@ class DiffrenderExtension : public FrameExtension {
 }  // namespace
 
 std::unique_ptr<Method> createDiffrenderMethod(const Scene& scene, const MethodContext& ctx) {
-  const Scene drawn = diffrenderCaptureScene(scene, diffrenderParameters(scene));
-  return createRasterMethod(drawn, ctx, std::make_unique<DiffrenderExtension>(drawn));
+  // Parsed once: the drawn scene (a capture layer in place of the colour) and the extension.
+  DiffrenderParameters params = diffrenderParameters(scene);
+  const Scene drawn = diffrenderCaptureScene(scene, params);
+  return createRasterMethod(drawn, ctx,
+                            std::make_unique<DiffrenderExtension>(drawn, std::move(params)));
 }
 
 }  // namespace nestlight::gi
