@@ -135,7 +135,7 @@ class DiffrenderExtension : public FrameExtension {
         "diffrender_impostor", frame::Scope::Frame,
         [](frame::PassBuilder& b) { b.write("diffrender_impostor"); },
         [this, &f](const frame::PassContext&) { renderImpostor(f); });
-    if (params_.query == DiffrenderParameters::Query::Exact) {
+    if (tracesExactly()) {
       // The scan's hierarchies, unpruned (every leaf a point's disc), built per node by the
       // loader threads and joined under a top tree when the cut changes (beforeFrame).
       layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> c) {
@@ -178,7 +178,7 @@ class DiffrenderExtension : public FrameExtension {
   }
 
   void beforeFrame(SceneFrame& f) override {
-    if (params_.query == DiffrenderParameters::Query::Exact && f.cutGeneration() != hierCut_) {
+    if (tracesExactly() && f.cutGeneration() != hierCut_) {
       hierCut_ = f.cutGeneration();
       hier_.assemble(f, layer_);
     }
@@ -200,6 +200,10 @@ class DiffrenderExtension : public FrameExtension {
     a["nestlight:diffrender_traced"] = std::to_string(s[DR_STAT_TRACED]);
     a["nestlight:diffrender_object_first"] = std::to_string(s[DR_STAT_OBJECT_FIRST]);
     a["nestlight:diffrender_self_shadowed"] = std::to_string(s[DR_STAT_SELF_SHADOWED]);
+    if (params_.compareExact) {
+      a["nestlight:diffrender_compared"] = std::to_string(s[DR_STAT_COMPARED]);
+      a["nestlight:diffrender_within_footprint"] = std::to_string(s[DR_STAT_WITHIN_FOOTPRINT]);
+    }
     a["nestlight:diffrender_solid_voxels"] = std::to_string(solidVoxels_);
     a["nestlight:diffrender_impostor_builds"] = std::to_string(impostorBuilds_);
     char line[256];
@@ -210,10 +214,22 @@ class DiffrenderExtension : public FrameExtension {
                   s[DR_STAT_TRACED], s[DR_STAT_OBJECT_PIXELS], s[DR_STAT_RHO_CLAMPED],
                   s[DR_STAT_UNCONVERGED], s[DR_STAT_HIDDEN]);
     mf.summary += line;
+    if (params_.compareExact) {
+      std::snprintf(
+          line, sizeof line,
+          "; compared with exact rays: %u of %u hits within an impostor texel's footprint",
+          s[DR_STAT_WITHIN_FOOTPRINT], s[DR_STAT_COMPARED]);
+      mf.summary += line;
+    }
     for (const std::string& w : warnings_) mf.summary += "; warning: " + w;
   }
 
  private:
+  // The exact query's hierarchies are built for it and for compare_exact's check of the others.
+  bool tracesExactly() const {
+    return params_.query == DiffrenderParameters::Query::Exact || params_.compareExact;
+  }
+
   // The photograph, linear (a PNG's display values decoded with gamma 2.2, colour-match's
   // convention), rows bottom up as the frame's.
   void loadBackground(SceneFrame& f) {
@@ -532,7 +548,8 @@ class DiffrenderExtension : public FrameExtension {
                                                   : DR_QUERY_DIT;
     glUniform1i(p.uniform("uQuery"), query);
     glUniform1i(p.uniform("uTopCount"), GLint(hier_.topCount()));
-    if (params_.query == DiffrenderParameters::Query::Exact) {
+    glUniform1i(p.uniform("uCompareExact"), params_.compareExact ? 1 : 0);
+    if (tracesExactly()) {
       hier_.top().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP);
       hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
       hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);

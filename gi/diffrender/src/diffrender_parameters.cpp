@@ -172,6 +172,10 @@ const ParameterSpecs& diffrenderParameterSpecs() {
                  "of 3 numbers, or a colour-match --json file); default identity"),
       P::integer("dit_iterations", 1, 64, 8,
                  "DIT: refinements of a ray's lookup direction before it counts as unconverged"),
+      P::boolean("compare_exact", false,
+                 "an accuracy check of the query: each material ray is also traced exactly and the "
+                 "query's hits within an impostor texel's footprint of the exact hit are counted "
+                 "(costs exact's time)"),
   };
   return specs;
 }
@@ -217,6 +221,7 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   p.rhoMax = float(r.number("rho_max"));
   p.materialEstimate = r.string("material") == "estimate";
   p.ditIterations = int(r.integer("dit_iterations"));
+  p.compareExact = r.boolean("compare_exact");
   if (const std::string a = r.string("aovs"); !a.empty()) {
     const std::filesystem::path dir(a);
     p.aovs = (dir.is_absolute() ? dir : scene.file.parent_path() / dir).string();

@@ -83,9 +83,11 @@ void main() {
       hitBits[i >> 5] |= 1u << (i & 31);
       hits++;
     }
-    if (uEstimateMaterial) {
+    if (uEstimateMaterial || uCompareExact) {
       float t;
-      incoming += queryScene(o, d, cone, t);
+      vec3 Lq = queryScene(o, d, cone, t);
+      if (uEstimateMaterial) incoming += Lq;
+      if (uCompareExact) compareWithExact(o, d, cone);
     }
   }
   // The scene's lights at the point: what they gave it without the inserted meshes, and the
@@ -142,6 +144,10 @@ void main() {
   atomicAdd(stats[DR_STAT_TRACED], traced);
   if (unconverged > 0u) atomicAdd(stats[DR_STAT_UNCONVERGED], unconverged);
   if (hidden > 0u) atomicAdd(stats[DR_STAT_HIDDEN], hidden);
+  if (compared > 0u) {
+    atomicAdd(stats[DR_STAT_COMPARED], compared);
+    atomicAdd(stats[DR_STAT_WITHIN_FOOTPRINT], withinFootprint);
+  }
   if (any(isnan(delta)) || any(isinf(delta))) delta = vec3(0.0);
   imageStore(uDelta, lp, vec4(delta, 1.0));
 }

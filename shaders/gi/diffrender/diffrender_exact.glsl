@@ -7,6 +7,8 @@
 #include "../pbgi/pbgi_nodes.glsl"
 #include "../../common/octahedral.glsl"
 uniform int uTopCount;  // 0: nothing resident
+uniform bool uCompareExact;
+vec3 exactNormal = vec3(0.0);  // the last hit disc's normal (one facing the ray when it has none)
 
 // The nearest disc along o + t d, 0 < t < tMax: its radiance and distance; false when none.
 bool traceScan(vec3 o, vec3 d, float tMax, out vec3 radiance, out float tHit) {
@@ -39,7 +41,10 @@ bool traceScan(vec3 o, vec3 d, float tMax, out vec3 radiance, out float tHit) {
         vec3 p = o + t * d - A.sphere.xyz;
         if (dot(p, p) > disc * disc) t = -1.0;
       }
-      if (t > 0.0 && t < tMax) tMax = t, tHit = t, radiance = A.colour.rgb, hit = true;
+      if (t > 0.0 && t < tMax) {
+        tMax = t, tHit = t, radiance = A.colour.rgb, hit = true;
+        exactNormal = A.links.w == 0u ? -d : decodeNormal(A.links.w);
+      }
       continue;
     }
     if (top + 2 > PBGI_STACK) break;
@@ -57,4 +62,29 @@ vec3 exactQuery(vec3 o, vec3 d, out float tScene) {
   if (traceScan(o + coneNormal * exactLift, d, kImpostorFar, L, tScene)) return L;
   tScene = kImpostorFar;
   return environment(d);
+}
+
+// compare_exact: of the rays whose exact trace meets the scan, how many hits of the query lie within
+// the footprint of an impostor texel about the exact hit. A texel spans about 2 / size radians
+// from the centre; on the surface its footprint stretches by one over the cosine between the
+// surface and the line of sight from the centre (capped at 10x: a surface seen edge-on).
+uint compared = 0u, withinFootprint = 0u;
+void compareWithExact(vec3 o, vec3 d, float solidAngle) {
+  vec3 oe = o + coneNormal * exactLift, L;
+  float te;
+  if (!traceScan(oe, d, kImpostorFar, L, te)) return;
+  compared++;
+  float tQuery = te;
+  if (uQuery != DR_QUERY_EXACT) {
+    uint u = unconverged, h = hidden;
+    queryScene(oe, d, solidAngle, tQuery);
+    unconverged = u, hidden = h;
+  }
+  if (tQuery >= kImpostorFar * 0.5) return;  // the query saw the environment
+  vec3 pe = oe + te * d, r = pe - uImpostorCentre;
+  float dist = length(r);
+  float cosView = abs(dot(exactNormal, r)) / max(dist, 1e-20);
+  float texel = 2.0 * dist / float(uImpostorSize) / max(cosView, 0.1);
+  // Along the ray: the exact hit is from the lifted origin, so the query's is taken from there too.
+  if (abs(tQuery - te) <= texel) withinFootprint++;
 }

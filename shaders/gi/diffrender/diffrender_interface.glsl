@@ -13,7 +13,9 @@
 #define DR_STAT_OBJECT_FIRST 6    // traced rays that met an object before the scene
 #define DR_STAT_SELF_SHADOWED 7   // object rays blocked by the objects' own volume
 #define DR_STAT_HIDDEN 8          // DIT rays that start behind the impostor's surface (unseen from its centre)
-#define DR_STAT_COUNT 9
+#define DR_STAT_COMPARED 9          // compare_exact: material rays whose exact trace met the scan
+#define DR_STAT_WITHIN_FOOTPRINT 10 // of them, the query's hit within an impostor texel's footprint
+#define DR_STAT_COUNT 11
 
 // Texture units of the passes (4 is the frame's shadow maps, lights.glsl; 5 the environment's,
 // environment.glsl).

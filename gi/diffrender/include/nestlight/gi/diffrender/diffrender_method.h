@@ -21,7 +21,7 @@ namespace nestlight::gi {
 struct DiffrenderParameters {
   // How a ray or cone finds the scene's radiance: the environment map's lookup by direction
   // alone (em), distance impostor tracing (dit, Szirmay-Kalos et al. 2005), voxel cones (vct) or
-  // exact rays (exact). vct and exact are not built yet.
+  // exact rays (exact).
   enum class Query { Em, Dit, Vct, Exact } query = Query::Dit;
   enum class Quality { Low, Med, High } quality = Quality::Med;
   int samples = 16;        // N: cosine directions per scan pixel (material and dL)
@@ -37,6 +37,9 @@ struct DiffrenderParameters {
   float rhoMax = 1;              // the material estimate's clamp
   bool materialEstimate = true;  // false: the recorded colour as rho (an ablation)
   int ditIterations = 8;         // DIT's secant steps after its search
+  // Each material ray also traced by `exact`, the query's hits counted against it (stats
+  // compared and within_footprint): how far an approximation's hits stray, at exact's cost.
+  bool compareExact = false;
   // A folder (relative to the scene file) for each still's images beside the composite:
   // diffrender_delta.exr (dL on the scan), diffrender_rho.exr (the material estimate), both at
   // 1 / delta_scale, and diffrender_mask.exr (1 scan, 2 inserted mesh, 0 else). Empty: none.
