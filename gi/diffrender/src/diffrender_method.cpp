@@ -203,6 +203,8 @@ class DiffrenderExtension : public FrameExtension {
     if (params_.compareExact) {
       a["nestlight:diffrender_compared"] = std::to_string(s[DR_STAT_COMPARED]);
       a["nestlight:diffrender_within_footprint"] = std::to_string(s[DR_STAT_WITHIN_FOOTPRINT]);
+      a["nestlight:diffrender_compared_seen"] = std::to_string(s[DR_STAT_COMPARED_SEEN]);
+      a["nestlight:diffrender_within_footprint_seen"] = std::to_string(s[DR_STAT_WITHIN_SEEN]);
     }
     a["nestlight:diffrender_solid_voxels"] = std::to_string(solidVoxels_);
     a["nestlight:diffrender_impostor_builds"] = std::to_string(impostorBuilds_);
@@ -217,8 +219,10 @@ class DiffrenderExtension : public FrameExtension {
     if (params_.compareExact) {
       std::snprintf(
           line, sizeof line,
-          "; compared with exact rays: %u of %u hits within an impostor texel's footprint",
-          s[DR_STAT_WITHIN_FOOTPRINT], s[DR_STAT_COMPARED]);
+          "; compared with exact rays: %u of %u hits within an impostor texel's footprint (%u of "
+          "the %u the impostor holds)",
+          s[DR_STAT_WITHIN_FOOTPRINT], s[DR_STAT_COMPARED], s[DR_STAT_WITHIN_SEEN],
+          s[DR_STAT_COMPARED_SEEN]);
       mf.summary += line;
     }
     for (const std::string& w : warnings_) mf.summary += "; warning: " + w;

@@ -147,6 +147,8 @@ void main() {
   if (compared > 0u) {
     atomicAdd(stats[DR_STAT_COMPARED], compared);
     atomicAdd(stats[DR_STAT_WITHIN_FOOTPRINT], withinFootprint);
+    atomicAdd(stats[DR_STAT_COMPARED_SEEN], comparedSeen);
+    atomicAdd(stats[DR_STAT_WITHIN_SEEN], withinSeen);
   }
   if (any(isnan(delta)) || any(isinf(delta))) delta = vec3(0.0);
   imageStore(uDelta, lp, vec4(delta, 1.0));

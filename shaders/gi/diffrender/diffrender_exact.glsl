@@ -68,7 +68,7 @@ vec3 exactQuery(vec3 o, vec3 d, out float tScene) {
 // the footprint of an impostor texel about the exact hit. A texel spans about 2 / size radians
 // from the centre; on the surface its footprint stretches by one over the cosine between the
 // surface and the line of sight from the centre (capped at 10x: a surface seen edge-on).
-uint compared = 0u, withinFootprint = 0u;
+uint compared = 0u, withinFootprint = 0u, comparedSeen = 0u, withinSeen = 0u;
 void compareWithExact(vec3 o, vec3 d, float solidAngle) {
   vec3 oe = o + coneNormal * exactLift, L;
   float te;
@@ -80,11 +80,18 @@ void compareWithExact(vec3 o, vec3 d, float solidAngle) {
     queryScene(oe, d, solidAngle, tQuery);
     unconverged = u, hidden = h;
   }
-  if (tQuery >= kImpostorFar * 0.5) return;  // the query saw the environment
   vec3 pe = oe + te * d, r = pe - uImpostorCentre;
   float dist = length(r);
+  if (tQuery >= kImpostorFar * 0.5) tQuery = -1.0;  // the query saw the environment
   float cosView = abs(dot(exactNormal, r)) / max(dist, 1e-20);
   float texel = 2.0 * dist / float(uImpostorSize) / max(cosView, 0.1);
   // Along the ray: the exact hit is from the lifted origin, so the query's is taken from there too.
-  if (abs(tQuery - te) <= texel) withinFootprint++;
+  bool within = abs(tQuery - te) <= texel;
+  if (within) withinFootprint++;
+  // Whether the impostor holds the exact hit (its stored distance there within two texels'
+  // footprint): a hit its centre does not see no query of it can find.
+  if (abs(impostorDistance(r) - dist) <= 2.0 * footprint(r)) {
+    comparedSeen++;
+    if (within) withinSeen++;
+  }
 }

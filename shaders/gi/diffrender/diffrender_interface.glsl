@@ -15,7 +15,9 @@
 #define DR_STAT_HIDDEN 8          // DIT rays that start behind the impostor's surface (unseen from its centre)
 #define DR_STAT_COMPARED 9          // compare_exact: material rays whose exact trace met the scan
 #define DR_STAT_WITHIN_FOOTPRINT 10 // of them, the query's hit within an impostor texel's footprint
-#define DR_STAT_COUNT 11
+#define DR_STAT_COMPARED_SEEN 11   // of the compared, exact hits the impostor holds (its centre sees them)
+#define DR_STAT_WITHIN_SEEN 12     // of those, the query's hit within the footprint
+#define DR_STAT_COUNT 13
 
 // Texture units of the passes (4 is the frame's shadow maps, lights.glsl; 5 the environment's,
 // environment.glsl).
