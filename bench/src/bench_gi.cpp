@@ -11,11 +11,10 @@
 #include <optional>
 
 #include "bench_gi_differential.h"
+#include "bench_gi_reference.h"
 #include "nestlight/bench/harness.h"
-#include "nestlight/gi/environment_sequence.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/plot.h"
-#include "nestlight/gi/reference/path_tracer.h"  // kReferenceModelVersion, by reference_scene.h
 #include "nestlight/gi/render_scene.h"
 #include "nestlight/gi/tone_map.h"
 #include "nestlight/octree/error.h"
@@ -27,40 +26,6 @@ using json = nlohmann::json;
 using namespace gi;
 
 namespace {
-
-std::string fileHash(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return std::to_string(std::hash<std::string>{}(bytes));
-}
-
-// What the reference depends on besides the scene file: its octrees (metadata and payload),
-// meshes and environment map, by size and modification time, so an edited asset is noticed.
-std::string assetStamp(const Scene& s) {
-  std::string stamp;
-  auto add = [&](const fs::path& p) {
-    std::error_code ec;
-    auto size = fs::file_size(p, ec);
-    auto time = fs::last_write_time(p, ec).time_since_epoch().count();
-    stamp += p.string() + "=" + std::to_string(ec ? 0 : size) + "@" +
-             std::to_string(ec ? 0 : time) + ";";
-  };
-  for (const auto& o : s.octrees) {
-    add(o.path / "metadata.json");
-    add(o.path / "octree.bin");
-  }
-  for (const auto& m : s.meshes) add(m.path);
-  if (s.environment && !s.environment->path.empty()) add(s.environment->path);
-  if (s.environment && !s.environment->sequence.empty()) {
-    try {
-      const EnvironmentSequence seq(sequenceSpec(*s.environment));
-      for (size_t i = 0; i < seq.frames(); ++i) add(seq.framePath(i));
-    } catch (const Error&) {
-      add(s.environment->sequence);  // the render names what is wrong with it
-    }
-  }
-  return std::to_string(std::hash<std::string>{}(stamp));
-}
 
 std::string shortNumber(double v) {
   char buf[32];
@@ -85,23 +50,7 @@ struct Setup {
   // the one the tone-mapped metrics use: they judge the pixels a reader of the PNGs sees.
   double exposure = 0;
   Scene prepared(const std::string& method) const {
-    Scene s = probe;
-    // The scene's gi.parameters are its own method's: another method keeps only the keys it
-    // declares (diffrender's capture is no parameter of pbgi, which would refuse it).
-    if (const MethodInfo* m = findMethod(method);
-        m && method != probe.gi.method && s.gi.parameters.is_object()) {
-      const std::vector<std::string> known = parameterNames(m->parameters);
-      for (auto it = s.gi.parameters.begin(); it != s.gi.parameters.end();)
-        it = std::find(known.begin(), known.end(), it.key()) == known.end()
-                 ? s.gi.parameters.erase(it)
-                 : std::next(it);
-    }
-    s.gi.method = method;
-    if (o.mode == "albedo") s.gi.mode = RadianceMode::Albedo;
-    if (o.mode == "radiance_cache") s.gi.mode = RadianceMode::RadianceCache;
-    s.camera.width = W;
-    s.camera.height = H;
-    return s;
+    return reference::sceneFor(probe, method, o.mode, W, H);
   }
 };
 
@@ -128,70 +77,21 @@ std::vector<const MethodInfo*> selectMethods(const BenchGiOptions& o) {
   return methods;
 }
 
-struct Reference {
-  HdrImage image;
-  json info;
-};
+using Reference = reference::Image;
 
 // The reference, cached in refPath under a key of everything that changes it; `withoutInserted`:
 // R0, the scene as it was captured (the meshes marked inserted left out).
 Reference loadOrRenderReference(const Setup& setup, const fs::path& refPath, std::FILE* log,
                                 bool withoutInserted = false) {
   const BenchGiOptions& o = setup.o;
-  const std::string key = "model" + std::to_string(kReferenceModelVersion) + ":" +
-                          fileHash(setup.sceneFile) + ":" + assetStamp(setup.probe) + ":" +
-                          std::to_string(setup.W) + "x" + std::to_string(setup.H) + ":" +
-                          std::to_string(o.referenceError) + ":" + o.mode +
-                          (withoutInserted ? ":without-inserted" : "");
-  Reference ref;
-  if (!o.forceReference && fs::exists(refPath)) {
-    ImageAttributes attrs;
-    HdrImage img = readHdrImage(refPath.string(), &attrs);
-    if (attrs["nestlight:cache_key"] == key) {
-      ref.image = std::move(img);
-      ref.info = {{"cached", true},
-                  {"samples", attrs["nestlight:samples"]},
-                  {"relative_error_estimate", attrs["nestlight:relative_error_estimate"]},
-                  {"seconds", attrs["nestlight:seconds"]}};
-      return ref;
-    }
-  }
-  say(log,
-      "bench gi: rendering the reference%s to %.4g relative error (at most %.0f s, %d spp)...\n",
-      withoutInserted ? " without the inserted meshes (R0)" : "", o.referenceError,
-      o.referenceTimeLimit, o.referenceSpp);
-  Scene s = setup.prepared("reference");
-  if (withoutInserted) s = differential::withoutInserted(std::move(s));
-  s.gi.targetRelativeError = o.referenceError;
-  s.gi.timeLimitSeconds = o.referenceTimeLimit;
-  s.gi.samplesPerPixel = o.referenceSpp;
-  s.gi.seed = 0x5eed;  // independent of the measured runs' seed
-  MethodFrame r = createMethod(s, {true, false})->render(s.camera);
-  ref.image = r.image;
-  // One that stopped short of the error target (time or sample limit) is kept for this run
-  // but not reused: the next run tries again.
-  ImageAttributes attrs{
-      {"nestlight:cache_key", r.stopReason == "error target" ? key : "incomplete"},
-      {"nestlight:samples", std::to_string(r.samplesPerPixel)},
-      {"nestlight:relative_error_estimate", std::to_string(r.relativeError)},
-      {"nestlight:seconds", std::to_string(r.seconds)},
-      {"nestlight:stop", r.stopReason}};
-  writeExr(refPath.string(), ref.image, attrs);
-  ref.info = {{"cached", false},
-              {"samples", r.samplesPerPixel},
-              {"relative_error_estimate", r.relativeError},
-              {"seconds", r.seconds},
-              {"stop", r.stopReason},
-              {"rays_per_second", r.raysPerSecond()},
-              {"samples_per_second", r.samplesPerSecond()}};
-  say(log, "  reference: %d spp, estimated error %.4f, %.1f s (%s)\n", r.samplesPerPixel,
-      r.relativeError, r.seconds, r.stopReason.c_str());
-  if (r.stopReason != "error target")
-    say(log,
-        "  warning: the reference stopped before %.4g error; errors below its own are not "
-        "meaningful\n",
-        o.referenceError);
-  return ref;
+  reference::Request r;
+  r.sceneFile = setup.sceneFile;
+  r.probe = setup.probe;
+  r.mode = o.mode;
+  r.width = setup.W, r.height = setup.H;
+  r.error = o.referenceError, r.timeLimit = o.referenceTimeLimit, r.spp = o.referenceSpp;
+  r.force = o.forceReference;
+  return reference::loadOrRender(r, refPath, log, withoutInserted);
 }
 
 // A quality level's short unit, for the plot's labels and the table.

@@ -2,7 +2,8 @@
 // Environment Illumination", IEEE TVCG 2017): for a scene with inserted meshes and a captured
 // radiance layer (gi.parameters.capture), R1 is the usual reference and R0 the reference without
 // the inserted meshes; what a differential method adds to the capture should be R1 - R0 on the
-// scan, and its inserted meshes should look as in R1. Private to bench_gi.cpp.
+// scan, and its inserted meshes should look as in R1. Private to bench/src (bench gi, bench
+// diffrender).
 #pragma once
 
 #include <filesystem>

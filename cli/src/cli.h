@@ -66,9 +66,10 @@ void addCompare(CLI::App& app, int& exitCode);
 void addExpandHdr(CLI::App& app, int& exitCode);
 void addBakeRadiance(CLI::App& app, int& exitCode);
 void addColourMatch(CLI::App& app, int& exitCode);
-void addBenchHdr(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
-void addBenchIbl(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
-void addBenchLaz(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
+void addBenchHdr(CLI::App& app, int& exitCode);         // after addBench: a sub-command of `bench`
+void addBenchIbl(CLI::App& app, int& exitCode);         // after addBench: a sub-command of `bench`
+void addBenchDiffrender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
+void addBenchLaz(CLI::App& app, int& exitCode);         // after addBench: a sub-command of `bench`
 void addGlInfo(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", "1B" (a billion), plain numbers: point counts are decimal.

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
       "  nestlight compare render.exr reference.exr     error metrics against a reference image\n"
       "  nestlight bench gi room/scene.json             speed against error of the GI methods\n"
       "  nestlight bench ibl                            IBL estimators under video light probes\n"
+      "  nestlight bench diffrender dr/scene.json       differential rendering's tables (paper)\n"
       "  nestlight gl-info --programs                   the GL driver, and every shader compiled "
       "by it\n"
       "  nestlight expand-hdr scan.octree --photo p.exr HDR colour layer from one HDR photograph\n"
@@ -61,6 +62,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addColourMatch(app, code);
   nestlight::cli::addBenchHdr(app, code);
   nestlight::cli::addBenchIbl(app, code);
+  nestlight::cli::addBenchDiffrender(app, code);
   nestlight::cli::addBenchLaz(app, code);
   nestlight::cli::addGlInfo(app, code);
   // Parse errors and user errors exit 1, failed checks 2, failures of the program or the
