@@ -182,6 +182,7 @@ class DiffrenderExtension : public FrameExtension {
       hierCut_ = f.cutGeneration();
       hier_.assemble(f, layer_);
     }
+    objectLightStale_ = true;
     std::array<uint32_t, DR_STAT_COUNT> zeros{};
     stats_.upload(zeros.data(), sizeof zeros);
   }
@@ -319,9 +320,26 @@ class DiffrenderExtension : public FrameExtension {
     volumeSize_ = n;
     const int depth = n.z * int(inserted.size());
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    occupancy_ = gl::Texture::volume(GL_R8, n.x, n.y, depth);
+    // Mips as far as each grid's slab of the stack stays whole along z (eq. 6's cones filter
+    // within one mesh's grid) and every side keeps a texel.
+    objectLevels_ = 1;
+    while (objectLevels_ < 8 && n.z % (1 << objectLevels_) == 0 &&
+           std::min({n.x, n.y, n.z}) >> objectLevels_ > 0)
+      ++objectLevels_;
+    occupancy_ = gl::Texture::volume(GL_R8, n.x, n.y, depth, objectLevels_);
     glTextureSubImage3D(occupancy_.id(), 0, 0, 0, 0, n.x, n.y, depth, GL_RED, GL_UNSIGNED_BYTE,
                         occupancy.data());
+    if (params_.query == DiffrenderParameters::Query::Vct) {
+      glGenerateTextureMipmap(occupancy_.id());
+      occupancy_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
+      objectLight_ = gl::Texture::volume(GL_RGBA16F, n.x, n.y, depth, objectLevels_);
+      objectLight_.setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
+      for (const gl::Texture* t : {&occupancy_, &objectLight_})
+        for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
+          glTextureParameteri(t->id(), w, GL_CLAMP_TO_EDGE);
+      objectLightProgram_ =
+          gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/object_light.comp"}});
+    }
     surface_ = gl::Texture::volume(GL_RGBA8, n.x, n.y, depth);
     glTextureSubImage3D(surface_.id(), 0, 0, 0, 0, n.x, n.y, depth, GL_RGBA, GL_UNSIGNED_BYTE,
                         surface.data());
@@ -561,7 +579,9 @@ class DiffrenderExtension : public FrameExtension {
     if (params_.query == DiffrenderParameters::Query::Vct) {
       glBindTextureUnit(DR_UNIT_SCENE_RADIANCE, sceneRadiance_.id());
       glBindTextureUnit(DR_UNIT_SCENE_OPACITY, sceneOpacity_.id());
+      glBindTextureUnit(DR_UNIT_OBJECT_LIGHT, objectLight_.id());
     }
+    glUniform1i(p.uniform("uObjectLevels"), objectLevels_);
     glUniform3fv(p.uniform("uSceneOrigin"), 1, &sceneOrigin_[0]);
     glUniform1f(p.uniform("uSceneCell"), sceneCell_);
     glUniform3i(p.uniform("uSceneDims"), sceneDims_.x, sceneDims_.y, sceneDims_.z);
@@ -597,6 +617,10 @@ class DiffrenderExtension : public FrameExtension {
     maps.setDepthCompare(true);
     glBindTextureUnit(4, maps.id());
     glBindTextureUnit(DR_UNIT_SHADOW_WITHOUT, shadowWithout_.id());
+    if (params_.query == DiffrenderParameters::Query::Vct && objectLightStale_) {
+      objectLightStale_ = false;
+      lightObjectVolume(f);
+    }
     bindCommon(f, delta_);
     glUniform1i(delta_.uniform("uSamples"), params_.samples);
     glUniform1i(delta_.uniform("uCache"), params_.cache);
@@ -633,6 +657,17 @@ class DiffrenderExtension : public FrameExtension {
     glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
     glMemoryBarrier(barriers | GL_FRAMEBUFFER_BARRIER_BIT);
     if (!params_.aovs.empty()) keepAovs(tile, lw, lh);
+  }
+
+  // Eq. 6's object light: every boundary voxel lit (object_light.comp), then the mips.
+  void lightObjectVolume(SceneFrame& f) {
+    bindCommon(f, objectLightProgram_);
+    const int depth = volumeSize_.z * int(volumeLo_.size());
+    glBindImageTexture(0, objectLight_.id(), 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA16F);
+    glDispatchCompute(GLuint((volumeSize_.x + 3) / 4), GLuint((volumeSize_.y + 3) / 4),
+                      GLuint((depth + 3) / 4));
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    glGenerateTextureMipmap(objectLight_.id());
   }
 
   // The tile's AOVs into the full image's (GL rows bottom up; the images' top down).
@@ -693,6 +728,11 @@ class DiffrenderExtension : public FrameExtension {
   glm::ivec3 sceneDims_{1};
   int slabDepth_ = 1;
   uint64_t sceneBuiltCut_ = ~0ull;
+  // vct: the boundary voxels' light for eq. 6's cones, lit once a frame (before the first tile).
+  gl::Texture objectLight_;
+  gl::ShaderProgram objectLightProgram_;
+  int objectLevels_ = 1;
+  bool objectLightStale_ = true;
   std::string sceneFile_;
   // exact's hierarchies of the lights' cut.
   size_t layer_ = 0;

@@ -230,6 +230,58 @@ bool marchObjects(vec3 o, vec3 d, float tStart, float tMax, out float tHit, out 
   return hit;
 }
 
+// Eq. 6 (vct): a cone through the inserted meshes' volumes in [0, tMax] (the scene's distance),
+// front to back from where it enters each grid's box, the mip from its diameter, steps of an
+// eighth of a diameter with the occupancy corrected for them (tau_s): the filtered occupancy
+// reaches a texel beyond the surface, and at half a diameter (the scene's cones) a black sphere's
+// shadow on the floor came out 17% too dark, at a quarter 7%, at an eighth within 5%. Each step's surface light (the boundary
+// voxels' mean, object_light.comp) is weighted by tau_s and by the transmittance alpha = prod
+// (1 - tau) of the steps before; `coverage` is 1 - alpha at the end and `radiance` the weighted
+// mean, so that dL = coverage (radiance - L_env). Grids are marched one after another, not
+// interleaved by depth: meshes whose boxes overlap along a cone are an approximation. False when
+// the cone meets no occupancy.
+layout(binding = DR_UNIT_OBJECT_LIGHT) uniform sampler3D uObjectLight;
+uniform int uObjectLevels;  // the volumes' mips (those whose slabs stay apart in the stack)
+
+bool coneObjects(vec3 o, vec3 d, float solidAngle, float tMax, out float coverage, out vec3 radiance) {
+  float cosHalf = clamp(1.0 - solidAngle / (2.0 * kPi), -1.0, 1.0 - 1e-6);
+  float tanHalf = sqrt(max(1.0 - cosHalf * cosHalf, 0.0)) / cosHalf;
+  float alpha = 1.0, lit = 0.0;
+  radiance = vec3(0.0);
+  for (int k = 0; k < uVolumeCount; ++k) {
+    float t0, t1;
+    if (!volumeSpan(k, o, d, t0, t1)) continue;
+    t1 = min(t1, tMax);
+    vec3 cell = volumeCell(k), extent = uVolumeHi[k] - uVolumeLo[k];
+    float voxel = min(cell.x, min(cell.y, cell.z));
+    float t = t0;
+    for (int i = 0; i < 1024 && t < t1 && alpha > 0.01; ++i) {
+      float diameter = max(2.0 * t * tanHalf, voxel);
+      float lod = clamp(log2(diameter / voxel), 0.0, float(uObjectLevels - 1));
+      vec3 local = (o + t * d - uVolumeLo[k]) / extent;
+      // Kept half a texel of the level inside grid k's slab of the stack, so that the filter does
+      // not reach the next mesh's grid.
+      float margin = 0.5 * exp2(floor(lod) + 1.0) / float(uVolumeSize.z);
+      local.z = clamp(local.z, margin, 1.0 - margin);
+      vec3 uvw = vec3(local.xy, (local.z + float(k)) / float(uVolumeCount));
+      float tau = textureLod(uOccupancy, uvw, lod).r;
+      if (tau > 1e-4) {
+        float step = 1.0 - pow(1.0 - min(tau, 0.9999), 0.125);
+        vec4 l = textureLod(uObjectLight, uvw, lod);
+        if (l.a > 1e-4) {
+          radiance += alpha * step * l.rgb / l.a;
+          lit += alpha * step;
+        }
+        alpha *= 1.0 - step;
+      }
+      t += 0.125 * diameter;
+    }
+  }
+  coverage = 1.0 - alpha;
+  radiance = lit > 0.0 ? radiance / lit : vec3(0.0);
+  return coverage > 1e-3;
+}
+
 // The grid whose box holds x, -1 when none does (within half a voxel).
 int volumeAt(vec3 x) {
   for (int k = 0; k < uVolumeCount; ++k) {

@@ -6,6 +6,8 @@
 // counted, each traced ray giving L_obj - L_env where it meets an object before the scene and 0
 // otherwise (Fig. 7), and eq. 9 scales their sum by 1 + |H_b| / |H_a| (unbiased: each hit is
 // traced with probability |H_a| / |H|). L_obj is one bounce off the hit voxel, taken as diffuse.
+// With vct each traced direction is a cone through the objects' volumes instead (eq. 6): its
+// coverage of them times their light less the scene's.
 // Beyond the paper: the scene file's lights lit the capture but are no surface of it, so the
 // impostor does not hold them. Their part of the light a scan point received, E_i V_i without the
 // inserted meshes (shadow maps drawn without them), joins the material estimate's denominator, and
@@ -129,6 +131,15 @@ void main() {
       vec3 d = F * sampleCosineHemisphereGl(u);
       float tScene;
       vec3 Lenv = queryScene(o, d, cone, tScene);
+      if (uQuery == DR_QUERY_VCT) {
+        // Eq. 6: the cone's coverage of the objects times their light less the scene's.
+        float coverage;
+        vec3 Lobj;
+        if (!coneObjects(o, d, cone, tScene, coverage, Lobj)) continue;
+        objectFirst++;
+        sum += coverage * (Lobj - Lenv);
+        continue;
+      }
       float tHit;
       vec3 hn;
       int material;

@@ -31,6 +31,9 @@
 #define DR_UNIT_BACKGROUND 13      // the photograph (`background`)
 #define DR_UNIT_SCENE_RADIANCE 14  // vct: the scene volume's radiance (premultiplied) and its mips
 #define DR_UNIT_SCENE_OPACITY 15   // vct: its opacity
+// vct: the inserted meshes' boundary voxels' light (object_light.comp) for eq. 6's cones. Unit 16:
+// GL 4.5 promises 16 units a stage, llvmpipe and NVIDIA's driver give 32.
+#define DR_UNIT_OBJECT_LIGHT 16
 
 // Inserted meshes at most: each its own voxel grid, stacked in one texture.
 #define DR_VOLUMES_MAX 16
