@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/reference/path_tracer.h"
@@ -85,6 +87,25 @@ inline Scene lambertFloorScene(const test::TempDir& t, const nlohmann::json& lig
   j["gi"] = {{"method", "raster"}, {"mode", "albedo"}, {"parameters", {{"shadow_map_size", 1024}}}};
   std::ofstream(t.path() / "scene.json") << j.dump(2);
   return loadScene(t.path() / "scene.json");
+}
+
+// A scan point as the GI tests write them: position, normal, 8-bit sRGB colour.
+struct ScanPoint {
+  glm::vec3 position, normal;
+  int red, green, blue;
+};
+
+// `points` as an ASCII PLY with normals and colours (what the converter reads as a scan).
+inline void writeScanPly(const std::string& file, const std::vector<ScanPoint>& points) {
+  std::ofstream ply(file);
+  ply << "ply\nformat ascii 1.0\nelement vertex " << points.size()
+      << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
+         "float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
+         "blue\nend_header\n";
+  for (const ScanPoint& q : points)
+    ply << q.position.x << " " << q.position.y << " " << q.position.z << " " << q.normal.x << " "
+        << q.normal.y << " " << q.normal.z << " " << q.red << " " << q.green << " " << q.blue
+        << "\n";
 }
 
 }  // namespace nestlight::gi

@@ -31,17 +31,12 @@ constexpr float kR = 0.5f, kD = 1.5f;
 
 // An 8 x 8 m grid of scan points 4 cm apart at z = 0, normals up.
 void buildFloor(const test::TempDir& t) {
-  std::ofstream ply(t.file("floor.ply"));
+  std::vector<ScanPoint> points;
   const int n = 201;
-  ply << "ply\nformat ascii 1.0\nelement vertex " << n * n
-      << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
-         "float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
-         "blue\nend_header\n";
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
-      ply << -4.0 + 0.04 * i << " " << -4.0 + 0.04 * j << " 0 0 0 1 " << kGrey << " " << kGrey
-          << " " << kGrey << "\n";
-  ply.close();
+      points.push_back({{-4.0 + 0.04 * i, -4.0 + 0.04 * j, 0}, {0, 0, 1}, kGrey, kGrey, kGrey});
+  writeScanPly(t.file("floor.ply"), points);
   test::buildOctreeFrom(t.file("floor.ply"), t.path() / "floor.octree");
   writeIcosphereObj(t.file("sphere.obj"), 4);
 }
@@ -218,30 +213,22 @@ TEST(DiffrenderCapture, LayerOfCapturedRadianceInTheAlbedoMode) {
 // showed the sky (the pull-push fill closes them) would pull it below 1.
 TEST(DiffrenderImpostor, ClosedRoomShowsNoSkyThroughItsSplats) {
   test::TempDir t;
-  {
-    std::ofstream ply(t.file("room.ply"));
-    const int n = 40;
-    Rng rng(7);
-    ply << "ply\nformat ascii 1.0\nelement vertex " << 6 * n * n
-        << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
-           "float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
-           "blue\nend_header\n";
-    for (int axis = 0; axis < 3; ++axis)
-      for (int side = 0; side < 2; ++side)
-        for (int j = 0; j < n; ++j)
-          for (int i = 0; i < n; ++i) {
-            double p[3], nn[3] = {0, 0, 0};
-            p[axis] = side ? 4.0 : 0.0;
-            // Uniformly random: the gaps between splats that a regular grid would not leave.
-            const glm::vec2 u = rng.uniform2();
-            p[(axis + 1) % 3] = 4.0 * u.x;
-            p[(axis + 2) % 3] = 4.0 * u.y;
-            (void)i, (void)j;
-            nn[axis] = side ? -1.0 : 1.0;
-            ply << p[0] - 2 << " " << p[1] - 2 << " " << p[2] << " " << nn[0] << " " << nn[1] << " "
-                << nn[2] << " 128 128 128\n";
-          }
-  }
+  std::vector<ScanPoint> points;
+  const int perSide = 40;
+  Rng rng(7);
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side)
+      for (int k = 0; k < perSide * perSide; ++k) {
+        glm::vec3 p(0.0f), nn(0.0f);
+        p[axis] = side ? 4.0f : 0.0f;
+        // Uniformly random: the gaps between splats that a regular grid would not leave.
+        const glm::vec2 u = rng.uniform2();
+        p[(axis + 1) % 3] = 4.0f * u.x;
+        p[(axis + 2) % 3] = 4.0f * u.y;
+        nn[axis] = side ? -1.0f : 1.0f;
+        points.push_back({p - glm::vec3(2, 2, 0), nn, 128, 128, 128});
+      }
+  writeScanPly(t.file("room.ply"), points);
   test::buildOctreeFrom(t.file("room.ply"), t.path() / "floor.octree");
   writeIcosphereObj(t.file("sphere.obj"), 3);
   json j = sceneJson({{"samples", 32},

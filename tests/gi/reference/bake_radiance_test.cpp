@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "gi/floor_scene.h"
 #include "nestlight/converters/test_scenes.h"
 #include "nestlight/gi/sampling.h"
 #include "nestlight/gi/srgb.h"
@@ -29,20 +30,16 @@ constexpr float kHalf = 2.0f;  // the floor spans [-2, 2]^2
 
 // 45 x 45 jittered points of a 4 x 4 m floor at z = 0, normals up.
 void buildFloor(const test::TempDir& t) {
-  std::ofstream ply(t.file("floor.ply"));
+  std::vector<ScanPoint> points;
   const int n = 45;
-  ply << "ply\nformat ascii 1.0\nelement vertex " << n * n
-      << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty "
-         "float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar "
-         "blue\nend_header\n";
   Rng rng(7);
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const glm::vec2 u = rng.uniform2();
       const float x = -kHalf + (i + u.x) * 2 * kHalf / n, y = -kHalf + (j + u.y) * 2 * kHalf / n;
-      ply << x << " " << y << " 0 0 0 1 " << kGrey << " " << kGrey << " " << kGrey << "\n";
+      points.push_back({{x, y, 0}, {0, 0, 1}, kGrey, kGrey, kGrey});
     }
-  ply.close();
+  writeScanPly(t.file("floor.ply"), points);
   test::buildOctreeFrom(t.file("floor.ply"), t.path() / "floor.octree");
   writeBoxObj(t.path() / "box.obj");
 }
