@@ -58,8 +58,9 @@ TEST(LionScene, BunnyAndGargoyleRenderInBothModes) {
                 std::abs(with.rgb[3 * i + 1] - without.rgb[3 * i + 1]);
       changed += d > 0.05f;
     }
-    // The two objects cover about 5% of the frame (measured: ~170 of 3072 pixels); noise of
-    // 4 spp alone changes a pixel by more than 0.05 rarely, so 60 pixels is a safe floor.
-    EXPECT_GT(changed, 60) << mode;
+    // The two objects on the plinth's front cover about 1.2% of the frame (944 of 76 800 pixels
+    // at 320 x 240: ~38 of 3072 here) and their shadows add some; noise of 4 spp alone changes a
+    // pixel by more than 0.05 rarely, so 25 pixels is a safe floor (measured: 43).
+    EXPECT_GT(changed, 25) << mode;
   }
 }

@@ -344,8 +344,8 @@ class DiffrenderExtension : public FrameExtension {
     glTextureSubImage3D(surface_.id(), 0, 0, 0, 0, n.x, n.y, depth, GL_RGBA, GL_UNSIGNED_BYTE,
                         surface.data());
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    // The impostor's centre: the middle of all inserted meshes' boxes.
-    centre_ = 0.5f * (lo + hi);
+    // The impostor's centre: the middle of all inserted meshes' boxes, or where the scene puts it.
+    centre_ = params_.impostorCentre ? f.scene().local(*params_.impostorCentre) : 0.5f * (lo + hi);
     // The farthest corner of the scene's bounds from the centre: DIT's search ends there.
     reach_ = 0;
     for (int c = 0; c < 8; ++c) {

@@ -1,6 +1,7 @@
 // `diffrender`'s declaration: its parameters, the quality presets of the paper's Table 2 and its
 // entry in the registry.
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <glm/gtc/matrix_inverse.hpp>
 
@@ -172,6 +173,11 @@ const ParameterSpecs& diffrenderParameterSpecs() {
                  "of 3 numbers, or a colour-match --json file); default identity"),
       P::integer("dit_iterations", 1, 64, 8,
                  "DIT: refinements of a ray's lookup direction before it counts as unconverged"),
+      stringSpec("impostor_centre",
+                 "[x, y, z] in the scene's coordinates (the meshes' frame): where the distance "
+                 "impostor is drawn from; default the middle of the inserted meshes' boxes (move "
+                 "it into open space when that middle falls inside the scan, as between two "
+                 "meshes set far apart)"),
       P::boolean("compare_exact", false,
                  "an accuracy check of the query: each material ray is also traced exactly and the "
                  "query's hits within an impostor texel's footprint of the exact hit are counted "
@@ -189,6 +195,7 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   const JsonField params(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
   if (given.contains("object_voxels")) rest.gi.parameters.erase("object_voxels");
   if (given.contains("background_map")) rest.gi.parameters.erase("background_map");
+  if (given.contains("impostor_centre")) rest.gi.parameters.erase("impostor_centre");
   const ResolvedParameters r = resolveParameterValues(rest, diffrenderParameterSpecs());
   DiffrenderParameters p;
   const std::string q = r.string("query"), quality = r.string("quality");
@@ -236,6 +243,10 @@ DiffrenderParameters diffrenderParameters(const Scene& scene) {
   }
   if (given.contains("background_map"))
     p.backgroundMap = parseColourMap(params.at("background_map"));
+  if (given.contains("impostor_centre")) {
+    const std::array<double, 3> c = params.at("impostor_centre").vec3(-1e12, 1e12);
+    p.impostorCentre = glm::dvec3(c[0], c[1], c[2]);
+  }
   // A cache the scene gives must fit its samples; a preset's shrinks to them (high's 32 at 16
   // samples traces all 16).
   if (p.cache > p.samples && !given.contains("cache")) p.cache = p.samples;

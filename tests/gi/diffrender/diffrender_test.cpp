@@ -471,6 +471,14 @@ TEST(DiffrenderParameters, ErrorsNameTheField) {
   fails({{"object_voxels", {8, 8}}}, "scene.gi.parameters.object_voxels");
   fails({{"background", "no_such_photo.exr"}}, "scene.gi.parameters.background");
   fails({{"background_map", {{1, 0, 0}, {0, 1, 0}}}}, "scene.gi.parameters.background_map");
+  fails({{"impostor_centre", {1.0, 2.0}}}, "scene.gi.parameters.impostor_centre");
+  fails({{"impostor_centre", "middle"}}, "scene.gi.parameters.impostor_centre");
+  EXPECT_EQ(*diffrenderParameters(writeScene(t, sceneJson({{"impostor_centre", {1.0, -2.0, 0.5}}},
+                                                          "diffrender", 32)))
+                 .impostorCentre,
+            glm::dvec3(1.0, -2.0, 0.5));
+  EXPECT_FALSE(diffrenderParameters(writeScene(t, sceneJson(json::object(), "diffrender", 32)))
+                   .impostorCentre);
   fails({{"background_map", {{1, 0, 0}, {0, 1, 0}, {0, 2, 0}}}},
         "scene.gi.parameters.background_map");  // singular
   // Presets fill what is not given; given values win.

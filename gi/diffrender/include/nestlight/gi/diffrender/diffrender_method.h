@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "nestlight/gi/method.h"
@@ -40,6 +41,9 @@ struct DiffrenderParameters {
   // Each material ray also traced by `exact`, the query's hits counted against it (stats
   // compared and within_footprint): how far an approximation's hits stray, at exact's cost.
   bool compareExact = false;
+  // Where the distance impostor is drawn from, in the scene's coordinates; none: the middle of
+  // the inserted meshes' boxes.
+  std::optional<glm::dvec3> impostorCentre;
   // A folder (relative to the scene file) for each still's images beside the composite:
   // diffrender_delta.exr (dL on the scan), diffrender_rho.exr (the material estimate), both at
   // 1 / delta_scale, and diffrender_mask.exr (1 scan, 2 inserted mesh, 0 else). Empty: none.
