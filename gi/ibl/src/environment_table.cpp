@@ -5,8 +5,6 @@
 #include <chrono>
 #include <cmath>
 
-#include "nestlight/gi/ibl/triangle_bvh.h"
-
 namespace nestlight::gi::ibl {
 
 namespace {

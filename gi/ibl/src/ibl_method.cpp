@@ -16,10 +16,10 @@
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/gi/frame/scene_frame.h"
 #include "nestlight/gi/ibl/environment_table.h"
-#include "nestlight/gi/ibl/triangle_bvh.h"
 #include "nestlight/gi/sampling.h"
 #include "nestlight/gi/shared/bsh_layer.h"
 #include "nestlight/gi/shared/cut_hierarchies.h"
+#include "nestlight/gi/shared/triangle_bvh.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -207,18 +207,18 @@ class IblExtension : public FrameExtension {
         corners.push_back(glm::vec3(localFromObject * glm::vec4(meshes[i].positions[idx], 1.0f)));
     }
     const auto t0 = std::chrono::steady_clock::now();
-    ibl::TriangleBvh bvh = ibl::buildTriangleBvh(corners);
+    TriangleBvh bvh = buildTriangleBvh(corners);
     bvhMs_ =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     bvhNodes_ = bvh.nodes.size();
     bvhTriangles_ = bvh.triangles.size();
     bvhDepth_ = bvh.depth;
-    NL_CHECK_MSG(bvh.nodes.size() * sizeof(ibl::BvhNode) <= gl::kMaxSsboRange &&
-                     bvh.triangles.size() * sizeof(ibl::BvhTriangle) <= gl::kMaxSsboRange,
+    NL_CHECK_MSG(bvh.nodes.size() * sizeof(BvhNode) <= gl::kMaxSsboRange &&
+                     bvh.triangles.size() * sizeof(BvhTriangle) <= gl::kMaxSsboRange,
                  "ibl: the meshes' BVH exceeds one 128 MiB buffer range");
-    bvh_ = gl::Buffer(std::max<size_t>(bvh.nodes.size(), 1) * sizeof(ibl::BvhNode),
+    bvh_ = gl::Buffer(std::max<size_t>(bvh.nodes.size(), 1) * sizeof(BvhNode),
                       bvh.nodes.empty() ? nullptr : bvh.nodes.data(), 0);
-    triangles_ = gl::Buffer(std::max<size_t>(bvh.triangles.size(), 1) * sizeof(ibl::BvhTriangle),
+    triangles_ = gl::Buffer(std::max<size_t>(bvh.triangles.size(), 1) * sizeof(BvhTriangle),
                             bvh.triangles.empty() ? nullptr : bvh.triangles.data(), 0);
     program_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/ibl/ibl_shade.comp"}},
                                  {{"IBL_SMC_N", std::to_string(params_.smcParticles)}});

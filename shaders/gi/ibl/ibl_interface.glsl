@@ -1,11 +1,12 @@
-// The `ibl` method's buffers as C++ (gi/ibl) writes them and GLSL reads them. Kept to the
-// preprocessor subset both share; include frame_interface.glsl first (NL_STRUCT).
+// The `ibl` method's buffers as C++ (gi/ibl) writes them and GLSL reads them: macros only, kept to
+// the preprocessor subset both share; include frame_interface.glsl first (NL_SSBO_METHOD0). The
+// meshes' BVH is gi/shared's (triangle_bvh_interface.glsl).
 
 // Slots (the GI frame's method slots). The scan's hierarchies sit where the pbgi method puts
 // them (PBGI_SSBO_TOP, _NODES, _TABLE: NL_SSBO_METHOD0 + 0 to 2), so its node layout is shared.
 #define IBL_SSBO_ENV (NL_SSBO_METHOD0 + 3)        // float[]: the environment's sampling table (IBL_ENV_*)
-#define IBL_SSBO_BVH (NL_SSBO_METHOD0 + 4)        // IblBvhNode[]: the meshes' triangles' BVH, root first
-#define IBL_SSBO_TRIANGLES (NL_SSBO_METHOD0 + 5)  // IblTriangle[]: in the BVH's leaf order
+#define IBL_SSBO_BVH (NL_SSBO_METHOD0 + 4)        // TriBvhNode[]: the meshes' triangles' BVH, root first
+#define IBL_SSBO_TRIANGLES (NL_SSBO_METHOD0 + 5)  // TriBvhTriangle[]: in the BVH's leaf order
 #define IBL_SSBO_STATE_IN (NL_SSBO_METHOD0 + 6)   // uint[]: SMC, the previous frame's per-pixel samples
 #define IBL_SSBO_STATE_OUT (NL_SSBO_METHOD0 + 7)  // uint[]: SMC, this frame's
 // Counters (uint[IBL_STAT_COUNT]) at the node-layer slot 3, which no GI pass binds.
@@ -38,22 +39,6 @@
 #define IBL_STAT_LOOP_LIMIT 8        // pixels whose loops neared llvmpipe's 65,535 iterations per invocation
 #define IBL_STAT_COUNT 9
 
-#define IBL_BVH_LEAF 0x80000000u    // IblBvhNode.lo.w bits of a leaf: first triangle | IBL_BVH_LEAF
-#define IBL_BVH_STACK 64
 #define IBL_PASS_SAMPLES 64      // MIS and the baselines: samples per pixel and dispatch, at most
 #define IBL_PASS_PROPOSALS 1024  // BIS: proposals per pixel and dispatch, at most (half search the map)
 
-// 32 bytes: a binary BVH node.
-NL_STRUCT(IblBvhNode) {
-  vec4 lo;   // xyz: box minimum; w: float bits of the left child's index (the right follows its
-             // sub-tree), or of first triangle | IBL_BVH_LEAF
-  vec4 hi;   // xyz: box maximum; w: float bits of the right child's index, or of the leaf's
-             // triangle count
-};
-
-// 48 bytes: a triangle in the scene (local) frame.
-NL_STRUCT(IblTriangle) {
-  vec4 v0;   // xyz, w: unused
-  vec4 e1;   // v1 - v0
-  vec4 e2;   // v2 - v0
-};

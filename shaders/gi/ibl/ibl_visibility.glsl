@@ -1,14 +1,15 @@
 // Visibility V(x, w) of the environment: rays against the inserted meshes' triangles through their
-// BVH (gi/ibl/triangle_bvh.h; gi::ibl::traceTriangleBvh is this traversal on the CPU), and
+// BVH (gi/shared/triangle_bvh.h; gi::traceTriangleBvh is this traversal on the CPU), and
 // against the scan's resident cut (below).
-layout(std430, binding = IBL_SSBO_BVH) readonly buffer IblBvh { IblBvhNode bvh[]; };
-layout(std430, binding = IBL_SSBO_TRIANGLES) readonly buffer IblTriangles { IblTriangle triangles[]; };
+#include "../shared/triangle_bvh_interface.glsl"
+layout(std430, binding = IBL_SSBO_BVH) readonly buffer IblBvh { TriBvhNode bvh[]; };
+layout(std430, binding = IBL_SSBO_TRIANGLES) readonly buffer TriBvhTriangles { TriBvhTriangle triangles[]; };
 uniform int uBvhNodes;  // 0: no meshes
 // Loop iterations this invocation ran (llvmpipe stops every loop of an invocation after 65,535 in
 // all: the frame counts the pixels that came near).
 uint loopSteps = 0u;
 
-bool iblHitBox(IblBvhNode n, vec3 o, vec3 inv, float tMax) {
+bool iblHitBox(TriBvhNode n, vec3 o, vec3 inv, float tMax) {
   vec3 t0 = (n.lo.xyz - o) * inv, t1 = (n.hi.xyz - o) * inv;
   vec3 a = min(t0, t1), b = max(t0, t1);
   float enter = max(max(a.x, a.y), max(a.z, 0.0));
@@ -17,7 +18,7 @@ bool iblHitBox(IblBvhNode n, vec3 o, vec3 inv, float tMax) {
 }
 
 // Möller and Trumbore (1997).
-float iblHitTriangle(IblTriangle t, vec3 o, vec3 d) {
+float iblHitTriangle(TriBvhTriangle t, vec3 o, vec3 d) {
   vec3 p = cross(d, t.e2.xyz);
   float det = dot(t.e1.xyz, p);
   if (abs(det) < 1e-20) return -1.0;
@@ -35,22 +36,22 @@ float iblHitTriangle(IblTriangle t, vec3 o, vec3 d) {
 bool meshesOcclude(vec3 o, vec3 d, float tMax) {
   if (uBvhNodes == 0) return false;
   vec3 inv = 1.0 / d;
-  uint stack[IBL_BVH_STACK];
+  uint stack[TRI_BVH_STACK];
   int top = 0;
   stack[top++] = 0u;
   while (top > 0) {
-    IblBvhNode n = bvh[stack[--top]];
+    TriBvhNode n = bvh[stack[--top]];
     loopSteps++;
     if (!iblHitBox(n, o, inv, tMax)) continue;
     uint a = floatBitsToUint(n.lo.w), b = floatBitsToUint(n.hi.w);
-    if ((a & IBL_BVH_LEAF) != 0u) {
-      for (uint i = a & ~IBL_BVH_LEAF, e = i + b; i < e; ++i) {
+    if ((a & TRI_BVH_LEAF) != 0u) {
+      for (uint i = a & ~TRI_BVH_LEAF, e = i + b; i < e; ++i) {
         float t = iblHitTriangle(triangles[i], o, d);
         if (t > 0.0 && t < tMax) return true;
       }
       continue;
     }
-    if (top + 2 > IBL_BVH_STACK) return false;  // deeper than the builder makes (a CHECK on the CPU)
+    if (top + 2 > TRI_BVH_STACK) return false;  // deeper than the builder makes (a CHECK on the CPU)
     stack[top++] = b;
     stack[top++] = a;
   }

@@ -12,8 +12,8 @@
 #include "gi/chi2.h"
 #include "nestlight/gi/environment_map.h"
 #include "nestlight/gi/ibl/environment_table.h"
-#include "nestlight/gi/ibl/triangle_bvh.h"
 #include "nestlight/gi/material.h"
+#include "nestlight/gi/shared/triangle_bvh.h"
 #include "nestlight/gl/context.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
@@ -179,20 +179,20 @@ TEST(IblSamplers, TriangleBvhFindsTheNearestHit) {
   }
   for (int i = 0; i < 5; ++i)
     corners.insert(corners.end(), {glm::vec3(1.0f), glm::vec3(1.0f), glm::vec3(2.0f)});
-  const ibl::TriangleBvh bvh = ibl::buildTriangleBvh(corners);
+  const TriangleBvh bvh = buildTriangleBvh(corners);
   EXPECT_EQ(bvh.degenerate, 5u);
   EXPECT_EQ(bvh.triangles.size(), 3000u);
-  ibl::TriangleBvh brute;
+  TriangleBvh brute;
   brute.triangles = bvh.triangles;
   brute.nodes.resize(1);
-  brute.nodes[0].lo = glm::vec4(-1e30f, -1e30f, -1e30f, std::bit_cast<float>(0u | IBL_BVH_LEAF));
+  brute.nodes[0].lo = glm::vec4(-1e30f, -1e30f, -1e30f, std::bit_cast<float>(0u | TRI_BVH_LEAF));
   brute.nodes[0].hi = glm::vec4(1e30f, 1e30f, 1e30f, std::bit_cast<float>(3000u));
   int hits = 0;
   for (int i = 0; i < 2000; ++i) {
     const glm::vec3 o = glm::vec3(rng.uniform(), rng.uniform(), rng.uniform()) * 14.0f - 2.0f;
     const glm::vec3 d = sampleUniformSphere(rng.uniform2());
-    const float a = ibl::traceTriangleBvh(bvh, o, d, 0, 1e30f),
-                b = ibl::traceTriangleBvh(brute, o, d, 0, 1e30f);
+    const float a = traceTriangleBvh(bvh, o, d, 0, 1e30f),
+                b = traceTriangleBvh(brute, o, d, 0, 1e30f);
     ASSERT_EQ(a < 0, b < 0) << i;
     if (b >= 0) {
       EXPECT_FLOAT_EQ(a, b);

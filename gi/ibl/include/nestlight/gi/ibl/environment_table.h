@@ -8,7 +8,11 @@
 
 #include <vector>
 
+#include "nestlight/frame/interface.h"
 #include "nestlight/gi/environment_map.h"
+
+// The table's layout and the method's slots (IBL_ENV_*, IBL_SSBO_*): macros only.
+#include "gi/ibl/ibl_interface.glsl"
 
 namespace nestlight::gi::ibl {
 

@@ -1,6 +1,6 @@
 // Embree builds (rtcBuildBVH: its binned SAH builder, nodes made through callbacks into memory
 // it owns for the build); this file only flattens the result depth first for the GPU.
-#include "nestlight/gi/ibl/triangle_bvh.h"
+#include "nestlight/gi/shared/triangle_bvh.h"
 
 #include <embree3/rtcore.h>
 
@@ -11,37 +11,38 @@
 
 #include "nestlight/octree/error.h"
 
-namespace nestlight::gi::ibl {
+namespace nestlight::gi {
 
 namespace {
 
-struct BuildNode {
-  virtual ~BuildNode() = default;
+struct BvhBuildNode {
+  virtual ~BvhBuildNode() = default;
 };
-struct InnerNode final : BuildNode {
-  BuildNode* child[2] = {nullptr, nullptr};
+struct BvhInnerNode final : BvhBuildNode {
+  BvhBuildNode* child[2] = {nullptr, nullptr};
   RTCBounds bounds[2] = {};
 };
-struct LeafNode final : BuildNode {
+struct BvhLeafNode final : BvhBuildNode {
   unsigned first = 0, count = 0;  // into the build's primitive order (prims[] by primID)
   unsigned ids[4] = {};
 };
 
 void* createNode(RTCThreadLocalAllocator alloc, unsigned int childCount, void*) {
   NL_CHECK(childCount == 2);
-  return new (rtcThreadLocalAlloc(alloc, sizeof(InnerNode), 16)) InnerNode;
+  return new (rtcThreadLocalAlloc(alloc, sizeof(BvhInnerNode), 16)) BvhInnerNode;
 }
 void setNodeChildren(void* node, void** children, unsigned int childCount, void*) {
   for (unsigned i = 0; i < childCount; ++i)
-    static_cast<InnerNode*>(node)->child[i] = static_cast<BuildNode*>(children[i]);
+    static_cast<BvhInnerNode*>(node)->child[i] = static_cast<BvhBuildNode*>(children[i]);
 }
 void setNodeBounds(void* node, const RTCBounds** bounds, unsigned int childCount, void*) {
-  for (unsigned i = 0; i < childCount; ++i) static_cast<InnerNode*>(node)->bounds[i] = *bounds[i];
+  for (unsigned i = 0; i < childCount; ++i)
+    static_cast<BvhInnerNode*>(node)->bounds[i] = *bounds[i];
 }
 void* createLeaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t numPrims,
                  void*) {
   NL_CHECK(numPrims >= 1 && numPrims <= 4);
-  auto* leaf = new (rtcThreadLocalAlloc(alloc, sizeof(LeafNode), 16)) LeafNode;
+  auto* leaf = new (rtcThreadLocalAlloc(alloc, sizeof(BvhLeafNode), 16)) BvhLeafNode;
   leaf->count = unsigned(numPrims);
   for (size_t i = 0; i < numPrims; ++i) leaf->ids[i] = prims[i].primID;
   return leaf;
@@ -58,19 +59,19 @@ struct Flattener {
   const std::vector<BvhTriangle>& source;
   TriangleBvh& out;
   // Writes `node` (whose box is lo..hi) at out.nodes[at] and its sub-tree after it.
-  void write(const BuildNode* node, size_t at, glm::vec3 lo, glm::vec3 hi, int depth) {
+  void write(const BvhBuildNode* node, size_t at, glm::vec3 lo, glm::vec3 hi, int depth) {
     out.depth = std::max(out.depth, depth);
     BvhNode& n = out.nodes[at];
     n.lo = glm::vec4(lo, 0.0f);
     n.hi = glm::vec4(hi, 0.0f);
-    if (const auto* leaf = dynamic_cast<const LeafNode*>(node)) {
+    if (const auto* leaf = dynamic_cast<const BvhLeafNode*>(node)) {
       const uint32_t first = uint32_t(out.triangles.size());
       for (unsigned i = 0; i < leaf->count; ++i) out.triangles.push_back(source[leaf->ids[i]]);
-      out.nodes[at].lo.w = bits(first | IBL_BVH_LEAF);
+      out.nodes[at].lo.w = bits(first | TRI_BVH_LEAF);
       out.nodes[at].hi.w = bits(leaf->count);
       return;
     }
-    const auto* inner = static_cast<const InnerNode*>(node);
+    const auto* inner = static_cast<const BvhInnerNode*>(node);
     auto box = [](const RTCBounds& b, glm::vec3* l, glm::vec3* h) {
       *l = {b.lower_x, b.lower_y, b.lower_z};
       *h = {b.upper_x, b.upper_y, b.upper_z};
@@ -122,7 +123,7 @@ TriangleBvh buildTriangleBvh(const std::vector<glm::vec3>& positions) {
   if (tris.size() == 1) {  // Embree's builder wants a tree; one triangle is a leaf root
     out.triangles = tris;
     BvhNode root;
-    root.lo = glm::vec4(lo, bits(0u | IBL_BVH_LEAF));
+    root.lo = glm::vec4(lo, bits(0u | TRI_BVH_LEAF));
     root.hi = glm::vec4(hi, bits(1u));
     out.nodes.push_back(root);
     return out;
@@ -135,7 +136,7 @@ TriangleBvh buildTriangleBvh(const std::vector<glm::vec3>& positions) {
   args.buildFlags = RTC_BUILD_FLAG_NONE;
   args.buildQuality = RTC_BUILD_QUALITY_MEDIUM;  // HIGH's spatial splits need spare primitive slots
   args.maxBranchingFactor = 2;
-  args.maxDepth = IBL_BVH_STACK - 4;
+  args.maxDepth = TRI_BVH_STACK - 4;
   args.sahBlockSize = 1;
   args.minLeafSize = 1;
   args.maxLeafSize = 4;
@@ -157,7 +158,7 @@ TriangleBvh buildTriangleBvh(const std::vector<glm::vec3>& positions) {
   }
   out.nodes.reserve(2 * tris.size());
   out.nodes.emplace_back();
-  Flattener{tris, out}.write(static_cast<BuildNode*>(root), 0, lo, hi, 0);
+  Flattener{tris, out}.write(static_cast<BvhBuildNode*>(root), 0, lo, hi, 0);
   // The nodes live in the BVH's allocator: released with it (their destructors are trivial in
   // effect: nothing they hold owns memory).
   rtcReleaseBVH(bvh);
@@ -197,7 +198,7 @@ float traceTriangleBvh(const TriangleBvh& bvh, const glm::vec3& o, const glm::ve
                        float tMax) {
   if (bvh.nodes.empty()) return -1;
   const glm::vec3 inv = 1.0f / d;
-  uint32_t stack[IBL_BVH_STACK];
+  uint32_t stack[TRI_BVH_STACK];
   int top = 0;
   stack[top++] = 0;
   float best = -1;
@@ -205,18 +206,18 @@ float traceTriangleBvh(const TriangleBvh& bvh, const glm::vec3& o, const glm::ve
     const BvhNode& n = bvh.nodes[stack[--top]];
     if (!hitBox(n, o, inv, tMin, tMax)) continue;
     const uint32_t a = ubits(n.lo.w), b = ubits(n.hi.w);
-    if (a & IBL_BVH_LEAF) {
-      for (uint32_t i = a & ~IBL_BVH_LEAF, e = i + b; i < e; ++i) {
+    if (a & TRI_BVH_LEAF) {
+      for (uint32_t i = a & ~TRI_BVH_LEAF, e = i + b; i < e; ++i) {
         const float t = hitTriangle(bvh.triangles[i], o, d);
         if (t > tMin && t < tMax) tMax = best = t;
       }
       continue;
     }
-    NL_CHECK(top + 2 <= IBL_BVH_STACK);
+    NL_CHECK(top + 2 <= TRI_BVH_STACK);
     stack[top++] = b;
     stack[top++] = a;
   }
   return best;
 }
 
-}  // namespace nestlight::gi::ibl
+}  // namespace nestlight::gi

@@ -1,6 +1,7 @@
-// A bounding-volume hierarchy over the inserted meshes' triangles for visibility rays on the GPU
-// (shaders/gi/ibl/ibl_visibility.glsl): built by Embree's own SAH builder (rtcBuildBVH, which
-// hands each node to callbacks), flattened into the binary layout of ibl_interface.glsl.
+// A bounding-volume hierarchy over meshes' triangles for rays on the GPU (ibl's visibility,
+// shaders/gi/ibl/ibl_visibility.glsl; diffrender's exact query): built by Embree's own SAH builder
+// (rtcBuildBVH, which hands each node to callbacks), flattened into the binary layout of
+// shaders/gi/shared/triangle_bvh_interface.glsl.
 #pragma once
 
 #include <cstdint>
@@ -9,17 +10,17 @@
 
 #include "nestlight/frame/interface.h"
 
-namespace nestlight::gi::ibl {
+namespace nestlight::gi {
 
 namespace glsl {
 using vec4 = glm::vec4;
-#include "gi/ibl/ibl_interface.glsl"
+#include "gi/shared/triangle_bvh_interface.glsl"
 }  // namespace glsl
 
-using BvhNode = glsl::IblBvhNode;
-using BvhTriangle = glsl::IblTriangle;
-static_assert(sizeof(BvhNode) == 32, "IblBvhNode must keep std430's layout");
-static_assert(sizeof(BvhTriangle) == 48, "IblTriangle must keep std430's layout");
+using BvhNode = glsl::TriBvhNode;
+using BvhTriangle = glsl::TriBvhTriangle;
+static_assert(sizeof(BvhNode) == 32, "TriBvhNode must keep std430's layout");
+static_assert(sizeof(BvhTriangle) == 48, "TriBvhTriangle must keep std430's layout");
 
 struct TriangleBvh {
   std::vector<BvhNode> nodes;          // root first; empty without triangles
@@ -36,4 +37,4 @@ TriangleBvh buildTriangleBvh(const std::vector<glm::vec3>& positions);
 float traceTriangleBvh(const TriangleBvh& bvh, const glm::vec3& o, const glm::vec3& d, float tMin,
                        float tMax);
 
-}  // namespace nestlight::gi::ibl
+}  // namespace nestlight::gi
