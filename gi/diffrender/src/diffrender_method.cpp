@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/shared/bsh_layer.h"
 #include "nestlight/gi/shared/cut_hierarchies.h"
+#include "nestlight/gi/shared/triangle_bvh.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/gl/resources.h"
 #include "nestlight/octree/error.h"
@@ -143,6 +145,7 @@ class DiffrenderExtension : public FrameExtension {
         o.prune = false;
         return std::make_shared<BshLayer>(meta, o, std::move(c));
       });
+      buildCapturedMeshBvh(f);
     }
     if (params_.query == DiffrenderParameters::Query::Vct) {
       setUpSceneVolume();
@@ -230,6 +233,36 @@ class DiffrenderExtension : public FrameExtension {
   }
 
  private:
+  // exact: the captured scene's meshes (inserted false) as a triangle BVH in the scene-local frame,
+  // each triangle's material index in v0.w.
+  void buildCapturedMeshBvh(SceneFrame& f) {
+    const Scene& scene = f.scene();
+    std::vector<glm::vec3> corners;
+    std::vector<uint32_t> materials;  // per input triangle
+    for (size_t i = 0; i < scene.meshes.size() && i < f.meshes().size(); ++i) {
+      if (scene.meshes[i].inserted) continue;
+      const glm::mat4 localFromObject = scene.localFromObject(scene.meshes[i]);
+      const auto& m = f.meshes()[i];
+      for (size_t k = 0; k + 2 < m.indices.size(); k += 3) {
+        for (size_t c = 0; c < 3; ++c)
+          corners.push_back(
+              glm::vec3(localFromObject * glm::vec4(m.positions[m.indices[k + c]], 1.0f)));
+        materials.push_back(uint32_t(scene.meshes[i].material));
+      }
+    }
+    TriangleBvh bvh = buildTriangleBvh(corners);
+    for (BvhTriangle& t : bvh.triangles)
+      t.v0.w = std::bit_cast<float>(materials[std::bit_cast<uint32_t>(t.v0.w)]);
+    NL_CHECK_MSG(bvh.nodes.size() * sizeof(BvhNode) <= gl::kMaxSsboRange &&
+                     bvh.triangles.size() * sizeof(BvhTriangle) <= gl::kMaxSsboRange,
+                 "diffrender: the captured meshes' BVH exceeds one 128 MiB buffer range");
+    meshBvhNodes_ = GLint(bvh.nodes.size());
+    meshBvh_ = gl::Buffer(std::max<size_t>(bvh.nodes.size(), 1) * sizeof(BvhNode),
+                          bvh.nodes.empty() ? nullptr : bvh.nodes.data(), 0);
+    meshTriangles_ = gl::Buffer(std::max<size_t>(bvh.triangles.size(), 1) * sizeof(BvhTriangle),
+                                bvh.triangles.empty() ? nullptr : bvh.triangles.data(), 0);
+  }
+
   // The exact query's hierarchies are built for it and for compare_exact's check of the others.
   bool tracesExactly() const {
     return params_.query == DiffrenderParameters::Query::Exact || params_.compareExact;
@@ -570,11 +603,14 @@ class DiffrenderExtension : public FrameExtension {
                                                   : DR_QUERY_DIT;
     glUniform1i(p.uniform("uQuery"), query);
     glUniform1i(p.uniform("uTopCount"), GLint(hier_.topCount()));
+    glUniform1i(p.uniform("uMeshBvhNodes"), tracesExactly() ? meshBvhNodes_ : 0);
     glUniform1i(p.uniform("uCompareExact"), params_.compareExact ? 1 : 0);
     if (tracesExactly()) {
       hier_.top().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TOP);
       hier_.nodes().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_NODES);
       hier_.table().bindBase(GL_SHADER_STORAGE_BUFFER, PBGI_SSBO_TABLE);
+      meshBvh_.bindBase(GL_SHADER_STORAGE_BUFFER, DR_SSBO_MESH_BVH);
+      meshTriangles_.bindBase(GL_SHADER_STORAGE_BUFFER, DR_SSBO_MESH_TRIANGLES);
     }
     if (params_.query == DiffrenderParameters::Query::Vct) {
       glBindTextureUnit(DR_UNIT_SCENE_RADIANCE, sceneRadiance_.id());
@@ -737,6 +773,8 @@ class DiffrenderExtension : public FrameExtension {
   // exact's hierarchies of the lights' cut.
   size_t layer_ = 0;
   CutHierarchies hier_;
+  gl::Buffer meshBvh_, meshTriangles_;  // the captured meshes' triangle BVH
+  GLint meshBvhNodes_ = 0;
   uint64_t hierCut_ = ~0ull;
   gl::Texture shadowWithout_;
   int shadowLayers_ = 0;

@@ -108,7 +108,7 @@ TriangleBvh buildTriangleBvh(const std::vector<glm::vec3>& positions) {
       continue;
     }
     BvhTriangle t;
-    t.v0 = glm::vec4(a, 0.0f);
+    t.v0 = glm::vec4(a, bits(uint32_t(i / 3)));
     t.e1 = glm::vec4(e1, 0.0f);
     t.e2 = glm::vec4(e2, 0.0f);
     const glm::vec3 l = glm::min(a, glm::min(b, c)), h = glm::max(a, glm::max(b, c));

@@ -13,11 +13,16 @@
 #define DR_STAT_OBJECT_FIRST 6    // traced rays that met an object before the scene
 #define DR_STAT_SELF_SHADOWED 7   // object rays blocked by the objects' own volume
 #define DR_STAT_HIDDEN 8          // DIT rays that start behind the impostor's surface (unseen from its centre)
-#define DR_STAT_COMPARED 9          // compare_exact: material rays whose exact trace met the scan
+#define DR_STAT_COMPARED 9          // compare_exact: material rays whose exact trace met the scene
 #define DR_STAT_WITHIN_FOOTPRINT 10 // of them, the query's hit within an impostor texel's footprint
 #define DR_STAT_COMPARED_SEEN 11   // of the compared, exact hits the impostor holds (its centre sees them)
 #define DR_STAT_WITHIN_SEEN 12     // of those, the query's hit within the footprint
 #define DR_STAT_COUNT 13
+
+// exact: the captured scene's meshes (inserted false) as a triangle BVH (TriBvhNode[], and
+// TriBvhTriangle[] whose v0.w holds the material index's bits); slots 3 and 4 of the methods'.
+#define DR_SSBO_MESH_BVH (NL_SSBO_METHOD0 + 3)
+#define DR_SSBO_MESH_TRIANGLES (NL_SSBO_METHOD0 + 4)
 
 // Texture units of the passes (4 is the frame's shadow maps, lights.glsl; 5 the environment's,
 // environment.glsl).

@@ -16,7 +16,7 @@ NL_STRUCT(TriBvhNode) {
 
 // 48 bytes: a triangle in the scene (local) frame.
 NL_STRUCT(TriBvhTriangle) {
-  vec4 v0;   // xyz; w: free for the user (diffrender: float bits of the material index)
+  vec4 v0;   // xyz; w: float bits of the input triangle's index (users may put their own there)
   vec4 e1;   // v1 - v0
   vec4 e2;   // v2 - v0
 };

@@ -262,10 +262,13 @@ TEST(DiffrenderCapture, LayerOfCapturedRadianceInTheAlbedoMode) {
 // sphere, under a sky ten times brighter: every direction from the floor meets a wall, so the
 // material estimate is c / c = 1 wherever the impostor is closed. Gaps between the splats that
 // showed the sky (the pull-push fill closes them) would pull it below 1.
-TEST(DiffrenderImpostor, ClosedRoomShowsNoSkyThroughItsSplats) {
-  test::TempDir t;
+// A closed 4 m room of scan points (grey, normals inward) about the black sphere, under a sky of
+// 10 that no scan pixel should see: 40 x 40 random points a side, or with `grid` 100 x 100 on a
+// grid (4 cm); with `meshCeiling` the ceiling is a captured mesh (a box, "inserted": false,
+// emitting the sky's radiance) instead of points.
+json closedRoomScene(const test::TempDir& t, bool grid, bool meshCeiling, const json& parameters) {
   std::vector<ScanPoint> points;
-  const int perSide = 40;
+  const int perSide = grid ? 100 : 40;
   Rng rng(7);
   for (int axis = 0; axis < 3; ++axis)
     for (int side = 0; side < 2; ++side)
@@ -273,21 +276,19 @@ TEST(DiffrenderImpostor, ClosedRoomShowsNoSkyThroughItsSplats) {
         glm::vec3 p(0.0f), nn(0.0f);
         p[axis] = side ? 4.0f : 0.0f;
         // Uniformly random: the gaps between splats that a regular grid would not leave.
-        const glm::vec2 u = rng.uniform2();
+        const glm::vec2 u = meshCeiling
+                                ? (glm::vec2(k % perSide, k / perSide) + 0.5f) / float(perSide)
+                                : rng.uniform2();
         p[(axis + 1) % 3] = 4.0f * u.x;
         p[(axis + 2) % 3] = 4.0f * u.y;
         nn[axis] = side ? -1.0f : 1.0f;
-        points.push_back({p - glm::vec3(2, 2, 0), nn, 128, 128, 128});
+        if (!(meshCeiling && axis == 2 && side == 1))
+          points.push_back({p - glm::vec3(2, 2, 0), nn, 128, 128, 128});
       }
   writeScanPly(t.file("room.ply"), points);
   test::buildOctreeFrom(t.file("room.ply"), t.path() / "floor.octree");
   writeIcosphereObj(t.file("sphere.obj"), 3);
-  json j = sceneJson({{"samples", 32},
-                      {"object_voxels", 32},
-                      {"rho_max", 4.0},
-                      {"aovs", "aovs"},
-                      {"compare_exact", true}},
-                     "diffrender", 48);
+  json j = sceneJson(parameters, "diffrender", 48);
   j["environment"] = {{"constant", {10.0, 10.0, 10.0}}};
   j["camera"] = {{"eye", {0.0, -1.8, 3.0}},
                  {"target", {0.0, 0.5, 0.0}},
@@ -295,6 +296,27 @@ TEST(DiffrenderImpostor, ClosedRoomShowsNoSkyThroughItsSplats) {
                  {"fov", 70.0},
                  {"width", 48},
                  {"height", 48}};
+  if (meshCeiling) {
+    writeBoxObj(t.path() / "box.obj");
+    j["materials"]["panel"] = {
+        {"type", "lambert"}, {"base_color", 0.0}, {"emission", {10.0, 10.0, 10.0}}};
+    j["meshes"].push_back(
+        {{"path", "box.obj"},
+         {"transform", {{"translate", {-2.0, -2.0, 4.0}}, {"scale", {4.0, 4.0, 0.1}}}},
+         {"material", "panel"},
+         {"inserted", false}});
+  }
+  return j;
+}
+
+TEST(DiffrenderImpostor, ClosedRoomShowsNoSkyThroughItsSplats) {
+  test::TempDir t;
+  const json j = closedRoomScene(t, false, false,
+                                 {{"samples", 32},
+                                  {"object_voxels", 32},
+                                  {"rho_max", 4.0},
+                                  {"aovs", "aovs"},
+                                  {"compare_exact", true}});
   const Scene s = writeScene(t, j);
   const MethodFrame f = createMethod(s, MethodContext(true))->render(s.camera);
   const HdrImage rhoAov = readHdrImage((t.path() / "aovs" / "diffrender_rho.exr").string());
@@ -457,6 +479,28 @@ TEST(DiffrenderCache, ScaledSumOfTracedHitsIsUnbiased) {
   const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / (n - 1));
   EXPECT_LT(std::abs(mean), 3 * se) << n << " pixels, mean difference " << mean << ", SE " << se;
   EXPECT_GT(se, 0.0);
+}
+
+// The exact query traces the captured scene's meshes like its scan: in a closed room (4 cm grid)
+// whose ceiling is a captured mesh, exact rays meet something as often as when the ceiling is
+// scanned (without the meshes, those to the ceiling, about half, would leave to the sky), and
+// DIT, whose impostor holds the ceiling's emission and distance, agrees with them as with points.
+TEST(DiffrenderExact, CapturedMeshesAreTracedLikeTheScan) {
+  std::map<bool, double> met, within;
+  for (bool mesh : {false, true}) {
+    test::TempDir t;
+    const Scene s =
+        writeScene(t, closedRoomScene(t, true, mesh, {{"samples", 32}, {"compare_exact", true}}));
+    const MethodFrame f = createMethod(s, MethodContext(true))->render(s.camera);
+    const double rays = 32.0 * std::stod(f.attributes.at("nestlight:diffrender_scan_pixels"));
+    const double compared = std::stod(f.attributes.at("nestlight:diffrender_compared"));
+    ASSERT_GT(rays, 10000);
+    met[mesh] = compared / rays;
+    within[mesh] = std::stod(f.attributes.at("nestlight:diffrender_within_footprint")) / compared;
+  }
+  EXPECT_GT(met[true], met[false] - 0.03) << met[false] << " with a scanned ceiling";
+  EXPECT_GT(met[true], 0.7);
+  EXPECT_GT(within[true], within[false] - 0.02) << within[false] << " with a scanned ceiling";
 }
 
 // DIT against exact rays in the protocol room (make-scene diffrender: the cornell room's walls and
