@@ -193,10 +193,13 @@ void diffrenderScene(json& scene, SyntheticSpec& spec, MeshWrites& meshWrites, c
   // From the free corner, down at the object and the floor round it, the blocks behind.
   scene["camera"] = cameraJson({3.7, 3.7, 1.5}, {2.5, 2.5, 0.25}, 50, o);
   // The scan's colours are albedos; the capture diffrender adds to is the colour layer
-  // `captured` that make-scene bakes with the reference (nestlight bake-radiance).
+  // `captured` that make-scene bakes with the reference (nestlight bake-radiance). Eight
+  // scattering events: the material estimate (eq. 5) divides a point's captured radiance (k
+  // events) by the light its neighbours' captured radiance brings (k + 1), so a short capture
+  // reads as a darker albedo: at 3 the floor's true material came out 1.1% lower than at 8.
   scene["gi"] = {{"method", "diffrender"},
                  {"mode", "albedo"},
-                 {"max_bounces", 3},
+                 {"max_bounces", 8},
                  {"samples_per_pixel", 1024},
                  {"target_relative_error", 0.01},
                  {"parameters", {{"capture", "captured"}}}};

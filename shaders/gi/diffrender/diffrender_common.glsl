@@ -46,10 +46,15 @@ vec2 rnd2() { return vec2(rnd(), rnd()); }
 
 uint unconverged = 0u, hidden = 0u;
 
-// The mip level whose texels span `solidAngle` (a cone's, or a sample's 1 / (N pdf): Colbert and
-// Krivanek, "GPU-Based Importance Sampling", 2007), from a face texel's solid angle 4 pi / (6 w^2).
-float impostorLod(float solidAngle) {
-  float texel = 4.0 * kPi / (6.0 * float(uImpostorSize * uImpostorSize));
+// The mip level whose texels span `solidAngle` about `dir` (a cone's, or a sample's 1 / (N pdf):
+// Colbert and Krivanek, "GPU-Based Importance Sampling", 2007). A face texel at face coordinates
+// (u, v) spans (2 / w)^2 / (1 + u^2 + v^2)^(3/2) = (2 / w)^2 (m / |dir|)^3, m the major axis'
+// component: twice as much at a face's middle as at its corners.
+float impostorLod(float solidAngle, vec3 dir) {
+  vec3 a = abs(dir);
+  float m = max(a.x, max(a.y, a.z)) / max(length(dir), 1e-20);
+  float side = 2.0 / float(uImpostorSize);
+  float texel = side * side * m * m * m;
   return clamp(0.5 * log2(max(solidAngle, 1e-12) / texel), 0.0, float(uImpostorLevels - 1));
 }
 
@@ -87,16 +92,9 @@ float beyondSurface(vec3 x, vec3 d, float t) {
 vec3 coneTrace(vec3 o, vec3 d, float solidAngle, out float tScene);
 vec3 exactQuery(vec3 o, vec3 d, out float tScene);
 
-vec3 queryScene(vec3 o, vec3 d, float solidAngle, out float tScene) {
-  if (uQuery == DR_QUERY_VCT) return coneTrace(o, d, solidAngle, tScene);
-  if (uQuery == DR_QUERY_EXACT) return exactQuery(o, d, tScene);
-  float lod = impostorLod(solidAngle);
+vec3 ditQuery(vec3 o, vec3 d, float solidAngle, out float tScene) {
+  float lod = impostorLod(solidAngle, d);
   vec3 x = o - uImpostorCentre;
-  if (uQuery == DR_QUERY_EM) {
-    float t = sphereExit(x, d, impostorDistance(d));
-    tScene = t < 0.0 ? kImpostorFar : t;
-    return textureLod(uImpostor, d, lod).rgb;
-  }
   // Steps out to the far side of the scene's bounds (uImpostorReach from the centre).
   float tMax = sphereExit(x, d, uImpostorReach);
   if (!(tMax > 0.0)) tMax = uImpostorReach;
@@ -151,7 +149,36 @@ vec3 queryScene(vec3 o, vec3 d, float solidAngle, out float tScene) {
   }
   if (!converged) unconverged++;
   tScene = t;
-  return textureLod(uImpostor, normalize(x + t * d), lod).rgb;
+  // The cone's footprint where it meets the surface, t^2 solidAngle, seen from the centre |p| away
+  // spans t^2 / |p|^2 of its solid angle: a point far from the centre looking at a wall near it
+  // fetches a finer level (at the cone's own solid angle the coarse levels mixed the spot-lit
+  // floor into the walls' texels above it).
+  vec3 p = x + t * d;
+  lod = impostorLod(solidAngle * t * t / max(dot(p, p), 1e-12), p);
+  return textureLod(uImpostor, normalize(p), lod).rgb;
+}
+
+vec3 queryScene(vec3 o, vec3 d, float solidAngle, out float tScene) {
+  if (uQuery == DR_QUERY_VCT) return coneTrace(o, d, solidAngle, tScene);
+  if (uQuery == DR_QUERY_EXACT) return exactQuery(o, d, tScene);
+  if (uQuery == DR_QUERY_EM) {
+    vec3 x = o - uImpostorCentre;
+    float t = sphereExit(x, d, impostorDistance(d));
+    tScene = t < 0.0 ? kImpostorFar : t;
+    return textureLod(uImpostor, d, impostorLod(solidAngle, d)).rgb;
+  }
+  return ditQuery(o, d, solidAngle, tScene);
+}
+
+// The material estimate's incoming light (eq. 5): EM's lookup by direction cannot answer for a
+// point away from the centre, so EM's material is DIT's. The impostor is read at its finest level
+// here: eq. 5 divides by the mean, which has to be unbiased, and a mip of the impostor seen from
+// off the centre mixes surfaces the point does not see together (the spot-lit floor into the walls
+// above it); filtered at the samples' solid angle the floor's estimate came out 6% low, at the
+// finest level 4% (exact's 2%), no noisier over the scan.
+vec3 queryMaterial(vec3 o, vec3 d, float solidAngle, out float tScene) {
+  if (uQuery == DR_QUERY_EM || uQuery == DR_QUERY_DIT) return ditQuery(o, d, 0.0, tScene);
+  return queryScene(o, d, solidAngle, tScene);
 }
 
 // The ray's span [t0, t1] inside grid k's box; false when it misses.

@@ -37,6 +37,12 @@ uniform float uRhoMax;
 
 #define DR_SAMPLES_MAX 1024
 
+// The solid angle a query filters over for one of N cosine samples at cos theta to the normal.
+float sampleCone(int N, float cone, float cosTheta) {
+  if (uQuery == DR_QUERY_VCT) return cone;
+  return kPi / (float(N) * max(cosTheta, 0.05));
+}
+
 void main() {
   ivec2 lp = ivec2(gl_GlobalInvocationID.xy);
   ivec2 lowSize = (ivec2(frame.tile.zw) + uScale - 1) / uScale;
@@ -69,7 +75,9 @@ void main() {
   coneBase = x, coneNormal = n;
   exactLift = 1.5 * texelFetch(uBaseColour, px, 0).a;
   int N = min(uSamples, DR_SAMPLES_MAX);
-  // A cone per direction: the solid angle 1 / (N pdf) of a cosine sample, about 2 pi / N.
+  // A cone per direction: vct's of solid angle 2 pi / N (the issue's aperture); the impostor's
+  // lookups filter over a sample's own 1 / (N pdf) = pi / (N cos theta) (Colbert and Krivanek), so
+  // that the ones near the normal, which weigh most, fetch finer levels.
   float cone = 2.0 * kPi / float(N);
   vec2 jitter = rnd2();
   vec3 incoming = vec3(0.0);
@@ -81,15 +89,16 @@ void main() {
     // Stratified by a rank-1 lattice (the golden ratio) with one random shift per pixel.
     vec2 u = fract(vec2((float(i) + 0.5) / float(N), float(i) * 0.618034) + jitter);
     vec3 d = F * sampleCosineHemisphereGl(u);
+    float omega = sampleCone(N, cone, dot(d, n));
     if (meetsObjectBoxes(o, d)) {
       hitBits[i >> 5] |= 1u << (i & 31);
       hits++;
     }
     if (uEstimateMaterial || uCompareExact) {
       float t;
-      vec3 Lq = queryScene(o, d, cone, t);
+      vec3 Lq = queryMaterial(o, d, omega, t);
       if (uEstimateMaterial) incoming += Lq;
-      if (uCompareExact) compareWithExact(o, d, cone);
+      if (uCompareExact) compareWithExact(o, d, omega);
     }
   }
   // The scene's lights at the point: what they gave it without the inserted meshes, and the
@@ -130,7 +139,7 @@ void main() {
       vec2 u = fract(vec2((float(i) + 0.5) / float(N), float(i) * 0.618034) + jitter);
       vec3 d = F * sampleCosineHemisphereGl(u);
       float tScene;
-      vec3 Lenv = queryScene(o, d, cone, tScene);
+      vec3 Lenv = queryScene(o, d, sampleCone(N, cone, dot(d, n)), tScene);
       if (uQuery == DR_QUERY_VCT) {
         // Eq. 6: the cone's coverage of the objects times their light less the scene's.
         float coverage;
