@@ -462,24 +462,38 @@ class DiffrenderExtension : public FrameExtension {
 
   // The voxel cone tracer's scene volume over the scene's bounds: cubic voxels, `scene_voxels`
   // along the longest side; R11G11B10F radiance (premultiplied) and R8 opacity with their mips
-  // (5 bytes a voxel, 8/7 with the mips: 256^3 is 91 MiB, under one 128 MiB range).
+  // (5 bytes a voxel, 8/7 with the mips), and from level 1 on RGBA8 opacity per axis (4 bytes
+  // an eighth of the voxels, 8/7 with its mips): 256^3 is 105 MB, under one 128 MiB range.
   void setUpSceneVolume() {
     const glm::vec3 lo = sceneLo_, extent = sceneHi_ - sceneLo_;
     const float longest = std::max({extent.x, extent.y, extent.z, 1e-3f});
-    sceneCell_ = longest / float(params_.sceneVoxels);
-    sceneDims_ = glm::max(glm::ivec3(glm::ceil(extent / sceneCell_)) + 1, glm::ivec3(1));
-    sceneOrigin_ = lo;
-    const double bytes = double(sceneDims_.x) * sceneDims_.y * sceneDims_.z * 5.0 * 8.0 / 7.0;
+    // A voxel of margin on every side (a closed room's walls lie on the bounds, and a wall in the
+    // border voxels is half blended with the empty border at every level), and every side a
+    // multiple of 2^kSceneMips: a mip of an odd size drops its last layer, and with it the
+    // ceiling of a room from every level coarser than the first (a third of the upward cones
+    // then saw the sky). The coarsest level is 2^kSceneMips voxels wide.
+    constexpr int kSceneMips = 5;
+    const int step = 1 << kSceneMips;
+    sceneCell_ = longest / float(std::max(params_.sceneVoxels - 3, 1));
+    const glm::ivec3 need = glm::ivec3(glm::ceil(extent / sceneCell_)) + 3;
+    sceneDims_ = (glm::max(need, glm::ivec3(1)) + (step - 1)) / step * step;
+    sceneOrigin_ = lo - glm::vec3(sceneCell_);
+    const double bytes =
+        double(sceneDims_.x) * sceneDims_.y * sceneDims_.z * (5.0 + 4.0 / 8.0) * 8.0 / 7.0;
     if (bytes > double(128 << 20))
       throw Error(sceneFile_, "scene.gi.parameters.scene_voxels",
                   "the scene volume would take " + std::to_string(int(bytes / 1e6)) +
                       " MB, over the 128 MiB bound: use fewer voxels");
-    const int levels = levelsFor(std::max({sceneDims_.x, sceneDims_.y, sceneDims_.z}));
+    const int levels = kSceneMips + 1;
+    sceneLevels_ = levels;
     sceneRadiance_ =
         gl::Texture::volume(GL_R11F_G11F_B10F, sceneDims_.x, sceneDims_.y, sceneDims_.z, levels);
     sceneOpacity_ = gl::Texture::volume(GL_R8, sceneDims_.x, sceneDims_.y, sceneDims_.z, levels);
-    for (const gl::Texture* t : {&sceneRadiance_, &sceneOpacity_}) {
-      t->setFilter(GL_LINEAR_MIPMAP_LINEAR, GL_LINEAR);
+    const glm::ivec3 half = sceneDims_ / 2;
+    sceneOpacityDir_ = gl::Texture::volume(GL_RGBA8, half.x, half.y, half.z, levels - 1);
+    for (const gl::Texture* t : {&sceneRadiance_, &sceneOpacity_, &sceneOpacityDir_}) {
+      t->setFilter(t == &sceneOpacityDir_ ? GL_NEAREST_MIPMAP_LINEAR : GL_LINEAR_MIPMAP_LINEAR,
+                   t == &sceneOpacityDir_ ? GL_NEAREST : GL_LINEAR);
       for (GLenum w : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
         glTextureParameteri(t->id(), w, GL_CLAMP_TO_BORDER);
     }
@@ -492,6 +506,7 @@ class DiffrenderExtension : public FrameExtension {
                                    {GL_FRAGMENT_SHADER, "gi/diffrender/scene_voxelize.frag"}},
                                   {{"NL_SCENE_FRAME", "1"}});
     resolve_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/scene_resolve.comp"}});
+    opacityMip_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/diffrender/scene_opacity_mip.comp"}});
     sceneFbo_ = gl::Framebuffer::create();
     glNamedFramebufferParameteri(sceneFbo_.id(), GL_FRAMEBUFFER_DEFAULT_WIDTH, sceneDims_.x);
     glNamedFramebufferParameteri(sceneFbo_.id(), GL_FRAMEBUFFER_DEFAULT_HEIGHT, sceneDims_.y);
@@ -503,9 +518,13 @@ class DiffrenderExtension : public FrameExtension {
     if (sceneBuiltCut_ == f.cutGeneration()) return;
     sceneBuiltCut_ = f.cutGeneration();
     constexpr float kFixedPoint = 1024.0f;
+    // The view reaches a voxel past the volume on every side: a point on its edge (a wall on the
+    // scene's bounds) sits on the first pixel's edge, which rasterisation may leave uncovered
+    // (the fragment finds its voxel from the point's position, not from the pixel).
     const glm::vec3 hi = sceneOrigin_ + glm::vec3(sceneDims_) * sceneCell_;
-    const glm::mat4 clip = glm::ortho(sceneOrigin_.x, hi.x, sceneOrigin_.y, hi.y,
-                                      -(hi.z + sceneCell_), -(sceneOrigin_.z - sceneCell_));
+    const glm::mat4 clip =
+        glm::ortho(sceneOrigin_.x - sceneCell_, hi.x + sceneCell_, sceneOrigin_.y - sceneCell_,
+                   hi.y + sceneCell_, -(hi.z + sceneCell_), -(sceneOrigin_.z - sceneCell_));
     glBindFramebuffer(GL_FRAMEBUFFER, sceneFbo_.id());
     glViewport(0, 0, sceneDims_.x, sceneDims_.y);
     glDisable(GL_DEPTH_TEST);
@@ -545,6 +564,24 @@ class DiffrenderExtension : public FrameExtension {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glGenerateTextureMipmap(sceneRadiance_.id());
     glGenerateTextureMipmap(sceneOpacity_.id());
+    buildDirectionalOpacity();
+  }
+
+  // Level by level from the base opacity: the directional texture's level k is the volume's k + 1.
+  void buildDirectionalOpacity() {
+    opacityMip_.use();
+    glBindImageTexture(1, sceneOpacity_.id(), 0, GL_TRUE, 0, GL_READ_ONLY, GL_R8);
+    for (int k = 0; k + 1 < sceneLevels_; ++k) {
+      const glm::ivec3 src = sceneDims_ >> k, dst = sceneDims_ >> (k + 1);
+      glBindImageTexture(0, sceneOpacityDir_.id(), k, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA8);
+      glBindImageTexture(2, sceneOpacityDir_.id(), std::max(k - 1, 0), GL_TRUE, 0, GL_READ_ONLY,
+                         GL_RGBA8);
+      glUniform3i(opacityMip_.uniform("uDims"), dst.x, dst.y, dst.z);
+      glUniform3i(opacityMip_.uniform("uSourceDims"), src.x, src.y, src.z);
+      glUniform1i(opacityMip_.uniform("uFromBase"), k == 0 ? 1 : 0);
+      glDispatchCompute(GLuint((dst.x + 3) / 4), GLuint((dst.y + 3) / 4), GLuint((dst.z + 3) / 4));
+      glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT);
+    }
   }
 
   // The lights' shadow maps as the frame draws them (the same views, resolution and offsets) but
@@ -615,12 +652,14 @@ class DiffrenderExtension : public FrameExtension {
     if (params_.query == DiffrenderParameters::Query::Vct) {
       glBindTextureUnit(DR_UNIT_SCENE_RADIANCE, sceneRadiance_.id());
       glBindTextureUnit(DR_UNIT_SCENE_OPACITY, sceneOpacity_.id());
+      glBindTextureUnit(DR_UNIT_SCENE_OPACITY_DIR, sceneOpacityDir_.id());
       glBindTextureUnit(DR_UNIT_OBJECT_LIGHT, objectLight_.id());
     }
     glUniform1i(p.uniform("uObjectLevels"), objectLevels_);
     glUniform3fv(p.uniform("uSceneOrigin"), 1, &sceneOrigin_[0]);
     glUniform1f(p.uniform("uSceneCell"), sceneCell_);
     glUniform3i(p.uniform("uSceneDims"), sceneDims_.x, sceneDims_.y, sceneDims_.z);
+    glUniform1i(p.uniform("uSceneLevels"), sceneLevels_);
     glUniform1i(p.uniform("uDitIterations"), params_.ditIterations);
     glUniform1i(p.uniform("uVolumeCount"), GLint(volumeLo_.size()));
     glUniform3fv(p.uniform("uVolumeLo"), GLsizei(volumeLo_.size()), &volumeLo_[0][0]);
@@ -755,13 +794,14 @@ class DiffrenderExtension : public FrameExtension {
   gl::Texture background_;
   std::string backgroundFile_;
   // vct's scene volume and its fixed-point sums (one slab of z layers at a time).
-  gl::Texture sceneRadiance_, sceneOpacity_;
+  gl::Texture sceneRadiance_, sceneOpacity_, sceneOpacityDir_;
   std::array<gl::Texture, 4> sums_;
-  gl::ShaderProgram voxelize_, resolve_;
+  gl::ShaderProgram voxelize_, resolve_, opacityMip_;
   gl::Framebuffer sceneFbo_;
   glm::vec3 sceneLo_{0.0f}, sceneHi_{1.0f}, sceneOrigin_{0.0f};
   float sceneCell_ = 1;
   glm::ivec3 sceneDims_{1};
+  int sceneLevels_ = 1;
   int slabDepth_ = 1;
   uint64_t sceneBuiltCut_ = ~0ull;
   // vct: the boundary voxels' light for eq. 6's cones, lit once a frame (before the first tile).

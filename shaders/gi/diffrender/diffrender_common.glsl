@@ -24,9 +24,13 @@ uniform int uVolumeCount;
 // uSceneDims of them; radiance premultiplied by opacity, and opacity, with averaged mips.
 layout(binding = DR_UNIT_SCENE_RADIANCE) uniform sampler3D uSceneRadiance;
 layout(binding = DR_UNIT_SCENE_OPACITY) uniform sampler3D uSceneOpacity;
+// Its levels from 1 on with each axis' opacity apart (x, y, z: scene_opacity_mip.comp), level k of
+// this texture the volume's k + 1.
+layout(binding = DR_UNIT_SCENE_OPACITY_DIR) uniform sampler3D uSceneOpacityDir;
 uniform vec3 uSceneOrigin;
 uniform float uSceneCell;
 uniform ivec3 uSceneDims;
+uniform int uSceneLevels;  // its mips (each side a multiple of 2^(levels - 1))
 uniform vec3 uVolumeLo[DR_VOLUMES_MAX], uVolumeHi[DR_VOLUMES_MAX];
 uniform ivec3 uVolumeSize;
 uniform uint uSeed;
@@ -338,18 +342,36 @@ bool inObjects(vec3 x) {
 
 // Voxel cone tracing (Crassin et al. 2011): front to back through the scene volume's mips, each
 // step as wide as the cone there (the mip from its diameter), its opacity corrected for steps of
-// half a diameter; the environment behind what the cone's opacity leaves. It starts 1.5 voxels
-// out, past the voxel of the surface it leaves. The scene's distance: where the opacity passes
-// one half.
-// The surface a cone leaves (scene-local point and normal; a zero normal: none). The volume's
-// coarse mips blur that surface's own voxels upwards, by up to two texels' width (the texel and
-// the trilinear blend): a step less than two diameters above its plane is weighted down (to 0
-// within one), else a floor takes a fifth of its own sky away from itself.
+// half a diameter and read by direction (the anisotropic voxels of their section 5: with averaged
+// opacity one-voxel walls leaked, the default room's floor material came out 17% high and 40% of
+// its samples clamped); the environment behind what the cone's opacity leaves. It starts 1.5
+// voxels out, past the voxel of the surface it leaves. The scene's distance: where the opacity
+// passes one half.
+// The surface a cone leaves (scene-local point and normal; a zero normal: none). A level-k lookup
+// reads voxels of 2^k cells within 1.5 of them, so a level that would take in the surface's own
+// voxels is not read: the cone is read at the finest level that keeps clear of its surface (and
+// sees nothing while under 1.5 cells above it). Weighting the coarse samples down instead (by how
+// far they stood above the surface in diameters) hid the walls from every cone under 48 degrees
+// of elevation and took two thirds of the ceiling from the upright ones.
 vec3 coneBase = vec3(0.0), coneNormal = vec3(0.0);
 // How far above its surface (along coneNormal) a scan point's exact rays leave: its neighbours'
 // discs stand up to about a splat radius off the position the G-buffer gives it (as ibl's rays
 // leave).
 float exactLift = 0.0;
+
+// The opacity a cone along d meets at mip level lod: level 0's own, from level 1 on each axis'
+// weighted by d's components (Crassin et al. weight by their squares, which sum to one: a wall
+// met obliquely then reads partly through its edge-on axes, half empty, and a closed room under
+// a bright sky let 16% of it in against 4%; the sum is capped at one), between levels 0 and 1 the
+// two mixed. Read from the nearest voxel of a level (levels blended): trilinear reads of a
+// one-voxel wall come out partial at every step across it (7% of the sky in).
+float directionalOpacity(vec3 uvw, float lod, vec3 d) {
+  vec3 w = abs(d);
+  if (lod >= 1.0) return min(dot(w, textureLod(uSceneOpacityDir, uvw, lod - 1.0).rgb), 1.0);
+  ivec3 v = clamp(ivec3(floor(uvw * vec3(uSceneDims))), ivec3(0), uSceneDims - 1);
+  float a0 = texelFetch(uSceneOpacity, v, 0).r;
+  return mix(a0, min(dot(w, textureLod(uSceneOpacityDir, uvw, 0.0).rgb), 1.0), max(lod, 0.0));
+}
 
 vec3 coneTrace(vec3 o, vec3 d, float solidAngle, out float tScene) {
   float cosHalf = clamp(1.0 - solidAngle / (2.0 * kPi), -1.0, 1.0 - 1e-6);
@@ -358,16 +380,28 @@ vec3 coneTrace(vec3 o, vec3 d, float solidAngle, out float tScene) {
   vec3 colour = vec3(0.0);
   float alpha = 0.0, t = 1.5 * uSceneCell;
   tScene = kImpostorFar;
+  bool fromSurface = dot(coneNormal, coneNormal) > 0.0;
   for (int i = 0; i < 512 && alpha < 0.99; ++i) {
-    float diameter = max(2.0 * t * tanHalf, uSceneCell);
     vec3 uvw = (o + t * d - uSceneOrigin) / extent;
-    if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
-    float lod = log2(diameter / uSceneCell);
-    float a = textureLod(uSceneOpacity, uvw, lod).r;
-    if (dot(coneNormal, coneNormal) > 0.0)
-      a *= clamp(dot(o + t * d - coneBase, coneNormal) / diameter - 1.0, 0.0, 1.0);
-    if (a > 1e-4) {
-      vec3 c = textureLod(uSceneRadiance, uvw, lod).rgb / a;
+    float lod = min(log2(max(2.0 * t * tanHalf, uSceneCell) / uSceneCell), float(uSceneLevels - 1));
+    float lift = 1.0;
+    if (fromSurface) {
+      float h = dot(o + t * d - coneBase, coneNormal) / uSceneCell;
+      float room = log2(max(h / 1.5, 1e-6));  // the coarsest level clear of the surface
+      if (ceil(lod) > room) lod = max(floor(room), 0.0);  // a fractional level reads the next
+      lift = h >= 1.5 ? 1.0 : 0.0;
+    }
+    float diameter = uSceneCell * exp2(lod);
+    // Out of the volume once the lookup reads nothing of it: a wall in its border voxels (a closed
+    // room's, at its bounds) is read by the steps about to leave, not stepped over.
+    vec3 margin = vec3(diameter) / extent;
+    if (any(lessThan(uvw, -margin)) || any(greaterThan(uvw, 1.0 + margin))) break;
+    // The radiance is premultiplied by the averaged opacity; what the cone meets is the
+    // directional one.
+    float coverage = textureLod(uSceneOpacity, uvw, lod).r;
+    float a = lift * directionalOpacity(uvw, lod, d);
+    if (a > 1e-4 && coverage > 1e-4) {
+      vec3 c = textureLod(uSceneRadiance, uvw, lod).rgb / coverage;
       float step = 1.0 - pow(1.0 - min(a, 0.9999), 0.5);
       colour += (1.0 - alpha) * step * c;
       alpha += (1.0 - alpha) * step;

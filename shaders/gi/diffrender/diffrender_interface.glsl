@@ -39,6 +39,8 @@
 // vct: the inserted meshes' boundary voxels' light (object_light.comp) for eq. 6's cones. Unit 16:
 // GL 4.5 promises 16 units a stage, llvmpipe and NVIDIA's driver give 32.
 #define DR_UNIT_OBJECT_LIGHT 16
+// vct: the scene volume's directional opacity from level 1 on (scene_opacity_mip.comp).
+#define DR_UNIT_SCENE_OPACITY_DIR 17
 
 // Inserted meshes at most: each its own voxel grid, stacked in one texture.
 #define DR_VOLUMES_MAX 16
