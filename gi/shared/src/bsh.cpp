@@ -62,6 +62,7 @@ class Builder {
     const size_t n = pts_.position.size();
     NL_CHECK(pts_.colour.size() == n);
     NL_CHECK(pts_.normal.empty() || pts_.normal.size() == n);
+    NL_CHECK(pts_.radius.empty() || pts_.radius.size() == n);
     NL_CHECK(std::isfinite(opt_.leafRadius) && opt_.leafRadius >= 0);
     st.input = n;
     if (opt_.recordLeaves) out.leafOf.assign(n, BSH_LEAF);
@@ -118,10 +119,14 @@ class Builder {
       a.count = double(e - k);
       a.sumPosition = a.centre;
       a.centre /= a.count;
-      double spread = 0;
-      for (size_t j = k; j < e; ++j)
-        spread = std::max(spread, glm::length(glm::dvec3(pts_.position[valid[j]]) - a.centre));
-      a.radius = double(opt_.leafRadius) + spread;
+      // The sphere holds every point's disc.
+      a.radius = 0;
+      for (size_t j = k; j < e; ++j) {
+        const uint32_t i = valid[j];
+        const double disc = pts_.radius.empty() ? double(opt_.leafRadius) : double(pts_.radius[i]);
+        NL_CHECK(disc >= 0);
+        a.radius = std::max(a.radius, disc + glm::length(glm::dvec3(pts_.position[i]) - a.centre));
+      }
       if (e - k > 1) st.sharedCells += e - k;
       cellCode.push_back(codes[k]);
       cellFirst_.push_back(uint32_t(k));

@@ -36,6 +36,10 @@ Bsh BshLayer::build(const NodeKey& key, const PointBuffer& points,
   }
   BshOptions opt = options_;
   opt.leafRadius = float(meta_.levelSpacing(key.level));
+  if (opt.discRadii) {
+    in.radius = opt.discRadii(in, opt.leafRadius);
+    NL_CHECK(in.radius.size() == n);
+  }
   return buildBsh(in, opt);
 }
 

@@ -516,6 +516,9 @@ TEST(DiffrenderCache, ScaledSumOfTracedHitsIsUnbiased) {
 // whose ceiling is a captured mesh, exact rays meet something as often as when the ceiling is
 // scanned (without the meshes, those to the ceiling, about half, would leave to the sky), and
 // DIT, whose impostor holds the ceiling's emission and distance, agrees with them as with points.
+// Every ray meets the closed room: the discs are the reference's, which cover their surface (with
+// the level's spacing as radius 17% of the rays passed between them with the meshed ceiling, 28%
+// with the scanned one).
 TEST(DiffrenderExact, CapturedMeshesAreTracedLikeTheScan) {
   std::map<bool, double> met, within;
   for (bool mesh : {false, true}) {
@@ -528,9 +531,11 @@ TEST(DiffrenderExact, CapturedMeshesAreTracedLikeTheScan) {
     ASSERT_GT(rays, 10000);
     met[mesh] = compared / rays;
     within[mesh] = std::stod(f.attributes.at("nestlight:diffrender_within_footprint")) / compared;
+    std::printf("%s ceiling: %.4f of the rays met the scan, %.4f within a texel's footprint\n",
+                mesh ? "meshed" : "scanned", met[mesh], within[mesh]);
   }
-  EXPECT_GT(met[true], met[false] - 0.03) << met[false] << " with a scanned ceiling";
-  EXPECT_GT(met[true], 0.7);
+  EXPECT_GT(met[false], 0.999);
+  EXPECT_GT(met[true], 0.999);
   EXPECT_GT(within[true], within[false] - 0.02) << within[false] << " with a scanned ceiling";
 }
 

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <functional>
 #include <numeric>
@@ -174,8 +175,12 @@ void checkInvariants(const BshPoints& pts, const BshOptions& opt, const Bsh& bsh
     glm::dvec3 sum(0), sum2(0), nsum(0);
     double withNormal = 0;
     for (uint32_t p : below) {
-      EXPECT_LE(glm::length(pts.position[p] - c) + opt.leafRadius, r * (1 + kSphereRel) + 1e-30f)
-          << i;
+      const float disc = pts.radius.empty() ? opt.leafRadius : pts.radius[p];
+      EXPECT_LE(glm::length(pts.position[p] - c) + disc, r * (1 + kSphereRel) + 1e-30f) << i;
+      // An unpruned leaf's disc reaches as far as its points' discs.
+      if (isLeaf(n) && !opt.prune) {
+        EXPECT_GE(std::bit_cast<float>(n.links.y), disc * (1 - kSphereRel)) << i;
+      }
       if (!pts.normal.empty()) {
         const NormalCone pc = NormalCone::of(pts.normal[p]);
         if (!pc.boundsNothing()) {
@@ -257,6 +262,21 @@ TEST(Bsh, InvariantsOnRandomPointsWithAndWithoutPruning) {
         EXPECT_EQ(bsh.nodes.size(), 5999u);
       }
     }
+}
+
+// Per-point disc radii (diffrender's exact query: the reference's): every sphere holds each
+// point's own disc, and an unpruned leaf's disc is as wide as its point's.
+TEST(Bsh, PerPointRadiiAreHeld) {
+  for (bool prune : {true, false}) {
+    BshPoints pts = randomPoints(2000, 5, true, 0.2f);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(0.0f, 0.2f);
+    for (size_t i = 0; i < pts.position.size(); ++i) pts.radius.push_back(u(rng));
+    BshOptions opt;
+    opt.leafRadius = 0.01f;  // not used: every point has its own
+    opt.prune = prune;
+    buildChecked(pts, opt);
+  }
 }
 
 // A sphere's surface, normals outward, uniform colour: pruning merges sub-trees where the surface

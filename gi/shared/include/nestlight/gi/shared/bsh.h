@@ -15,6 +15,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <glm/glm.hpp>
 #include <vector>
 
@@ -38,12 +39,18 @@ struct BshPoints {
   std::vector<glm::vec3> position;
   std::vector<glm::vec3> colour;  // linear, any non-negative magnitude
   std::vector<glm::vec3> normal;
+  // Each point's disc radius (world units); empty: BshOptions::leafRadius for every point.
+  std::vector<float> radius;
 };
 
 struct BshOptions {
   // The disc radius each point stands for (world units): leaves are spheres of this radius, so
   // a coarse level's points, which stand for more surface, make wider leaves.
   float leafRadius = 0;
+  // BshLayer: each node's points' disc radii (BshPoints::radius) from its points and leafRadius,
+  // where leaves must cover the surface for rays not to pass between them (diffrender's exact
+  // query: the reference's radii, assignDiscRadii); unset, every leaf has leafRadius.
+  std::function<std::vector<float>(const BshPoints&, float leafRadius)> discRadii;
   bool prune = true;
   float colourVariance = 0.01f;  // t_c: largest channel's variance of linear colour, below which...
   float normalAgreement =
