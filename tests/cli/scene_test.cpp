@@ -100,7 +100,8 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
       test::runCli(
           "bench gi " + dir.file("c/scene.json") +
               " --runs 1 --spp 1,4 --quality raster=64,256 --quality vpl=16 "
-              "--quality pbgi=8 --quality ibl=2 --quality diffrender=8 --reference-error 0.05 "
+              "--quality pbgi=8 --quality ibl=2 --quality diffrender=8 --quality projection=1 "
+              "--reference-error 0.05 "
               "--reference-spp 256 -o " +
               dir.file("b"),
           &out),
@@ -117,10 +118,14 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   // bounce variants skipped: in the radiance-cache mode, with one convex mesh, every bounce count
   // renders the same image), pbgi (X-PBGI) at 8 x 8 micro-buffers and in its 5 variants
   // (classic, mip, no pruning, conservative, no meshes); ibl skipped (no environment); diffrender
-  // (the sphere is an inserted mesh) at 8 samples, and its em, vct, low and high variants.
-  EXPECT_EQ(rows, 19 + 4);  // and the 4 skipped, each with its reason
+  // (the sphere is an inserted mesh) at 8 samples, and its em, vct, low and high variants;
+  // projection at 1 importance sample per cluster and its random, splat 1 and splat 3 variants.
+  EXPECT_EQ(rows, 23 + 4);  // and the 4 skipped, each with its reason
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 19u);
+  ASSERT_EQ(j["rows"].size(), 23u);
+  EXPECT_EQ(j["rows"][19]["method"], "projection");
+  EXPECT_EQ(j["rows"][20]["variant"], "random");
+  EXPECT_TRUE(j["rows"][19]["gpu_pass_ms"].contains("projection_gather")) << j["rows"][19].dump();
   EXPECT_EQ(j["rows"][14]["method"], "diffrender");
   EXPECT_EQ(j["rows"][15]["variant"], "em");
   EXPECT_TRUE(j["rows"][14]["gpu_pass_ms"].contains("diffrender_shade")) << j["rows"][14].dump();

@@ -2,6 +2,7 @@
 #include "nestlight/gi/ibl/ibl_method.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/pbgi/pbgi_method.h"
+#include "nestlight/gi/projection/projection_method.h"
 #include "nestlight/gi/raster/raster_method.h"
 #include "nestlight/gi/vpl/vpl_method.h"
 #include "nestlight/octree/error.h"
@@ -13,8 +14,8 @@ namespace nestlight::gi {
 // its own library.
 const std::vector<MethodInfo>& registeredMethods() {
   static const std::vector<MethodInfo> methods = {
-      referenceMethodInfo(), directMethodInfo(), rasterMethodInfo(),    vplMethodInfo(),
-      pbgiMethodInfo(),      iblMethodInfo(),    diffrenderMethodInfo()};
+      referenceMethodInfo(), directMethodInfo(), rasterMethodInfo(),     vplMethodInfo(),
+      pbgiMethodInfo(),      iblMethodInfo(),    diffrenderMethodInfo(), projectionMethodInfo()};
   return methods;
 }
 

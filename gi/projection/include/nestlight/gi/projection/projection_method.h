@@ -1,0 +1,42 @@
+// `projection`: final gathering by importance-driven point projection (Maletz, Wang and Bowers,
+// "Importance-Driven Point Projection for GPU-based Final Gathering", 2011) on the raster frame:
+// the lights' cut thinned to a point set S (every point's area from its neighbours' spacing),
+// split into equal-count clusters (clusters.h), and per receiver pixel a few random points per
+// cluster give the clusters' importance, which shares the importance samples among them
+// (projection_allocate.glsl); every sample is splatted into the receiver's hemi-octahedral
+// micro-buffer (hemi_octahedral.h) with the solid angle it stands for, and the micro-buffer's
+// light through the receiver's BSDF is its indirect light. docs/PROJECTION.md describes the
+// parameters and what is built.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "nestlight/gi/method.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/gi/method_parameters.h"
+#include "nestlight/gi/scene.h"
+
+namespace nestlight::gi {
+
+struct ProjectionParameters {
+  int points = 262144;        // |S|: the lights' cut thinned to at most this many points
+  int clusters = 512;         // K, a power of two
+  int randomPerCluster = 2;   // N_rnd: random points per cluster (importance and splats)
+  int samplesPerCluster = 4;  // N_s / K: importance samples per cluster, on average
+  int microBuffer = 32;       // M: texels per side of the hemi-octahedral micro-buffer
+  // importance (the paper), random (every sample uniform over S: the paper's baseline), brute
+  // (all of S, each point its own area: the micro-buffer's reference).
+  enum class Sampling { Importance, Random, Brute } sampling = Sampling::Importance;
+  int splat = 0;       // 0: adaptive (eq. 3), else a fixed square of 1, 2 or 3 texels per side
+  int fillPasses = 2;  // passes closing holes between splats (0: the paper's micro-buffers)
+};
+
+const ParameterSpecs& projectionParameterSpecs();
+MethodInfo projectionMethodInfo();
+// From scene.gi.parameters; throws nestlight::Error naming scene.gi.parameters.<key>.
+ProjectionParameters projectionParameters(const Scene& scene);
+
+std::unique_ptr<Method> createProjectionMethod(const Scene& scene, const MethodContext& ctx);
+
+}  // namespace nestlight::gi

@@ -1,0 +1,379 @@
+// The `projection` method (nestlight/gi/projection/projection_method.h): Maletz, Wang and
+// Bowers, "Importance-Driven Point Projection for GPU-based Final Gathering" (2011), sections 3.1
+// (the point set), 3.2 (importance-driven splatting) and 4 (clusters, micro-buffers), on the
+// raster frame. Every receiver pixel gathers (the paper's image-space adaptive sampling is not
+// built yet).
+#include "nestlight/gi/projection/projection_method.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <nanoflann.hpp>
+
+#include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/interface.h"
+#include "nestlight/gi/frame/scene_frame.h"
+#include "nestlight/gi/projection/clusters.h"
+#include "nestlight/gi/projection/hemi_octahedral.h"
+#include "nestlight/gl/program.h"
+#include "nestlight/gl/resources.h"
+#include "nestlight/octree/error.h"
+
+namespace nestlight::gi {
+
+namespace glsl {
+using vec4 = glm::vec4;
+#include "gi/projection/projection_interface.glsl"
+}  // namespace glsl
+
+namespace {
+
+using ProjectionPoint = glsl::ProjectionPoint;
+static_assert(sizeof(ProjectionPoint) == 32, "ProjectionPoint must keep std430's layout");
+
+// Each point's area from its neighbours' spacing (a Poisson process of density rho has
+// E[pi d_k^2] = k / rho for the distance d_k to its k-th neighbour): S is the union of whole
+// octree levels, each of which covers the surface, so no level's spacing alone says how much
+// surface a point of S stands for; its neighbours in S do, whatever the scan's sampling.
+constexpr size_t kAreaNeighbours = 8;
+
+struct PositionCloud {
+  const std::vector<glm::vec3>& p;
+  size_t kdtree_get_point_count() const { return p.size(); }
+  float kdtree_get_pt(size_t i, size_t dim) const { return p[i][int(dim)]; }
+  template <class B>
+  bool kdtree_get_bbox(B&) const {
+    return false;
+  }
+};
+using PositionTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PositionCloud>,
+                                        PositionCloud, 3, uint32_t>;
+
+std::vector<float> areasFromSpacing(const std::vector<glm::vec3>& p, float fallback) {
+  std::vector<float> area(p.size(), fallback);
+  if (p.size() <= kAreaNeighbours) return area;
+  const PositionCloud cloud{p};
+  PositionTree tree(3, cloud, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  tree.buildIndex();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 4096),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      uint32_t idx[kAreaNeighbours + 1];
+                      float d2[kAreaNeighbours + 1];
+                      for (size_t i = r.begin(); i < r.end(); ++i) {
+                        const size_t found = tree.knnSearch(&p[i].x, kAreaNeighbours + 1, idx, d2);
+                        if (found == kAreaNeighbours + 1 && d2[kAreaNeighbours] > 0)
+                          area[i] = float(M_PI) * d2[kAreaNeighbours] / float(kAreaNeighbours);
+                      }
+                    });
+  return area;
+}
+
+class ProjectionExtension : public FrameExtension {
+ public:
+  explicit ProjectionExtension(const Scene& scene)
+      : params_(projectionParameters(scene)), seed_(uint32_t(scene.gi.seed)) {}
+
+  std::string name() const override { return "projection"; }
+  std::vector<std::string> parameterKeys() const override {
+    return parameterNames(projectionParameterSpecs());
+  }
+
+  std::vector<std::pair<std::string, std::string>> parameters() const override {
+    const char* sampling = params_.sampling == ProjectionParameters::Sampling::Random ? "random"
+                           : params_.sampling == ProjectionParameters::Sampling::Brute
+                               ? "brute"
+                               : "importance";
+    return {{"points", std::to_string(params_.points)},
+            {"clusters", std::to_string(params_.clusters)},
+            {"random_per_cluster", std::to_string(params_.randomPerCluster)},
+            {"samples_per_cluster", std::to_string(params_.samplesPerCluster)},
+            {"micro_buffer", std::to_string(params_.microBuffer)},
+            {"sampling", sampling},
+            {"splat", params_.splat == 0 ? "adaptive" : std::to_string(params_.splat)},
+            {"fill", std::to_string(params_.fillPasses)}};
+  }
+
+  std::string setUp(SceneFrame& f) override {
+    const Scene& scene = f.scene();
+    albedo_ = scene.gi.mode == RadianceMode::Albedo;
+    bounces_ = std::max(scene.gi.maxBounces, 1);
+    gathers_ = !albedo_ || bounces_ >= 2;
+    // Empty texels that see the sky gather it occluded by the scan, on every lobe of the
+    // receiver's BSDF: direct light then leaves it off every receiver.
+    skyOwned_ = f.hasEnvironment() && gathers_;
+    if (skyOwned_) f.setSkyInDirectLight(false);
+    const int m = params_.microBuffer;
+    const std::vector<double> omega = projection::hemiOctTexelSolidAngles(m);
+    std::vector<float> omegaF(omega.begin(), omega.end());
+    solid_ = gl::Buffer(omegaF.size() * sizeof(float), omegaF.data(), 0);
+    const int samples = params_.clusters * (params_.randomPerCluster + params_.samplesPerCluster);
+    const std::vector<std::pair<std::string, std::string>> defines = {
+        {"PROJECTION_MB", std::to_string(m)},
+        {"PROJECTION_K", std::to_string(params_.clusters)},
+        {"PROJECTION_SAMPLES", std::to_string(std::max(samples, 1))}};
+    pointsProgram_ =
+        gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_points.comp"}});
+    lightProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_light.comp"}});
+    gather_ =
+        gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_gather.comp"}}, defines);
+    stats_ = gl::Buffer(32);
+    addPasses(f);
+    return "radiance_gi";
+  }
+
+  void beforeFrame(SceneFrame&) override {
+    const uint32_t zeros[8] = {};
+    stats_.upload(zeros, sizeof zeros);
+  }
+
+  void describe(const SceneFrame&, MethodFrame& f) const override {
+    uint32_t s[8] = {};
+    glGetNamedBufferSubData(stats_.id(), 0, sizeof s, s);
+    f.attributes["nestlight:projection_points"] = std::to_string(pointCount_);
+    f.attributes["nestlight:projection_levels"] = std::to_string(levelsTaken_);
+    f.attributes["nestlight:projection_stride"] = std::to_string(stride_);
+    f.attributes["nestlight:projection_clusters"] = std::to_string(clusterCount_);
+    f.attributes["nestlight:projection_points_ms"] = std::to_string(pointsMs_);
+    f.attributes["nestlight:projection_cluster_ms"] = std::to_string(clusterMs_);
+    f.attributes["nestlight:projection_receivers"] = std::to_string(s[0]);
+    f.attributes["nestlight:projection_unweighted"] = std::to_string(s[1]);
+    f.attributes["nestlight:projection_empty_texels"] = std::to_string(s[2]);
+    f.attributes["nestlight:projection_splats"] = std::to_string(s[3]);
+    f.attributes["nestlight:projection_filled_texels"] = std::to_string(s[4]);
+    const double texels = double(s[0]) * params_.microBuffer * params_.microBuffer;
+    f.attributes["nestlight:projection_coverage"] =
+        std::to_string(texels > 0 ? 1.0 - double(s[2]) / texels : 0.0);
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "; projection: %llu points (levels 0-%d, every %d-th of the next), %u clusters, "
+                  "%u receivers, %.1f%% of their texels covered",
+                  (unsigned long long)pointCount_, levelsTaken_ - 1, stride_, clusterCount_, s[0],
+                  texels > 0 ? 100.0 * (1.0 - double(s[2]) / texels) : 0.0);
+    f.summary += line;
+    if (clusterCount_ < uint32_t(params_.clusters) && pointCount_ > 0)
+      f.summary += "; fewer points than clusters: " + std::to_string(clusterCount_) + " clusters";
+    if (!gathers_) f.summary += "; albedo mode with max_bounces 1: direct light only";
+    if (s[1])
+      f.summary +=
+          "; " + std::to_string(s[1]) + " receivers saw no cluster's importance (uniform pdf)";
+  }
+
+ private:
+  void addPasses(SceneFrame& f) {
+    frame::FrameGraph& g = f.graph();
+    g.addBuffer("projection_points");
+    g.addPass(
+        "projection_points", frame::Scope::Frame,
+        [](frame::PassBuilder& b) { b.write("projection_points"); },
+        [this, &f](const frame::PassContext&) { gatherPoints(f); });
+    g.addBuffer("projection_clusters");
+    g.addPass(
+        "projection_cluster", frame::Scope::Frame,
+        [](frame::PassBuilder& b) {
+          b.read("projection_points");
+          b.write("projection_clusters");
+        },
+        [this](const frame::PassContext&) { cluster(); });
+    g.addBuffer("projection_radiance");
+    g.addPass(
+        "projection_light", frame::Scope::Frame,
+        [](frame::PassBuilder& b) {
+          b.read("shadow_maps");
+          b.read("projection_clusters");
+          b.write("projection_radiance");
+        },
+        [this, &f](const frame::PassContext& ctx) { light(f, ctx); });
+    g.addTarget("radiance_gi", {GL_RGBA32F});
+    g.addPass(
+        "projection_gather", frame::Scope::Tile,
+        [](frame::PassBuilder& b) {
+          for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
+            b.read(t);
+          b.read("projection_radiance");
+          b.write("radiance_gi");
+        },
+        [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
+  }
+
+  // S from the lights' cut (when it changed): whole levels from the root while they fit the
+  // budget, then every stride-th point of the next level; unsorted, read back for the clusters.
+  void gatherPoints(SceneFrame& f) {
+    if (f.cutGeneration() == generation_ && built_) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    generation_ = f.cutGeneration();
+    built_ = true;
+    rebuilt_ = true;
+    const std::vector<CutNode>& cut = f.lightsCut();
+    // Levels by spacing, coarsest first (scans of different spacing interleave by it).
+    std::map<float, uint64_t, std::greater<float>> perLevel;
+    for (const CutNode& c : cut) perLevel[c.spacing] += c.numPoints;
+    uint64_t taken = 0;
+    float finest = INFINITY, partial = -1;
+    stride_ = 1;
+    levelsTaken_ = 0;
+    for (const auto& [spacing, count] : perLevel) {
+      if (taken + count <= uint64_t(params_.points)) {
+        taken += count, finest = spacing, levelsTaken_++;
+        continue;
+      }
+      const uint64_t room = uint64_t(params_.points) - taken;
+      if (room > 0) {
+        stride_ = int((count + room - 1) / room);
+        partial = spacing;
+      }
+      break;
+    }
+    std::vector<size_t> nodes;
+    std::vector<uint32_t> kept, offset;
+    uint32_t total = 0;
+    for (size_t i = 0; i < cut.size(); ++i) {
+      const CutNode& c = cut[i];
+      uint32_t k = 0;
+      if (c.spacing >= finest)
+        k = c.numPoints;
+      else if (c.spacing == partial)
+        k = (c.numPoints + uint32_t(stride_) - 1) / uint32_t(stride_);
+      if (k == 0) continue;
+      nodes.push_back(i), kept.push_back(k), offset.push_back(total);
+      total += k;
+    }
+    pointCount_ = total;
+    unsorted_.reserve(std::max<size_t>(total, 1) * sizeof(ProjectionPoint));
+    unsorted_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_POINTS);
+    pointsProgram_.use();
+    for (size_t j = 0; j < nodes.size(); ++j) {
+      const CutNode& c = cut[nodes[j]];
+      glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, c.buffer, 0,
+                        GLsizeiptr(size_t(c.numPoints) * frame::kGpuPointBytes));
+      glUniform3f(pointsProgram_.uniform("uOrigin"), c.origin.x, c.origin.y, c.origin.z);
+      glUniform1ui(pointsProgram_.uniform("uStride"),
+                   c.spacing == partial ? uint32_t(stride_) : 1u);
+      glUniform1ui(pointsProgram_.uniform("uOffset"), offset[j]);
+      glUniform1ui(pointsProgram_.uniform("uKept"), kept[j]);
+      glUniform1f(pointsProgram_.uniform("uColourScale"), c.colourScale);
+      glUniform1i(pointsProgram_.uniform("uHdrColour"), c.hdrColour);
+      glDispatchCompute((kept[j] + 63) / 64, 1, 1);
+    }
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    host_.resize(total);
+    if (total)
+      glGetNamedBufferSubData(unsorted_.id(), 0, GLsizeiptr(total * sizeof(ProjectionPoint)),
+                              host_.data());
+    fallbackArea_ = std::isfinite(finest) ? finest * finest : (partial > 0 ? partial * partial : 0);
+    pointsMs_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  // The clusters of S and its points' areas; S uploaded cluster by cluster.
+  void cluster() {
+    if (!rebuilt_) return;
+    rebuilt_ = false;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<glm::vec3> position(host_.size());
+    for (size_t i = 0; i < host_.size(); ++i) position[i] = glm::vec3(host_[i].positionArea);
+    const std::vector<float> area = areasFromSpacing(position, fallbackArea_);
+    const projection::Clusters c = projection::buildClusters(position, uint32_t(params_.clusters));
+    clusterCount_ = c.count;
+    std::vector<ProjectionPoint> sorted(c.order.size());
+    for (size_t j = 0; j < c.order.size(); ++j) {
+      sorted[j] = host_[c.order[j]];
+      sorted[j].positionArea.w = area[c.order[j]];
+    }
+    // The shader takes K clusters: those the points could not fill are empty.
+    std::vector<uint32_t> first(size_t(params_.clusters) + 1, uint32_t(sorted.size()));
+    std::copy(c.first.begin(), c.first.end(), first.begin());
+    points_.reserve(std::max<size_t>(sorted.size(), 1) * sizeof(ProjectionPoint));
+    if (!sorted.empty()) points_.upload(sorted.data(), sorted.size() * sizeof(ProjectionPoint));
+    clusters_.reserve(first.size() * 4);
+    clusters_.upload(first.data(), first.size() * 4);
+    radiance_.reserve(std::max<size_t>(sorted.size(), 1) * 16);
+    sortedCount_ = uint32_t(sorted.size());
+    clusterMs_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  // Each point's radiance: its colour (radiance cache), or its direct light (albedo).
+  void light(SceneFrame& f, const frame::PassContext& ctx) {
+    if (sortedCount_ == 0) return;
+    const gl::Texture& maps = ctx.target("shadow_maps");
+    maps.setFilter(GL_LINEAR, GL_LINEAR);
+    maps.setDepthCompare(true);
+    glBindTextureUnit(4, maps.id());
+    f.bindSceneBuffers();
+    lightProgram_.use();
+    f.bindEnvironment(lightProgram_);
+    points_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_POINTS);
+    radiance_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_RADIANCE);
+    glUniform1ui(lightProgram_.uniform("uCount"), sortedCount_);
+    glUniform1i(lightProgram_.uniform("uAlbedo"), albedo_ ? 1 : 0);
+    glDispatchCompute((sortedCount_ + 63) / 64, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+
+  void gather(SceneFrame& f, const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    f.bindSceneBuffers();
+    ctx.bindTexture("depth", 0);
+    ctx.bindTexture("base_colour", 1);
+    ctx.bindTexture("normal", 2);
+    ctx.bindTexture("material", 3);
+    ctx.bindTexture("radiance", 4);
+    glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    if (points_.bytes() == 0) points_.reserve(sizeof(ProjectionPoint));
+    if (clusters_.bytes() == 0) {
+      std::vector<uint32_t> none(size_t(params_.clusters) + 1, 0u);
+      clusters_.reserve(none.size() * 4);
+      clusters_.upload(none.data(), none.size() * 4);
+    }
+    if (radiance_.bytes() == 0) radiance_.reserve(16);
+    points_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_POINTS);
+    clusters_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_CLUSTERS);
+    solid_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_SOLID);
+    radiance_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_RADIANCE);
+    stats_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_STATS);
+    gather_.use();
+    f.bindEnvironment(gather_);
+    glUniform1i(gather_.uniform("uRandomPerCluster"), params_.randomPerCluster);
+    glUniform1i(gather_.uniform("uSamplesPerCluster"), params_.samplesPerCluster);
+    glUniform1i(gather_.uniform("uSampling"), int(params_.sampling));
+    glUniform1i(gather_.uniform("uSplat"), params_.splat);
+    const glm::vec3 diag = f.boundsHi() - f.boundsLo();
+    glUniform1f(gather_.uniform("uMaxDistance"), std::max(glm::length(diag), 1e-6f));
+    glUniform1i(gather_.uniform("uSkyOwned"), skyOwned_ ? 1 : 0);
+    glUniform1i(gather_.uniform("uGathers"), gathers_ ? 1 : 0);
+    glUniform1ui(gather_.uniform("uSeed"), seed_);
+    glUniform1i(gather_.uniform("uFillPasses"), params_.fillPasses);
+    glDispatchCompute(GLuint(tile.width), GLuint(tile.height), 1);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
+                    GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+  }
+
+  ProjectionParameters params_;
+  uint32_t seed_ = 1;
+  bool albedo_ = false, gathers_ = true, skyOwned_ = false;
+  int bounces_ = 1;
+  gl::ShaderProgram pointsProgram_, lightProgram_, gather_;
+  gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_;
+  std::vector<ProjectionPoint> host_;
+  float fallbackArea_ = 0;
+  uint64_t generation_ = ~0ull;
+  bool built_ = false, rebuilt_ = false;
+  uint64_t pointCount_ = 0;
+  uint32_t sortedCount_ = 0, clusterCount_ = 0;
+  int levelsTaken_ = 0, stride_ = 1;
+  double pointsMs_ = 0, clusterMs_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Method> createProjectionMethod(const Scene& scene, const MethodContext& ctx) {
+  return createRasterMethod(scene, ctx, std::make_unique<ProjectionExtension>(scene));
+}
+
+}  // namespace nestlight::gi

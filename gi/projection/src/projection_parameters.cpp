@@ -1,0 +1,89 @@
+// `projection`'s declaration: its parameters and its entry in the registry.
+#include "nestlight/gi/frame/frame_parameters.h"
+#include "nestlight/gi/method_info.h"
+#include "nestlight/gi/projection/projection_method.h"
+#include "nestlight/octree/error.h"
+#include "nestlight/octree/json_field.h"
+
+namespace nestlight::gi {
+
+const ParameterSpecs& projectionParameterSpecs() {
+  using P = ParameterSpec;
+  static const ParameterSpecs specs = {
+      P::integer("points", 1, 1 << 22, 262144,
+                 "the point set S: the lights' cut thinned to at most this many points (whole "
+                 "levels from the root, then every k-th point of the next)"),
+      P::integer("clusters", 1, 512, 512,
+                 "clusters of S (equal counts, median splits), each given one importance")
+          .powersOfTwo(),
+      P::integer("random_per_cluster", 1, 8, 2,
+                 "random points per cluster and receiver: the cluster's importance (eq. 1), "
+                 "splatted too"),
+      P::integer("samples_per_cluster", 0, 8, 4,
+                 "importance samples per cluster on average: N_s = this x clusters, shared among "
+                 "the clusters by importance"),
+      P::integer("micro_buffer", 8, 32, 32,
+                 "texels per side of a receiver's hemi-octahedral micro-buffer"),
+      P::choice("sampling", {"importance", "random", "brute"}, "importance",
+                "importance (the paper), random (uniform over S) or brute (all of S: the "
+                "micro-buffer's reference)")
+          .asFlag(),
+      P::integer("splat", 1, 3, "adaptive",
+                 "splat side in texels: adaptive (the solid angle a sample stands for, eq. 3) or "
+                 "a fixed 1, 2 or 3")
+          .orOneOf({"adaptive"}),
+      P::integer("fill", 0, 4, 2,
+                 "passes closing holes between splats: an empty texel covered on two opposite "
+                 "sides takes its nearer neighbour's sample (0: the paper's micro-buffers)"),
+  };
+  return specs;
+}
+
+ProjectionParameters projectionParameters(const Scene& scene) {
+  const ResolvedParameters r = resolveParameterValues(scene, projectionParameterSpecs());
+  ProjectionParameters p;
+  p.points = int(r.integer("points"));
+  p.clusters = int(r.integer("clusters"));
+  p.randomPerCluster = int(r.integer("random_per_cluster"));
+  p.samplesPerCluster = int(r.integer("samples_per_cluster"));
+  p.microBuffer = int(r.integer("micro_buffer"));
+  const std::string s = r.string("sampling");
+  p.sampling = s == "random"  ? ProjectionParameters::Sampling::Random
+               : s == "brute" ? ProjectionParameters::Sampling::Brute
+                              : ProjectionParameters::Sampling::Importance;
+  const nlohmann::json& splat = r.value("splat");
+  p.splat = splat.is_string() ? 0 : int(splat.get<int64_t>());
+  p.fillPasses = int(r.integer("fill"));
+  // A receiver's samples are told apart by 12 bits of its depth words.
+  const int samples = p.clusters * (p.randomPerCluster + p.samplesPerCluster);
+  if (samples > 4096) {
+    const JsonField params(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+    std::string key = "clusters";
+    for (const char* k : {"samples_per_cluster", "random_per_cluster"})
+      if (params.value().contains(k)) key = k;
+    params.at(key).fail("clusters x (random_per_cluster + samples_per_cluster) is " +
+                        std::to_string(samples) +
+                        " samples per receiver; at most 4096 fit the micro-buffer's depth words");
+  }
+  return p;
+}
+
+MethodInfo projectionMethodInfo() {
+  MethodInfo m;
+  m.name = "projection";
+  m.summary = "real-time GI: importance-driven point projection into per-pixel micro-buffers (GL)";
+  m.gpu = true;
+  m.qualityName = "importance samples per cluster";
+  m.defaultQualities = {1, 2, 4};
+  m.applyQuality = [](GiSettings& g, int q) { setParameter(g, "samples_per_cluster", q); };
+  m.create = createProjectionMethod;
+  m.variants = {{"random", [](GiSettings& g) { g.parameters["sampling"] = "random"; }},
+                {"splat 1", [](GiSettings& g) { g.parameters["splat"] = 1; }},
+                {"splat 3", [](GiSettings& g) { g.parameters["splat"] = 3; }}};
+  m.parameters = rasterParameterSpecs();
+  m.parameters.insert(m.parameters.end(), projectionParameterSpecs().begin(),
+                      projectionParameterSpecs().end());
+  return m;
+}
+
+}  // namespace nestlight::gi

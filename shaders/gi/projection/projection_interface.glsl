@@ -1,0 +1,21 @@
+// The `projection` method's buffers (Maletz, Wang and Bowers, "Importance-Driven Point Projection
+// for GPU-based Final Gathering", 2011) as C++ writes them and GLSL reads them. Kept to the
+// preprocessor subset both share; include frame_interface.glsl first (NL_STRUCT).
+
+#define PROJECTION_SSBO_POINTS (NL_SSBO_METHOD0 + 0)    // ProjectionPoint[]: S, cluster by cluster
+#define PROJECTION_SSBO_CLUSTERS (NL_SSBO_METHOD0 + 1)  // uint[K + 1]: each cluster's first point
+#define PROJECTION_SSBO_SOLID (NL_SSBO_METHOD0 + 2)     // float[M x M]: the texels' solid angles
+#define PROJECTION_SSBO_RADIANCE (NL_SSBO_METHOD0 + 3)  // vec4[]: each point's outgoing radiance
+#define PROJECTION_SSBO_STATS (NL_SSBO_METHOD0 + 4)     // uint[8]: receivers, unweighted pdfs, empty texels, splats, filled texels
+
+// A receiver's samples are told apart in the micro-buffer's depth words by 12 bits.
+#define PROJECTION_MAX_SAMPLES 4096
+#define PROJECTION_NO_SAMPLE 0xffffffffu
+#define PROJECTION_BACK_FACING 0x80000000u  // a sample's flag: it shows the receiver its back
+
+// 32 bytes.
+NL_STRUCT(ProjectionPoint) {
+  vec4 positionArea;  // xyz scene-local position, w: the surface area it stands for (Delta A)
+  vec4 normalColour;  // x: its normal, octahedral word (0: none), yzw: its linear colour (the
+                      // radiance-cache mode's radiance, the albedo mode's albedo)
+};

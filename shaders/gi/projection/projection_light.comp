@@ -1,0 +1,44 @@
+// The albedo mode's radiance of the points of S (Maletz, Wang and Bowers 2011, section 4: direct
+// light at the scene points through the lights' shadow maps): Lambert reflectors of their colour
+// clamped to 1, as the raster frame's G-buffer treats scan points, lit by the scene's lights
+// through the frame's shadow maps and by the environment's unshadowed irradiance, as raster's
+// direct light lights diffuse lobes (pbgi_light.comp lights its hierarchies alike). In the
+// radiance-cache mode the colour is the radiance.
+layout(local_size_x = 64) in;
+#include "../../interface/frame_interface.glsl"
+#include "../common/gbuffer_in.glsl"
+#include "../common/environment.glsl"
+#include "../common/lights.glsl"
+#include "../../common/octahedral.glsl"
+#include "projection_interface.glsl"
+layout(std430, binding = PROJECTION_SSBO_POINTS) readonly buffer Points { ProjectionPoint points[]; };
+layout(std430, binding = PROJECTION_SSBO_RADIANCE) writeonly buffer Radiance { vec4 radiance[]; };
+uniform uint uCount;
+uniform bool uAlbedo;
+
+void main() {
+  uint i = gl_GlobalInvocationID.x;
+  if (i >= uCount) return;
+  ProjectionPoint P = points[i];
+  vec3 colour = P.normalColour.yzw;
+  if (!uAlbedo) {
+    radiance[i] = vec4(colour, 0.0);
+    return;
+  }
+  vec3 p = P.positionArea.xyz;
+  uint word = floatBitsToUint(P.normalColour.x);
+  bool hasNormal = word != 0u;
+  vec3 axis = hasNormal ? decodeNormal(word) : vec3(0.0);
+  float splat = sqrt(P.positionArea.w / kPi);
+  vec3 E = vec3(0.0);
+  for (int l = 0; l < frame.counts.x; ++l) {
+    LightSample s = sampleLight(l, p);
+    vec3 n = hasNormal ? axis : s.wi;
+    float c = dot(n, s.wi);
+    if (c < 0.0) n = -n, c = -c;  // scanned surfaces are lit from either side, as the G-buffer's
+    if (c <= 0.0) continue;
+    E += s.radiance * c * visibility(l, p, n, splat, s);
+  }
+  if (uHasEnvironment) E += hasNormal ? irradiance(axis) : max(uEnvSh[0], vec3(0.0));
+  radiance[i] = vec4(min(colour, vec3(1.0)) * kInvPi * E, 0.0);
+}
