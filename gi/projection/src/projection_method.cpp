@@ -95,7 +95,12 @@ class ProjectionExtension : public FrameExtension {
             {"micro_buffer", std::to_string(params_.microBuffer)},
             {"sampling", sampling},
             {"splat", params_.splat == 0 ? "adaptive" : std::to_string(params_.splat)},
-            {"fill", std::to_string(params_.fillPasses)}};
+            {"fill", std::to_string(params_.fillPasses)},
+            {"adaptive", params_.adaptive ? "true" : "false"},
+            {"grid", std::to_string(params_.grid)},
+            {"lambda", std::to_string(params_.lambda)},
+            {"epsilon", std::to_string(params_.epsilon)},
+            {"epsilon_level_factor", std::to_string(params_.epsilonLevelFactor)}};
   }
 
   std::string setUp(SceneFrame& f) override {
@@ -121,6 +126,13 @@ class ProjectionExtension : public FrameExtension {
     lightProgram_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_light.comp"}});
     gather_ =
         gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_gather.comp"}}, defines);
+    const std::vector<std::pair<std::string, std::string>> mb = {
+        {"PROJECTION_MB", std::to_string(m)}};
+    select_ = gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_select.comp"}}, mb);
+    upsample_ =
+        gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_upsample.comp"}}, mb);
+    compose_ =
+        gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_compose.comp"}}, mb);
     stats_ = gl::Buffer(32);
     addPasses(f);
     return "radiance_gi";
@@ -129,6 +141,7 @@ class ProjectionExtension : public FrameExtension {
   void beforeFrame(SceneFrame&) override {
     const uint32_t zeros[8] = {};
     stats_.upload(zeros, sizeof zeros);
+    std::fill(std::begin(gatheredPerLevel_), std::end(gatheredPerLevel_), 0);
   }
 
   void describe(const SceneFrame&, MethodFrame& f) const override {
@@ -145,15 +158,22 @@ class ProjectionExtension : public FrameExtension {
     f.attributes["nestlight:projection_empty_texels"] = std::to_string(s[2]);
     f.attributes["nestlight:projection_splats"] = std::to_string(s[3]);
     f.attributes["nestlight:projection_filled_texels"] = std::to_string(s[4]);
+    f.attributes["nestlight:projection_shaded_pixels"] = std::to_string(s[5]);
+    f.attributes["nestlight:projection_gathered_share"] =
+        std::to_string(s[5] ? double(s[0]) / double(s[5]) : 0.0);
+    std::string perLevel;
+    for (int l = 0; l < 8 && (l == 0 || gatheredPerLevel_[l]); ++l)
+      perLevel += (l ? "," : "") + std::to_string(gatheredPerLevel_[l]);
+    f.attributes["nestlight:projection_gathered_per_level"] = perLevel;
     const double texels = double(s[0]) * params_.microBuffer * params_.microBuffer;
     f.attributes["nestlight:projection_coverage"] =
         std::to_string(texels > 0 ? 1.0 - double(s[2]) / texels : 0.0);
     char line[256];
     std::snprintf(line, sizeof line,
                   "; projection: %llu points (levels 0-%d, every %d-th of the next), %u clusters, "
-                  "%u receivers, %.1f%% of their texels covered",
+                  "%u of %u receiver pixels gathered (%.1f%% of their texels covered)",
                   (unsigned long long)pointCount_, levelsTaken_ - 1, stride_, clusterCount_, s[0],
-                  texels > 0 ? 100.0 * (1.0 - double(s[2]) / texels) : 0.0);
+                  s[5], texels > 0 ? 100.0 * (1.0 - double(s[2]) / texels) : 0.0);
     f.summary += line;
     if (clusterCount_ < uint32_t(params_.clusters) && pointCount_ > 0)
       f.summary += "; fewer points than clusters: " + std::to_string(clusterCount_) + " clusters";
@@ -337,6 +357,13 @@ class ProjectionExtension : public FrameExtension {
     solid_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_SOLID);
     radiance_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_RADIANCE);
     stats_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_STATS);
+    const size_t pixels = size_t(tile.width) * size_t(tile.height);
+    pixels_.reserve(pixels * 32);
+    const float zero[4] = {0, 0, 0, 0};
+    glClearNamedBufferData(pixels_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, zero);
+    list_.reserve((4 + pixels) * 4);
+    pixels_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
+    list_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_LIST);
     gather_.use();
     f.bindEnvironment(gather_);
     glUniform1i(gather_.uniform("uRandomPerCluster"), params_.randomPerCluster);
@@ -346,20 +373,56 @@ class ProjectionExtension : public FrameExtension {
     const glm::vec3 diag = f.boundsHi() - f.boundsLo();
     glUniform1f(gather_.uniform("uMaxDistance"), std::max(glm::length(diag), 1e-6f));
     glUniform1i(gather_.uniform("uSkyOwned"), skyOwned_ ? 1 : 0);
-    glUniform1i(gather_.uniform("uGathers"), gathers_ ? 1 : 0);
     glUniform1ui(gather_.uniform("uSeed"), seed_);
     glUniform1i(gather_.uniform("uFillPasses"), params_.fillPasses);
-    glDispatchCompute(GLuint(tile.width), GLuint(tile.height), 1);
+    // The levels: the grid, then every halving of its step down to single pixels (without
+    // adaptive sampling, one level of single pixels: every receiver).
+    std::vector<int> steps;
+    for (int s = params_.adaptive ? params_.grid : 1; s >= 1; s /= 2) steps.push_back(s);
+    for (size_t level = 0; level < steps.size(); ++level) {
+      const uint32_t zeros[4] = {0, 0, 0, 0};
+      list_.upload(zeros, sizeof zeros);
+      select_.use();
+      glUniform1i(select_.uniform("uStep"), steps[level]);
+      glUniform1i(select_.uniform("uFirstLevel"), level == 0 ? 1 : 0);
+      glUniform1f(select_.uniform("uEpsilon"),
+                  params_.epsilon * std::pow(params_.epsilonLevelFactor, float(level) - 1.0f));
+      glUniform1f(select_.uniform("uLambda"), params_.lambda);
+      glUniform1f(select_.uniform("uHalfDiagonal"), std::max(0.5f * glm::length(diag), 1e-6f));
+      glUniform1i(select_.uniform("uGathers"), gathers_ ? 1 : 0);
+      glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+      uint32_t count = 0;
+      glGetNamedBufferSubData(list_.id(), 0, 4, &count);
+      gatheredPerLevel_[std::min<size_t>(level, 7)] += count;
+      if (count > 0) {
+        gather_.use();
+        const uint32_t row = std::min<uint32_t>(count, 65535u);
+        glUniform1ui(gather_.uniform("uRowItems"), row);
+        glDispatchCompute(row, (count + row - 1) / row, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      }
+      if (level > 0) {
+        upsample_.use();
+        glUniform1i(upsample_.uniform("uStep"), steps[level]);
+        glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      }
+    }
+    compose_.use();
+    glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
-                    GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+                    GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
+                    GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
   }
 
   ProjectionParameters params_;
   uint32_t seed_ = 1;
   bool albedo_ = false, gathers_ = true, skyOwned_ = false;
   int bounces_ = 1;
-  gl::ShaderProgram pointsProgram_, lightProgram_, gather_;
-  gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_;
+  gl::ShaderProgram pointsProgram_, lightProgram_, gather_, select_, upsample_, compose_;
+  gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_;
+  uint64_t gatheredPerLevel_[8] = {};
   std::vector<ProjectionPoint> host_;
   float fallbackArea_ = 0;
   uint64_t generation_ = ~0ull;

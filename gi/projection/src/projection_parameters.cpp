@@ -35,6 +35,16 @@ const ParameterSpecs& projectionParameterSpecs() {
       P::integer("fill", 0, 4, 2,
                  "passes closing holes between splats: an empty texel covered on two opposite "
                  "sides takes its nearer neighbour's sample (0: the paper's micro-buffers)"),
+      P::boolean("adaptive", true,
+                 "image-space adaptive sampling: gather a grid, then where the coherence metric "
+                 "says so, upsampling the rest (false: every receiver pixel gathers)"),
+      P::integer("grid", 1, 16, 4, "the first level's grid step in pixels").powersOfTwo(),
+      P::number("lambda", 0, 1e6, 8, "the metric's weight of radiance changes against geometry"),
+      P::number("epsilon", 0, 1e6, 0.3,
+                "the metric's threshold: a pixel gathers where the metric reaches it (0: every "
+                "pixel)"),
+      P::number("epsilon_level_factor", 1e-3, 1e3, 2,
+                "epsilon's factor per level below the first (the paper: \"scaled by 2\")"),
   };
   return specs;
 }
@@ -54,6 +64,11 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   const nlohmann::json& splat = r.value("splat");
   p.splat = splat.is_string() ? 0 : int(splat.get<int64_t>());
   p.fillPasses = int(r.integer("fill"));
+  p.adaptive = r.boolean("adaptive");
+  p.grid = int(r.integer("grid"));
+  p.lambda = float(r.number("lambda"));
+  p.epsilon = float(r.number("epsilon"));
+  p.epsilonLevelFactor = float(r.number("epsilon_level_factor"));
   // A receiver's samples are told apart by 12 bits of its depth words.
   const int samples = p.clusters * (p.randomPerCluster + p.samplesPerCluster);
   if (samples > 4096) {

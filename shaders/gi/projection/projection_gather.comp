@@ -1,6 +1,7 @@
 // Final gathering by importance-driven point projection (Maletz, Wang and Bowers, "Importance-
 // Driven Point Projection for GPU-based Final Gathering", 2011, sections 3.2 and 4): one
-// workgroup per receiver pixel, its invocations sharing the clusters. Per cluster, N_rnd random
+// workgroup per listed pixel (projection_select.comp's list), its invocations sharing the
+// clusters; it writes the pixel's irradiance and the rest of its BSDF's light apart. Per cluster, N_rnd random
 // points give the cluster's importance (eq. 1: the projected solid angle, |cos| at the source, so
 // that back-facing points, which still shadow, count) and are splatted; the importances, taken as
 // a pdf, share N_s = samples_per_cluster x K importance samples among the clusters (allocateSamples,
@@ -16,6 +17,8 @@
 layout(local_size_x = 64) in;
 #include "projection_common.glsl"
 #include "projection_map.glsl"
+#include "projection_upsample_weights.glsl"
+layout(std430, binding = PROJECTION_SSBO_LIST) readonly buffer List { uint list[]; };
 
 #ifndef PROJECTION_K
 #define PROJECTION_K 512  // clusters: the method compiles with its own; this is for validators
@@ -38,8 +41,8 @@ uniform int uSplat;              // 0 adaptive (eq. 3), else a fixed square of t
 uniform float uMaxDistance;      // the depth words' range: the scene's diagonal
 uniform bool uSkyOwned;          // empty texels are the environment
 uniform uint uSeed;
-uniform bool uGathers;
-uniform int uFillPasses;         // hole-filling passes over the micro-buffer           // false: the albedo mode with one bounce (direct light only)
+uniform int uFillPasses;         // hole-filling passes over the micro-buffer
+uniform uint uRowItems;          // list entries per row of workgroups (the dispatch's x size)
 
 shared uint sKey[M * M];
 shared uint sSample[PROJECTION_SAMPLES];
@@ -49,7 +52,7 @@ shared int sCount[PROJECTION_K];
 shared int sBase[PROJECTION_K];
 shared float sTotal;
 shared bool sWeighted;
-shared vec3 sSum[64];
+shared vec3 sSum[64], sRest[64];
 
 float allocateWeight(int k) { return sWeight[k]; }
 void allocateStore(int k, int n) { sCount[k] = n; }
@@ -171,14 +174,11 @@ void splat(uint index, uint slot, float area) {
 }
 
 void main() {
-  ivec2 px = ivec2(gl_WorkGroupID.xy);
+  uint item = gl_WorkGroupID.y * uRowItems + gl_WorkGroupID.x;
   uint lid = gl_LocalInvocationID.x;
-  if (px.x >= int(frame.tile.z) || px.y >= int(frame.tile.w)) return;
-  vec4 direct = texelFetch(uDirect, px, 0);
-  if (!uGathers || !isReceiver(px)) {
-    if (lid == 0u) imageStore(uOut, px, direct);
-    return;
-  }
+  if (item >= list[0]) return;
+  uint word = list[4u + item];
+  ivec2 px = ivec2(int(word & 0xffffu), int(word >> 16));
   gR = receiverAt(px);
   mat3 f = frameFromNormal(gR.n);  // columns: tangent, bitangent, normal
   gLocalFromWorld = transpose(mat3(f[0], f[2], f[1]));
@@ -276,7 +276,8 @@ void main() {
   mat3 worldFromMap = transpose(gLocalFromWorld);
   mat3 shadeFrame = frameFromNormal(gR.n);
   vec3 woLocal = transpose(shadeFrame) * gR.wo;
-  vec3 sum = vec3(0.0);
+  vec3 sum = vec3(0.0), rest = vec3(0.0);
+  vec3 lambert = diffuseAlbedo(gR.mat) * kInvPi;
   uint empty = 0u;
   for (uint t = lid; t < uint(M * M); t += 64u) {
     ivec2 c = ivec2(int(t) % M, int(t) / M);
@@ -292,16 +293,23 @@ void main() {
     }
     vec3 wiLocal = transpose(shadeFrame) * w;
     if (wiLocal.z <= 0.0) continue;
-    sum += L * evalBsdf(gR.mat, woLocal, wiLocal) * wiLocal.z * texelSolidAngle[t];
+    // Irradiance (the diffuse lobe's, re-applied with each pixel's own albedo after
+    // interpolation) and the rest of the BSDF's light apart.
+    vec3 e = L * wiLocal.z * texelSolidAngle[t];
+    sum += e;
+    rest += e * (evalBsdf(gR.mat, woLocal, wiLocal) - lambert);
   }
   sSum[lid] = sum;
+  sRest[lid] = rest;
   if (empty > 0u) atomicAdd(stats[2], empty);
   if (filled > 0u) atomicAdd(stats[4], filled);
   barrier();
   if (lid == 0u) {
-    vec3 s = vec3(0.0);
-    for (int i = 0; i < 64; ++i) s += sSum[i];
+    vec3 e = vec3(0.0), r = vec3(0.0);
+    for (int i = 0; i < 64; ++i) e += sSum[i], r += sRest[i];
     atomicAdd(stats[0], 1u);
-    imageStore(uOut, px, vec4(direct.rgb + s, direct.a));
+    uint i = uint(px.y * int(frame.tile.z) + px.x);
+    pixels[2u * i] = vec4(e, PROJECTION_GATHERED);
+    pixels[2u * i + 1u] = vec4(r, 0.0);
   }
 }

@@ -6,6 +6,8 @@
 #define PROJECTION_SSBO_CLUSTERS (NL_SSBO_METHOD0 + 1)  // uint[K + 1]: each cluster's first point
 #define PROJECTION_SSBO_SOLID (NL_SSBO_METHOD0 + 2)     // float[M x M]: the texels' solid angles
 #define PROJECTION_SSBO_RADIANCE (NL_SSBO_METHOD0 + 3)  // vec4[]: each point's outgoing radiance
+#define PROJECTION_SSBO_PIXELS (NL_SSBO_METHOD0 + 5)    // vec4[2 per tile pixel]: (E, state), (glossy rest, level)
+#define PROJECTION_SSBO_LIST (NL_SSBO_METHOD0 + 6)      // uint[]: [0] pixels to gather, then each pixel (x | y << 16)
 #define PROJECTION_SSBO_STATS (NL_SSBO_METHOD0 + 4)     // uint[8]: receivers, unweighted pdfs, empty texels, splats, filled texels
 
 // A receiver's samples are told apart in the micro-buffer's depth words by 12 bits.
@@ -19,3 +21,8 @@ NL_STRUCT(ProjectionPoint) {
   vec4 normalColour;  // x: its normal, octahedral word (0: none), yzw: its linear colour (the
                       // radiance-cache mode's radiance, the albedo mode's albedo)
 };
+
+// A tile pixel's state in the adaptive sampling (PROJECTION_SSBO_PIXELS, first vec4's w).
+#define PROJECTION_UNSET 0.0         // not reached yet, or no receiver
+#define PROJECTION_GATHERED 1.0      // its micro-buffer was gathered
+#define PROJECTION_INTERPOLATED 2.0  // upsampled from the corners of its cell

@@ -100,6 +100,64 @@ TEST(Projection, SameSeedSameImageAndFewPoints) {
   EXPECT_NE(f.summary.find("fewer points than clusters"), std::string::npos) << f.summary;
 }
 
+// Adaptive sampling on a flat face of constant light gathers only the first level's grid (the
+// 32 x 32 image's pixels at multiples of 4 and its last row and column: 9 x 9), and still reads
+// the furnace within 2%; epsilon 0 gathers every pixel and gives the image of no adaptive
+// sampling bit for bit (each pixel's random numbers are its own).
+TEST(ProjectionAdaptive, FlatFaceGathersTheGridAndEpsilonZeroEveryPixel) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 30000, 2.0f, 150);
+  const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
+  Scene s = boxInSphereScene(t, rho, "projection", {{"clusters", 64}});
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  EXPECT_EQ(f.attributes.at("nestlight:projection_receivers"), "81") << f.summary;
+  EXPECT_EQ(f.attributes.at("nestlight:projection_shaded_pixels"), "1024");
+  EXPECT_NEAR(boxMean(f.image) / (rho * L), 1.0, 0.02);
+
+  Scene all = boxInSphereScene(t, rho, "projection", {{"clusters", 64}, {"epsilon", 0}});
+  MethodFrame a = createMethod(all, {true, false})->render(all.camera);
+  EXPECT_EQ(a.attributes.at("nestlight:projection_receivers"), "1024");
+  Scene none = boxInSphereScene(t, rho, "projection", {{"clusters", 64}, {"adaptive", false}});
+  MethodFrame b = createMethod(none, {true, false})->render(none.camera);
+  EXPECT_EQ(b.attributes.at("nestlight:projection_receivers"), "1024");
+  EXPECT_EQ(a.image.rgb, b.image.rgb);
+}
+
+// A crease between two faces of different light: under the upper half of the sphere of emitters
+// the box's top face reflects rho L and its side face about rho L / 2 (up to 0.61 rho L near its
+// top edge, 0.2 m above the emitters' rim, which it sees below its horizon). Seen from above and
+// aside, every pixel of the crease's two sides is gathered or interpolated from its own face
+// only: none reads in between (a weight across the crease would mix the faces to about 0.75).
+TEST(ProjectionAdaptive, CreaseIsGatheredAndNoWeightCrossesIt) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 30000, 2.0f, 150, 0.0f);
+  const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
+  Scene s = boxInSphereScene(t, rho, "projection", {{"clusters", 64}});
+  s.camera.eye = glm::dvec3(-0.9, 0.1, 0.7);
+  s.camera.target = glm::dvec3(-0.2, 0.0, 0.2);
+  s.camera.fovYDegrees = 40;
+  s.camera.width = s.camera.height = 48;
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  int top = 0, side = 0, between = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) {
+      const double r = f.image.get(x, y).r / (rho * L);
+      if (r < 0.3) continue;  // the scan behind, not a receiver
+      if (r > 0.88)
+        top++;
+      else if (r < 0.66)
+        side++;
+      else
+        between++;
+    }
+  std::printf("crease: %d top, %d side, %d between; %s\n", top, side, between, f.summary.c_str());
+  EXPECT_GT(top, 100);
+  EXPECT_GT(side, 100);
+  EXPECT_EQ(between, 0);
+  EXPECT_LT(std::stoi(f.attributes.at("nestlight:projection_receivers")),
+            std::stoi(f.attributes.at("nestlight:projection_shaded_pixels")) / 2);
+}
+
 // Bad values name the field.
 TEST(Projection, ErrorsNameTheField) {
   nestlight::test::TempDir t;

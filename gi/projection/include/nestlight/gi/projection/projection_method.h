@@ -30,6 +30,14 @@ struct ProjectionParameters {
   enum class Sampling { Importance, Random, Brute } sampling = Sampling::Importance;
   int splat = 0;       // 0: adaptive (eq. 3), else a fixed square of 1, 2 or 3 texels per side
   int fillPasses = 2;  // passes closing holes between splats (0: the paper's micro-buffers)
+  // Image-space adaptive sampling (section 3.3): gather the grid (step `grid`), then per finer
+  // level the pixels whose coherence metric over their cell's corners reaches epsilon (times
+  // epsilonLevelFactor per level below the first), the others upsampled from the corners.
+  bool adaptive = true;
+  int grid = 4;
+  float lambda = 8.0f;
+  float epsilon = 0.3f;
+  float epsilonLevelFactor = 2.0f;
 };
 
 const ParameterSpecs& projectionParameterSpecs();

@@ -1,0 +1,82 @@
+// The adaptive sampling's cells (Maletz, Wang and Bowers 2011, section 3.3): a pixel on a
+// level's grid and the corners of its cell on the coarser grid, with their joint bilateral
+// weights (Kopf, Cohen, Lischinski and Uyttendaele, "Joint Bilateral Upsampling", 2007: the
+// bilinear weight times the guide's similarity: normals, and the corner's distance from the
+// pixel's tangent plane, which is 0 across a tilted plane and large across a depth edge) and
+// tone-mapped outgoing radiance. Include after projection_common.glsl.
+layout(std430, binding = PROJECTION_SSBO_PIXELS) buffer Pixels { vec4 pixels[]; };
+uniform bool uGathers;
+
+vec3 positionAt(ivec2 px) {
+  float depth = texelFetch(uDepth, px, 0).r;
+  vec2 ndc = ((vec2(px) + 0.5) / frame.tile.zw) * 2.0 - 1.0;
+  vec4 wp = frame.worldFromClip * vec4(ndc, depth * 2.0 - 1.0, 1.0);
+  return wp.xyz / wp.w;
+}
+
+vec3 normalAt(ivec2 px) {
+  vec4 nn = texelFetch(uNormal, px, 0);
+  vec3 wo = normalize(frame.eye.xyz - positionAt(px));
+  vec3 n = nn.w > 0.0 ? normalize(nn.xyz) : wo;
+  return dot(n, wo) < 0.0 ? -n : n;
+}
+
+// On the grid of step `step` (the tile's last row and column are on every grid, so that every
+// pixel has corners on both sides).
+bool onGrid(ivec2 px, int step, ivec2 size) {
+  return (px.x % step == 0 || px.x == size.x - 1) && (px.y % step == 0 || px.y == size.y - 1);
+}
+
+// A pixel's outgoing radiance from its gathered (or interpolated) light: direct light plus its
+// diffuse albedo times the irradiance over pi plus the glossy rest.
+vec3 outgoingAt(ivec2 px, ivec2 size) {
+  uint i = uint(px.y * size.x + px.x);
+  vec3 emission;
+  MaterialParams m = gbufferMaterial(texelFetch(uBaseColour, px, 0).rgb, texelFetch(uMaterial, px, 0), emission);
+  return texelFetch(uDirect, px, 0).rgb + diffuseAlbedo(m) * kInvPi * pixels[2u * i].rgb + pixels[2u * i + 1u].rgb;
+}
+
+struct Corners {
+  ivec2 at[4];
+  float weight[4];      // joint bilateral weights, normalised (all 0: no corner is like the pixel)
+  float weightSum;      // before normalising
+  float toneMapped[4];  // L_o's luminance, l / (1 + l)
+};
+
+// The coarser grid's cell around px (step 2 x `step`): its corners, clamped to the tile.
+Corners cornersOf(ivec2 px, int step, ivec2 size) {
+  int s2 = 2 * step;
+  ivec2 lo = (px / s2) * s2;
+  ivec2 hi = min(lo + s2, size - 1);
+  if (px.x % s2 == 0 || hi.x == px.x) hi.x = lo.x;
+  if (px.y % s2 == 0 || hi.y == px.y) hi.y = lo.y;
+  vec2 t = vec2(hi.x > lo.x ? float(px.x - lo.x) / float(hi.x - lo.x) : 0.0,
+                hi.y > lo.y ? float(px.y - lo.y) / float(hi.y - lo.y) : 0.0);
+  Corners c;
+  c.at[0] = lo, c.at[1] = ivec2(hi.x, lo.y), c.at[2] = ivec2(lo.x, hi.y), c.at[3] = hi;
+  float bilinear[4] = float[4]((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
+  vec3 pc = positionAt(px), nc = normalAt(px);
+  float footprint = 0.02 * max(length(pc - frame.eye.xyz), 1e-6);
+  c.weightSum = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    ivec2 q = c.at[k];
+    uint i = uint(q.y * size.x + q.x);
+    float w = 0.0;
+    c.toneMapped[k] = 0.0;
+    if (pixels[2u * i].w != PROJECTION_UNSET && texelFetch(uDepth, q, 0).r < 1.0) {
+      vec3 nq = normalAt(q);
+      float plane = abs(dot(positionAt(q) - pc, nc));
+      w = bilinear[k] * pow(max(dot(nq, nc), 0.0), 8.0) * max(1.0 - plane / footprint, 0.0);
+      float l = luminance(outgoingAt(q, size));
+      c.toneMapped[k] = l / (1.0 + l);
+    }
+    // A corner at the pixel's own bilinear weight 0 still speaks for it when it is the only one.
+    c.weight[k] = w;
+    c.weightSum += w;
+  }
+  // Corners the bilinear weights leave out (the pixel on the cell's edge) but that are alike
+  // count through the others; a pixel on a corner's row takes only that row's corners.
+  if (c.weightSum > 0.0)
+    for (int k = 0; k < 4; ++k) c.weight[k] /= c.weightSum;
+  return c;
+}
