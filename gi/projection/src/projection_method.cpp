@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -15,8 +16,11 @@
 #include <nanoflann.hpp>
 
 #include "nestlight/frame/frame_graph.h"
+#include "nestlight/frame/gl_node_store.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/gi/frame/scene_frame.h"
+#include "nestlight/gi/material.h"
+#include "nestlight/gi/mesh.h"
 #include "nestlight/gi/projection/clusters.h"
 #include "nestlight/gi/projection/hemi_octahedral.h"
 #include "nestlight/gl/program.h"
@@ -27,13 +31,14 @@ namespace nestlight::gi {
 
 namespace glsl {
 using vec4 = glm::vec4;
+using uvec4 = glm::uvec4;
 #include "gi/projection/projection_interface.glsl"
 }  // namespace glsl
 
 namespace {
 
 using ProjectionPoint = glsl::ProjectionPoint;
-static_assert(sizeof(ProjectionPoint) == 32, "ProjectionPoint must keep std430's layout");
+static_assert(sizeof(ProjectionPoint) == 48, "ProjectionPoint must keep std430's layout");
 
 // Each point's area from its neighbours' spacing (a Poisson process of density rho has
 // E[pi d_k^2] = k / rho for the distance d_k to its k-th neighbour): S is the union of whole
@@ -134,6 +139,7 @@ class ProjectionExtension : public FrameExtension {
     compose_ =
         gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_compose.comp"}}, mb);
     stats_ = gl::Buffer(32);
+    sampleMeshSurfels(f);
     addPasses(f);
     return "radiance_gi";
   }
@@ -148,6 +154,7 @@ class ProjectionExtension : public FrameExtension {
     uint32_t s[8] = {};
     glGetNamedBufferSubData(stats_.id(), 0, sizeof s, s);
     f.attributes["nestlight:projection_points"] = std::to_string(pointCount_);
+    f.attributes["nestlight:projection_mesh_surfels"] = std::to_string(surfels_.size());
     f.attributes["nestlight:projection_levels"] = std::to_string(levelsTaken_);
     f.attributes["nestlight:projection_stride"] = std::to_string(stride_);
     f.attributes["nestlight:projection_clusters"] = std::to_string(clusterCount_);
@@ -220,6 +227,35 @@ class ProjectionExtension : public FrameExtension {
         [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
   }
 
+  // The meshes' surfels join S (paper section 3.1: the scene's surfaces sampled by Poisson disks,
+  // each point its area): they occlude, reflect the lights and emit. Their albedo is the
+  // material's directional albedo (as pbgi's surfels), their radiance lit each frame.
+  void sampleMeshSurfels(SceneFrame& f) {
+    const Scene& scene = f.scene();
+    const std::vector<TriangleMesh>& meshes = f.meshes();
+    for (size_t i = 0; i < scene.meshes.size() && i < meshes.size(); ++i) {
+      const SceneMesh& m = scene.meshes[i];
+      SurfelOptions o;
+      o.method = m.surfelMethod;
+      o.count = m.surfelCount;
+      o.material = m.material;
+      o.baseColor = Rgb(1.0f);
+      const Surfels sf = sampleSurfels(meshes[i], scene.localFromObject(m), o);
+      const Material& mat = scene.materials.at(m.material);
+      const Rgb rho =
+          glm::clamp(directionalAlbedo(mat, glm::vec3(0, 0, 1), 4096), Rgb(0.0f), Rgb(1.0f));
+      for (size_t k = 0; k < sf.positions.size(); ++k) {
+        ProjectionPoint p;
+        p.positionArea = glm::vec4(sf.positions[k], sf.area[k]);
+        const glm::vec3 n = sf.normals[k];
+        p.normalColour = glm::vec4(std::bit_cast<float>(frame::packNormal(n.x, n.y, n.z)),
+                                   glm::vec3(sf.albedo[k]) * glm::vec3(rho));
+        p.source = glm::uvec4(m.material + 1, 0, 0, 0);
+        surfels_.push_back(p);
+      }
+    }
+  }
+
   // S from the lights' cut (when it changed): whole levels from the root while they fit the
   // budget, then every stride-th point of the next level; unsorted, read back for the clusters.
   void gatherPoints(SceneFrame& f) {
@@ -284,6 +320,9 @@ class ProjectionExtension : public FrameExtension {
     if (total)
       glGetNamedBufferSubData(unsorted_.id(), 0, GLsizeiptr(total * sizeof(ProjectionPoint)),
                               host_.data());
+    scanPoints_ = total;
+    host_.insert(host_.end(), surfels_.begin(), surfels_.end());
+    pointCount_ = host_.size();
     fallbackArea_ = std::isfinite(finest) ? finest * finest : (partial > 0 ? partial * partial : 0);
     pointsMs_ =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -296,7 +335,12 @@ class ProjectionExtension : public FrameExtension {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<glm::vec3> position(host_.size());
     for (size_t i = 0; i < host_.size(); ++i) position[i] = glm::vec3(host_[i].positionArea);
-    const std::vector<float> area = areasFromSpacing(position, fallbackArea_);
+    // The scan's points' areas from their neighbours among the scan's points; the surfels have
+    // theirs.
+    std::vector<float> area = areasFromSpacing(
+        std::vector<glm::vec3>(position.begin(), position.begin() + std::ptrdiff_t(scanPoints_)),
+        fallbackArea_);
+    for (size_t i = scanPoints_; i < host_.size(); ++i) area.push_back(host_[i].positionArea.w);
     const projection::Clusters c = projection::buildClusters(position, uint32_t(params_.clusters));
     clusterCount_ = c.count;
     std::vector<ProjectionPoint> sorted(c.order.size());
@@ -423,7 +467,8 @@ class ProjectionExtension : public FrameExtension {
   gl::ShaderProgram pointsProgram_, lightProgram_, gather_, select_, upsample_, compose_;
   gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_;
   uint64_t gatheredPerLevel_[8] = {};
-  std::vector<ProjectionPoint> host_;
+  std::vector<ProjectionPoint> host_, surfels_;
+  size_t scanPoints_ = 0;
   float fallbackArea_ = 0;
   uint64_t generation_ = ~0ull;
   bool built_ = false, rebuilt_ = false;

@@ -15,11 +15,13 @@
 #define PROJECTION_NO_SAMPLE 0xffffffffu
 #define PROJECTION_BACK_FACING 0x80000000u  // a sample's flag: it shows the receiver its back
 
-// 32 bytes.
+// 48 bytes.
 NL_STRUCT(ProjectionPoint) {
   vec4 positionArea;  // xyz scene-local position, w: the surface area it stands for (Delta A)
-  vec4 normalColour;  // x: its normal, octahedral word (0: none), yzw: its linear colour (the
-                      // radiance-cache mode's radiance, the albedo mode's albedo)
+  vec4 normalColour;  // x: its normal, octahedral word (0: none), yzw: its linear colour (a scan
+                      // point: the radiance-cache mode's radiance, the albedo mode's albedo; a
+                      // mesh's surfel: its albedo)
+  uvec4 source;       // x: 0 a scan point, else a mesh's surfel: its material + 1; yzw: unused
 };
 
 // A tile pixel's state in the adaptive sampling (PROJECTION_SSBO_PIXELS, first vec4's w).

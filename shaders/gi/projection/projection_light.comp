@@ -3,7 +3,9 @@
 // clamped to 1, as the raster frame's G-buffer treats scan points, lit by the scene's lights
 // through the frame's shadow maps and by the environment's unshadowed irradiance, as raster's
 // direct light lights diffuse lobes (pbgi_light.comp lights its hierarchies alike). In the
-// radiance-cache mode the colour is the radiance.
+// radiance-cache mode a scan point's colour is its radiance; the meshes' surfels are lit in both
+// modes (from the front only, their albedo the material's directional albedo) and add their
+// material's emission.
 layout(local_size_x = 64) in;
 #include "../../interface/frame_interface.glsl"
 #include "../common/gbuffer_in.glsl"
@@ -21,7 +23,8 @@ void main() {
   if (i >= uCount) return;
   ProjectionPoint P = points[i];
   vec3 colour = P.normalColour.yzw;
-  if (!uAlbedo) {
+  bool mesh = P.source.x != 0u;
+  if (!uAlbedo && !mesh) {
     radiance[i] = vec4(colour, 0.0);
     return;
   }
@@ -35,10 +38,13 @@ void main() {
     LightSample s = sampleLight(l, p);
     vec3 n = hasNormal ? axis : s.wi;
     float c = dot(n, s.wi);
-    if (c < 0.0) n = -n, c = -c;  // scanned surfaces are lit from either side, as the G-buffer's
+    if (c < 0.0 && mesh) continue;  // a mesh's surfel is lit from the front only
+    if (c < 0.0) n = -n, c = -c;    // scanned surfaces are lit from either side, as the G-buffer's
     if (c <= 0.0) continue;
     E += s.radiance * c * visibility(l, p, n, splat, s);
   }
   if (uHasEnvironment) E += hasNormal ? irradiance(axis) : max(uEnvSh[0], vec3(0.0));
-  radiance[i] = vec4(min(colour, vec3(1.0)) * kInvPi * E, 0.0);
+  radiance[i] = vec4(min(colour, vec3(1.0)) * kInvPi * E +
+                        (mesh ? materials[P.source.x - 1u].emission.rgb : vec3(0.0)),
+                    0.0);
 }

@@ -19,5 +19,6 @@ void main() {
   ProjectionPoint p;
   p.positionArea = vec4(uOrigin + pointLocal(i), 0.0);
   p.normalColour = vec4(uintBitsToFloat(pointNormalWord(i)), pointLinearColour(i) * uColourScale);
+  p.source = uvec4(0u);
   points[uOffset + j] = p;
 }
