@@ -11,6 +11,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <nanoflann.hpp>
@@ -105,7 +106,8 @@ class ProjectionExtension : public FrameExtension {
             {"grid", std::to_string(params_.grid)},
             {"lambda", std::to_string(params_.lambda)},
             {"epsilon", std::to_string(params_.epsilon)},
-            {"epsilon_level_factor", std::to_string(params_.epsilonLevelFactor)}};
+            {"epsilon_level_factor", std::to_string(params_.epsilonLevelFactor)},
+            {"post_filter", params_.postFilter < 0 ? "auto" : std::to_string(params_.postFilter)}};
   }
 
   std::string setUp(SceneFrame& f) override {
@@ -138,8 +140,28 @@ class ProjectionExtension : public FrameExtension {
         gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_upsample.comp"}}, mb);
     compose_ =
         gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_compose.comp"}}, mb);
+    if (params_.postFilter != 0)
+      filter_ =
+          gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_filter.comp"}}, mb);
     stats_ = gl::Buffer(32);
     sampleMeshSurfels(f);
+    // The paper estimates importance from a few points per cluster, which suits BRDFs up to Phong
+    // exponent 50 (GGX roughness 0.44: n = 2 / alpha^2 - 2, alpha = roughness^2); sharper
+    // lobes alias.
+    std::vector<bool> seen(scene.materials.size(), false);
+    for (const SceneMesh& m : scene.meshes) {
+      if (m.material >= seen.size() || seen[m.material]) continue;
+      seen[m.material] = true;
+      const Material& mat = scene.materials[m.material];
+      if (mat.type != MaterialType::Lambert && mat.roughness < 0.44f)
+        warnings_.push_back("material \"" + mat.name + "\" has roughness " +
+                            std::to_string(mat.roughness) +
+                            ", glossier than the paper's Phong exponent 50 (roughness 0.44): its "
+                            "reflections of the scan may alias");
+    }
+    if (!f.quiet())
+      for (const std::string& w : warnings_)
+        std::fprintf(stderr, "projection: warning: %s\n", w.c_str());
     addPasses(f);
     return "radiance_gi";
   }
@@ -185,6 +207,7 @@ class ProjectionExtension : public FrameExtension {
     if (clusterCount_ < uint32_t(params_.clusters) && pointCount_ > 0)
       f.summary += "; fewer points than clusters: " + std::to_string(clusterCount_) + " clusters";
     if (!gathers_) f.summary += "; albedo mode with max_bounces 1: direct light only";
+    for (const std::string& w : warnings_) f.summary += "; warning: " + w;
     if (s[1])
       f.summary +=
           "; " + std::to_string(s[1]) + " receivers saw no cluster's importance (uniform pdf)";
@@ -453,6 +476,17 @@ class ProjectionExtension : public FrameExtension {
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
       }
     }
+    if (params_.postFilter != 0) {
+      filtered_.reserve(pixels * 32);
+      filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_FILTERED);
+      filter_.use();
+      const int r = params_.postFilter < 0 ? 3 : params_.postFilter / 2;
+      glUniform1i(filter_.uniform("uRadius"), r);
+      glUniform1i(filter_.uniform("uGlossyRadius"), params_.postFilter < 0 ? 1 : r);
+      glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
+    }
     compose_.use();
     glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
@@ -464,10 +498,11 @@ class ProjectionExtension : public FrameExtension {
   uint32_t seed_ = 1;
   bool albedo_ = false, gathers_ = true, skyOwned_ = false;
   int bounces_ = 1;
-  gl::ShaderProgram pointsProgram_, lightProgram_, gather_, select_, upsample_, compose_;
-  gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_;
+  gl::ShaderProgram pointsProgram_, lightProgram_, gather_, select_, upsample_, filter_, compose_;
+  gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_, filtered_;
   uint64_t gatheredPerLevel_[8] = {};
   std::vector<ProjectionPoint> host_, surfels_;
+  std::vector<std::string> warnings_;
   size_t scanPoints_ = 0;
   float fallbackArea_ = 0;
   uint64_t generation_ = ~0ull;

@@ -45,6 +45,10 @@ const ParameterSpecs& projectionParameterSpecs() {
                 "pixel)"),
       P::number("epsilon_level_factor", 1e-3, 1e3, 2,
                 "epsilon's factor per level below the first (the paper: \"scaled by 2\")"),
+      P::integer("post_filter", 0, 7, "auto",
+                 "the joint bilateral post filter's window: auto (7 x 7, 3 x 3 where glossy), 0 "
+                 "(none), 3 or 7")
+          .orOneOf({"auto"}),
   };
   return specs;
 }
@@ -69,6 +73,12 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   p.lambda = float(r.number("lambda"));
   p.epsilon = float(r.number("epsilon"));
   p.epsilonLevelFactor = float(r.number("epsilon_level_factor"));
+  const nlohmann::json& filter = r.value("post_filter");
+  p.postFilter = filter.is_string() ? -1 : int(filter.get<int64_t>());
+  if (p.postFilter != -1 && p.postFilter != 0 && p.postFilter != 3 && p.postFilter != 7) {
+    const JsonField params(scene.gi.parameters, "scene.gi.parameters", scene.file.string());
+    params.at("post_filter").fail("expected auto, 0, 3 or 7, got " + std::to_string(p.postFilter));
+  }
   // A receiver's samples are told apart by 12 bits of its depth words.
   const int samples = p.clusters * (p.randomPerCluster + p.samplesPerCluster);
   if (samples > 4096) {

@@ -7,6 +7,7 @@
 #define PROJECTION_SSBO_SOLID (NL_SSBO_METHOD0 + 2)     // float[M x M]: the texels' solid angles
 #define PROJECTION_SSBO_RADIANCE (NL_SSBO_METHOD0 + 3)  // vec4[]: each point's outgoing radiance
 #define PROJECTION_SSBO_PIXELS (NL_SSBO_METHOD0 + 5)    // vec4[2 per tile pixel]: (E, state), (glossy rest, level)
+#define PROJECTION_SSBO_FILTERED (NL_SSBO_METHOD0 + 7)  // vec4[2 per tile pixel]: the post filter's output
 #define PROJECTION_SSBO_LIST (NL_SSBO_METHOD0 + 6)      // uint[]: [0] pixels to gather, then each pixel (x | y << 16)
 #define PROJECTION_SSBO_STATS (NL_SSBO_METHOD0 + 4)     // uint[8]: receivers, unweighted pdfs, empty texels, splats, filled texels
 

@@ -38,6 +38,8 @@ struct ProjectionParameters {
   float lambda = 8.0f;
   float epsilon = 0.3f;
   float epsilonLevelFactor = 2.0f;
+  // The post filter's window: -1 auto (7 x 7, 3 x 3 where glossy), 0 none, 3 or 7.
+  int postFilter = -1;
 };
 
 const ParameterSpecs& projectionParameterSpecs();
