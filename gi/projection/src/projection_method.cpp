@@ -140,6 +140,9 @@ class ProjectionExtension : public FrameExtension {
         gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_upsample.comp"}}, mb);
     compose_ =
         gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_compose.comp"}}, mb);
+    if (albedo_ && bounces_ >= 3)
+      bounceProgram_ =
+          gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_bounce.comp"}});
     if (params_.postFilter != 0)
       filter_ =
           gl::ShaderProgram({{GL_COMPUTE_SHADER, "gi/projection/projection_filter.comp"}}, mb);
@@ -177,6 +180,8 @@ class ProjectionExtension : public FrameExtension {
     glGetNamedBufferSubData(stats_.id(), 0, sizeof s, s);
     f.attributes["nestlight:projection_points"] = std::to_string(pointCount_);
     f.attributes["nestlight:projection_mesh_surfels"] = std::to_string(surfels_.size());
+    f.attributes["nestlight:projection_further_bounces"] = std::to_string(furtherBounces_);
+    f.attributes["nestlight:projection_bounce_receivers"] = std::to_string(bounceList_.size());
     f.attributes["nestlight:projection_levels"] = std::to_string(levelsTaken_);
     f.attributes["nestlight:projection_stride"] = std::to_string(stride_);
     f.attributes["nestlight:projection_clusters"] = std::to_string(clusterCount_);
@@ -207,6 +212,9 @@ class ProjectionExtension : public FrameExtension {
     if (clusterCount_ < uint32_t(params_.clusters) && pointCount_ > 0)
       f.summary += "; fewer points than clusters: " + std::to_string(clusterCount_) + " clusters";
     if (!gathers_) f.summary += "; albedo mode with max_bounces 1: direct light only";
+    if (furtherBounces_)
+      f.summary += "; " + std::to_string(furtherBounces_) + " further bounce(s) gathered at " +
+                   std::to_string(bounceList_.size()) + " points of S";
     for (const std::string& w : warnings_) f.summary += "; warning: " + w;
     if (s[1])
       f.summary +=
@@ -380,8 +388,52 @@ class ProjectionExtension : public FrameExtension {
     clusters_.upload(first.data(), first.size() * 4);
     radiance_.reserve(std::max<size_t>(sorted.size(), 1) * 16);
     sortedCount_ = uint32_t(sorted.size());
+    chooseBounceReceivers(sorted, first);
     clusterMs_ =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  }
+
+  // The points of S that gather for the further bounces: bounce_receivers of them, spread over
+  // the clusters (each cluster's points are neighbours: evenly through its list), and for every
+  // point the receiver of its cluster it takes its gathered light from: the nearest whose normal
+  // agrees within 45 degrees, else the nearest.
+  void chooseBounceReceivers(const std::vector<ProjectionPoint>& sorted,
+                             const std::vector<uint32_t>& first) {
+    bounceList_.clear();
+    receiverOf_.assign(sorted.size(), 0u);
+    if (!albedo_ || bounces_ < 3 || sorted.empty()) return;
+    const size_t K = first.size() - 1;
+    const size_t perCluster = std::max<size_t>(1, (size_t(params_.bounceReceivers) + K - 1) / K);
+    for (size_t k = 0; k < K; ++k) {
+      const uint32_t lo = first[k], hi = first[k + 1];
+      if (hi <= lo) continue;
+      const size_t m = std::min<size_t>(perCluster, hi - lo);
+      const size_t base = bounceList_.size();
+      for (size_t j = 0; j < m; ++j) bounceList_.push_back(lo + uint32_t(j * (hi - lo) / m));
+      for (uint32_t i = lo; i < hi; ++i) {
+        const glm::vec3 p(sorted[i].positionArea);
+        const glm::vec3 n = frame::unpackNormal(std::bit_cast<uint32_t>(sorted[i].normalColour.x));
+        float best = INFINITY, bestAgreeing = INFINITY;
+        uint32_t pick = uint32_t(base), pickAgreeing = UINT32_MAX;
+        for (size_t j = base; j < bounceList_.size(); ++j) {
+          const ProjectionPoint& r = sorted[bounceList_[j]];
+          const glm::vec3 d = glm::vec3(r.positionArea) - p;
+          const float d2 = glm::dot(d, d);
+          if (d2 < best) best = d2, pick = uint32_t(j);
+          const glm::vec3 rn = frame::unpackNormal(std::bit_cast<uint32_t>(r.normalColour.x));
+          if (glm::dot(rn, n) > 0.7071f && d2 < bestAgreeing)
+            bestAgreeing = d2, pickAgreeing = uint32_t(j);
+        }
+        receiverOf_[i] = pickAgreeing != UINT32_MAX ? pickAgreeing : pick;
+      }
+    }
+    std::vector<uint32_t> list(4 + bounceList_.size(), 0u);
+    list[0] = uint32_t(bounceList_.size());
+    std::copy(bounceList_.begin(), bounceList_.end(), list.begin() + 4);
+    bounceListBuffer_.reserve(list.size() * 4);
+    bounceListBuffer_.upload(list.data(), list.size() * 4);
+    receiverOfBuffer_.reserve(receiverOf_.size() * 4);
+    receiverOfBuffer_.upload(receiverOf_.data(), receiverOf_.size() * 4);
   }
 
   // Each point's radiance: its colour (radiance cache), or its direct light (albedo).
@@ -398,8 +450,65 @@ class ProjectionExtension : public FrameExtension {
     radiance_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_RADIANCE);
     glUniform1ui(lightProgram_.uniform("uCount"), sortedCount_);
     glUniform1i(lightProgram_.uniform("uAlbedo"), albedo_ ? 1 : 0);
+    glUniform1f(lightProgram_.uniform("uSplatScale"), f.frameParameters().splatScale);
     glDispatchCompute((sortedCount_ + 63) / 64, 1, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    furtherBounces_ = 0;
+    if (bounceList_.empty()) return;
+    // The further bounces (gi.max_bounces beyond the gathered one): the points' radiance is their
+    // direct light plus what their receivers gather from the points' radiance of the bounce before.
+    const size_t bytes = size_t(sortedCount_) * 16;
+    direct_.reserve(bytes);
+    glCopyNamedBufferSubData(radiance_.id(), direct_.id(), 0, 0, GLsizeiptr(bytes));
+    bounceE_.reserve(bounceList_.size() * 32);
+    const uint32_t count = uint32_t(bounceList_.size());
+    for (int b = 0; b + 2 < bounces_; ++b) {
+      bindGather(f);
+      points_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_POINTS);
+      radiance_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_RADIANCE);
+      bounceListBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_LIST);
+      bounceE_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
+      glUniform1i(gather_.uniform("uPointReceivers"), 1);
+      const uint32_t row = std::min<uint32_t>(count, 65535u);
+      glUniform1ui(gather_.uniform("uRowItems"), row);
+      glDispatchCompute(row, (count + row - 1) / row, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      bounceProgram_.use();
+      direct_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_FILTERED);
+      receiverOfBuffer_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_LIST);
+      glUniform1ui(bounceProgram_.uniform("uCount"), sortedCount_);
+      glDispatchCompute((sortedCount_ + 63) / 64, 1, 1);
+      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+      furtherBounces_++;
+    }
+  }
+
+  // The gather's program and the buffers and uniforms every use of it shares.
+  void bindGather(SceneFrame& f) {
+    if (clusters_.bytes() == 0) {
+      std::vector<uint32_t> none(size_t(params_.clusters) + 1, 0u);
+      clusters_.reserve(none.size() * 4);
+      clusters_.upload(none.data(), none.size() * 4);
+    }
+    if (points_.bytes() == 0) points_.reserve(sizeof(ProjectionPoint));
+    if (radiance_.bytes() == 0) radiance_.reserve(16);
+    points_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_POINTS);
+    clusters_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_CLUSTERS);
+    solid_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_SOLID);
+    radiance_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_RADIANCE);
+    stats_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_STATS);
+    gather_.use();
+    f.bindEnvironment(gather_);
+    glUniform1i(gather_.uniform("uRandomPerCluster"), params_.randomPerCluster);
+    glUniform1i(gather_.uniform("uSamplesPerCluster"), params_.samplesPerCluster);
+    glUniform1i(gather_.uniform("uSampling"), int(params_.sampling));
+    glUniform1i(gather_.uniform("uSplat"), params_.splat);
+    const glm::vec3 diag = f.boundsHi() - f.boundsLo();
+    glUniform1f(gather_.uniform("uMaxDistance"), std::max(glm::length(diag), 1e-6f));
+    glUniform1i(gather_.uniform("uSkyOwned"), skyOwned_ ? 1 : 0);
+    glUniform1ui(gather_.uniform("uSeed"), seed_);
+    glUniform1i(gather_.uniform("uFillPasses"), params_.fillPasses);
+    glUniform1i(gather_.uniform("uPointReceivers"), 0);
   }
 
   void gather(SceneFrame& f, const frame::PassContext& ctx) {
@@ -412,18 +521,6 @@ class ProjectionExtension : public FrameExtension {
     ctx.bindTexture("radiance", 4);
     glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
                        GL_RGBA32F);
-    if (points_.bytes() == 0) points_.reserve(sizeof(ProjectionPoint));
-    if (clusters_.bytes() == 0) {
-      std::vector<uint32_t> none(size_t(params_.clusters) + 1, 0u);
-      clusters_.reserve(none.size() * 4);
-      clusters_.upload(none.data(), none.size() * 4);
-    }
-    if (radiance_.bytes() == 0) radiance_.reserve(16);
-    points_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_POINTS);
-    clusters_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_CLUSTERS);
-    solid_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_SOLID);
-    radiance_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_RADIANCE);
-    stats_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_STATS);
     const size_t pixels = size_t(tile.width) * size_t(tile.height);
     pixels_.reserve(pixels * 32);
     const float zero[4] = {0, 0, 0, 0};
@@ -431,17 +528,8 @@ class ProjectionExtension : public FrameExtension {
     list_.reserve((4 + pixels) * 4);
     pixels_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
     list_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_LIST);
-    gather_.use();
-    f.bindEnvironment(gather_);
-    glUniform1i(gather_.uniform("uRandomPerCluster"), params_.randomPerCluster);
-    glUniform1i(gather_.uniform("uSamplesPerCluster"), params_.samplesPerCluster);
-    glUniform1i(gather_.uniform("uSampling"), int(params_.sampling));
-    glUniform1i(gather_.uniform("uSplat"), params_.splat);
+    bindGather(f);
     const glm::vec3 diag = f.boundsHi() - f.boundsLo();
-    glUniform1f(gather_.uniform("uMaxDistance"), std::max(glm::length(diag), 1e-6f));
-    glUniform1i(gather_.uniform("uSkyOwned"), skyOwned_ ? 1 : 0);
-    glUniform1ui(gather_.uniform("uSeed"), seed_);
-    glUniform1i(gather_.uniform("uFillPasses"), params_.fillPasses);
     // The levels: the grid, then every halving of its step down to single pixels (without
     // adaptive sampling, one level of single pixels: every receiver).
     std::vector<int> steps;
@@ -498,7 +586,11 @@ class ProjectionExtension : public FrameExtension {
   uint32_t seed_ = 1;
   bool albedo_ = false, gathers_ = true, skyOwned_ = false;
   int bounces_ = 1;
-  gl::ShaderProgram pointsProgram_, lightProgram_, gather_, select_, upsample_, filter_, compose_;
+  gl::ShaderProgram pointsProgram_, lightProgram_, gather_, select_, upsample_, filter_, compose_,
+      bounceProgram_;
+  gl::Buffer direct_, bounceE_, bounceListBuffer_, receiverOfBuffer_;
+  std::vector<uint32_t> bounceList_, receiverOf_;
+  int furtherBounces_ = 0;
   gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_, filtered_;
   uint64_t gatheredPerLevel_[8] = {};
   std::vector<ProjectionPoint> host_, surfels_;

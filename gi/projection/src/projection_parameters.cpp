@@ -49,6 +49,9 @@ const ParameterSpecs& projectionParameterSpecs() {
                  "the joint bilateral post filter's window: auto (7 x 7, 3 x 3 where glossy), 0 "
                  "(none), 3 or 7")
           .orOneOf({"auto"}),
+      P::integer("bounce_receivers", 1, 1 << 22, 4096,
+                 "albedo mode, gi.max_bounces 3 and more: the points of S that gather each "
+                 "further bounce (the others take the nearest one's of their cluster)"),
   };
   return specs;
 }
@@ -73,6 +76,7 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   p.lambda = float(r.number("lambda"));
   p.epsilon = float(r.number("epsilon"));
   p.epsilonLevelFactor = float(r.number("epsilon_level_factor"));
+  p.bounceReceivers = int(r.integer("bounce_receivers"));
   const nlohmann::json& filter = r.value("post_filter");
   p.postFilter = filter.is_string() ? -1 : int(filter.get<int64_t>());
   if (p.postFilter != -1 && p.postFilter != 0 && p.postFilter != 3 && p.postFilter != 7) {

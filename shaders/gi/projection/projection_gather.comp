@@ -43,6 +43,7 @@ uniform bool uSkyOwned;          // empty texels are the environment
 uniform uint uSeed;
 uniform int uFillPasses;         // hole-filling passes over the micro-buffer
 uniform uint uRowItems;          // list entries per row of workgroups (the dispatch's x size)
+uniform bool uPointReceivers;    // the list holds points of S (further bounces), not pixels
 
 shared uint sKey[M * M];
 shared uint sSample[PROJECTION_SAMPLES];
@@ -170,7 +171,7 @@ void splat(uint index, uint slot, float area) {
   for (int y = lo.y; y < hi.y; ++y)
     for (int x = lo.x; x < hi.x; ++x)
       if (covers(x, y)) atomicMin(sKey[y * M + x], key);
-  atomicAdd(stats[3], 1u);
+  if (!uPointReceivers) atomicAdd(stats[3], 1u);
 }
 
 void main() {
@@ -179,7 +180,24 @@ void main() {
   if (item >= list[0]) return;
   uint word = list[4u + item];
   ivec2 px = ivec2(int(word & 0xffffu), int(word >> 16));
-  gR = receiverAt(px);
+  if (uPointReceivers) {
+    // A further bounce (paper section 3.1): a point of S gathers, from a splat radius and a half
+    // above its surface along its normal, the light its diffuse reflection then sends on.
+    ProjectionPoint P = points[word];
+    uint nw = floatBitsToUint(P.normalColour.x);
+    if (nw == 0u) {
+      if (lid == 0u) pixels[2u * item] = vec4(0.0);
+      return;
+    }
+    gR.n = decodeNormal(nw);
+    gR.x = P.positionArea.xyz + gR.n * 1.5 * sqrt(P.positionArea.w * kInvPi);
+    gR.wo = gR.n;
+    gR.mat.type = NL_MATERIAL_LAMBERT;
+    gR.mat.baseColor = vec3(1.0);
+    px = ivec2(int(word % 65536u), int(word / 65536u) + 65536);
+  } else {
+    gR = receiverAt(px);
+  }
   mat3 f = frameFromNormal(gR.n);  // columns: tangent, bitangent, normal
   gLocalFromWorld = transpose(mat3(f[0], f[2], f[1]));
   uint filled = 0u;
@@ -285,7 +303,8 @@ void main() {
     uint key = sKey[t];
     vec3 L;
     if (key == PROJECTION_NO_SAMPLE) {
-      L = uSkyOwned ? environment(w) : vec3(0.0);
+      // Points of S have the sky (unshadowed) in their direct light already.
+      L = uSkyOwned && !uPointReceivers ? environment(w) : vec3(0.0);
       empty++;
     } else {
       uint s = uSampling == 2 ? sTexelPoint[t] : sSample[key & 4095u];
@@ -301,15 +320,20 @@ void main() {
   }
   sSum[lid] = sum;
   sRest[lid] = rest;
-  if (empty > 0u) atomicAdd(stats[2], empty);
-  if (filled > 0u) atomicAdd(stats[4], filled);
+  // The counters describe the pixels' micro-buffers (the points' of further bounces are not).
+  if (empty > 0u && !uPointReceivers) atomicAdd(stats[2], empty);
+  if (filled > 0u && !uPointReceivers) atomicAdd(stats[4], filled);
   barrier();
   if (lid == 0u) {
     vec3 e = vec3(0.0), r = vec3(0.0);
     for (int i = 0; i < 64; ++i) e += sSum[i], r += sRest[i];
-    atomicAdd(stats[0], 1u);
-    uint i = uint(px.y * int(frame.tile.z) + px.x);
-    pixels[2u * i] = vec4(e, PROJECTION_GATHERED);
-    pixels[2u * i + 1u] = vec4(r, 0.0);
+    if (uPointReceivers) {
+      pixels[2u * item] = vec4(e, 0.0);
+    } else {
+      atomicAdd(stats[0], 1u);
+      uint i = uint(px.y * int(frame.tile.z) + px.x);
+      pixels[2u * i] = vec4(e, PROJECTION_GATHERED);
+      pixels[2u * i + 1u] = vec4(r, 0.0);
+    }
   }
 }

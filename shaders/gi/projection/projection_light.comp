@@ -17,6 +17,7 @@ layout(std430, binding = PROJECTION_SSBO_POINTS) readonly buffer Points { Projec
 layout(std430, binding = PROJECTION_SSBO_RADIANCE) writeonly buffer Radiance { vec4 radiance[]; };
 uniform uint uCount;
 uniform bool uAlbedo;
+uniform float uSplatScale;  // the frame's splat diameter in spacings (its splats' radius over a point's)
 
 void main() {
   uint i = gl_GlobalInvocationID.x;
@@ -32,7 +33,10 @@ void main() {
   uint word = floatBitsToUint(P.normalColour.x);
   bool hasNormal = word != 0u;
   vec3 axis = hasNormal ? decodeNormal(word) : vec3(0.0);
-  float splat = sqrt(P.positionArea.w / kPi);
+  // The shadow maps hold the scan's splats, uSplatScale spacings across: a point lies up to a
+  // splat radius behind its neighbours' splats, and with its own area's radius as the offset the
+  // points of a sphere lit from its centre read 10% dark (they shadowed themselves).
+  float splat = uSplatScale * sqrt(P.positionArea.w / kPi);
   vec3 E = vec3(0.0);
   for (int l = 0; l < frame.counts.x; ++l) {
     LightSample s = sampleLight(l, p);

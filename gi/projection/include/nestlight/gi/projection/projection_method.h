@@ -40,6 +40,9 @@ struct ProjectionParameters {
   float epsilonLevelFactor = 2.0f;
   // The post filter's window: -1 auto (7 x 7, 3 x 3 where glossy), 0 none, 3 or 7.
   int postFilter = -1;
+  // The albedo mode's bounces beyond the gathered one (gi.max_bounces 3 and more) gather at this
+  // many points of S, every other point taking its light from the nearest of its cluster's.
+  int bounceReceivers = 4096;
 };
 
 const ParameterSpecs& projectionParameterSpecs();
