@@ -23,6 +23,21 @@ bool isReceiver(ivec2 px) {
   return frame.counts.y == 1 || gbufferSource(texelFetch(uMaterial, px, 0)) != NL_SOURCE_SCAN;
 }
 
+// A pixel's position (scene-local) from the depth buffer, and its normal facing the camera.
+vec3 positionAt(ivec2 px) {
+  float depth = texelFetch(uDepth, px, 0).r;
+  vec2 ndc = ((vec2(px) + 0.5) / frame.tile.zw) * 2.0 - 1.0;
+  vec4 wp = frame.worldFromClip * vec4(ndc, depth * 2.0 - 1.0, 1.0);
+  return wp.xyz / wp.w;
+}
+
+vec3 normalAt(ivec2 px) {
+  vec4 nn = texelFetch(uNormal, px, 0);
+  vec3 wo = normalize(frame.eye.xyz - positionAt(px));
+  vec3 n = nn.w > 0.0 ? normalize(nn.xyz) : wo;
+  return dot(n, wo) < 0.0 ? -n : n;
+}
+
 struct Receiver {
   vec3 x;   // position, lifted off its surface
   vec3 n;   // normal, facing the camera
@@ -34,14 +49,9 @@ struct Receiver {
 // its neighbours' discs, offset by scan noise, no longer stand over it; a mesh pixel by a hair.
 Receiver receiverAt(ivec2 px) {
   Receiver R;
-  float depth = texelFetch(uDepth, px, 0).r;
-  vec2 ndc = ((vec2(px) + 0.5) / frame.tile.zw) * 2.0 - 1.0;
-  vec4 wp = frame.worldFromClip * vec4(ndc, depth * 2.0 - 1.0, 1.0);
-  R.x = wp.xyz / wp.w;
+  R.x = positionAt(px);
   R.wo = normalize(frame.eye.xyz - R.x);
-  vec4 nn = texelFetch(uNormal, px, 0);
-  R.n = nn.w > 0.0 ? normalize(nn.xyz) : R.wo;
-  if (dot(R.n, R.wo) < 0.0) R.n = -R.n;
+  R.n = normalAt(px);
   vec3 emission;
   vec4 base = texelFetch(uBaseColour, px, 0);
   R.mat = gbufferMaterial(base.rgb, texelFetch(uMaterial, px, 0), emission);

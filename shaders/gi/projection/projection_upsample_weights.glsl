@@ -7,20 +7,6 @@
 layout(std430, binding = PROJECTION_SSBO_PIXELS) buffer Pixels { vec4 pixels[]; };
 uniform bool uGathers;
 
-vec3 positionAt(ivec2 px) {
-  float depth = texelFetch(uDepth, px, 0).r;
-  vec2 ndc = ((vec2(px) + 0.5) / frame.tile.zw) * 2.0 - 1.0;
-  vec4 wp = frame.worldFromClip * vec4(ndc, depth * 2.0 - 1.0, 1.0);
-  return wp.xyz / wp.w;
-}
-
-vec3 normalAt(ivec2 px) {
-  vec4 nn = texelFetch(uNormal, px, 0);
-  vec3 wo = normalize(frame.eye.xyz - positionAt(px));
-  vec3 n = nn.w > 0.0 ? normalize(nn.xyz) : wo;
-  return dot(n, wo) < 0.0 ? -n : n;
-}
-
 // On the grid of step `step` (the tile's last row and column are on every grid, so that every
 // pixel has corners on both sides).
 bool onGrid(ivec2 px, int step, ivec2 size) {
