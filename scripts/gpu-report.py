@@ -173,7 +173,7 @@ def gl_suites():
 def parse_tests(log_path):
     """Per-test results from gtest's console output (a suite killed at its limit still reports the
     tests it finished; the one it was running is 'unfinished')."""
-    tests, goldens, running = {}, [], None
+    tests, goldens, running, output = {}, [], None, []
     try:
         lines = open(log_path, errors="replace").read().splitlines()
     except OSError:
@@ -183,13 +183,20 @@ def parse_tests(log_path):
         if m:
             what, name, ms = m.group(1), m.group(2), m.group(3)
             if what == "RUN":
-                running = name
+                running, output = name, []
                 tests.setdefault(name, {"status": "unfinished", "ms": None})
-            elif "." in name and not name.endswith(","):
+            elif "." in name and not name.endswith(",") and not (ms is None and name != running and name in tests):
+                # (gtest's closing list repeats failed tests without their time: not a result)
                 tests[name] = {"status": {"OK": "passed", "FAILED": "failed", "SKIPPED": "skipped"}[what],
                                "ms": int(ms) if ms else None}
+                if what == "FAILED" and name == running:
+                    # What the test said before failing: the assertion and its values.
+                    first = next((i for i, l in enumerate(output) if "Failure" in l), 0)
+                    tests[name]["message"] = [l[:240] for l in output[first:] if l.strip()][:10]
                 running = None if running == name else running
             continue
+        if running:
+            output.append(line)
         g = GOLDEN_LINE.match(line.strip())
         if g:
             goldens.append({"golden": g.group(1), "differing": int(g.group(2)), "pixels": int(g.group(3)),
@@ -263,6 +270,10 @@ def report(work, out, quick, threads, deadline):
     r["goldens"] = all_goldens
     for f in failures:
         md.append("- %s" % f)
+        suite, name = f.split(": ", 1)
+        message = r["tests"].get(suite, {}).get(name, {}).get("message")
+        if message:
+            md.append("\n```\n%s\n```" % "\n".join(message))
     if all_goldens:
         md.append("\nGolden images (made on llvmpipe) against this device:\n")
         md.append("| golden | pixels differing | max channel error |")

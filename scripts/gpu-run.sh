@@ -24,6 +24,15 @@
 #     --out DIR       report.json, report.md, details.tar.gz and a few PNGs (default gpu-report)
 #     --deadline S    seconds the whole run may take (default 520; --quick 240)
 #     --keep          keep the work folder (generated scans, logs)
+#   For a second run on the same lent machine, after the first showed what to look at:
+#     --steps REGEX   only the steps whose names match (bash regex, whole name: 'gl_info|tests|frame_vpl.*')
+#     --runs N        runs per benchmark instead of 5
+#     --suite-filter SUITE=FILTER   the gtest filter of one suite of scripts/gpu-suites.txt (repeatable)
+#     --shader-dir DIR              shader files read from DIR where it holds them (NESTLIGHT_SHADER_DIR)
+#     --shader-variants DIR         bisect a driver's refusal: each folder of DIR (in name order) is an
+#                     edited copy of part of shaders/ with a file `programs` naming the programs to
+#                     check; each is compiled with gl-info, and the first whose programs all link
+#                     becomes the shader folder of the rest of the run
 # Exit status: 0 when every step succeeded, 1 when one failed or timed out, 2 for bad options.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -35,6 +44,11 @@ bin_dir=""
 out="gpu-report"
 deadline=""
 keep=0
+only_steps=""
+runs_override=""
+shader_dir=""
+variants_dir=""
+suite_filters=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1; shift ;;
@@ -43,7 +57,12 @@ while [ $# -gt 0 ]; do
     --out) out=$2; shift 2 ;;
     --deadline) deadline=$2; shift 2 ;;
     --keep) keep=1; shift ;;
-    -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
+    --steps) only_steps=$2; shift 2 ;;
+    --runs) runs_override=$2; shift 2 ;;
+    --suite-filter) suite_filters+=("$2"); shift 2 ;;
+    --shader-dir) shader_dir=$2; shift 2 ;;
+    --shader-variants) variants_dir=$2; shift 2 ;;
+    -h|--help) sed -n '2,37p' "$0"; exit 0 ;;
     *) echo "gpu-run: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -82,12 +101,19 @@ else
 fi
 export NESTLIGHT_TEST_SOURCE_DIR="$repo"
 threads=$(nproc)
+if [ -n "$shader_dir" ]; then
+  export NESTLIGHT_SHADER_DIR=$(cd "$shader_dir" && pwd) || exit 2
+fi
 
 # step NAME LIMIT_S COMMAND: runs COMMAND (a bash command line) with its output in logs/NAME.log,
 # within LIMIT_S and what is left before the deadline (20 s kept for the report).
 failed=0
 step() {
   local name=$1 limit=$2 cmd=$3
+  if [ -n "$only_steps" ] && ! [[ $name =~ ^($only_steps)$ ]]; then
+    printf '{"name": "%s", "status": "not selected", "seconds": 0, "limit": 0}\n' "$name" >>"$steps"
+    return 1
+  fi
   local left=$((deadline - SECONDS - 20))
   [ "$left" -lt "$limit" ] && limit=$left
   if [ "$limit" -lt 5 ]; then
@@ -109,6 +135,26 @@ step() {
   [ $status = ok ]
 }
 
+# 0. Shader variants: which edit of a refused program this driver takes (docs/GPU.md).
+if [ -n "$variants_dir" ]; then
+  variants_dir=$(cd "$variants_dir" && pwd) || exit 2
+  step shader_variants 60 "
+    for v in \$(ls -d $variants_dir/*/ | sort); do
+      v=\${v%/}
+      if NESTLIGHT_SHADER_DIR=\$v $NL gl-info --programs --only \$(tr -s ' \\n' ',' < \$v/programs | sed 's/,\$//') \\
+          --json $work/res/variant-\$(basename \$v).json > $work/logs/variant-\$(basename \$v).log 2>&1; then
+        echo \"\$(basename \$v) links\"; echo \$v >> $work/variants-ok
+      else
+        echo \"\$(basename \$v) fails\"; grep -m3 -E 'error|fatal' $work/logs/variant-\$(basename \$v).log | sed 's/^/    /'
+      fi
+    done"
+  if [ -s "$work/variants-ok" ]; then
+    export NESTLIGHT_SHADER_DIR=$(head -n 1 "$work/variants-ok")
+    say "shader folder for the rest of the run: $NESTLIGHT_SHADER_DIR"
+  fi
+  cp "$work/logs/shader_variants.log" "$out/variants.txt" 2>/dev/null
+fi
+
 if [ $quick = 1 ]; then
   points=200k; W=64; H=36; pbgi_size=32; runs=1
   vpls="16 64"; mbs="8"; variants="classic x"; estimators="smc"
@@ -120,6 +166,7 @@ else
   gi_points=300k; gi_size=""; gi_ref="--reference-time-limit 40"
   gi_methods=""
 fi
+[ -n "$runs_override" ] && runs=$runs_override
 
 # 1. Context and every shader program.
 step gl_info 60 "$NL gl-info --programs --json $work/res/gl-info.json"
@@ -131,6 +178,7 @@ tests_cmd=""
 while read -r name full quick_filter; do
   case "$name" in ''|'#'*) continue ;; esac
   filter=$([ $quick = 1 ] && echo "$quick_filter" || echo "$full")
+  for f in "${suite_filters[@]}"; do [ "${f%%=*}" = "$name" ] && filter=${f#*=}; done
   [ "$filter" = "-" ] && continue
   suites="$suites $name"
   tests_cmd="$tests_cmd
@@ -172,9 +220,20 @@ if [ -n "$octree" ]; then
     done
   done
   for e in $estimators; do frame "ibl_$e" "--width $W --height $H" --method ibl --param estimator=$e; done
+  frame projection "--width $W --height $H" --method projection
+  # Differential rendering on its own scene (the cornell room's scan, its capture baked on every
+  # core, an inserted sphere): the paper's queries at medium quality.
+  step diffrender_scene $([ $quick = 1 ] && echo 30 || echo 60) "
+    $NL make-scene diffrender -o $work/dr -n $gi_points --width $W --height $H --bake-spp 8 -q"
+  if [ -f "$work/dr/scene.json" ]; then
+    for q in dit em vct; do
+      step "frame_diffrender_$q" $([ $quick = 1 ] && echo 30 || echo 40) \
+        "$NL bench frame $work/dr/scene.json --width $W --height $H --runs $runs --json $work/res/frame-diffrender_$q.json --method diffrender --param query=$q"
+    done
+  fi
   # A picture of each GI method on the big scene.
   for m in vpl pbgi ibl; do
-    step "image_$m" 40 "$NL render $work/scene.json --method $m --still -o $work/res/$m.exr && cp $work/res/$m.png $out/$m.png"
+    step "image_$m" 40 "$NL render $work/scene.json --method $m --still -o $work/$m.exr && cp $work/$m.png $out/$m.png"
   done
 else
   say "no scene: steps 3 to 5 not run"

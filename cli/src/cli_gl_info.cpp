@@ -25,20 +25,33 @@ std::string glString(GLenum name) {
 }  // namespace
 
 void addGlInfo(CLI::App& app, int& exitCode) {
-  auto* cmd = app.add_subcommand("gl-info",
-                                 "The OpenGL context Nestlight gets headless (EGL device: a GPU; "
-                                 "EGL surfaceless: Mesa llvmpipe):\n"
-                                 "vendor, renderer, version, limits, the extensions the renderers "
-                                 "use; --programs compiles and links\n"
-                                 "every shader program of the project (shaders/programs.json) and "
-                                 "lists failures with the driver's log.\n"
-                                 "Exit 0 when every supported program links, 2 when one fails.\n"
-                                 "Example: nestlight gl-info --programs --json gl.json");
+  auto* cmd = app.add_subcommand(
+      "gl-info",
+      "The OpenGL context Nestlight gets headless (EGL device: a GPU; "
+      "EGL surfaceless: Mesa llvmpipe):\n"
+      "vendor, renderer, version, limits, the extensions the renderers "
+      "use; --programs compiles and links\n"
+      "every shader program of the project (shaders/programs.json) and "
+      "lists failures with the driver's log.\n"
+      "Exit 0 when every supported program links, 2 when one fails. NESTLIGHT_SHADER_DIR=DIR reads "
+      "shader\nfiles from DIR where it holds them (an edited copy of "
+      "shaders/), the embedded ones otherwise.\n"
+      "Example: nestlight gl-info --programs --json gl.json");
   auto programs = std::make_shared<bool>(false);
   auto json = std::make_shared<std::string>();
   cmd->add_flag("--programs", *programs, "Compile and link every shader program of the catalogue");
   cmd->add_option("--json", *json, "Also write the results as JSON to this file");
+  auto only = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--only", *only,
+                  "With --programs: only these programs of the catalogue (names as "
+                  "shaders/programs.json gives them,\ncomma-separated), e.g. vpl.shade")
+      ->delimiter(',');
   cmd->callback([=, &exitCode]() {
+    for (const std::string& name : *only) {
+      bool known = false;
+      for (const gl::ProgramSpec& spec : gl::programCatalogue()) known |= spec.name == name;
+      if (!known) throw Error("--only", name, "no program of that name in shaders/programs.json");
+    }
     auto ctx = gl::createHeadlessContext();
     nlohmann::json out;
     out["context"] = ctx->description();
@@ -75,7 +88,7 @@ void addGlInfo(CLI::App& app, int& exitCode) {
       std::printf("%-26s %s\n", k.c_str(), v.get<bool>() ? "yes" : "no");
     int failed = 0;
     if (*programs) {
-      const std::vector<gl::ProgramCheck> checks = gl::checkCatalogue();
+      const std::vector<gl::ProgramCheck> checks = gl::checkCatalogue(*only);
       int ok = 0, unsupported = 0;
       double ms = 0;
       std::printf("\n%-28s %-22s %-12s %9s\n", "program", "defines", "status", "ms");

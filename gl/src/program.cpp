@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <sstream>
 
 #include "nestlight/gl/program_catalogue.h"
@@ -18,6 +20,25 @@ const shaders::EmbeddedFile* findFile(const std::string& path) {
   for (const auto& f : shaders::embeddedFiles())
     if (f.path == path) return &f;
   return nullptr;
+}
+
+// A shader file's text: from NESTLIGHT_SHADER_DIR where that folder holds the file, else the
+// embedded copy. The override lets a driver's refusal be bisected on a lent machine with edited
+// copies of shaders/ and the same binary (docs/GPU.md); files it lacks stay embedded.
+bool readShaderText(const std::string& path, std::string& text) {
+  if (const char* dir = std::getenv("NESTLIGHT_SHADER_DIR"); dir && *dir) {
+    std::ifstream in(std::string(dir) + "/" + path, std::ios::binary);
+    if (in) {
+      std::ostringstream s;
+      s << in.rdbuf();
+      text = s.str();
+      return true;
+    }
+  }
+  const shaders::EmbeddedFile* f = findFile(path);
+  if (!f) return false;
+  text = std::string(f->text);
+  return true;
 }
 
 // "points/../common/a.glsl" -> "common/a.glsl"; an empty result means it leaves shaders/.
@@ -72,8 +93,8 @@ Directive directiveOf(const std::string& line, std::string& included) {
 
 void expand(const std::string& path, PreprocessedSource& out, std::vector<std::string>& stack,
             const std::string& from, int fromLine) {
-  const shaders::EmbeddedFile* f = findFile(path);
-  if (!f)
+  std::string fileText;
+  if (!readShaderText(path, fileText))
     throw Error(from.empty() ? "shaders/" + path : "shaders/" + from,
                 from.empty() ? "" : "line " + std::to_string(fromLine),
                 "no embedded shader file '" + path + "'");
@@ -89,7 +110,7 @@ void expand(const std::string& path, PreprocessedSource& out, std::vector<std::s
     number = static_cast<int>(out.files.size());
     out.files.push_back(path);
   }
-  std::istringstream in{std::string(f->text)};
+  std::istringstream in{fileText};
   std::string line;
   int lineNo = 0;
   out.text += "#line 1 " + std::to_string(number) + "\n";
@@ -275,9 +296,10 @@ ProgramCheck checkProgram(const ProgramSpec& spec,
   return c;
 }
 
-std::vector<ProgramCheck> checkCatalogue() {
+std::vector<ProgramCheck> checkCatalogue(const std::vector<std::string>& only) {
   std::vector<ProgramCheck> out;
   for (const ProgramSpec& spec : programCatalogue()) {
+    if (!only.empty() && std::find(only.begin(), only.end(), spec.name) == only.end()) continue;
     // Every listed value of every define, one at a time (the others at their first value).
     std::vector<std::vector<std::pair<std::string, std::string>>> variants;
     std::vector<std::pair<std::string, std::string>> base;

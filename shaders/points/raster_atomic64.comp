@@ -10,8 +10,8 @@
 
 layout(local_size_x = 128) in;
 
-layout(std430, binding = NL_SSBO_RASTER_PACKED) buffer Packed { uint64_t packed[]; } fb64;
-layout(std430, binding = NL_SSBO_RASTER_PACKED_NORMAL) buffer PackedNormals { uint64_t packed[]; } nb64;
+layout(std430, binding = NL_SSBO_RASTER_PACKED) buffer Packed { uint64_t words[]; } fb64;
+layout(std430, binding = NL_SSBO_RASTER_PACKED_NORMAL) buffer PackedNormals { uint64_t words[]; } nb64;
 
 uniform ivec2 uViewport;
 
@@ -26,6 +26,6 @@ void main() {
   ivec2 p = clamp(ivec2((ndc.xy * 0.5 + 0.5) * vec2(uViewport)), ivec2(0), uViewport - 1);
   uint pixel = uint(p.y * uViewport.x + p.x);
   uint64_t depthBits = uint64_t(floatBitsToUint(-view.z)) << 32;
-  atomicMin(fb64.packed[pixel], depthBits | uint64_t(pointColour(i)));
-  atomicMin(nb64.packed[pixel], depthBits | uint64_t(pointNormalWord(i)));
+  atomicMin(fb64.words[pixel], depthBits | uint64_t(pointColour(i)));
+  atomicMin(nb64.words[pixel], depthBits | uint64_t(pointNormalWord(i)));
 }

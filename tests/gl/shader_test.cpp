@@ -2,7 +2,10 @@
 // every embedded program compiles on the machine's GL (llvmpipe in CI).
 #include <epoxy/gl.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdlib>
+#include <fstream>
 #include <set>
 
 #include "nestlight/gl/context.h"
@@ -19,6 +22,70 @@ TEST(Shaders, EveryFileIsEmbedded) {
   for (const char* want : {"common/point_data.glsl", "common/octahedral.glsl", "points/points.vert",
                            "points/raster_depth.comp", "points/edl.frag"})
     EXPECT_NE(std::find(paths.begin(), paths.end(), want), paths.end()) << want;
+}
+
+namespace {
+
+// Identifiers of a GLSL text that the language reserves: GLSL 4.50, section 3.6, reserves these
+// for future use, and `packed` (reserved up to GLSL 1.20 and in GLSL ES) is still refused by
+// NVIDIA's compiler (seen on an H200 with driver 580: "unexpected reserved word packed") though
+// Mesa and glslang take it. Comments are skipped; the result is "word at line N".
+std::vector<std::string> reservedIdentifiers(const std::string& text) {
+  static const std::set<std::string> reserved = {
+      "common",  "partition", "active",    "asm",      "class",     "union",         "enum",
+      "typedef", "template",  "this",      "resource", "goto",      "inline",        "noinline",
+      "public",  "static",    "extern",    "external", "interface", "long",          "short",
+      "half",    "fixed",     "unsigned",  "superp",   "input",     "output",        "hvec2",
+      "hvec3",   "hvec4",     "fvec2",     "fvec3",    "fvec4",     "sampler3DRect", "filter",
+      "sizeof",  "cast",      "namespace", "using",    "packed"};
+  std::vector<std::string> found;
+  int line = 1;
+  for (size_t i = 0; i < text.size();) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line, ++i;
+    } else if (text.compare(i, 2, "//") == 0) {
+      i = text.find('\n', i);
+      if (i == std::string::npos) break;
+    } else if (text.compare(i, 2, "/*") == 0) {
+      const size_t end = text.find("*/", i + 2);
+      for (size_t k = i; k < std::min(end, text.size()); ++k) line += text[k] == '\n';
+      if (end == std::string::npos) break;
+      i = end + 2;
+    } else if (c == '#') {  // directives (#include "common/...") hold paths, not identifiers
+      i = text.find('\n', i);
+      if (i == std::string::npos) break;
+    } else if (std::isalpha(static_cast<unsigned char>(c)) || c == '_') {
+      size_t j = i;
+      while (j < text.size() &&
+             (std::isalnum(static_cast<unsigned char>(text[j])) || text[j] == '_'))
+        ++j;
+      const std::string word = text.substr(i, j - i);
+      if (reserved.count(word)) found.push_back(word + " at line " + std::to_string(line));
+      i = j;
+    } else {
+      ++i;
+    }
+  }
+  return found;
+}
+
+}  // namespace
+
+TEST(Shaders, NoFileUsesAReservedWordAsAnIdentifier) {
+  // The scanner finds them where they are and nowhere else.
+  EXPECT_EQ(reservedIdentifiers("uint64_t packed[];\n// packed in a comment\n/* filter\n */ int "
+                                "input;\n#include \"common/a.glsl\"\nfloat filtered;"),
+            (std::vector<std::string>{"packed at line 1", "input at line 4"}));
+  int files = 0;
+  for (const auto& f : shaders::embeddedFiles()) {
+    const std::string path(f.path);
+    if (path.size() < 5 || path.compare(path.size() - 5, 5, ".json") == 0) continue;
+    ++files;
+    for (const std::string& hit : reservedIdentifiers(std::string(f.text)))
+      ADD_FAILURE() << "shaders/" << f.path << ": " << hit;
+  }
+  EXPECT_GT(files, 50);
 }
 
 TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
@@ -42,6 +109,26 @@ TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
   EXPECT_EQ(s.text.find("vec3 decodeNormal(", first + 1), std::string::npos);
   // After the include, numbering resumes in the including file at the next line.
   EXPECT_NE(s.text.find("#line 2 0\n"), std::string::npos);
+}
+
+// NESTLIGHT_SHADER_DIR: a folder's copy of a file replaces the embedded one (with its includes
+// resolved there or embedded), files it lacks stay embedded; how a driver's refusal is bisected
+// on a lent GPU with the same binary.
+TEST(Shaders, ShaderDirReplacesTheFilesItHolds) {
+  test::TempDir t;
+  std::filesystem::create_directories(t.path() / "points");
+  {
+    std::ofstream f(t.path() / "points/raster_common.glsl");
+    f << "// edited\n#include \"../common/point_data.glsl\"\nfloat editedMarker;\n";
+  }
+  ::setenv("NESTLIGHT_SHADER_DIR", t.path().c_str(), 1);
+  gl::PreprocessedSource s = gl::preprocessShader("points/raster_depth.comp");
+  ::unsetenv("NESTLIGHT_SHADER_DIR");
+  EXPECT_NE(s.text.find("float editedMarker;"), std::string::npos);
+  EXPECT_NE(s.text.find("vec3 decodeNormal("), std::string::npos);  // embedded, via the edit
+  EXPECT_EQ(s.files[0], "points/raster_depth.comp");
+  gl::PreprocessedSource plain = gl::preprocessShader("points/raster_depth.comp");
+  EXPECT_EQ(plain.text.find("editedMarker"), std::string::npos);
 }
 
 TEST(Shaders, MissingFileIsNamed) {

@@ -348,9 +348,21 @@ TEST(Render, OsMesaFallbackMatchesEgl) {
   RenderJob b = a;
   b.output = tmp.file("osmesa.png");
   ::setenv("NESTLIGHT_GL_PLATFORM", "surfaceless", 1);
+  if (!gl::createHeadlessContext()->isSoftware()) {
+    ::unsetenv("NESTLIGHT_GL_PLATFORM");
+    GTEST_SKIP() << "EGL runs on a GPU here: the images of two rasterisers are not compared "
+                    "pixel for pixel";
+  }
   renderHeadless(a);
   ::setenv("NESTLIGHT_GL_PLATFORM", "osmesa", 1);
-  renderHeadless(b);
+  try {
+    renderHeadless(b);
+  } catch (const Error& e) {
+    ::unsetenv("NESTLIGHT_GL_PLATFORM");
+    if (std::string(e.what()).find("libOSMesa is not installed") != std::string::npos)
+      GTEST_SKIP() << "no OSMesa on this machine: " << e.what();
+    throw;
+  }
   ::unsetenv("NESTLIGHT_GL_PLATFORM");
   ImageDiff d = compareImages(readImage(a.output), readImage(b.output), 1.f / 255);
   EXPECT_EQ(d.differing, 0u) << d.maxChannel;

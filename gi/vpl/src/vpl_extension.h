@@ -180,6 +180,7 @@ class VplExtension : public FrameExtension {
   glm::vec3 objectsLo_{INFINITY}, objectsHi_{-INFINITY};
   gl::ShaderProgram scanGBuffer_, meshGBuffer_, importance_, generate_, bounce_, gather_, splat_,
       pull_, push_, shade_, filter_;
+  gl::ShaderProgram shadeExact_;  // shade_ with the ISM-against-exact comparison, made on first use
   std::unique_ptr<ImportanceWarp> warp_;
   gl::Framebuffer lightFbo_;
   gl::VertexArray emptyVao_;

@@ -185,8 +185,9 @@ void VplExtension::compile() {
   splat_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_splat.comp"}});
   pull_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_pull.comp"}});
   push_ = ShaderProgram({{GL_COMPUTE_SHADER, "gi/vpl/ism_push.comp"}});
-  shade_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
-                          {GL_FRAGMENT_SHADER, "gi/vpl/vpl_shade.frag"}});
+  shade_ = ShaderProgram(
+      {{GL_VERTEX_SHADER, "common/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "gi/vpl/vpl_shade.frag"}},
+      {{"VPL_EXACT_VISIBILITY", "0"}});
   filter_ = ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
                            {GL_FRAGMENT_SHADER, "gi/vpl/vpl_filter.frag"}});
   warp_ = std::make_unique<ImportanceWarp>();

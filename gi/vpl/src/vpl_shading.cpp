@@ -20,7 +20,15 @@ void VplExtension::addShadePass(SceneFrame& f) {
         ctx.bindFramebuffer();
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_BLEND);
-        shade_.use();
+        // The ISM-against-exact comparison is a program of its own: NVIDIA's compiler (driver
+        // 580) failed inside on that code ("C9999 ... DUI_foreachId"), and the frames users run
+        // never take it.
+        if (exact() && !shadeExact_.id())
+          shadeExact_ = gl::ShaderProgram({{GL_VERTEX_SHADER, "common/fullscreen.vert"},
+                                           {GL_FRAGMENT_SHADER, "gi/vpl/vpl_shade.frag"}},
+                                          {{"VPL_EXACT_VISIBILITY", "1"}});
+        const gl::ShaderProgram& shade = exact() ? shadeExact_ : shade_;
+        shade.use();
         bindCommon(f);
         ctx.bindTexture("depth", 0);
         ctx.bindTexture("base_colour", 1);
@@ -31,13 +39,13 @@ void VplExtension::addShadePass(SceneFrame& f) {
           exactBits_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_EXACT, 0, exactBits_.bytes());
           agreement_.bindRange(GL_SHADER_STORAGE_BUFFER, VPL_SSBO_AGREEMENT, 0, agreement_.bytes());
         }
-        glUniform1i(shade_.uniform("uExactWords"), exactWords_);
-        glUniform1i(shade_.uniform("uVplCount"), params_.count * generationsRun_);
-        glUniform1i(shade_.uniform("uInterleave"), params_.interleave);
-        glUniform1i(shade_.uniform("uIsmSize"), params_.ismSize);
-        glUniform1f(shade_.uniform("uClampDistance"), clampDistance_);
-        glUniform1f(shade_.uniform("uIsmBias"), params_.ismBias);
-        glUniform1i(shade_.uniform("uVisibility"), exact() ? 2 : usesIsms() ? 1 : 0);
+        glUniform1i(shade.uniform("uExactWords"), exactWords_);
+        glUniform1i(shade.uniform("uVplCount"), params_.count * generationsRun_);
+        glUniform1i(shade.uniform("uInterleave"), params_.interleave);
+        glUniform1i(shade.uniform("uIsmSize"), params_.ismSize);
+        glUniform1f(shade.uniform("uClampDistance"), clampDistance_);
+        glUniform1f(shade.uniform("uIsmBias"), params_.ismBias);
+        glUniform1i(shade.uniform("uVisibility"), exact() ? 2 : usesIsms() ? 1 : 0);
         glBindVertexArray(emptyVao_.id());
         glDrawArrays(GL_TRIANGLES, 0, 3);
       });

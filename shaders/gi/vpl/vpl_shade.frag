@@ -13,8 +13,10 @@
 #include "vpl_material.glsl"
 layout(std430, binding = VPL_SSBO_RECORDS) readonly buffer Vpls { VplRecord vpls[]; };
 layout(std430, binding = VPL_SSBO_ISM) readonly buffer Ism { uint ism[]; };
+#if VPL_EXACT_VISIBILITY  // visibility "exact": the ISMs counted against Embree's rays
 layout(std430, binding = VPL_SSBO_EXACT) readonly buffer Exact { uint exactBits[]; };
 layout(std430, binding = VPL_SSBO_AGREEMENT) buffer Agreement { uint agreement[]; };
+#endif
 layout(binding = 0) uniform sampler2D uDepth;
 layout(binding = 1) uniform sampler2D uBaseColour;
 layout(binding = 2) uniform sampler2D uNormal;
@@ -105,26 +107,33 @@ void main() {
     if (all(equal(c, vec3(0.0)))) continue;
     if (uVisibility == 1) {
       c *= ismVisibility(k, v, p, dist, wL, cosR);
-    } else if (uVisibility == 2) {
+    }
+#if VPL_EXACT_VISIBILITY
+    else if (uVisibility == 2) {
       int slot = k / (N * N);
       uint word = exactBits[(px.y * int(frame.tile.z) + px.x) * uExactWords + slot / 32];
       bool seen = ((word >> uint(slot % 32)) & 1u) != 0u;
       bool ismSeen = ismVisibility(k, v, p, dist, wL, cosR) >= 0.5;
       float weight = luminance(c / max(d2, clamp2));
-      agreeWeight += seen == ismSeen ? weight : 0.0;
+      if (seen == ismSeen) agreeWeight += weight;
       compareWeight += weight;
       atomicAdd(agreement[1], 1u);
+      // Constant indices: a computed one was among what the program NVIDIA's compiler failed on.
       if (seen == ismSeen) atomicAdd(agreement[0], 1u);
-      else atomicAdd(agreement[seen ? 2 : 3], 1u);
+      else if (seen) atomicAdd(agreement[2], 1u);
+      else atomicAdd(agreement[3], 1u);
       if (!seen) c = vec3(0.0);
     }
+#endif
     L += c / max(d2, clamp2);
     loss += c * (1.0 / d2 - 1.0 / max(d2, clamp2));
   }
+#if VPL_EXACT_VISIBILITY
   if (uVisibility == 2 && compareWeight > 0.0) {  // per pixel, in 1/1024ths
     atomicAdd(agreement[4], uint(1024.0 * agreeWeight / compareWeight + 0.5));
     atomicAdd(agreement[5], 1024u);
   }
+#endif
   float weight = float(N * N);
   outIndirect = vec4(L * weight / demodulation(mat), 1.0);
   outClampLoss = vec4(loss * weight, 1.0);

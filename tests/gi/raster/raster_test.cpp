@@ -429,6 +429,9 @@ TEST(Raster, RunsOnTheOsMesaFallback) {
                                                 {"direction", {0.0, 0.0, -1.0}},
                                                 {"intensity", 50.0}}}),
                               32, true);
+  if (!gl::createHeadlessContext()->isSoftware())
+    GTEST_SKIP() << "EGL runs on a GPU here: the images of two rasterisers are not compared "
+                    "value for value";
   MethodFrame egl = renderRaster(s);
   ::setenv("NESTLIGHT_GL_PLATFORM", "osmesa", 1);
   MethodFrame osmesa;

@@ -41,7 +41,7 @@ const char* statusName(ProgramCheck::Status s);
 // driver's refusal (that is the result).
 ProgramCheck checkProgram(const ProgramSpec& spec,
                           const std::vector<std::pair<std::string, std::string>>& defines);
-// Every catalogue entry, once per listed value of each of its defines.
-std::vector<ProgramCheck> checkCatalogue();
+// Every catalogue entry (or those named in `only`), once per listed value of each of its defines.
+std::vector<ProgramCheck> checkCatalogue(const std::vector<std::string>& only = {});
 
 }  // namespace nestlight::gl
