@@ -125,7 +125,7 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   ASSERT_EQ(j["rows"].size(), 23u);
   EXPECT_EQ(j["rows"][19]["method"], "projection");
   EXPECT_EQ(j["rows"][20]["variant"], "random");
-  EXPECT_TRUE(j["rows"][19]["gpu_pass_ms"].contains("projection_gather")) << j["rows"][19].dump();
+  EXPECT_TRUE(j["rows"][19]["gpu_pass_ms"].contains("projection_gather_1")) << j["rows"][19].dump();
   EXPECT_EQ(j["rows"][14]["method"], "diffrender");
   EXPECT_EQ(j["rows"][15]["variant"], "em");
   EXPECT_TRUE(j["rows"][14]["gpu_pass_ms"].contains("diffrender_shade")) << j["rows"][14].dump();

@@ -247,15 +247,81 @@ class ProjectionExtension : public FrameExtension {
         },
         [this, &f](const frame::PassContext& ctx) { light(f, ctx); });
     g.addTarget("radiance_gi", {GL_RGBA32F});
+    // Per tile, level by level of the adaptive sampling (section 3.3): the grid, then every
+    // halving of its step down to single pixels (without adaptive sampling, one level of single
+    // pixels: every receiver). Each level selects the pixels it gathers, gathers them and (below
+    // the grid) interpolates the rest, each its own pass, so their times are the levels' (the
+    // paper's Fig. 11). A level reads its parents up to twice its step away: its margin.
+    steps_.clear();
+    for (int st = params_.adaptive ? params_.grid : 1; st >= 1; st /= 2) steps_.push_back(st);
+    std::string previous;
+    for (size_t level = 0; level < steps_.size(); ++level) {
+      const std::string step = std::to_string(steps_[level]);
+      const int margin = level == 0 ? 0 : 2 * steps_[level];
+      const std::string list = "projection_list_" + step, gathered = "projection_gathered_" + step,
+                        pixels = "projection_pixels_" + step;
+      g.addBuffer(list);
+      g.addBuffer(gathered);
+      if (level > 0) g.addBuffer(pixels);
+      g.addPass(
+          "projection_select_" + step, frame::Scope::Tile,
+          [=](frame::PassBuilder& b) {
+            for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
+              b.read(t);
+            if (!previous.empty()) b.read(previous);
+            b.write(list);
+            b.margin(margin);
+          },
+          [this, &f, level](const frame::PassContext& ctx) { select(f, ctx, level); });
+      g.addPass(
+          "projection_gather_" + step, frame::Scope::Tile,
+          [=](frame::PassBuilder& b) {
+            for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
+              b.read(t);
+            b.read("projection_radiance");
+            b.read(list);
+            b.write(gathered);
+          },
+          [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
+      if (level == 0) {
+        previous = gathered;
+        continue;
+      }
+      g.addPass(
+          "projection_upsample_" + step, frame::Scope::Tile,
+          [=](frame::PassBuilder& b) {
+            for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
+              b.read(t);
+            b.read(gathered);
+            b.write(pixels);
+            b.margin(margin);
+          },
+          [this, &f, level](const frame::PassContext& ctx) { upsample(f, ctx, level); });
+      previous = pixels;
+    }
+    if (params_.postFilter != 0) {
+      g.addBuffer("projection_filtered");
+      g.addPass(
+          "projection_filter", frame::Scope::Tile,
+          [=](frame::PassBuilder& b) {
+            for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
+              b.read(t);
+            b.read(previous);
+            b.write("projection_filtered");
+            b.margin(params_.postFilter < 0 ? 3 : params_.postFilter / 2);
+          },
+          [this, &f](const frame::PassContext& ctx) { filter(f, ctx); });
+      previous = "projection_filtered";
+    }
     g.addPass(
-        "projection_gather", frame::Scope::Tile,
-        [](frame::PassBuilder& b) {
+        "projection_compose", frame::Scope::Tile,
+        [=](frame::PassBuilder& b) {
           for (const char* t : {"depth", "base_colour", "normal", "material", "radiance"})
             b.read(t);
-          b.read("projection_radiance");
+          b.read(previous);
           b.write("radiance_gi");
         },
-        [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
+        [this, &f](const frame::PassContext& ctx) { compose(f, ctx); });
   }
 
   // The meshes' surfels join S (paper section 3.1: the scene's surfaces sampled by Poisson disks,
@@ -511,72 +577,101 @@ class ProjectionExtension : public FrameExtension {
     glUniform1i(gather_.uniform("uPointReceivers"), 0);
   }
 
-  void gather(SceneFrame& f, const frame::PassContext& ctx) {
-    const frame::Tile& tile = ctx.tile();
+  // What every per-tile pass binds: the G-buffer and the direct light, the per-pixel light
+  // (pixels_: irradiance and glossy rest, each pixel's state in .w) and the list of pixels to
+  // gather.
+  void bindTile(SceneFrame& f, const frame::PassContext& ctx) {
     f.bindSceneBuffers();
     ctx.bindTexture("depth", 0);
     ctx.bindTexture("base_colour", 1);
     ctx.bindTexture("normal", 2);
     ctx.bindTexture("material", 3);
     ctx.bindTexture("radiance", 4);
-    glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
-                       GL_RGBA32F);
-    const size_t pixels = size_t(tile.width) * size_t(tile.height);
-    pixels_.reserve(pixels * 32);
-    const float zero[4] = {0, 0, 0, 0};
-    glClearNamedBufferData(pixels_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, zero);
-    list_.reserve((4 + pixels) * 4);
     pixels_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
     list_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_LIST);
-    bindGather(f);
-    const glm::vec3 diag = f.boundsHi() - f.boundsLo();
-    // The levels: the grid, then every halving of its step down to single pixels (without
-    // adaptive sampling, one level of single pixels: every receiver).
-    std::vector<int> steps;
-    for (int s = params_.adaptive ? params_.grid : 1; s >= 1; s /= 2) steps.push_back(s);
-    for (size_t level = 0; level < steps.size(); ++level) {
-      const uint32_t zeros[4] = {0, 0, 0, 0};
-      list_.upload(zeros, sizeof zeros);
-      select_.use();
-      glUniform1i(select_.uniform("uStep"), steps[level]);
-      glUniform1i(select_.uniform("uFirstLevel"), level == 0 ? 1 : 0);
-      glUniform1f(select_.uniform("uEpsilon"),
-                  params_.epsilon * std::pow(params_.epsilonLevelFactor, float(level) - 1.0f));
-      glUniform1f(select_.uniform("uLambda"), params_.lambda);
-      glUniform1f(select_.uniform("uHalfDiagonal"), std::max(0.5f * glm::length(diag), 1e-6f));
-      glUniform1i(select_.uniform("uGathers"), gathers_ ? 1 : 0);
-      glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
-      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-      uint32_t count = 0;
-      glGetNamedBufferSubData(list_.id(), 0, 4, &count);
-      gatheredPerLevel_[std::min<size_t>(level, 7)] += count;
-      if (count > 0) {
-        gather_.use();
-        const uint32_t row = std::min<uint32_t>(count, 65535u);
-        glUniform1ui(gather_.uniform("uRowItems"), row);
-        glDispatchCompute(row, (count + row - 1) / row, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-      }
-      if (level > 0) {
-        upsample_.use();
-        glUniform1i(upsample_.uniform("uStep"), steps[level]);
-        glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-      }
-    }
-    if (params_.postFilter != 0) {
-      filtered_.reserve(pixels * 32);
-      filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_FILTERED);
-      filter_.use();
-      const int r = params_.postFilter < 0 ? 3 : params_.postFilter / 2;
-      glUniform1i(filter_.uniform("uRadius"), r);
-      glUniform1i(filter_.uniform("uGlossyRadius"), params_.postFilter < 0 ? 1 : r);
-      glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
-      glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-      filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
-    }
-    compose_.use();
+    stats_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_STATS);
+  }
+
+  static void dispatchOverTile(const frame::Tile& tile) {
     glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
+  }
+
+  // One level's choice of the pixels it gathers (the first level: its whole grid).
+  void select(SceneFrame& f, const frame::PassContext& ctx, size_t level) {
+    const frame::Tile& tile = ctx.tile();
+    const size_t pixels = size_t(tile.width) * size_t(tile.height);
+    if (level == 0) {
+      pixels_.reserve(pixels * 32);
+      const float zero[4] = {0, 0, 0, 0};
+      glClearNamedBufferData(pixels_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, zero);
+      list_.reserve((4 + pixels) * 4);
+    }
+    const uint32_t zeros[4] = {0, 0, 0, 0};
+    list_.upload(zeros, sizeof zeros);
+    bindTile(f, ctx);
+    const glm::vec3 diag = f.boundsHi() - f.boundsLo();
+    select_.use();
+    glUniform1i(select_.uniform("uStep"), steps_[level]);
+    glUniform1i(select_.uniform("uFirstLevel"), level == 0 ? 1 : 0);
+    glUniform1f(select_.uniform("uEpsilon"),
+                params_.epsilon * std::pow(params_.epsilonLevelFactor, float(level) - 1.0f));
+    glUniform1f(select_.uniform("uLambda"), params_.lambda);
+    glUniform1f(select_.uniform("uHalfDiagonal"), std::max(0.5f * glm::length(diag), 1e-6f));
+    glUniform1i(select_.uniform("uGathers"), gathers_ ? 1 : 0);
+    dispatchOverTile(tile);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    // The gather's dispatch is sized by the count (a workgroup per listed pixel).
+    listCount_ = 0;
+    glGetNamedBufferSubData(list_.id(), 0, 4, &listCount_);
+    gatheredPerLevel_[std::min<size_t>(level, 7)] += listCount_;
+  }
+
+  // The listed pixels' micro-buffers: a workgroup each.
+  void gather(SceneFrame& f, const frame::PassContext& ctx) {
+    if (listCount_ == 0) return;
+    bindTile(f, ctx);
+    bindGather(f);
+    const uint32_t row = std::min<uint32_t>(listCount_, 65535u);
+    glUniform1ui(gather_.uniform("uRowItems"), row);
+    glDispatchCompute(row, (listCount_ + row - 1) / row, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+
+  // The level's pixels not gathered, interpolated from their cell's corners.
+  void upsample(SceneFrame& f, const frame::PassContext& ctx, size_t level) {
+    bindTile(f, ctx);
+    upsample_.use();
+    glUniform1i(upsample_.uniform("uStep"), steps_[level]);
+    glUniform1i(upsample_.uniform("uGathers"), gathers_ ? 1 : 0);
+    dispatchOverTile(ctx.tile());
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+
+  // The joint bilateral post filter, into filtered_ (which then stands for pixels_).
+  void filter(SceneFrame& f, const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    bindTile(f, ctx);
+    filtered_.reserve(size_t(tile.width) * size_t(tile.height) * 32);
+    filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_FILTERED);
+    filter_.use();
+    const int r = params_.postFilter < 0 ? 3 : params_.postFilter / 2;
+    glUniform1i(filter_.uniform("uRadius"), r);
+    glUniform1i(filter_.uniform("uGlossyRadius"), params_.postFilter < 0 ? 1 : r);
+    glUniform1i(filter_.uniform("uGathers"), gathers_ ? 1 : 0);
+    dispatchOverTile(tile);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+
+  // The tile's output: direct light plus each pixel's albedo times its light.
+  void compose(SceneFrame& f, const frame::PassContext& ctx) {
+    bindTile(f, ctx);
+    if (params_.postFilter != 0)
+      filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
+    glBindImageTexture(0, ctx.target("radiance_gi").id(), 0, GL_FALSE, 0, GL_WRITE_ONLY,
+                       GL_RGBA32F);
+    compose_.use();
+    glUniform1i(compose_.uniform("uGathers"), gathers_ ? 1 : 0);
+    dispatchOverTile(ctx.tile());
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
                     GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
                     GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
@@ -593,6 +688,8 @@ class ProjectionExtension : public FrameExtension {
   int furtherBounces_ = 0;
   gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_, filtered_;
   uint64_t gatheredPerLevel_[8] = {};
+  std::vector<int> steps_;  // the adaptive sampling's levels, coarsest first
+  uint32_t listCount_ = 0;  // pixels the current level's gather takes
   std::vector<ProjectionPoint> host_, surfels_;
   std::vector<std::string> warnings_;
   size_t scanPoints_ = 0;

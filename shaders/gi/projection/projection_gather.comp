@@ -201,7 +201,8 @@ void main() {
   mat3 f = frameFromNormal(gR.n);  // columns: tangent, bitangent, normal
   gLocalFromWorld = transpose(mat3(f[0], f[2], f[1]));
   uint filled = 0u;
-  gRng = hashU(uint(px.x) * 73856093u ^ uint(px.y) * 19349663u ^ hashU(uSeed + uint(frame.counts.z)) ^ lid * 83492791u);
+  ivec2 g = px + ivec2(frame.tile.xy);  // the full image's pixel: tiles draw the same samples
+  gRng = hashU(uint(g.x) * 73856093u ^ uint(g.y) * 19349663u ^ hashU(uSeed + uint(frame.counts.z)) ^ lid * 83492791u);
   for (uint t = lid; t < uint(M * M); t += 64u) sKey[t] = PROJECTION_NO_SAMPLE;
   barrier();
 

@@ -1,5 +1,5 @@
 // Image-space adaptive sampling (Maletz, Wang and Bowers 2011, section 3.3), one level: the
-// tile's pixels on this level's grid (step uStep, plus the tile's last row and column) that are
+// tile's pixels on this level's grid (the full image's, step uStep, plus its last row and column) that are
 // not gathered yet are gathered where the coherence metric over the corners of their cell on the
 // coarser grid (step 2 uStep) reaches uEpsilon,
 //   max_i(|p_i - p_c| / (d / 2) + sqrt(2 - 2 n_i . n_c)) + lambda sum_{j<k} |L_o(p_j) - L_o(p_k)|,

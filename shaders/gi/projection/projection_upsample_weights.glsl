@@ -7,10 +7,12 @@
 layout(std430, binding = PROJECTION_SSBO_PIXELS) buffer Pixels { vec4 pixels[]; };
 uniform bool uGathers;
 
-// On the grid of step `step` (the tile's last row and column are on every grid, so that every
-// pixel has corners on both sides).
+// The grids are the full image's (a tile at x0, y0 takes the same pixels as an untiled frame,
+// its margin holding the parents its edge pixels need); the image's last row and column are on
+// every grid, so that every pixel has corners on both sides.
 bool onGrid(ivec2 px, int step, ivec2 size) {
-  return (px.x % step == 0 || px.x == size.x - 1) && (px.y % step == 0 || px.y == size.y - 1);
+  ivec2 g = px + ivec2(frame.tile.xy), last = ivec2(frame.image.xy) - 1;
+  return (g.x % step == 0 || g.x == last.x) && (g.y % step == 0 || g.y == last.y);
 }
 
 // A pixel's outgoing radiance from its gathered (or interpolated) light: direct light plus its
@@ -32,12 +34,17 @@ struct Corners {
 // The coarser grid's cell around px (step 2 x `step`): its corners, clamped to the tile.
 Corners cornersOf(ivec2 px, int step, ivec2 size) {
   int s2 = 2 * step;
-  ivec2 lo = (px / s2) * s2;
-  ivec2 hi = min(lo + s2, size - 1);
-  if (px.x % s2 == 0 || hi.x == px.x) hi.x = lo.x;
-  if (px.y % s2 == 0 || hi.y == px.y) hi.y = lo.y;
-  vec2 t = vec2(hi.x > lo.x ? float(px.x - lo.x) / float(hi.x - lo.x) : 0.0,
-                hi.y > lo.y ? float(px.y - lo.y) / float(hi.y - lo.y) : 0.0);
+  ivec2 origin = ivec2(frame.tile.xy), g = px + origin;
+  ivec2 lo = (g / s2) * s2;
+  ivec2 hi = min(lo + s2, ivec2(frame.image.xy) - 1);
+  if (g.x % s2 == 0 || hi.x == g.x) hi.x = lo.x;
+  if (g.y % s2 == 0 || hi.y == g.y) hi.y = lo.y;
+  vec2 t = vec2(hi.x > lo.x ? float(g.x - lo.x) / float(hi.x - lo.x) : 0.0,
+                hi.y > lo.y ? float(g.y - lo.y) / float(hi.y - lo.y) : 0.0);
+  // In the tile's pixels; corners beyond the tile (only for its margin's pixels, which the
+  // frame discards) are clamped to it.
+  lo = clamp(lo - origin, ivec2(0), size - 1);
+  hi = clamp(hi - origin, ivec2(0), size - 1);
   Corners c;
   c.at[0] = lo, c.at[1] = ivec2(hi.x, lo.y), c.at[2] = ivec2(lo.x, hi.y), c.at[3] = hi;
   float bilinear[4] = float[4]((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);

@@ -170,6 +170,21 @@ TEST(ProjectionAdaptive, CreaseIsGatheredAndNoWeightCrossesIt) {
   EXPECT_EQ(between, 0);
   EXPECT_LT(std::stoi(f.attributes.at("nestlight:projection_receivers")),
             std::stoi(f.attributes.at("nestlight:projection_shaded_pixels")) / 2);
+
+  // In tiles of 16 pixels (nine, each with the margins its levels and the post filter declare:
+  // the grids are the full image's, the samples drawn per image pixel) the image is the same.
+  Scene tiled = projectionScene(t, rho, {{"clusters", 64}, {"max_tile", 16}});
+  tiled.camera = s.camera;
+  MethodFrame g = createMethod(tiled, {true, false})->render(tiled.camera);
+  ASSERT_EQ(g.image.rgb.size(), f.image.rgb.size());
+  double worst = 0;
+  for (size_t i = 0; i < f.image.rgb.size(); ++i)
+    worst = std::max(worst, double(std::abs(g.image.rgb[i] - f.image.rgb[i])));
+  std::printf("tiled: worst difference %.3g of rho L\n", worst / (rho * L));
+  EXPECT_LT(worst, 0.005 * rho * L) << g.summary;  // measured 0.0012; tile-local grids 0.0125
+  // More pixels are gathered: the margins' too.
+  EXPECT_GT(std::stoi(g.attributes.at("nestlight:projection_receivers")),
+            std::stoi(f.attributes.at("nestlight:projection_receivers")));
 }
 
 // The meshes' surfels are points of S: an emissive square (half side w = 0.6 m, radiance L_e)
