@@ -55,12 +55,15 @@ RasterMethod::~RasterMethod() {
   scans_.clear();
 }
 
-MethodFrame RasterMethod::render(const SceneCamera& camera) {
+MethodFrame RasterMethod::render(const SceneCamera& cameraIn) {
   if (context_) context_->makeCurrent();
   setOutput(radianceTarget_);
-  const int W = camera.width, H = camera.height;
-  if (W <= 0 || H <= 0)
+  if (cameraIn.width <= 0 || cameraIn.height <= 0)
     throw Error(scene_.file.string(), "camera", "the image size must be positive");
+  const int ss = extension_ ? std::max(1, extension_->supersample()) : 1;
+  SceneCamera camera = cameraIn;
+  camera.width *= ss, camera.height *= ss;
+  const int W = camera.width, H = camera.height;
   selectEnvironment(camera);
   const auto tStream = Clock::now();
   const uint64_t drawPoints = stream(camera, true);
@@ -79,9 +82,20 @@ MethodFrame RasterMethod::render(const SceneCamera& camera) {
     rgba = graph_.execute(W, H, tile);
     t0 = tAgain;
   }
+  if (ss > 1) {  // box-filtered back to the camera's pixels
+    const int w = cameraIn.width, h = cameraIn.height;
+    std::vector<float> small(size_t(w) * size_t(h) * 4, 0.0f);
+    const float weight = 1.0f / float(ss * ss);
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x)
+        for (int c = 0; c < 4; ++c)
+          small[(size_t(y / ss) * w + size_t(x / ss)) * 4 + c] +=
+              weight * rgba[(size_t(y) * W + size_t(x)) * 4 + c];
+    rgba = std::move(small);
+  }
   MethodFrame f;
   f.seconds = secondsSince(t0) + beforeFrameSeconds_;
-  f.image = imageOf(rgba, W, H);
+  f.image = imageOf(rgba, cameraIn.width, cameraIn.height);
   describe(f, drawPoints, streamSeconds);
   if (extension_) extension_->afterReadBack(rgba, f);
   return f;

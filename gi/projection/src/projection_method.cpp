@@ -107,7 +107,9 @@ class ProjectionExtension : public FrameExtension {
             {"lambda", std::to_string(params_.lambda)},
             {"epsilon", std::to_string(params_.epsilon)},
             {"epsilon_level_factor", std::to_string(params_.epsilonLevelFactor)},
-            {"post_filter", params_.postFilter < 0 ? "auto" : std::to_string(params_.postFilter)}};
+            {"post_filter", params_.postFilter < 0 ? "auto" : std::to_string(params_.postFilter)},
+            {"supersample", std::to_string(params_.supersample)},
+            {"bounce_receivers", std::to_string(params_.bounceReceivers)}};
   }
 
   std::string setUp(SceneFrame& f) override {
@@ -169,6 +171,8 @@ class ProjectionExtension : public FrameExtension {
     return "radiance_gi";
   }
 
+  int supersample() const override { return params_.supersample; }
+
   void beforeFrame(SceneFrame&) override {
     const uint32_t zeros[8] = {};
     stats_.upload(zeros, sizeof zeros);
@@ -215,6 +219,9 @@ class ProjectionExtension : public FrameExtension {
     if (furtherBounces_)
       f.summary += "; " + std::to_string(furtherBounces_) + " further bounce(s) gathered at " +
                    std::to_string(bounceList_.size()) + " points of S";
+    if (params_.supersample > 1)
+      f.summary += "; " + std::to_string(params_.supersample) + "x" +
+                   std::to_string(params_.supersample) + " subpixels a pixel (stills)";
     for (const std::string& w : warnings_) f.summary += "; warning: " + w;
     if (s[1])
       f.summary +=

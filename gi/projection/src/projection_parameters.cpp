@@ -49,6 +49,9 @@ const ParameterSpecs& projectionParameterSpecs() {
                  "the joint bilateral post filter's window: auto (7 x 7, 3 x 3 where glossy), 0 "
                  "(none), 3 or 7")
           .orOneOf({"auto"}),
+      P::integer("supersample", 1, 2, 1,
+                 "stills at 2 x 2 subpixels a pixel, box-filtered (the paper's 2xAA; about 4x "
+                 "the time; the viewer's frames stay at 1)"),
       P::integer("bounce_receivers", 1, 1 << 22, 4096,
                  "albedo mode, gi.max_bounces 3 and more: the points of S that gather each "
                  "further bounce (the others take the nearest one's of their cluster)"),
@@ -77,6 +80,7 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   p.epsilon = float(r.number("epsilon"));
   p.epsilonLevelFactor = float(r.number("epsilon_level_factor"));
   p.bounceReceivers = int(r.integer("bounce_receivers"));
+  p.supersample = int(r.integer("supersample"));
   const nlohmann::json& filter = r.value("post_filter");
   p.postFilter = filter.is_string() ? -1 : int(filter.get<int64_t>());
   if (p.postFilter != -1 && p.postFilter != 0 && p.postFilter != 3 && p.postFilter != 7) {

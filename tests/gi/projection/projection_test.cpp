@@ -187,6 +187,47 @@ TEST(ProjectionAdaptive, CreaseIsGatheredAndNoWeightCrossesIt) {
             std::stoi(f.attributes.at("nestlight:projection_receivers")));
 }
 
+// supersample 2 (the paper's 2xAA): the still is the box filter of the same frame rendered at twice
+// the width and height (its cut, grids and samples are that image's), so the two agree to float
+// rounding; and the crease's edge pixels take values between its faces'.
+TEST(ProjectionAdaptive, SupersampledStillIsTheBoxFilterOfTwiceTheSize) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 30000, 2.0f, 150, 0.0f);
+  const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
+  Scene s = projectionScene(t, rho, {{"clusters", 64}, {"supersample", 2}});
+  s.camera.eye = glm::dvec3(-0.9, 0.1, 0.7);
+  s.camera.target = glm::dvec3(-0.2, 0.0, 0.2);
+  s.camera.fovYDegrees = 40;
+  s.camera.width = s.camera.height = 24;
+  MethodFrame f = createMethod(s, {true, false})->render(s.camera);
+  ASSERT_EQ(f.image.width, 24);
+  EXPECT_NE(f.summary.find("2x2 subpixels"), std::string::npos) << f.summary;
+  Scene big = projectionScene(t, rho, {{"clusters", 64}});
+  big.camera = s.camera;
+  big.camera.width = big.camera.height = 48;
+  MethodFrame b = createMethod(big, {true, false})->render(big.camera);
+  double worst = 0;
+  int between = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      glm::vec3 box(0.0f);
+      for (int k = 0; k < 4; ++k) {
+        const Rgb c = b.image.get(2 * x + k % 2, 2 * y + k / 2);
+        box += 0.25f * glm::vec3(c.r, c.g, c.b);
+      }
+      const Rgb c = f.image.get(x, y);
+      worst = std::max(worst, double(glm::length(glm::vec3(c.r, c.g, c.b) - box)));
+      const double r = c.r / (rho * L);
+      between += r > 0.68 && r < 0.86;
+    }
+  std::printf(
+      "supersampled: worst difference from the box filter %.3g of rho L; %d pixels "
+      "between the faces\n",
+      worst / (rho * L), between);
+  EXPECT_LT(worst, 1e-4 * rho * L);
+  EXPECT_GT(between, 0);
+}
+
 // The meshes' surfels are points of S: an emissive square (half side w = 0.6 m, radiance L_e)
 // 0.5 m in front of the box's face, behind the camera, inside a sphere of black points, lights the
 // face's centre with irradiance pi L_e F, F the square's view factor from a point on its axis

@@ -144,6 +144,9 @@ class FrameExtension {
     return false;
   }
   virtual std::vector<std::pair<std::string, std::string>> parameters() const { return {}; }
+  // Stills render at this many times the camera's width and height (its cut chosen for that
+  // size too) and are box-filtered back: supersampling for extensions whose paper asks for it.
+  virtual int supersample() const { return 1; }
   // True when the extension reads the shadow maps only at the camera's pixels (as raster's direct
   // light does): directional lights' maps are then fitted to the camera's view each frame
   // (shadow_fit.h), sharp however far the scene's objects lie apart. False keeps each over the

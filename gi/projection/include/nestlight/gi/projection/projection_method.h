@@ -43,6 +43,8 @@ struct ProjectionParameters {
   // The albedo mode's bounces beyond the gathered one (gi.max_bounces 3 and more) gather at this
   // many points of S, every other point taking its light from the nearest of its cluster's.
   int bounceReceivers = 4096;
+  // Stills at this many subpixels a side, box-filtered (the paper's 2xAA: 2).
+  int supersample = 1;
 };
 
 const ParameterSpecs& projectionParameterSpecs();
