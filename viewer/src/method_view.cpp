@@ -145,6 +145,9 @@ Edit parameterWidget(const gi::ParameterSpec& p, json& v) {
     case gi::ParameterType::Number:
       e = numberWidget(p, v);
       break;
+    case gi::ParameterType::Pixels:  // set in the scene file; shown, not edited
+      ImGui::TextUnformatted((p.name + ": " + v.dump()).c_str());
+      break;
   }
   if (e != Edit::Committed && ImGui::IsItemDeactivatedAfterEdit()) e = Edit::Committed;
   if (ImGui::IsItemHovered())

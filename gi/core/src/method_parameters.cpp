@@ -30,6 +30,20 @@ json checkValue(const JsonField& v, const ParameterSpec& s) {
       return v.choice(s.choices);
     case ParameterType::String:
       return v.string();
+    case ParameterType::Pixels: {
+      if (!v.value().is_array())
+        v.fail("expected a list of [x, y] pixels, e.g. [[10, 20], [5, 7]]");
+      if (v.arraySize() > size_t(s.max))
+        v.fail("at most " + std::to_string(int64_t(s.max)) + " pixels, got " +
+               std::to_string(v.arraySize()));
+      json out = json::array();
+      for (size_t i = 0; i < v.arraySize(); ++i) {
+        const JsonField p = v.at(i);
+        if (!p.value().is_array() || p.arraySize() != 2) p.fail("expected [x, y]");
+        out.push_back({p.at(0).integer(0, 65535), p.at(1).integer(0, 65535)});
+      }
+      return out;
+    }
   }
   return nullptr;
 }
@@ -78,6 +92,16 @@ ParameterSpec ParameterSpec::choice(std::string name, std::vector<std::string> c
   s.type = ParameterType::Choice;
   s.choices = std::move(choices);
   s.defaultValue = std::move(value);
+  s.help = std::move(help);
+  return s;
+}
+
+ParameterSpec ParameterSpec::pixels(std::string name, int maxCount, std::string help) {
+  ParameterSpec s;
+  s.name = std::move(name);
+  s.type = ParameterType::Pixels;
+  s.min = 0, s.max = maxCount;
+  s.defaultValue = json::array();
   s.help = std::move(help);
   return s;
 }
@@ -172,6 +196,9 @@ std::string describeParameterType(const ParameterSpec& s) {
       break;
     case ParameterType::String:
       o << "string";
+      break;
+    case ParameterType::Pixels:
+      o << "list of [x, y] pixels (at most " << int64_t(s.max) << ")";
       break;
   }
   return o.str();

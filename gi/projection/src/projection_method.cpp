@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <nanoflann.hpp>
 
@@ -20,6 +21,7 @@
 #include "nestlight/frame/gl_node_store.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/gi/frame/scene_frame.h"
+#include "nestlight/gi/hdr_image.h"
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/projection/clusters.h"
@@ -89,11 +91,14 @@ class ProjectionExtension : public FrameExtension {
     return parameterNames(projectionParameterSpecs());
   }
 
+  const char* samplingName() const {
+    return params_.sampling == ProjectionParameters::Sampling::Random  ? "random"
+           : params_.sampling == ProjectionParameters::Sampling::Brute ? "brute"
+                                                                       : "importance";
+  }
+
   std::vector<std::pair<std::string, std::string>> parameters() const override {
-    const char* sampling = params_.sampling == ProjectionParameters::Sampling::Random ? "random"
-                           : params_.sampling == ProjectionParameters::Sampling::Brute
-                               ? "brute"
-                               : "importance";
+    const char* sampling = samplingName();
     return {{"points", std::to_string(params_.points)},
             {"clusters", std::to_string(params_.clusters)},
             {"random_per_cluster", std::to_string(params_.randomPerCluster)},
@@ -222,6 +227,13 @@ class ProjectionExtension : public FrameExtension {
     if (params_.supersample > 1)
       f.summary += "; " + std::to_string(params_.supersample) + "x" +
                    std::to_string(params_.supersample) + " subpixels a pixel (stills)";
+    if (!dumpFiles_.empty()) {
+      std::string files;
+      for (const std::string& d : dumpFiles_) files += (files.empty() ? "" : ",") + d;
+      f.attributes["nestlight:projection_dumped"] = files;
+      f.summary += "; " + std::to_string(dumpFiles_.size()) + " micro-buffer(s) written to " +
+                   params_.dumpFolder;
+    }
     for (const std::string& w : warnings_) f.summary += "; warning: " + w;
     if (s[1])
       f.summary +=
@@ -582,6 +594,7 @@ class ProjectionExtension : public FrameExtension {
     glUniform1ui(gather_.uniform("uSeed"), seed_);
     glUniform1i(gather_.uniform("uFillPasses"), params_.fillPasses);
     glUniform1i(gather_.uniform("uPointReceivers"), 0);
+    glUniform1i(gather_.uniform("uDump"), 0);
   }
 
   // What every per-tile pass binds: the G-buffer and the direct light, the per-pixel light
@@ -682,6 +695,67 @@ class ProjectionExtension : public FrameExtension {
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
                     GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
                     GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    if (!params_.dumpPixels.empty() && gathers_) dumpMicroBuffers(f, ctx);
+  }
+
+  // dump_pixels: the first frame's micro-buffers of the listed pixels this tile holds, gathered
+  // again (the same samples: they are drawn per image pixel) with the texels written out, one EXR
+  // each: texel (i, j) of the hemi-octahedral map (eq. 2) at pixel (i, j), its light in RGB; the
+  // header says which texels a sample covers (the rest are holes).
+  void dumpMicroBuffers(SceneFrame& f, const frame::PassContext& ctx) {
+    const frame::Tile& tile = ctx.tile();
+    if (dumped_.size() != params_.dumpPixels.size()) dumped_.assign(params_.dumpPixels.size(), 0);
+    std::vector<uint32_t> words(4, 0u);
+    std::vector<size_t> which;
+    for (size_t i = 0; i < params_.dumpPixels.size(); ++i) {
+      const int x = params_.dumpPixels[i][0], glY = tile.fullHeight - 1 - params_.dumpPixels[i][1];
+      const int lx = x - tile.x0, ly = glY - tile.y0;
+      if (dumped_[i] || lx < 0 || ly < 0 || lx >= tile.width || ly >= tile.height) continue;
+      words.push_back(uint32_t(lx) | (uint32_t(ly) << 16));
+      which.push_back(i);
+    }
+    if (which.empty()) return;
+    words[0] = uint32_t(which.size());
+    list_.reserve(words.size() * 4);
+    list_.upload(words.data(), words.size() * 4);
+    const size_t texels = size_t(params_.microBuffer) * size_t(params_.microBuffer);
+    dump_.reserve(which.size() * texels * 16);
+    bindTile(f, ctx);
+    bindGather(f);
+    dump_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_FILTERED);
+    glUniform1i(gather_.uniform("uDump"), 1);
+    glUniform1ui(gather_.uniform("uRowItems"), uint32_t(which.size()));
+    glDispatchCompute(GLuint(which.size()), 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    glUniform1i(gather_.uniform("uDump"), 0);
+    std::vector<float> texel(which.size() * texels * 4);
+    glGetNamedBufferSubData(dump_.id(), 0, GLsizeiptr(texel.size() * sizeof(float)), texel.data());
+    std::filesystem::create_directories(params_.dumpFolder);
+    const int M = params_.microBuffer;
+    for (size_t j = 0; j < which.size(); ++j) {
+      const auto& px = params_.dumpPixels[which[j]];
+      HdrImage img(M, M);
+      std::string covered;
+      size_t holes = 0;
+      for (int t = 0; t < M * M; ++t) {
+        const float* v = &texel[(j * texels + size_t(t)) * 4];
+        img.set(t % M, t / M, Rgb(v[0], v[1], v[2]));
+        covered += v[3] > 0.5f ? '1' : '0';
+        holes += v[3] <= 0.5f;
+      }
+      const std::string path =
+          (std::filesystem::path(params_.dumpFolder) /
+           ("projection_" + std::to_string(px[0]) + "_" + std::to_string(px[1]) + ".exr"))
+              .string();
+      writeExr(path, img,
+               {{"nestlight:pixel", std::to_string(px[0]) + " " + std::to_string(px[1])},
+                {"nestlight:micro_buffer", std::to_string(M)},
+                {"nestlight:covered", covered},
+                {"nestlight:holes", std::to_string(holes)},
+                {"nestlight:sampling", samplingName()}});
+      dumped_[which[j]] = 1;
+      dumpFiles_.push_back(path);
+    }
   }
 
   ProjectionParameters params_;
@@ -697,6 +771,9 @@ class ProjectionExtension : public FrameExtension {
   uint64_t gatheredPerLevel_[8] = {};
   std::vector<int> steps_;  // the adaptive sampling's levels, coarsest first
   uint32_t listCount_ = 0;  // pixels the current level's gather takes
+  gl::Buffer dump_;
+  std::vector<char> dumped_;
+  std::vector<std::string> dumpFiles_;
   std::vector<ProjectionPoint> host_, surfels_;
   std::vector<std::string> warnings_;
   size_t scanPoints_ = 0;

@@ -52,6 +52,17 @@ const ParameterSpecs& projectionParameterSpecs() {
       P::integer("supersample", 1, 2, 1,
                  "stills at 2 x 2 subpixels a pixel, box-filtered (the paper's 2xAA; about 4x "
                  "the time; the viewer's frames stay at 1)"),
+      P::pixels("dump_pixels", 16,
+                "pixels whose micro-buffers each still writes as EXR (texel light; which texels "
+                "a sample covers in the header), e.g. [[80, 60]]"),
+      [] {
+        ParameterSpec p;
+        p.name = "dump_folder";
+        p.type = ParameterType::String;
+        p.defaultValue = "";
+        p.help = "the folder dump_pixels writes to (default: micro-buffers beside the scene file)";
+        return p;
+      }(),
       P::integer("bounce_receivers", 1, 1 << 22, 4096,
                  "albedo mode, gi.max_bounces 3 and more: the points of S that gather each "
                  "further bounce (the others take the nearest one's of their cluster)"),
@@ -81,6 +92,10 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   p.epsilonLevelFactor = float(r.number("epsilon_level_factor"));
   p.bounceReceivers = int(r.integer("bounce_receivers"));
   p.supersample = int(r.integer("supersample"));
+  for (const nlohmann::json& px : r.value("dump_pixels"))
+    p.dumpPixels.push_back({px[0].get<int>(), px[1].get<int>()});
+  p.dumpFolder = r.string("dump_folder");
+  if (p.dumpFolder.empty()) p.dumpFolder = (scene.file.parent_path() / "micro-buffers").string();
   const nlohmann::json& filter = r.value("post_filter");
   p.postFilter = filter.is_string() ? -1 : int(filter.get<int64_t>());
   if (p.postFilter != -1 && p.postFilter != 0 && p.postFilter != 3 && p.postFilter != 7) {

@@ -33,6 +33,10 @@ layout(std430, binding = PROJECTION_SSBO_CLUSTERS) readonly buffer Clusters { ui
 layout(std430, binding = PROJECTION_SSBO_SOLID) readonly buffer Solid { float texelSolidAngle[]; };
 layout(std430, binding = PROJECTION_SSBO_RADIANCE) readonly buffer Radiance { vec4 radiance[]; };
 layout(std430, binding = PROJECTION_SSBO_STATS) buffer Stats { uint stats[]; };
+// dump_pixels: the listed pixels' micro-buffers, M x M texels each (rgb: the light the texel
+// sends, a: 1 where a sample covers it, 0 for a hole), written instead of their light.
+layout(std430, binding = PROJECTION_SSBO_FILTERED) writeonly buffer Dump { vec4 dumpTexels[]; };
+uniform bool uDump;
 
 uniform int uRandomPerCluster;   // N_rnd
 uniform int uSamplesPerCluster;  // N_s / K
@@ -171,7 +175,7 @@ void splat(uint index, uint slot, float area) {
   for (int y = lo.y; y < hi.y; ++y)
     for (int x = lo.x; x < hi.x; ++x)
       if (covers(x, y)) atomicMin(sKey[y * M + x], key);
-  if (!uPointReceivers) atomicAdd(stats[3], 1u);
+  if (!uPointReceivers && !uDump) atomicAdd(stats[3], 1u);
 }
 
 void main() {
@@ -252,7 +256,7 @@ void main() {
       sTotal = sum;
       int base = K * nRnd;
       for (int k = 0; k < K; ++k) sBase[k] = base, base += sCount[k];
-      if (!sWeighted) atomicAdd(stats[1], 1u);
+      if (!sWeighted && !uDump) atomicAdd(stats[1], 1u);
     }
     barrier();
     float ns = float(K * uSamplesPerCluster);
@@ -311,6 +315,7 @@ void main() {
       uint s = uSampling == 2 ? sTexelPoint[t] : sSample[key & 4095u];
       L = (s & PROJECTION_BACK_FACING) != 0u ? vec3(0.0) : radiance[s & 0x7fffffffu].rgb;
     }
+    if (uDump) dumpTexels[item * uint(M * M) + t] = vec4(L, key == PROJECTION_NO_SAMPLE ? 0.0 : 1.0);
     vec3 wiLocal = transpose(shadeFrame) * w;
     if (wiLocal.z <= 0.0) continue;
     // Irradiance (the diffuse lobe's, re-applied with each pixel's own albedo after
@@ -322,10 +327,10 @@ void main() {
   sSum[lid] = sum;
   sRest[lid] = rest;
   // The counters describe the pixels' micro-buffers (the points' of further bounces are not).
-  if (empty > 0u && !uPointReceivers) atomicAdd(stats[2], empty);
-  if (filled > 0u && !uPointReceivers) atomicAdd(stats[4], filled);
+  if (empty > 0u && !uPointReceivers && !uDump) atomicAdd(stats[2], empty);
+  if (filled > 0u && !uPointReceivers && !uDump) atomicAdd(stats[4], filled);
   barrier();
-  if (lid == 0u) {
+  if (lid == 0u && !uDump) {
     vec3 e = vec3(0.0), r = vec3(0.0);
     for (int i = 0; i < 64; ++i) e += sSum[i], r += sRest[i];
     if (uPointReceivers) {

@@ -54,13 +54,35 @@ TEST(Projection, UniformSphereOfEmittersLightsAnObjectAsTheFurnace) {
   buildSphereScan(t, 30000, 2.0f, 150);
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
   for (const char* sampling : {"importance", "random", "brute"}) {
-    Scene s = projectionScene(t, rho, {{"sampling", sampling}, {"clusters", 64}});
+    // dump_pixels: the centre pixel's micro-buffer (the box's face) as EXR.
+    const int cx = 16, cy = 16;
+    Scene s = projectionScene(
+        t, rho, {{"sampling", sampling}, {"clusters", 64}, {"dump_pixels", {{cx, cy}}}});
     MethodFrame f = createMethod(s, {true, false})->render(s.camera);
     const double ratio = boxMean(f.image) / (rho * L);
     std::printf("projection %s: box / (rho L) = %.4f, coverage %.4f; %s\n", sampling, ratio,
                 coverage(f), f.summary.c_str());
     EXPECT_NEAR(ratio, 1.0, 0.02) << sampling;
     EXPECT_EQ(f.attributes.at("nestlight:projection_clusters"), "64");
+    // Every covered texel holds an emitter's radiance L; the header's mask and hole count agree,
+    // and the samples cover most of the map.
+    const std::string file = f.attributes.at("nestlight:projection_dumped");
+    ImageAttributes a;
+    const HdrImage mb = readHdrImage(file, &a);
+    ASSERT_EQ(mb.width, 32) << file;
+    const std::string& covered = a.at("nestlight:covered");
+    ASSERT_EQ(covered.size(), 32u * 32u);
+    size_t holes = 0, wrong = 0;
+    for (int k = 0; k < 32 * 32; ++k) {
+      if (covered[size_t(k)] == '0') {
+        holes++;
+        continue;
+      }
+      wrong += std::abs(mb.get(k % 32, k / 32).g / L - 1.0) > 0.01;
+    }
+    EXPECT_EQ(std::to_string(holes), a.at("nestlight:holes"));
+    EXPECT_EQ(wrong, 0u) << sampling;
+    EXPECT_LT(holes, 32u * 32u / 10) << sampling;
   }
 }
 

@@ -14,7 +14,8 @@
 
 namespace nestlight::gi {
 
-enum class ParameterType { Integer, Number, Boolean, Choice, String };
+// Pixels: a list of [x, y] image pixels (top row 0), at most `max` of them.
+enum class ParameterType { Integer, Number, Boolean, Choice, String, Pixels };
 
 struct ParameterSpec {
   std::string name;
@@ -37,6 +38,7 @@ struct ParameterSpec {
   static ParameterSpec boolean(std::string name, bool value, std::string help);
   static ParameterSpec choice(std::string name, std::vector<std::string> choices, std::string value,
                               std::string help);
+  static ParameterSpec pixels(std::string name, int maxCount, std::string help);
   // An integer that may be one of `words` instead.
   ParameterSpec orOneOf(std::vector<std::string> words) &&;
   ParameterSpec powersOfTwo() &&;

@@ -9,7 +9,9 @@
 // parameters and what is built.
 #pragma once
 
+#include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "nestlight/gi/method.h"
@@ -45,6 +47,9 @@ struct ProjectionParameters {
   int bounceReceivers = 4096;
   // Stills at this many subpixels a side, box-filtered (the paper's 2xAA: 2).
   int supersample = 1;
+  // Pixels (x, y; top row 0) whose micro-buffers each still writes to dumpFolder as EXR.
+  std::vector<std::array<int, 2>> dumpPixels;
+  std::string dumpFolder;
 };
 
 const ParameterSpecs& projectionParameterSpecs();
