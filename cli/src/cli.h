@@ -56,10 +56,11 @@ void addBench(CLI::App& app, int& exitCode);
 void addStress(CLI::App& app, int& exitCode);
 void addRender(CLI::App& app, int& exitCode);
 void addView(CLI::App& app, int& exitCode);
-void addBenchRender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
-void addBenchGi(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
-void addBenchFrame(CLI::App& app, int& exitCode);   // after addBench: a sub-command of `bench`
-void addBenchStream(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
+void addBenchRender(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
+void addBenchGi(CLI::App& app, int& exitCode);          // after addBench: a sub-command of `bench`
+void addBenchFrame(CLI::App& app, int& exitCode);       // after addBench: a sub-command of `bench`
+void addBenchProjection(CLI::App& app, int& exitCode);  // after addBench
+void addBenchStream(CLI::App& app, int& exitCode);      // after addBench: a sub-command of `bench`
 void addMakeScene(CLI::App& app, int& exitCode);
 void addSurfels(CLI::App& app, int& exitCode);
 void addCompare(CLI::App& app, int& exitCode);

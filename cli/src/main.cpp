@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
       "  nestlight bench gi room/scene.json             speed against error of the GI methods\n"
       "  nestlight bench ibl                            IBL estimators under video light probes\n"
       "  nestlight bench diffrender dr/scene.json       differential rendering's tables (paper)\n"
+      "  nestlight bench projection room/scene.json     micro-buffers against brute force (paper)\n"
       "  nestlight gl-info --programs                   the GL driver, and every shader compiled "
       "by it\n"
       "  nestlight expand-hdr scan.octree --photo p.exr HDR colour layer from one HDR photograph\n"
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addBenchRender(app, code);
   nestlight::cli::addBenchGi(app, code);
   nestlight::cli::addBenchFrame(app, code);
+  nestlight::cli::addBenchProjection(app, code);
   nestlight::cli::addBenchStream(app, code);
   nestlight::cli::addMakeScene(app, code);
   nestlight::cli::addSurfels(app, code);

@@ -234,7 +234,14 @@ class ProjectionExtension : public FrameExtension {
       f.summary += "; " + std::to_string(dumpFiles_.size()) + " micro-buffer(s) written to " +
                    params_.dumpFolder;
     }
+    for (const std::string& p : notReceivers_)
+      f.summary += "; dump_pixels: pixel " + p + " shows no receiver (sky or background)";
     for (const std::string& w : warnings_) f.summary += "; warning: " + w;
+    f.attributes["nestlight:projection_truncated"] = std::to_string(s[6]);
+    if (s[6])
+      f.summary += "; " + std::to_string(s[6]) +
+                   " receivers' splats stopped at llvmpipe's loop limit (brute force over a large "
+                   "S near a surface: their micro-buffers are incomplete)";
     if (s[1])
       f.summary +=
           "; " + std::to_string(s[1]) + " receivers saw no cluster's importance (uniform pdf)";
@@ -718,7 +725,8 @@ class ProjectionExtension : public FrameExtension {
     words[0] = uint32_t(which.size());
     list_.reserve(words.size() * 4);
     list_.upload(words.data(), words.size() * 4);
-    const size_t texels = size_t(params_.microBuffer) * size_t(params_.microBuffer);
+    // M x M texels and a word saying whether the receiver was truncated, per pixel.
+    const size_t texels = size_t(params_.microBuffer) * size_t(params_.microBuffer) + 1;
     dump_.reserve(which.size() * texels * 16);
     bindTile(f, ctx);
     bindGather(f);
@@ -734,9 +742,15 @@ class ProjectionExtension : public FrameExtension {
     const int M = params_.microBuffer;
     for (size_t j = 0; j < which.size(); ++j) {
       const auto& px = params_.dumpPixels[which[j]];
+      dumped_[which[j]] = 1;
+      if (texel[j * texels * 4 + 3] < 0) {  // no receiver there
+        notReceivers_.push_back(std::to_string(px[0]) + " " + std::to_string(px[1]));
+        continue;
+      }
       HdrImage img(M, M);
       std::string covered;
       size_t holes = 0;
+      const bool truncated = texel[(j * texels + texels - 1) * 4] > 0.5f;
       for (int t = 0; t < M * M; ++t) {
         const float* v = &texel[(j * texels + size_t(t)) * 4];
         img.set(t % M, t / M, Rgb(v[0], v[1], v[2]));
@@ -752,8 +766,8 @@ class ProjectionExtension : public FrameExtension {
                 {"nestlight:micro_buffer", std::to_string(M)},
                 {"nestlight:covered", covered},
                 {"nestlight:holes", std::to_string(holes)},
+                {"nestlight:truncated", truncated ? "true" : "false"},
                 {"nestlight:sampling", samplingName()}});
-      dumped_[which[j]] = 1;
       dumpFiles_.push_back(path);
     }
   }
@@ -773,7 +787,7 @@ class ProjectionExtension : public FrameExtension {
   uint32_t listCount_ = 0;  // pixels the current level's gather takes
   gl::Buffer dump_;
   std::vector<char> dumped_;
-  std::vector<std::string> dumpFiles_;
+  std::vector<std::string> dumpFiles_, notReceivers_;
   std::vector<ProjectionPoint> host_, surfels_;
   std::vector<std::string> warnings_;
   size_t scanPoints_ = 0;

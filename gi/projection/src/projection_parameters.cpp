@@ -52,7 +52,7 @@ const ParameterSpecs& projectionParameterSpecs() {
       P::integer("supersample", 1, 2, 1,
                  "stills at 2 x 2 subpixels a pixel, box-filtered (the paper's 2xAA; about 4x "
                  "the time; the viewer's frames stay at 1)"),
-      P::pixels("dump_pixels", 16,
+      P::pixels("dump_pixels", 256,
                 "pixels whose micro-buffers each still writes as EXR (texel light; which texels "
                 "a sample covers in the header), e.g. [[80, 60]]"),
       [] {

@@ -58,6 +58,16 @@ shared int sBase[PROJECTION_K];
 shared float sTotal;
 shared bool sWeighted;
 shared vec3 sSum[64], sRest[64];
+shared uint sTruncated;
+
+// llvmpipe ends the loops of an invocation, silently, once they have made 65,535 iterations in
+// all (its loop limiter is shared by an invocation's loops). The main loops check, after they end,
+// that they ran to their bound: where one did not, the receiver is counted truncated (a summary
+// line; a dumped micro-buffer says so) instead of reading as if its micro-buffer held everything.
+// Brute force over all of a large S met it (a ceiling pixel's map 61 of 1024 texels covered).
+void truncatedUnless(bool ranToTheEnd) {
+  if (!ranToTheEnd) atomicOr(sTruncated, 1u);
+}
 
 float allocateWeight(int k) { return sWeight[k]; }
 void allocateStore(int k, int n) { sCount[k] = n; }
@@ -172,9 +182,11 @@ void splat(uint index, uint slot, float area) {
   if (!footprint(index, area, lo, hi, q, back)) return;
   sSample[slot] = index | (back ? PROJECTION_BACK_FACING : 0u);
   uint key = (q << 12) | slot;
-  for (int y = lo.y; y < hi.y; ++y)
+  int y = lo.y;
+  for (; y < hi.y; ++y)
     for (int x = lo.x; x < hi.x; ++x)
       if (covers(x, y)) atomicMin(sKey[y * M + x], key);
+  truncatedUnless(y >= hi.y);
   if (!uPointReceivers && !uDump) atomicAdd(stats[3], 1u);
 }
 
@@ -200,6 +212,10 @@ void main() {
     gR.mat.baseColor = vec3(1.0);
     px = ivec2(int(word % 65536u), int(word / 65536u) + 65536);
   } else {
+    if (uDump && !isReceiver(px)) {  // nothing gathers there: say so
+      for (uint t = lid; t <= uint(M * M); t += 64u) dumpTexels[item * uint(M * M + 1) + t] = vec4(-1.0);
+      return;
+    }
     gR = receiverAt(px);
   }
   mat3 f = frameFromNormal(gR.n);  // columns: tangent, bitangent, normal
@@ -208,6 +224,7 @@ void main() {
   ivec2 g = px + ivec2(frame.tile.xy);  // the full image's pixel: tiles draw the same samples
   gRng = hashU(uint(g.x) * 73856093u ^ uint(g.y) * 19349663u ^ hashU(uSeed + uint(frame.counts.z)) ^ lid * 83492791u);
   for (uint t = lid; t < uint(M * M); t += 64u) sKey[t] = PROJECTION_NO_SAMPLE;
+  if (lid == 0u) sTruncated = 0u;
   barrier();
 
   const int K = PROJECTION_K;
@@ -215,7 +232,8 @@ void main() {
   if (uSampling == 2) {
     // Brute force: every point, its own area; too many to tell apart by the depth word's 12
     // bits, so the nearest distance first, then the point at it.
-    for (uint i = lid; i < total; i += 64u) {
+    uint i = lid;
+    for (; i < total; i += 64u) {
       ivec2 lo, hi;
       uint q;
       bool back;
@@ -224,8 +242,9 @@ void main() {
         for (int x = lo.x; x < hi.x; ++x)
           if (covers(x, y)) atomicMin(sKey[y * M + x], q << 12);
     }
+    truncatedUnless(i >= total);
     barrier();
-    for (uint i = lid; i < total; i += 64u) {
+    for (i = lid; i < total; i += 64u) {
       ivec2 lo, hi;
       uint q;
       bool back;
@@ -234,9 +253,11 @@ void main() {
         for (int x = lo.x; x < hi.x; ++x)
           if (covers(x, y) && sKey[y * M + x] == q << 12) sTexelPoint[y * M + x] = i | (back ? PROJECTION_BACK_FACING : 0u);
     }
+    truncatedUnless(i >= total);
   } else {
     int nRnd = uRandomPerCluster;
-    for (int k = int(lid); k < K; k += 64) {
+    int k = int(lid);
+    for (; k < K; k += 64) {
       uint first = clusterFirst[k], size = clusterFirst[k + 1] - first;
       float w = 0.0;
       for (int j = 0; j < nRnd && size > 0u; ++j) {
@@ -248,6 +269,7 @@ void main() {
       // Random sampling: each cluster by its share of the points.
       sWeight[k] = uSampling == 1 ? float(size) : w;
     }
+    truncatedUnless(k >= K);
     barrier();
     if (lid == 0u) {
       sWeighted = allocateSamples(K * uSamplesPerCluster, nextF());
@@ -260,7 +282,7 @@ void main() {
     }
     barrier();
     float ns = float(K * uSamplesPerCluster);
-    for (int k = int(lid); k < K; k += 64) {
+    for (k = int(lid); k < K; k += 64) {
       uint first = clusterFirst[k], size = clusterFirst[k + 1] - first;
       int n = sCount[k];
       if (size == 0u || n == 0) continue;
@@ -271,6 +293,7 @@ void main() {
         splat(index, uint(sBase[k] + j), float(size) * points[index].positionArea.w / expected);
       }
     }
+    truncatedUnless(k >= K);
   }
   barrier();
   // Holes between splats: samples drawn at random in their clusters do not tile the map, and
@@ -302,7 +325,8 @@ void main() {
   vec3 sum = vec3(0.0), rest = vec3(0.0);
   vec3 lambert = diffuseAlbedo(gR.mat) * kInvPi;
   uint empty = 0u;
-  for (uint t = lid; t < uint(M * M); t += 64u) {
+  uint t = lid;
+  for (; t < uint(M * M); t += 64u) {
     ivec2 c = ivec2(int(t) % M, int(t) / M);
     vec3 w = worldFromMap * hemiOctDecode((vec2(c) + 0.5) / float(M));
     uint key = sKey[t];
@@ -315,7 +339,8 @@ void main() {
       uint s = uSampling == 2 ? sTexelPoint[t] : sSample[key & 4095u];
       L = (s & PROJECTION_BACK_FACING) != 0u ? vec3(0.0) : radiance[s & 0x7fffffffu].rgb;
     }
-    if (uDump) dumpTexels[item * uint(M * M) + t] = vec4(L, key == PROJECTION_NO_SAMPLE ? 0.0 : 1.0);
+    if (uDump)  // alpha: 1 covered, 0 a hole
+      dumpTexels[item * uint(M * M + 1) + t] = vec4(L, key == PROJECTION_NO_SAMPLE ? 0.0 : 1.0);
     vec3 wiLocal = transpose(shadeFrame) * w;
     if (wiLocal.z <= 0.0) continue;
     // Irradiance (the diffuse lobe's, re-applied with each pixel's own albedo after
@@ -324,12 +349,15 @@ void main() {
     sum += e;
     rest += e * (evalBsdf(gR.mat, woLocal, wiLocal) - lambert);
   }
+  truncatedUnless(t >= uint(M * M));
   sSum[lid] = sum;
   sRest[lid] = rest;
   // The counters describe the pixels' micro-buffers (the points' of further bounces are not).
   if (empty > 0u && !uPointReceivers && !uDump) atomicAdd(stats[2], empty);
   if (filled > 0u && !uPointReceivers && !uDump) atomicAdd(stats[4], filled);
   barrier();
+  // After each dumped map, whether its receiver was truncated.
+  if (uDump && lid == 0u) dumpTexels[item * uint(M * M + 1) + uint(M * M)] = vec4(float(sTruncated));
   if (lid == 0u && !uDump) {
     vec3 e = vec3(0.0), r = vec3(0.0);
     for (int i = 0; i < 64; ++i) e += sSum[i], r += sRest[i];
@@ -337,6 +365,7 @@ void main() {
       pixels[2u * item] = vec4(e, 0.0);
     } else {
       atomicAdd(stats[0], 1u);
+      if (sTruncated != 0u) atomicAdd(stats[6], 1u);
       uint i = uint(px.y * int(frame.tile.z) + px.x);
       pixels[2u * i] = vec4(e, PROJECTION_GATHERED);
       pixels[2u * i + 1u] = vec4(r, 0.0);
