@@ -32,7 +32,7 @@ struct Configuration {
 struct MicroBuffer {
   int size = 0;
   std::vector<double> luminance;
-  std::string covered;  // '1' where a sample covers the texel
+  std::string covered;     // '1' where a sample covers the texel
   bool truncated = false;  // llvmpipe's loop limit stopped its splats
 };
 
@@ -45,8 +45,9 @@ bool readMicroBuffer(const fs::path& file, MicroBuffer& mb) {
   mb.covered = a.count("nestlight:covered") ? a.at("nestlight:covered") : "";
   mb.truncated = a.count("nestlight:truncated") && a.at("nestlight:truncated") == "true";
   if (mb.covered.size() != img.pixels())
-    throw Error(file.string(), "", "no nestlight:covered mask of " + std::to_string(img.pixels()) +
-                                       " texels in its header");
+    throw Error(
+        file.string(), "",
+        "no nestlight:covered mask of " + std::to_string(img.pixels()) + " texels in its header");
   mb.luminance.resize(img.pixels());
   for (size_t i = 0; i < img.pixels(); ++i) {
     const float* p = &img.rgb[3 * i];
@@ -92,7 +93,7 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
                   "outside the " + std::to_string(W) + "x" + std::to_string(H) + " image");
 
   const std::vector<Configuration> configurations = {
-      {"brute", {{"sampling", "brute"}}},  {"importance", json::object()},
+      {"brute", {{"sampling", "brute"}}},   {"importance", json::object()},
       {"random", {{"sampling", "random"}}}, {"splat 1", {{"splat", 1}}},
       {"splat 2", {{"splat", 2}}},          {"splat 3", {{"splat", 3}}}};
   auto ctx = gl::createHeadlessContext();
@@ -106,7 +107,8 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
   if (pixels.empty()) {
     json grid = json::array();
     for (int j = 0; j < 16; ++j)
-      for (int i = 0; i < 16; ++i) grid.push_back({int((i + 0.5) * W / 16), int((j + 0.5) * H / 16)});
+      for (int i = 0; i < 16; ++i)
+        grid.push_back({int((i + 0.5) * W / 16), int((j + 0.5) * H / 16)});
     gi::Scene s = base;
     s.gi.parameters["dump_pixels"] = grid;
     s.gi.parameters["dump_folder"] = (out / "probe").string();
@@ -130,7 +132,8 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
   }
   json pixelList = json::array();
   for (const auto& p : pixels) pixelList.push_back({p[0], p[1]});
-  json report = {{"device", ctx->description()}, {"scene", fs::absolute(o.scene).string()},
+  json report = {{"device", ctx->description()},
+                 {"scene", fs::absolute(o.scene).string()},
                  {"width", W},
                  {"height", H},
                  {"pixels", pixelList}};
@@ -153,9 +156,8 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
                 f.attributes.count("nestlight:projection_points")
                     ? (f.attributes.at("nestlight:projection_points") + " points of S").c_str()
                     : "");
-    report["configurations"][c.name] = {{"parameters", c.parameters},
-                                        {"seconds", f.seconds},
-                                        {"summary", f.summary}};
+    report["configurations"][c.name] = {
+        {"parameters", c.parameters}, {"seconds", f.seconds}, {"summary", f.summary}};
   }
 
   // Medians over the pixels: one receiver that sees a few points just above its horizon (brute
@@ -194,7 +196,8 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
         weights.assign(omega.size(), 0.0);
         for (int t = 0; t < b.size * b.size; ++t) {
           const double u = (t % b.size + 0.5) / b.size, v = (t / b.size + 0.5) / b.size;
-          const double x = 1.0 - u - v, z = u - v, y = std::max(1.0 - std::abs(x) - std::abs(z), 0.0);
+          const double x = 1.0 - u - v, z = u - v,
+                       y = std::max(1.0 - std::abs(x) - std::abs(z), 0.0);
           weights[size_t(t)] = omega[size_t(t)] * y / std::sqrt(x * x + y * y + z * z);
         }
       }
@@ -234,7 +237,8 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
   }
 
   std::string md =
-      "| configuration | pixels | rms | rms, irradiance-weighted | irradiance error | holes | spill "
+      "| configuration | pixels | rms | rms, irradiance-weighted | irradiance error | holes | "
+      "spill "
       "|\n|---|---|---|---|---|---|---|\n";
   char line[256];
   for (const MicroBufferComparison& r : results) {
@@ -242,9 +246,12 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
                   r.configuration.c_str(), r.pixels, r.rms, r.rmsIrradiance, r.irradianceError,
                   r.holes, r.spill);
     md += line;
-    report["results"][r.configuration] = {
-        {"pixels", r.pixels},   {"rms", r.rms},     {"rms_irradiance", r.rmsIrradiance},
-        {"irradiance_error", r.irradianceError}, {"holes", r.holes}, {"spill", r.spill}};
+    report["results"][r.configuration] = {{"pixels", r.pixels},
+                                          {"rms", r.rms},
+                                          {"rms_irradiance", r.rmsIrradiance},
+                                          {"irradiance_error", r.irradianceError},
+                                          {"holes", r.holes},
+                                          {"spill", r.spill}};
   }
   auto find = [&](const std::string& n) -> const MicroBufferComparison& {
     for (const auto& r : results)
@@ -278,8 +285,9 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
   if (find("brute").pixels == 0)
     md += "\nNo listed pixel shows a receiver: choose others with --pixel.\n";
   else if (rnd.rmsIrradiance == 0)
-    md += "\nBrute force's micro-buffers are black (no light reaches the points of S): nothing to "
-          "compare.\n";
+    md +=
+        "\nBrute force's micro-buffers are black (no light reaches the points of S): nothing to "
+        "compare.\n";
   std::printf("\n%s", md.c_str());
   std::ofstream(out / "bench_projection.md") << md;
   std::ofstream(out / "bench_projection.json") << report.dump(1) << "\n";

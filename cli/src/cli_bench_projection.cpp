@@ -25,8 +25,7 @@ void addBenchProjection(CLI::App& app, int& exitCode) {
   auto o = std::make_shared<bench::BenchProjectionOptions>();
   auto pixels = std::make_shared<std::vector<std::string>>();
   cmd->add_option("scene", o->scene, "Scene file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", o->out,
-                  "Output folder (default: bench-projection beside the scene)");
+  cmd->add_option("-o,--out", o->out, "Output folder (default: bench-projection beside the scene)");
   cmd->add_option("--pixel", *pixels,
                   "A pixel X,Y (top row 0) whose micro-buffers are compared; repeatable "
                   "(default: five receivers spread over those a 16 x 16 grid of the image finds)");

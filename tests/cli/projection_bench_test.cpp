@@ -18,9 +18,8 @@ TEST(ProjectionBench, EveryConfigurationIsComparedWithBruteForce) {
   test::TempDir dir;
   std::string out;
   test::noLeakChecksInGlChildren();
-  ASSERT_EQ(test::runCli("make-scene cornell -q -n 20k --width 32 --height 24 -o " +
-                             dir.file("room"),
-                         &out),
+  ASSERT_EQ(test::runCli(
+                "make-scene cornell -q -n 20k --width 32 --height 24 -o " + dir.file("room"), &out),
             0)
       << out;
   ASSERT_EQ(test::runCli("bench projection " + dir.file("room/scene.json") +
@@ -48,8 +47,8 @@ TEST(ProjectionBench, EveryConfigurationIsComparedWithBruteForce) {
   }
   EXPECT_NE(out.find("Targets"), std::string::npos) << out;
 
-  EXPECT_NE(test::runCli("bench projection " + dir.file("room/scene.json") +
-                             " --pixel 40,3 -o " + dir.file("b2"),
+  EXPECT_NE(test::runCli("bench projection " + dir.file("room/scene.json") + " --pixel 40,3 -o " +
+                             dir.file("b2"),
                          &out),
             0);
   EXPECT_NE(out.find("--pixel: 40,3"), std::string::npos) << out;
