@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
+#include <mutex>
 #include <vector>
 
 #include "nestlight/octree/error.h"
@@ -54,6 +56,27 @@ bool hasExtension(const char* list, const char* name) {
   return false;
 }
 
+// EGL keeps one display per platform and device for the process, and eglInitialize does not
+// count its callers: the first eglTerminate would end every other context on it (two headless
+// methods alive at once, one destroyed). Each context holds a use of its display here; the
+// last one terminates it.
+std::mutex displayUsersMutex;
+std::map<EGLDisplay, int>& displayUsers() {
+  static std::map<EGLDisplay, int> users;
+  return users;
+}
+void acquireDisplay(EGLDisplay d) {
+  std::lock_guard<std::mutex> lock(displayUsersMutex);
+  displayUsers()[d]++;
+}
+void releaseDisplay(EGLDisplay d) {
+  std::lock_guard<std::mutex> lock(displayUsersMutex);
+  auto it = displayUsers().find(d);
+  if (it != displayUsers().end() && --it->second > 0) return;
+  if (it != displayUsers().end()) displayUsers().erase(it);
+  eglTerminate(d);
+}
+
 class EglContext : public GlContext {
  public:
   EglContext(EGLDisplay d, EGLContext c, const std::string& platform) : display_(d), context_(c) {
@@ -69,7 +92,7 @@ class EglContext : public GlContext {
   void release() {
     eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
-    eglTerminate(display_);
+    releaseDisplay(display_);
   }
   void makeCurrent() override {
     if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
@@ -88,15 +111,16 @@ EGLContext createEglContext(EGLDisplay display, std::string& why) {
     why = "eglInitialize failed (" + eglErrorName(eglGetError()) + ")";
     return EGL_NO_CONTEXT;
   }
+  acquireDisplay(display);
   const char* ext = eglQueryString(display, EGL_EXTENSIONS);
   if (!hasExtension(ext, "EGL_KHR_surfaceless_context")) {
     why = "the display lacks EGL_KHR_surfaceless_context";
-    eglTerminate(display);
+    releaseDisplay(display);
     return EGL_NO_CONTEXT;
   }
   if (!eglBindAPI(EGL_OPENGL_API)) {
     why = "no desktop OpenGL API (" + eglErrorName(eglGetError()) + ")";
-    eglTerminate(display);
+    releaseDisplay(display);
     return EGL_NO_CONTEXT;
   }
   EGLConfig config = EGL_NO_CONFIG_KHR;
@@ -106,7 +130,7 @@ EGLContext createEglContext(EGLDisplay display, std::string& why) {
     EGLint n = 0;
     if (!eglChooseConfig(display, want, &config, 1, &n) || n < 1) {
       why = "no EGL config with desktop OpenGL";
-      eglTerminate(display);
+      releaseDisplay(display);
       return EGL_NO_CONTEXT;
     }
   }
@@ -128,7 +152,7 @@ EGLContext createEglContext(EGLDisplay display, std::string& why) {
   if (c == EGL_NO_CONTEXT) {
     why = "no OpenGL 4.5 core context (" + eglErrorName(eglGetError()) + "; EGL " +
           std::to_string(major) + "." + std::to_string(minor) + ")";
-    eglTerminate(display);
+    releaseDisplay(display);
   }
   return c;
 }

@@ -166,6 +166,23 @@ TEST(Shaders, CompileErrorNamesFileAndLineOnThisDriver) {
   EXPECT_NE(mapped.find("shaders/common/broken.glsl:2"), std::string::npos) << log;
 }
 
+// Headless contexts share EGL's one display per process: ending one (a method destroyed while
+// another lives) must leave the others working, and a context made after still works.
+TEST(Contexts, OneEndingLeavesTheOthersWorking) {
+  auto a = gl::createHeadlessContext();
+  auto b = gl::createHeadlessContext();
+  b.reset();
+  ASSERT_NO_THROW(a->makeCurrent());
+  GLuint buffer = 0;
+  glCreateBuffers(1, &buffer);
+  EXPECT_NE(buffer, 0u);
+  glDeleteBuffers(1, &buffer);
+  a.reset();
+  auto c = gl::createHeadlessContext();
+  ASSERT_NO_THROW(c->makeCurrent());
+  EXPECT_NE(glGetString(GL_VERSION), nullptr);
+}
+
 TEST(Shaders, EveryProgramCompilesAndLinks) {
   auto ctx = gl::createHeadlessContext();
   EXPECT_NE(ctx->description().find("4.5"), std::string::npos) << ctx->description();

@@ -65,6 +65,7 @@ MethodFrame RasterMethod::render(const SceneCamera& cameraIn) {
   camera.width *= ss, camera.height *= ss;
   const int W = camera.width, H = camera.height;
   selectEnvironment(camera);
+  still_ = true;
   const auto tStream = Clock::now();
   const uint64_t drawPoints = stream(camera, true);
   const double streamSeconds = secondsSince(tStream);
@@ -112,6 +113,7 @@ unsigned RasterMethod::renderInteractive(const SceneCamera& camera, float exposu
   setOutput("display");
   *exposure_ = exposureStops;
   selectEnvironment(camera);
+  still_ = false;
   const auto t0 = Clock::now();
   const uint64_t drawPoints = stream(camera, false);
   graph_.executeToTarget(camera.width, camera.height);

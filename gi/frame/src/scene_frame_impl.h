@@ -114,6 +114,8 @@ class RasterMethod : public Method, public SceneFrame {
   void setSkyInDirectLight(bool on) override { skyInDirectLight_ = on; }
   const std::vector<CutNode>& lightsCut() const override { return lightsCut_; }
   uint64_t cutGeneration() const override { return cutGeneration_; }
+  uint64_t viewGeneration() const override { return viewGeneration_; }
+  bool still() const override { return still_; }
   void bindLightsCutTree(int scan) const override { scans_.at(size_t(scan)).shadowTree.bind(); }
   size_t addNodeLayer(const NodeLayerFactory& make) override;
   unsigned layerBuffer(const CutNode& n, size_t layer) const override {
@@ -190,6 +192,11 @@ class RasterMethod : public Method, public SceneFrame {
   std::string radianceTarget_ = "radiance";  // what the tone map and the read-back take
   std::vector<CutNode> lightsCut_;
   uint64_t cutGeneration_ = 0;
+  uint64_t viewGeneration_ = 0;
+  // The camera's cut as last drawn (per scan, its nodes' handles, keys' hashes and point
+  // counts): viewGeneration.
+  std::vector<uint64_t> viewCut_;
+  bool still_ = false;
   FrameParameters params_;
   std::unique_ptr<gl::GlContext> context_;
   LocalBox bounds_;

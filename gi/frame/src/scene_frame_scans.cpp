@@ -117,7 +117,16 @@ uint64_t RasterMethod::stream(const SceneCamera& camera, bool complete) {
     }
     s.shadowTree.upload(s.shadowStreamer->drawList());
   }
-  if (extension_) updateLightsCut();  // only extensions read it
+  if (extension_) {  // only extensions read them
+    updateLightsCut();
+    std::vector<uint64_t> viewCut;
+    for (const auto& s : scans_) {
+      for (const streaming::DrawNode& n : s.streamer->drawList())
+        viewCut.insert(viewCut.end(), {n.handle, uint64_t(NodeKeyHash{}(n.key)), n.numPoints});
+      viewCut.push_back(~0ull);  // the scans apart
+    }
+    if (viewCut != viewCut_) viewCut_ = std::move(viewCut), ++viewGeneration_;
+  }
 
   frame::FrameBlock& u = graph_.uniforms();
   u.viewFromWorld = glm::lookAt(eye, target, up);

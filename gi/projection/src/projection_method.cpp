@@ -1,8 +1,8 @@
 // The `projection` method (nestlight/gi/projection/projection_method.h): Maletz, Wang and
 // Bowers, "Importance-Driven Point Projection for GPU-based Final Gathering" (2011), sections 3.1
 // (the point set), 3.2 (importance-driven splatting) and 4 (clusters, micro-buffers), on the
-// raster frame. Every receiver pixel gathers (the paper's image-space adaptive sampling is not
-// built yet).
+// raster frame, with section 3.3's image-space adaptive sampling and section 4's progressive
+// rendering (interactive frames refine while the view rests).
 #include "nestlight/gi/projection/projection_method.h"
 
 #include <tbb/parallel_for.h>
@@ -178,10 +178,26 @@ class ProjectionExtension : public FrameExtension {
 
   int supersample() const override { return params_.supersample; }
 
-  void beforeFrame(SceneFrame&) override {
+  void beforeFrame(SceneFrame& f) override {
     const uint32_t zeros[8] = {};
     stats_.upload(zeros, sizeof zeros);
     std::fill(std::begin(gatheredPerLevel_), std::end(gatheredPerLevel_), 0);
+    const frame::FrameBlock& u = f.graph().uniforms();
+    // Interactive frames refine one view over several frames while nothing it depends on
+    // changes: the camera, the nodes drawn, the lights' cut and views, the environment.
+    progressive_ = !f.still() && params_.progressiveMs > 0;
+    ViewKey key;
+    key.viewFromWorld = u.viewFromWorld;
+    key.clipFromView = u.clipFromView;
+    key.generations = glm::u64vec4(f.viewGeneration(), f.cutGeneration(), f.lightViewsGeneration(),
+                                   f.environmentGeneration());
+    if (!progressive_ || !progressStarted_ || !(key == viewKey_)) {
+      viewKey_ = key;
+      progressStarted_ = false;
+      progressLevel_ = 0;
+      levelListed_ = false;
+    }
+    budgetStarted_ = false;
   }
 
   void describe(const SceneFrame&, MethodFrame& f) const override {
@@ -205,9 +221,14 @@ class ProjectionExtension : public FrameExtension {
     f.attributes["nestlight:projection_gathered_share"] =
         std::to_string(s[5] ? double(s[0]) / double(s[5]) : 0.0);
     std::string perLevel;
-    for (int l = 0; l < 8 && (l == 0 || gatheredPerLevel_[l]); ++l)
+    for (size_t l = 0; l < std::min<size_t>(steps_.size(), 8); ++l)
       perLevel += (l ? "," : "") + std::to_string(gatheredPerLevel_[l]);
     f.attributes["nestlight:projection_gathered_per_level"] = perLevel;
+    if (progressive_) {
+      const bool done = progressLevel_ >= gatheringLevels();
+      f.attributes["nestlight:projection_converged"] = done ? "true" : "false";
+      f.attributes["nestlight:projection_progress_level"] = std::to_string(progressLevel_);
+    }
     const double texels = double(s[0]) * params_.microBuffer * params_.microBuffer;
     f.attributes["nestlight:projection_coverage"] =
         std::to_string(texels > 0 ? 1.0 - double(s[2]) / texels : 0.0);
@@ -224,6 +245,19 @@ class ProjectionExtension : public FrameExtension {
     if (furtherBounces_)
       f.summary += "; " + std::to_string(furtherBounces_) + " further bounce(s) gathered at " +
                    std::to_string(bounceList_.size()) + " points of S";
+    if (progressive_) {
+      char p[160];
+      if (progressLevel_ >= gatheringLevels())
+        std::snprintf(p, sizeof p, "; progressive: converged (the still's image)");
+      else
+        std::snprintf(p, sizeof p, "; progressive: level %zu of %zu (step %d), %u of %u pixels",
+                      progressLevel_ + 1, gatheringLevels(), steps_[progressLevel_],
+                      levelListed_ ? levelOffset_ : 0u, levelListed_ ? levelCount_ : 0u);
+      f.summary += p;
+    }
+    if (params_.levels > 0 && size_t(params_.levels) < steps_.size())
+      f.summary += "; levels: the first " + std::to_string(params_.levels) + " of " +
+                   std::to_string(steps_.size()) + " gather, the rest interpolate";
     if (params_.supersample > 1)
       f.summary += "; " + std::to_string(params_.supersample) + "x" +
                    std::to_string(params_.supersample) + " subpixels a pixel (stills)";
@@ -308,7 +342,7 @@ class ProjectionExtension : public FrameExtension {
             b.read(list);
             b.write(gathered);
           },
-          [this, &f](const frame::PassContext& ctx) { gather(f, ctx); });
+          [this, &f, level](const frame::PassContext& ctx) { gather(f, ctx, level); });
       if (level == 0) {
         previous = gathered;
         continue;
@@ -327,6 +361,7 @@ class ProjectionExtension : public FrameExtension {
     }
     if (params_.postFilter != 0) {
       g.addBuffer("projection_filtered");
+      const int radius = params_.postFilter < 0 ? 3 : params_.postFilter / 2;
       g.addPass(
           "projection_filter", frame::Scope::Tile,
           [=](frame::PassBuilder& b) {
@@ -334,7 +369,7 @@ class ProjectionExtension : public FrameExtension {
               b.read(t);
             b.read(previous);
             b.write("projection_filtered");
-            b.margin(params_.postFilter < 0 ? 3 : params_.postFilter / 2);
+            b.margin(radius);
           },
           [this, &f](const frame::PassContext& ctx) { filter(f, ctx); });
       previous = "projection_filtered";
@@ -602,6 +637,8 @@ class ProjectionExtension : public FrameExtension {
     glUniform1i(gather_.uniform("uFillPasses"), params_.fillPasses);
     glUniform1i(gather_.uniform("uPointReceivers"), 0);
     glUniform1i(gather_.uniform("uDump"), 0);
+    glUniform1ui(gather_.uniform("uListOffset"), 0u);
+    glUniform1ui(gather_.uniform("uListEnd"), UINT32_MAX);
   }
 
   // What every per-tile pass binds: the G-buffer and the direct light, the per-pixel light
@@ -614,7 +651,7 @@ class ProjectionExtension : public FrameExtension {
     ctx.bindTexture("normal", 2);
     ctx.bindTexture("material", 3);
     ctx.bindTexture("radiance", 4);
-    pixels_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
+    work_->bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
     list_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_LIST);
     stats_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_STATS);
   }
@@ -623,60 +660,150 @@ class ProjectionExtension : public FrameExtension {
     glDispatchCompute(GLuint((tile.width + 7) / 8), GLuint((tile.height + 7) / 8), 1);
   }
 
-  // One level's choice of the pixels it gathers (the first level: its whole grid).
+  // The levels that gather: all, or the first `levels`.
+  size_t gatheringLevels() const {
+    return params_.levels > 0 ? std::min(steps_.size(), size_t(params_.levels)) : steps_.size();
+  }
+
+  // One level's choice of the pixels it gathers (the first level: its whole grid). A progressive
+  // frame keeps its pixels in committed_, which holds exactly what a still's levels would have
+  // made so far: it selects a level once, when it reaches it.
   void select(SceneFrame& f, const frame::PassContext& ctx, size_t level) {
     const frame::Tile& tile = ctx.tile();
     const size_t pixels = size_t(tile.width) * size_t(tile.height);
-    if (level == 0) {
-      pixels_.reserve(pixels * 32);
-      const float zero[4] = {0, 0, 0, 0};
-      glClearNamedBufferData(pixels_.id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, zero);
-      list_.reserve((4 + pixels) * 4);
+    listCount_ = 0;
+    if (level == 0 && progressive_ &&
+        (tile.width != tile.fullWidth || tile.height != tile.fullHeight))
+      progressive_ = false;  // tiled frames start afresh per tile: no state to carry
+    work_ = progressive_ ? &committed_ : &pixels_;
+    if (progressive_ && level == 0 &&
+        (tile.fullWidth != progressWidth_ || tile.fullHeight != progressHeight_)) {
+      progressWidth_ = tile.fullWidth, progressHeight_ = tile.fullHeight;
+      progressLevel_ = 0, levelListed_ = false;  // a new size: a new view
     }
+    if (progressive_ && (level != progressLevel_ || levelListed_)) return;
+    if (level == 0) {
+      work_->reserve(pixels * 32);
+      const float zero[4] = {0, 0, 0, 0};
+      glClearNamedBufferData(work_->id(), GL_RGBA32F, GL_RGBA, GL_FLOAT, zero);
+      list_.reserve((4 + pixels) * 4);
+      progressStarted_ = true;
+    }
+    if (progressive_ && level >= gatheringLevels()) return;
+    runSelect(f, ctx, level, level >= gatheringLevels());
+    if (level >= gatheringLevels()) return;
+    // The gather's dispatch is sized by the count (a workgroup per listed pixel).
+    glGetNamedBufferSubData(list_.id(), 0, 4, &listCount_);
+    if (progressive_) levelListed_ = true, levelCount_ = listCount_, levelOffset_ = 0;
+  }
+
+  void runSelect(SceneFrame& f, const frame::PassContext& ctx, size_t level, bool interpolateOnly) {
     const uint32_t zeros[4] = {0, 0, 0, 0};
-    list_.upload(zeros, sizeof zeros);
+    if (!interpolateOnly) list_.upload(zeros, sizeof zeros);
     bindTile(f, ctx);
     const glm::vec3 diag = f.boundsHi() - f.boundsLo();
     select_.use();
     glUniform1i(select_.uniform("uStep"), steps_[level]);
     glUniform1i(select_.uniform("uFirstLevel"), level == 0 ? 1 : 0);
+    glUniform1i(select_.uniform("uInterpolateOnly"), interpolateOnly ? 1 : 0);
     glUniform1f(select_.uniform("uEpsilon"),
                 params_.epsilon * std::pow(params_.epsilonLevelFactor, float(level) - 1.0f));
     glUniform1f(select_.uniform("uLambda"), params_.lambda);
     glUniform1f(select_.uniform("uHalfDiagonal"), std::max(0.5f * glm::length(diag), 1e-6f));
     glUniform1i(select_.uniform("uGathers"), gathers_ ? 1 : 0);
-    dispatchOverTile(tile);
+    dispatchOverTile(ctx.tile());
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    // The gather's dispatch is sized by the count (a workgroup per listed pixel).
-    listCount_ = 0;
-    glGetNamedBufferSubData(list_.id(), 0, 4, &listCount_);
-    gatheredPerLevel_[std::min<size_t>(level, 7)] += listCount_;
   }
 
-  // The listed pixels' micro-buffers: a workgroup each.
-  void gather(SceneFrame& f, const frame::PassContext& ctx) {
-    if (listCount_ == 0) return;
+  // The listed pixels' micro-buffers: a workgroup each. A progressive frame gathers the first
+  // level whole, then its level's pixels in chunks for at most progressive_ms (at least one
+  // chunk a frame, so the view always refines).
+  void gather(SceneFrame& f, const frame::PassContext& ctx, size_t level) {
+    if (!progressive_) {
+      if (listCount_ == 0) return;
+      gatheredPerLevel_[std::min<size_t>(level, 7)] += listCount_;
+      runGather(f, ctx, 0, listCount_);
+      return;
+    }
+    if (level != progressLevel_ || !levelListed_) return;
+    using Clock = std::chrono::steady_clock;
+    if (level > 0 && !budgetStarted_) budgetStarted_ = true, budgetStart_ = Clock::now();
+    bool first = true;
+    while (levelOffset_ < levelCount_) {
+      uint32_t n = levelCount_ - levelOffset_;
+      if (level > 0) {
+        const double left =
+            params_.progressiveMs -
+            std::chrono::duration<double, std::milli>(Clock::now() - budgetStart_).count();
+        if (left <= 0 && !first) break;
+        const double want = msPerPixel_ > 0 ? std::max(left, 0.0) / msPerPixel_ : 16.0;
+        n = std::min<uint32_t>(n, uint32_t(std::clamp(want, 16.0, 1e7)));
+      }
+      const auto t0 = Clock::now();
+      runGather(f, ctx, levelOffset_, n);
+      glFinish();
+      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+      msPerPixel_ = msPerPixel_ > 0 ? 0.5 * (msPerPixel_ + ms / n) : ms / n;
+      levelOffset_ += n;
+      gatheredPerLevel_[std::min<size_t>(level, 7)] += n;
+      first = false;
+    }
+    if (levelOffset_ < levelCount_) return;
+    // The level is complete: its interpolation, as a still's, then on to the next.
+    if (level > 0) runUpsample(f, ctx, level, false);
+    levelListed_ = false;
+    progressLevel_++;
+  }
+
+  void runGather(SceneFrame& f, const frame::PassContext& ctx, uint32_t offset, uint32_t count) {
     bindTile(f, ctx);
     bindGather(f);
-    const uint32_t row = std::min<uint32_t>(listCount_, 65535u);
+    const uint32_t row = std::min<uint32_t>(count, 65535u);
     glUniform1ui(gather_.uniform("uRowItems"), row);
-    glDispatchCompute(row, (listCount_ + row - 1) / row, 1);
+    glUniform1ui(gather_.uniform("uListOffset"), offset);
+    glUniform1ui(gather_.uniform("uListEnd"), offset + count);
+    glDispatchCompute(row, (count + row - 1) / row, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
   }
 
-  // The level's pixels not gathered, interpolated from their cell's corners.
+  // The level's pixels not gathered, interpolated from their cell's corners (levels beyond
+  // `levels`: those pixels are listed by an interpolating select first).
   void upsample(SceneFrame& f, const frame::PassContext& ctx, size_t level) {
+    if (progressive_) return;  // committed_'s levels upsample as they complete
+    runUpsample(f, ctx, level, level >= gatheringLevels());
+  }
+
+  void runUpsample(SceneFrame& f, const frame::PassContext& ctx, size_t level, bool fallback) {
     bindTile(f, ctx);
     upsample_.use();
     glUniform1i(upsample_.uniform("uStep"), steps_[level]);
     glUniform1i(upsample_.uniform("uGathers"), gathers_ ? 1 : 0);
+    glUniform1i(upsample_.uniform("uFallback"), fallback ? 1 : 0);
     dispatchOverTile(ctx.tile());
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+  }
+
+  // A progressive frame's image: committed_ copied, the level in progress interpolated (its
+  // pixels not gathered yet too) and the levels after it interpolated from it.
+  void buildProgressiveView(SceneFrame& f, const frame::PassContext& ctx) {
+    if (!progressive_) return;
+    const frame::Tile& tile = ctx.tile();
+    const size_t bytes = size_t(tile.width) * size_t(tile.height) * 32;
+    pixels_.reserve(bytes);
+    glCopyNamedBufferSubData(committed_.id(), pixels_.id(), 0, 0, GLsizeiptr(bytes));
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    work_ = &pixels_;
+    for (size_t level = std::max<size_t>(progressLevel_, 1); level < steps_.size(); ++level) {
+      if (!(level == progressLevel_ && levelListed_)) runSelect(f, ctx, level, true);
+      runUpsample(f, ctx, level, true);
+    }
   }
 
   // The joint bilateral post filter, into filtered_ (which then stands for pixels_).
   void filter(SceneFrame& f, const frame::PassContext& ctx) {
     const frame::Tile& tile = ctx.tile();
+    buildProgressiveView(f, ctx);
+    work_ = &pixels_;
     bindTile(f, ctx);
     filtered_.reserve(size_t(tile.width) * size_t(tile.height) * 32);
     filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_FILTERED);
@@ -691,6 +818,8 @@ class ProjectionExtension : public FrameExtension {
 
   // The tile's output: direct light plus each pixel's albedo times its light.
   void compose(SceneFrame& f, const frame::PassContext& ctx) {
+    if (params_.postFilter == 0) buildProgressiveView(f, ctx);
+    work_ = &pixels_;
     bindTile(f, ctx);
     if (params_.postFilter != 0)
       filtered_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_PIXELS);
@@ -782,6 +911,26 @@ class ProjectionExtension : public FrameExtension {
   std::vector<uint32_t> bounceList_, receiverOf_;
   int furtherBounces_ = 0;
   gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_, filtered_;
+  // Progressive frames: the pixels as a still's levels leave them so far (committed_), the
+  // level in progress, its list's size and how far its gather got; pixels_ then holds the frame.
+  struct ViewKey {
+    glm::mat4 viewFromWorld{0.0f}, clipFromView{0.0f};
+    glm::u64vec4 generations{0};
+    bool operator==(const ViewKey& o) const {
+      return viewFromWorld == o.viewFromWorld && clipFromView == o.clipFromView &&
+             generations == o.generations;
+    }
+  };
+  gl::Buffer committed_;
+  gl::Buffer* work_ = &pixels_;  // what the per-tile passes bind as the pixels
+  bool progressive_ = false, progressStarted_ = false, levelListed_ = false;
+  ViewKey viewKey_;
+  size_t progressLevel_ = 0;
+  uint32_t levelCount_ = 0, levelOffset_ = 0;
+  int progressWidth_ = 0, progressHeight_ = 0;
+  double msPerPixel_ = 0;
+  bool budgetStarted_ = false;
+  std::chrono::steady_clock::time_point budgetStart_;
   uint64_t gatheredPerLevel_[8] = {};
   std::vector<int> steps_;  // the adaptive sampling's levels, coarsest first
   uint32_t listCount_ = 0;  // pixels the current level's gather takes

@@ -39,6 +39,14 @@ const ParameterSpecs& projectionParameterSpecs() {
                  "image-space adaptive sampling: gather a grid, then where the coherence metric "
                  "says so, upsampling the rest (false: every receiver pixel gathers)"),
       P::integer("grid", 1, 16, 4, "the first level's grid step in pixels").powersOfTwo(),
+      P::integer("levels", 0, 8, 0,
+                 "the adaptive sampling's levels that gather (0: all); the finer ones are only "
+                 "interpolated from them: the images the viewer shows as it refines"),
+      P::number(
+          "progressive_ms", 0, 1e5, 33,
+          "the viewer: each frame gathers the grid, then the finer levels' pixels for at most "
+          "this long; while the view rests, frames go on where the last stopped, up to the "
+          "still's image (0: every frame gathers all)"),
       P::number("lambda", 0, 1e6, 8, "the metric's weight of radiance changes against geometry"),
       P::number("epsilon", 0, 1e6, 0.3,
                 "the metric's threshold: a pixel gathers where the metric reaches it (0: every "
@@ -90,6 +98,8 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   p.lambda = float(r.number("lambda"));
   p.epsilon = float(r.number("epsilon"));
   p.epsilonLevelFactor = float(r.number("epsilon_level_factor"));
+  p.levels = int(r.integer("levels"));
+  p.progressiveMs = r.number("progressive_ms");
   p.bounceReceivers = int(r.integer("bounce_receivers"));
   p.supersample = int(r.integer("supersample"));
   for (const nlohmann::json& px : r.value("dump_pixels"))

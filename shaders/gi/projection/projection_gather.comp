@@ -47,6 +47,8 @@ uniform bool uSkyOwned;          // empty texels are the environment
 uniform uint uSeed;
 uniform int uFillPasses;         // hole-filling passes over the micro-buffer
 uniform uint uRowItems;          // list entries per row of workgroups (the dispatch's x size)
+uniform uint uListOffset;        // the list entries this dispatch gathers: [offset, end)
+uniform uint uListEnd;
 uniform bool uPointReceivers;    // the list holds points of S (further bounces), not pixels
 
 shared uint sKey[M * M];
@@ -191,9 +193,9 @@ void splat(uint index, uint slot, float area) {
 }
 
 void main() {
-  uint item = gl_WorkGroupID.y * uRowItems + gl_WorkGroupID.x;
+  uint item = uListOffset + gl_WorkGroupID.y * uRowItems + gl_WorkGroupID.x;
   uint lid = gl_LocalInvocationID.x;
-  if (item >= list[0]) return;
+  if (item >= min(list[0], uListEnd)) return;
   uint word = list[4u + item];
   ivec2 px = ivec2(int(word & 0xffffu), int(word >> 16));
   if (uPointReceivers) {
@@ -222,7 +224,7 @@ void main() {
   gLocalFromWorld = transpose(mat3(f[0], f[2], f[1]));
   uint filled = 0u;
   ivec2 g = px + ivec2(frame.tile.xy);  // the full image's pixel: tiles draw the same samples
-  gRng = hashU(uint(g.x) * 73856093u ^ uint(g.y) * 19349663u ^ hashU(uSeed + uint(frame.counts.z)) ^ lid * 83492791u);
+  gRng = hashU(uint(g.x) * 73856093u ^ uint(g.y) * 19349663u ^ hashU(uSeed) ^ lid * 83492791u);
   for (uint t = lid; t < uint(M * M); t += 64u) sKey[t] = PROJECTION_NO_SAMPLE;
   if (lid == 0u) sTruncated = 0u;
   barrier();

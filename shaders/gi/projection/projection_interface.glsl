@@ -29,3 +29,4 @@ NL_STRUCT(ProjectionPoint) {
 #define PROJECTION_UNSET 0.0         // not reached yet, or no receiver
 #define PROJECTION_GATHERED 1.0      // its micro-buffer was gathered
 #define PROJECTION_INTERPOLATED 2.0  // upsampled from the corners of its cell
+#define PROJECTION_LISTED 3.0        // to be gathered (progressive frames: not yet)

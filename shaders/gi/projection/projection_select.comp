@@ -5,7 +5,9 @@
 //   max_i(|p_i - p_c| / (d / 2) + sqrt(2 - 2 n_i . n_c)) + lambda sum_{j<k} |L_o(p_j) - L_o(p_k)|,
 // or where the joint bilateral weights of those corners all vanish (a depth edge: no weight
 // crosses it); else they are interpolated (projection_upsample.comp). The first level gathers its
-// whole grid. Gathered pixels are listed for projection_gather.comp.
+// whole grid. Gathered pixels are listed for projection_gather.comp (which marks them gathered).
+// uInterpolateOnly (a level a progressive frame has not reached, or beyond `levels`): every
+// receiver not gathered or listed is interpolated.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "projection_common.glsl"
 #include "projection_upsample_weights.glsl"
@@ -16,6 +18,7 @@ uniform bool uFirstLevel;
 uniform float uEpsilon;
 uniform float uLambda;
 uniform float uHalfDiagonal;  // d / 2: the scene's bounding diagonal's half
+uniform bool uInterpolateOnly;
 
 void main() {
   ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -23,10 +26,11 @@ void main() {
   if (px.x >= size.x || px.y >= size.y) return;
   if (!onGrid(px, uStep, size)) return;
   uint i = uint(px.y * size.x + px.x);
-  if (pixels[2u * i].w == PROJECTION_GATHERED) return;
+  float state = pixels[2u * i].w;
+  if (state == PROJECTION_GATHERED || state == PROJECTION_LISTED) return;
   if (!uGathers || !isReceiver(px)) return;
-  bool gather = uFirstLevel;
-  if (!gather) {
+  bool gather = uFirstLevel && !uInterpolateOnly;
+  if (!gather && !uInterpolateOnly) {
     Corners c = cornersOf(px, uStep, size);
     gather = c.weightSum <= 0.0;
     if (!gather) {
@@ -41,7 +45,7 @@ void main() {
     }
   }
   if (gather) {
-    pixels[2u * i].w = PROJECTION_GATHERED;
+    pixels[2u * i].w = PROJECTION_LISTED;
     uint slot = atomicAdd(list[0], 1u);
     list[4u + slot] = uint(px.x) | (uint(px.y) << 16);
   } else {

@@ -1,6 +1,7 @@
 // The `projection` method against closed forms: a Lambert box of albedo rho inside a sphere of
 // scan points of radiance L (radiance-cache mode) reflects rho L; with only the upper half
 // emitting, a side face sees emitters over half its hemisphere and reflects rho L / 2.
+#include <epoxy/gl.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -207,6 +208,84 @@ TEST(ProjectionAdaptive, CreaseIsGatheredAndNoWeightCrossesIt) {
   // More pixels are gathered: the margins' too.
   EXPECT_GT(std::stoi(g.attributes.at("nestlight:projection_receivers")),
             std::stoi(f.attributes.at("nestlight:projection_receivers")));
+}
+
+// The display texture of an interactive frame (RGBA8), read in the method's context (current
+// after the frame).
+std::vector<uint8_t> interactiveFrame(Method& m, const SceneCamera& c, MethodFrame& stats) {
+  const unsigned tex = m.renderInteractive(c, 0.0f, &stats);
+  std::vector<uint8_t> rgba(size_t(c.width) * size_t(c.height) * 4);
+  glGetTextureImage(tex, 0, GL_RGBA, GL_UNSIGNED_BYTE, GLsizei(rgba.size()), rgba.data());
+  return rgba;
+}
+
+// Progressive rendering (paper section 4): interactive frames gather the grid, then a budget's
+// worth of the finer levels' pixels each; while the view rests each frame goes on where the last
+// stopped, and the converged frame is the one a frame gathering everything at once shows, to the
+// bit (a level's pixels are selected once, from the levels before it, as in a still; samples are
+// drawn per pixel). Moving the camera starts again. `levels` 1 (the first level's image: the grid
+// alone, the rest interpolated) leaves no receiver dark, not even along the crease.
+TEST(ProjectionProgressive, RestingViewRefinesToTheFullFrameAndMovingRestarts) {
+  nestlight::test::TempDir t;
+  buildSphereScan(t, 30000, 2.0f, 150, 0.0f);
+  const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
+  Scene s = projectionScene(t, rho, {{"clusters", 64}, {"progressive_ms", 0.001}});
+  s.camera.eye = glm::dvec3(-0.9, 0.1, 0.7);
+  s.camera.target = glm::dvec3(-0.2, 0.0, 0.2);
+  s.camera.fovYDegrees = 40;
+  s.camera.width = s.camera.height = 48;
+  std::unique_ptr<Method> a = createMethod(s, {true, false});
+  MethodFrame st;
+  std::vector<uint8_t> progressive;
+  int frames = 0, refining = 0;
+  uint64_t mostPerFrame = 0;
+  for (; frames < 200; ++frames) {
+    progressive = interactiveFrame(*a, s.camera, st);
+    if (st.attributes.at("nestlight:projection_converged") == "true") break;
+    refining++;
+    // Frames that start the view (the first, and those whose cut was still streaming in) gather
+    // the grid whole; the others at most a chunk per level they reach.
+    if (st.attributes.at("nestlight:projection_gathered_per_level").substr(0, 2) == "0,")
+      mostPerFrame = std::max<uint64_t>(
+          mostPerFrame, std::stoull(st.attributes.at("nestlight:projection_receivers")));
+  }
+  std::printf("progressive: converged after %d frames, at most %llu pixels gathered a frame; %s\n",
+              frames + 1, (unsigned long long)mostPerFrame, st.summary.c_str());
+  ASSERT_LT(frames, 200) << st.summary;
+  EXPECT_GE(refining, 3);             // refined over several frames
+  EXPECT_LE(mostPerFrame, 3u * 16u);  // one chunk of 16 pixels per level reached a frame
+
+  Scene once = s;
+  once.gi.parameters["progressive_ms"] = 0;
+  std::unique_ptr<Method> b = createMethod(once, {true, false});
+  std::vector<uint8_t> whole;
+  for (int i = 0; i < 3; ++i) whole = interactiveFrame(*b, once.camera, st);
+  EXPECT_EQ(st.attributes.count("nestlight:projection_converged"), 0u);
+  EXPECT_TRUE(progressive == whole) << "the converged progressive frame differs from the full one";
+
+  SceneCamera moved = s.camera;
+  moved.eye.x += 0.01;
+  interactiveFrame(*a, moved, st);
+  EXPECT_EQ(st.attributes.at("nestlight:projection_converged"), "false") << st.summary;
+
+  Scene full = projectionScene(t, rho, {{"clusters", 64}});
+  full.camera = s.camera;
+  const MethodFrame f = createMethod(full, {true, false})->render(full.camera);
+  Scene first = full;
+  first.gi.parameters["levels"] = 1;
+  const MethodFrame g = createMethod(first, {true, false})->render(first.camera);
+  const std::string perLevel = f.attributes.at("nestlight:projection_gathered_per_level");
+  EXPECT_EQ(g.attributes.at("nestlight:projection_receivers"),
+            perLevel.substr(0, perLevel.find(',')));
+  int dark = 0, lit = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) {
+      if (f.image.get(x, y).r < 0.3 * rho * L) continue;  // not the box
+      lit++;
+      dark += g.image.get(x, y).r < 0.3 * rho * L;
+    }
+  EXPECT_GT(lit, 200);
+  EXPECT_EQ(dark, 0) << g.summary;
 }
 
 // supersample 2 (the paper's 2xAA): the still is the box filter of the same frame rendered at twice

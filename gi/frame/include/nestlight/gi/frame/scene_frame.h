@@ -97,6 +97,12 @@ class SceneFrame {
   // (cutGeneration() counts the changes).
   virtual const std::vector<CutNode>& lightsCut() const = 0;
   virtual uint64_t cutGeneration() const = 0;
+  // A new generation whenever the camera's cut (the nodes the G-buffer draws) changes: with the
+  // camera, the lights' cut and the environment, what an extension refining one view over
+  // several frames (projection's progressive frames) must start again on.
+  virtual uint64_t viewGeneration() const = 0;
+  // Whether the frame being rendered is a still (render) or an interactive frame.
+  virtual bool still() const = 0;
   // Binds scan `scan`'s lights'-cut draw tree (NL_SSBO_DRAW_TREE: points/splat_size.glsl's
   // finestSpacing() then works for that scan's CutNodes).
   virtual void bindLightsCutTree(int scan) const = 0;

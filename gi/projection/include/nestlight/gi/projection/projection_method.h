@@ -40,6 +40,14 @@ struct ProjectionParameters {
   float lambda = 8.0f;
   float epsilon = 0.3f;
   float epsilonLevelFactor = 2.0f;
+  // The levels gathered (0: all): with N, the levels below the first N only interpolate, which is
+  // what the progressive view shows as each level completes (the paper's Fig. 11).
+  int levels = 0;
+  // Interactive frames (the viewer): the grid is gathered whole, the finer levels' pixels for at
+  // most this long a frame; while the view does not change each frame goes on where the last one
+  // stopped, until the image is the still's (the paper's progressive rendering). 0: every frame
+  // gathers all its levels.
+  double progressiveMs = 33;
   // The post filter's window: -1 auto (7 x 7, 3 x 3 where glossy), 0 none, 3 or 7.
   int postFilter = -1;
   // The albedo mode's bounces beyond the gathered one (gi.max_bounces 3 and more) gather at this
