@@ -206,6 +206,7 @@ class ProjectionExtension : public FrameExtension {
     f.attributes["nestlight:projection_points"] = std::to_string(pointCount_);
     f.attributes["nestlight:projection_mesh_surfels"] = std::to_string(surfels_.size());
     f.attributes["nestlight:projection_further_bounces"] = std::to_string(furtherBounces_);
+    f.attributes["nestlight:projection_lit"] = litThisFrame_ ? "true" : "false";
     f.attributes["nestlight:projection_bounce_receivers"] = std::to_string(bounceList_.size());
     f.attributes["nestlight:projection_levels"] = std::to_string(levelsTaken_);
     f.attributes["nestlight:projection_stride"] = std::to_string(stride_);
@@ -516,6 +517,7 @@ class ProjectionExtension : public FrameExtension {
     radiance_.reserve(std::max<size_t>(sorted.size(), 1) * 16);
     sortedCount_ = uint32_t(sorted.size());
     chooseBounceReceivers(sorted, first);
+    lit_ = false;  // a new S: its light too
     clusterMs_ =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   }
@@ -563,9 +565,15 @@ class ProjectionExtension : public FrameExtension {
     receiverOfBuffer_.upload(receiverOf_.data(), receiverOf_.size() * 4);
   }
 
-  // Each point's radiance: its colour (radiance cache), or its direct light (albedo).
+  // Each point's radiance: its colour (radiance cache), or its direct light (albedo), and the
+  // further bounces; kept while S, the lights' views and the environment stay (the paper: the
+  // points' bounces take seconds, and the view may then change at will).
   void light(SceneFrame& f, const frame::PassContext& ctx) {
+    litThisFrame_ = false;
     if (sortedCount_ == 0) return;
+    const glm::u64vec3 key(f.cutGeneration(), f.lightViewsGeneration(), f.environmentGeneration());
+    if (lit_ && key == litKey_) return;
+    lit_ = true, litKey_ = key, litThisFrame_ = true;
     const gl::Texture& maps = ctx.target("shadow_maps");
     maps.setFilter(GL_LINEAR, GL_LINEAR);
     maps.setDepthCompare(true);
@@ -910,6 +918,9 @@ class ProjectionExtension : public FrameExtension {
   gl::Buffer direct_, bounceE_, bounceListBuffer_, receiverOfBuffer_;
   std::vector<uint32_t> bounceList_, receiverOf_;
   int furtherBounces_ = 0;
+  bool lit_ = false;  // S's radiance is up to date for litKey_ (lights' cut, views, environment)
+  bool litThisFrame_ = false;
+  glm::u64vec3 litKey_{0};
   gl::Buffer unsorted_, points_, clusters_, radiance_, solid_, stats_, pixels_, list_, filtered_;
   // Progressive frames: the pixels as a still's levels leave them so far (committed_), the
   // level in progress, its list's size and how far its gather got; pixels_ then holds the frame.

@@ -22,6 +22,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -37,6 +38,12 @@ struct BenchProjectionOptions {
   std::string mode;           // empty: the scene's; radiance_cache or albedo
   int width = 0, height = 0;  // 0: the scene camera's
   int points = 0;             // |S| (gi.parameters.points); 0: the scene's or the default
+  // runBenchProjectionLevels: frames timed per configuration (the median reported), and the
+  // path-traced reference (cached at `reference`, default OUT/reference.exr).
+  int runs = 3;
+  int referenceSpp = 1024;
+  double referenceError = 0.01;
+  std::filesystem::path reference;
 };
 
 struct MicroBufferComparison {
@@ -48,5 +55,29 @@ struct MicroBufferComparison {
 
 // Runs the configurations and returns their comparisons with brute force, brute force first.
 std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptions& o);
+
+}  // namespace nestlight::bench
+
+namespace nestlight::bench {
+
+// The paper's Fig. 11 and 8 made measurable (`bench projection --levels`): the image after each
+// level of the adaptive sampling (gi.parameters.levels 1, 2, ...: what the progressive view shows
+// as each level completes) and with every pixel gathered (adaptive false), each against the
+// path-traced reference: the share of receiver pixels gathered, the frame's time and the levels'
+// passes' (wall times, each pass finished before the next), relative L2 and box 4 (of
+// 4 x 4 block means). Target (the issue's): the adaptive image within 10% of every-pixel's box-4
+// error at <= 35% of its pixels and <= 1/3 of its passes' time. Fig. 8: the indirect light alone
+// (the frame less `raster`'s direct light) against the reference's (the same difference), as
+// PNGs with their difference at 2x. Writes bench_projection_levels.md and .json.
+struct LevelRow {
+  std::string configuration;  // "level 1 (step 4)", ..., "every pixel"
+  int levels = 0;             // 0: every pixel
+  uint64_t gathered = 0, receivers = 0;
+  // Medians over the runs: the frame, the levels' passes (select, gather, upsample, filter,
+  // compose) and the passes every configuration shares (G-buffer, direct light, S and its light).
+  double frameMs = 0, passesMs = 0, sharedMs = 0;
+  double relativeL2 = 0, box4 = 0;
+};
+std::vector<LevelRow> runBenchProjectionLevels(const BenchProjectionOptions& o);
 
 }  // namespace nestlight::bench
