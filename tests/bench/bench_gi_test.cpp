@@ -107,6 +107,28 @@ TEST(BenchGiApplicability, IblNeedsAnEnvironment) {
   EXPECT_EQ(nestlight::gi::whyNotApplicable(*nestlight::gi::findMethod("raster"), room), "");
 }
 
+// projection's "1 bounce" (max_bounces 2: no gather at the points of S) differs only in the albedo
+// mode; its sampling and image-space variants apply in both.
+TEST(BenchGiApplicability, ProjectionBounceVariantOnlyInTheAlbedoMode) {
+  nestlight::gi::Scene room;
+  room.gi.mode = nestlight::gi::RadianceMode::RadianceCache;
+  const auto* p = nestlight::gi::findMethod("projection");
+  ASSERT_NE(p, nullptr);
+  std::vector<std::string> names;
+  for (const auto& v : p->variants) {
+    names.push_back(v.name);
+    const std::string why = nestlight::gi::whyNotApplicable(*p, room, &v);
+    if (v.name == "1 bounce")
+      EXPECT_NE(why.find("radiance-cache"), std::string::npos) << why;
+    else
+      EXPECT_EQ(why, "") << v.name;
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"random", "splat 1", "splat 2", "splat 3",
+                                             "every pixel", "grid", "1 bounce"}));
+  room.gi.mode = nestlight::gi::RadianceMode::Albedo;
+  for (const auto& v : p->variants) EXPECT_EQ(nestlight::gi::whyNotApplicable(*p, room, &v), "");
+}
+
 TEST(BenchGiApplicability, VplBouncesMatterOnlyWhereLightCanBounceOn) {
   nestlight::gi::Scene room;
   room.gi.mode = nestlight::gi::RadianceMode::RadianceCache;
