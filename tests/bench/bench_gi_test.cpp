@@ -108,7 +108,8 @@ TEST(BenchGiApplicability, IblNeedsAnEnvironment) {
 }
 
 // projection's "1 bounce" (max_bounces 2: no gather at the points of S) differs only in the albedo
-// mode; its sampling and image-space variants apply in both.
+// mode, "no glossy-to-glossy" only with a glossy mesh; its sampling and image-space variants apply
+// everywhere.
 TEST(BenchGiApplicability, ProjectionBounceVariantOnlyInTheAlbedoMode) {
   nestlight::gi::Scene room;
   room.gi.mode = nestlight::gi::RadianceMode::RadianceCache;
@@ -120,12 +121,20 @@ TEST(BenchGiApplicability, ProjectionBounceVariantOnlyInTheAlbedoMode) {
     const std::string why = nestlight::gi::whyNotApplicable(*p, room, &v);
     if (v.name == "1 bounce")
       EXPECT_NE(why.find("radiance-cache"), std::string::npos) << why;
+    else if (v.name == "no glossy-to-glossy")
+      EXPECT_NE(why.find("no glossy mesh"), std::string::npos) << why;
     else
       EXPECT_EQ(why, "") << v.name;
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"random", "splat 1", "splat 2", "splat 3",
-                                             "every pixel", "grid", "1 bounce"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"random", "splat 1", "splat 2", "splat 3", "every pixel",
+                                      "grid", "1 bounce", "no glossy-to-glossy"}));
   room.gi.mode = nestlight::gi::RadianceMode::Albedo;
+  nestlight::gi::Material glossy;
+  glossy.type = nestlight::gi::MaterialType::GGX;
+  room.materials.push_back(glossy);
+  room.meshes.push_back(nestlight::gi::SceneMesh{});
+  room.meshes.back().material = 0;
   for (const auto& v : p->variants) EXPECT_EQ(nestlight::gi::whyNotApplicable(*p, room, &v), "");
 }
 

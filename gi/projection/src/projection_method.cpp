@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <glm/gtc/packing.hpp>
 #include <map>
 #include <nanoflann.hpp>
 
@@ -114,6 +115,7 @@ class ProjectionExtension : public FrameExtension {
             {"epsilon_level_factor", std::to_string(params_.epsilonLevelFactor)},
             {"post_filter", params_.postFilter < 0 ? "auto" : std::to_string(params_.postFilter)},
             {"supersample", std::to_string(params_.supersample)},
+            {"glossy_to_glossy", params_.glossyToGlossy ? "true" : "false"},
             {"bounce_receivers", std::to_string(params_.bounceReceivers)}};
   }
 
@@ -205,6 +207,7 @@ class ProjectionExtension : public FrameExtension {
     glGetNamedBufferSubData(stats_.id(), 0, sizeof s, s);
     f.attributes["nestlight:projection_points"] = std::to_string(pointCount_);
     f.attributes["nestlight:projection_mesh_surfels"] = std::to_string(surfels_.size());
+    f.attributes["nestlight:projection_glossy_surfels"] = std::to_string(lobeSlots_);
     f.attributes["nestlight:projection_further_bounces"] = std::to_string(furtherBounces_);
     f.attributes["nestlight:projection_lit"] = litThisFrame_ ? "true" : "false";
     f.attributes["nestlight:projection_bounce_receivers"] = std::to_string(bounceList_.size());
@@ -403,6 +406,10 @@ class ProjectionExtension : public FrameExtension {
       const Material& mat = scene.materials.at(m.material);
       const Rgb rho =
           glm::clamp(directionalAlbedo(mat, glm::vec3(0, 0, 1), 4096), Rgb(0.0f), Rgb(1.0f));
+      // Glossy surfels keep lobes (glossy_to_glossy): the diffuse lobe's colour apart.
+      const bool lobes = params_.glossyToGlossy && mat.type != MaterialType::Lambert;
+      const Rgb diffuse =
+          mat.type == MaterialType::Lambert ? mat.baseColor : (1.0f - mat.metallic) * mat.baseColor;
       for (size_t k = 0; k < sf.positions.size(); ++k) {
         ProjectionPoint p;
         p.positionArea = glm::vec4(sf.positions[k], sf.area[k]);
@@ -410,6 +417,12 @@ class ProjectionExtension : public FrameExtension {
         p.normalColour = glm::vec4(std::bit_cast<float>(frame::packNormal(n.x, n.y, n.z)),
                                    glm::vec3(sf.albedo[k]) * glm::vec3(rho));
         p.source = glm::uvec4(m.material + 1, 0, 0, 0);
+        if (lobes) {
+          const glm::vec3 d = glm::clamp(glm::vec3(sf.albedo[k]) * glm::vec3(diffuse), 0.0f, 1.0f);
+          p.source.y = 1;  // its slot is given once S is sorted
+          p.source.z = glm::packHalf2x16(glm::vec2(d.r, d.g));
+          p.source.w = glm::packHalf2x16(glm::vec2(d.b, 0.0f));
+        }
         surfels_.push_back(p);
       }
     }
@@ -503,9 +516,11 @@ class ProjectionExtension : public FrameExtension {
     const projection::Clusters c = projection::buildClusters(position, uint32_t(params_.clusters));
     clusterCount_ = c.count;
     std::vector<ProjectionPoint> sorted(c.order.size());
+    lobeSlots_ = 0;
     for (size_t j = 0; j < c.order.size(); ++j) {
       sorted[j] = host_[c.order[j]];
       sorted[j].positionArea.w = area[c.order[j]];
+      if (sorted[j].source.y != 0) sorted[j].source.y = ++lobeSlots_;
     }
     // The shader takes K clusters: those the points could not fill are empty.
     std::vector<uint32_t> first(size_t(params_.clusters) + 1, uint32_t(sorted.size()));
@@ -514,7 +529,8 @@ class ProjectionExtension : public FrameExtension {
     if (!sorted.empty()) points_.upload(sorted.data(), sorted.size() * sizeof(ProjectionPoint));
     clusters_.reserve(first.size() * 4);
     clusters_.upload(first.data(), first.size() * 4);
-    radiance_.reserve(std::max<size_t>(sorted.size(), 1) * 16);
+    // Each point's radiance, then the glossy surfels' lobes (projection_interface.glsl).
+    radiance_.reserve(std::max<size_t>(sorted.size() + 2 * PROJECTION_LOBES * lobeSlots_, 1) * 16);
     sortedCount_ = uint32_t(sorted.size());
     chooseBounceReceivers(sorted, first);
     lit_ = false;  // a new S: its light too
@@ -955,7 +971,7 @@ class ProjectionExtension : public FrameExtension {
   uint64_t generation_ = ~0ull;
   bool built_ = false, rebuilt_ = false;
   uint64_t pointCount_ = 0;
-  uint32_t sortedCount_ = 0, clusterCount_ = 0;
+  uint32_t sortedCount_ = 0, clusterCount_ = 0, lobeSlots_ = 0;
   int levelsTaken_ = 0, stride_ = 1;
   double pointsMs_ = 0, clusterMs_ = 0;
 };

@@ -57,6 +57,9 @@ const ParameterSpecs& projectionParameterSpecs() {
                  "the joint bilateral post filter's window: auto (7 x 7, 3 x 3 where glossy), 0 "
                  "(none), 3 or 7")
           .orOneOf({"auto"}),
+      P::boolean("glossy_to_glossy", true,
+                 "glossy meshes' surfels reflect their 4 strongest lights in glossy lobes toward "
+                 "each receiver, and weigh their importance so (false: all points diffuse)"),
       P::integer("supersample", 1, 2, 1,
                  "stills at 2 x 2 subpixels a pixel, box-filtered (the paper's 2xAA; about 4x "
                  "the time; the viewer's frames stay at 1)"),
@@ -102,6 +105,7 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   p.progressiveMs = r.number("progressive_ms");
   p.bounceReceivers = int(r.integer("bounce_receivers"));
   p.supersample = int(r.integer("supersample"));
+  p.glossyToGlossy = r.boolean("glossy_to_glossy");
   for (const nlohmann::json& px : r.value("dump_pixels"))
     p.dumpPixels.push_back({px[0].get<int>(), px[1].get<int>()});
   p.dumpFolder = r.string("dump_folder");
@@ -137,7 +141,7 @@ MethodInfo projectionMethodInfo() {
   m.create = createProjectionMethod;
   // The variants but brute force (all of S per pixel: minutes a frame, and beyond 65,535
   // points llvmpipe's loop limit cuts it short; `bench projection` measures it where it is the
-  // micro-buffers' reference) and glossy-to-glossy (not built).
+  // micro-buffers' reference).
   const MethodInfo::Applicability albedoOnly = [](const Scene& s) -> std::string {
     return s.gi.mode == RadianceMode::Albedo
                ? ""
@@ -150,7 +154,15 @@ MethodInfo projectionMethodInfo() {
       {"splat 3", [](GiSettings& g) { g.parameters["splat"] = 3; }},
       {"every pixel", [](GiSettings& g) { g.parameters["adaptive"] = false; }},
       {"grid", [](GiSettings& g) { g.parameters["levels"] = 1; }},
-      {"1 bounce", [](GiSettings& g) { g.maxBounces = std::min(g.maxBounces, 2); }, albedoOnly}};
+      {"1 bounce", [](GiSettings& g) { g.maxBounces = std::min(g.maxBounces, 2); }, albedoOnly},
+      {"no glossy-to-glossy", [](GiSettings& g) { g.parameters["glossy_to_glossy"] = false; },
+       [](const Scene& s) -> std::string {
+         for (const SceneMesh& m : s.meshes)
+           if (m.material < s.materials.size() &&
+               s.materials[m.material].type != MaterialType::Lambert)
+             return "";
+         return "no glossy mesh: every point reflects diffusely either way";
+       }}};
   m.parameters = rasterParameterSpecs();
   m.parameters.insert(m.parameters.end(), projectionParameterSpecs().begin(),
                       projectionParameterSpecs().end());

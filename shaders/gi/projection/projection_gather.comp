@@ -12,6 +12,10 @@
 // cosine and the texel's solid angle is the gathered light. Empty texels are the environment
 // (the gather owns the sky then) or black.
 //
+// Glossy (section 3.2, eq. 4): a glossy receiver's importance is times its BSDF toward the point;
+// a glossy surfel with lobes (glossy_to_glossy, projection_light.comp) sends each receiver its
+// diffuse radiance plus what its lobes reflect toward it, and its importance grows by that.
+//
 // `sampling` random: every sample uniform over S (p_k of each cluster its share of the points);
 // brute: all of S, each point its own area (the reference micro-buffer).
 layout(local_size_x = 64) in;
@@ -89,13 +93,53 @@ uint nextU() {
 float nextF() { return float(nextU() >> 8) * (1.0 / 16777216.0); }
 
 Receiver gR;
+mat3 gShadeFromWorld;  // the receiver's BSDF frame (rows: tangent, bitangent, normal)
+vec3 gWoLocal;
+bool gGlossyReceiver;
 vec2 gFootT;     // the last footprint's centre (texels)
 float gFootR2;   // its disc's squared radius (texels; negative: a square)
 mat3 gLocalFromWorld;  // rows: tangent, normal, bitangent (the map's +y is the normal)
 
+MaterialParams recordMaterial(MaterialRecord r) {
+  MaterialParams m;
+  m.type = int(r.baseColor.w);
+  m.baseColor = r.baseColor.rgb;
+  m.roughness = r.params.x, m.metallic = r.params.y, m.specular = r.params.z;
+  m.specularTint = r.params.w, m.sheen = r.params2.x, m.sheenTint = r.params2.y;
+  m.clearcoat = r.params2.z, m.clearcoatGloss = r.params2.w;
+  return m;
+}
+
+// What a glossy surfel's lobes reflect toward `toReceiver` (unit, from the point): per lobe its
+// BSDF's glossy part (less the diffuse lobe, which its radiance holds) times the irradiance its
+// light gives. 0 for the other points.
+vec3 lobesToward(ProjectionPoint P, vec3 toReceiver) {
+  uint slot = P.source.y;
+  if (slot == 0u || P.source.x == 0u) return vec3(0.0);
+  uint word = floatBitsToUint(P.normalColour.x);
+  if (word == 0u) return vec3(0.0);
+  mat3 f = frameFromNormal(decodeNormal(word));
+  vec3 woL = toReceiver * f;
+  if (woL.z <= 0.0) return vec3(0.0);
+  MaterialParams m = recordMaterial(materials[P.source.x - 1u]);
+  vec3 lambert = diffuseAlbedo(m) * kInvPi;
+  uint count = clusterFirst[PROJECTION_K];
+  uint at = count + uint(2 * PROJECTION_LOBES) * (slot - 1u);
+  vec3 L = vec3(0.0);
+  for (int j = 0; j < PROJECTION_LOBES; ++j) {
+    vec3 E = radiance[at + uint(2 * j) + 1u].rgb;
+    if (E == vec3(0.0)) continue;
+    vec3 wiL = radiance[at + uint(2 * j)].xyz * f;
+    L += max(evalBsdf(m, woL, wiL) - lambert, vec3(0.0)) * E;
+  }
+  return L;
+}
+
 // Eq. 1's term for point s: max(cos at the receiver, 0) |cos at s| dA / d^2; 0 below the
-// receiver's horizon and within the point's own radius of the receiver (its own surface).
-float importanceOf(ProjectionPoint s) {
+// receiver's horizon and within the point's own radius of the receiver (its own surface). Eq. 4:
+// a glossy receiver's BSDF toward s times it; a glossy source's lobes toward the receiver over
+// its diffuse radiance add to it (capped: a surfel without diffuse light would take all).
+float importanceOf(ProjectionPoint s, uint index) {
   vec3 d = s.positionArea.xyz - gR.x;
   float d2 = dot(d, d);
   float area = s.positionArea.w;
@@ -105,7 +149,14 @@ float importanceOf(ProjectionPoint s) {
   if (cosP <= 0.0) return 0.0;
   uint word = floatBitsToUint(s.normalColour.x);
   float cosS = word != 0u ? abs(dot(decodeNormal(word), d)) * inv : 1.0;
-  return cosP * cosS * area / d2;
+  float w = cosP * cosS * area / d2;
+  if (gGlossyReceiver) w *= luminance(evalBsdf(gR.mat, gWoLocal, gShadeFromWorld * (d * inv)));
+  if (s.source.y != 0u) {
+    float glossy = luminance(lobesToward(s, -d * inv));
+    float diffuse = luminance(radiance[index].rgb);
+    w *= 1.0 + min(glossy / max(diffuse, 1e-6 * glossy + 1e-30), 64.0);
+  }
+  return w;
 }
 
 // Where point `index`, standing for `area` of surface, lands in the micro-buffer: the texels
@@ -222,6 +273,9 @@ void main() {
   }
   mat3 f = frameFromNormal(gR.n);  // columns: tangent, bitangent, normal
   gLocalFromWorld = transpose(mat3(f[0], f[2], f[1]));
+  gShadeFromWorld = transpose(f);
+  gWoLocal = gShadeFromWorld * gR.wo;
+  gGlossyReceiver = gR.mat.type != NL_MATERIAL_LAMBERT;
   uint filled = 0u;
   ivec2 g = px + ivec2(frame.tile.xy);  // the full image's pixel: tiles draw the same samples
   gRng = hashU(uint(g.x) * 73856093u ^ uint(g.y) * 19349663u ^ hashU(uSeed) ^ lid * 83492791u);
@@ -265,7 +319,7 @@ void main() {
       for (int j = 0; j < nRnd && size > 0u; ++j) {
         uint index = first + nextU() % size;
         ProjectionPoint s = points[index];
-        w += importanceOf(s);
+        w += importanceOf(s, index);
         splat(index, uint(k * nRnd + j), float(size) * s.positionArea.w / float(nRnd));
       }
       // Random sampling: each cluster by its share of the points.
@@ -339,7 +393,14 @@ void main() {
       empty++;
     } else {
       uint s = uSampling == 2 ? sTexelPoint[t] : sSample[key & 4095u];
-      L = (s & PROJECTION_BACK_FACING) != 0u ? vec3(0.0) : radiance[s & 0x7fffffffu].rgb;
+      uint at = s & 0x7fffffffu;
+      if ((s & PROJECTION_BACK_FACING) != 0u) {
+        L = vec3(0.0);
+      } else {
+        ProjectionPoint P = points[at];
+        L = radiance[at].rgb;
+        if (P.source.y != 0u) L += lobesToward(P, normalize(gR.x - P.positionArea.xyz));
+      }
     }
     if (uDump)  // alpha: 1 covered, 0 a hole
       dumpTexels[item * uint(M * M + 1) + t] = vec4(L, key == PROJECTION_NO_SAMPLE ? 0.0 : 1.0);

@@ -22,8 +22,15 @@ NL_STRUCT(ProjectionPoint) {
   vec4 normalColour;  // x: its normal, octahedral word (0: none), yzw: its linear colour (a scan
                       // point: the radiance-cache mode's radiance, the albedo mode's albedo; a
                       // mesh's surfel: its albedo)
-  uvec4 source;       // x: 0 a scan point, else a mesh's surfel: its material + 1; yzw: unused
+  uvec4 source;       // x: 0 a scan point, else a mesh's surfel: its material + 1; y: a glossy
+                      // surfel's lobes, slot + 1 (0: diffuse); zw: its diffuse colour, half
+                      // floats (r, g), (b, 0)
 };
+
+// A glossy surfel's lobes follow the points' radiance in PROJECTION_SSBO_RADIANCE: from
+// radiance[count + 2 x PROJECTION_LOBES x (slot - 1)], per lobe (direction to its light, 0) and
+// (the irradiance that light gives, 0).
+#define PROJECTION_LOBES 4
 
 // A tile pixel's state in the adaptive sampling (PROJECTION_SSBO_PIXELS, first vec4's w).
 #define PROJECTION_UNSET 0.0         // not reached yet, or no receiver

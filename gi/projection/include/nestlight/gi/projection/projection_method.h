@@ -53,6 +53,11 @@ struct ProjectionParameters {
   // The albedo mode's bounces beyond the gathered one (gi.max_bounces 3 and more) gather at this
   // many points of S, every other point taking its light from the nearest of its cluster's.
   int bounceReceivers = 4096;
+  // Glossy meshes' surfels keep a glossy lobe for each of the 4 lights that light them most (the
+  // light's direction and irradiance) and send each receiver what those lobes reflect toward it;
+  // the importance of a glossy source grows with it (paper section 3.2, glossy-to-glossy). False:
+  // every point reflects diffusely, a glossy surfel with its material's directional albedo.
+  bool glossyToGlossy = true;
   // Stills at this many subpixels a side, box-filtered (the paper's 2xAA: 2).
   int supersample = 1;
   // Pixels (x, y; top row 0) whose micro-buffers each still writes to dumpFolder as EXR.
