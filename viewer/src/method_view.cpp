@@ -390,6 +390,9 @@ void MethodView::figuresPanel() {
     if (!s.error.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", s.error.c_str());
     return;
   }
+  // A method that refines while the view rests says how far it got.
+  if (auto it = stats_.attributes.find("nestlight:progress"); it != stats_.attributes.end())
+    ImGui::Text("%s", it->second.c_str());
   double total = 0;
   for (const auto& [name, ms] : stats_.passMs) {
     ImGui::Text("%-16s %7.2f ms", name.c_str(), ms);

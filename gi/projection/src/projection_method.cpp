@@ -252,12 +252,13 @@ class ProjectionExtension : public FrameExtension {
     if (progressive_) {
       char p[160];
       if (progressLevel_ >= gatheringLevels())
-        std::snprintf(p, sizeof p, "; progressive: converged (the still's image)");
+        std::snprintf(p, sizeof p, "progressive: converged (the still's image)");
       else
-        std::snprintf(p, sizeof p, "; progressive: level %zu of %zu (step %d), %u of %u pixels",
+        std::snprintf(p, sizeof p, "progressive: level %zu of %zu (step %d), %u of %u pixels",
                       progressLevel_ + 1, gatheringLevels(), steps_[progressLevel_],
                       levelListed_ ? levelOffset_ : 0u, levelListed_ ? levelCount_ : 0u);
-      f.summary += p;
+      f.summary += std::string("; ") + p;
+      f.attributes["nestlight:progress"] = p;  // the viewer's panel shows it
     }
     if (params_.levels > 0 && size_t(params_.levels) < steps_.size())
       f.summary += "; levels: the first " + std::to_string(params_.levels) + " of " +
