@@ -856,7 +856,8 @@ class ProjectionExtension : public FrameExtension {
     glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
                     GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT |
                     GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-    if (!params_.dumpPixels.empty() && gathers_) dumpMicroBuffers(f, ctx);
+    // Stills only: a progressive frame's list of the level in progress must survive the dump's.
+    if (!params_.dumpPixels.empty() && gathers_ && !progressive_) dumpMicroBuffers(f, ctx);
   }
 
   // dump_pixels: the first frame's micro-buffers of the listed pixels this tile holds, gathered
