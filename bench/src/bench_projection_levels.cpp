@@ -76,6 +76,11 @@ std::vector<LevelRow> runBenchProjectionLevels(const BenchProjectionOptions& o) 
   gi::Scene base = reference::sceneFor(probe, "projection", o.mode, W, H);
   if (o.points > 0) base.gi.parameters["points"] = o.points;
   if (base.gi.parameters.is_object()) base.gi.parameters.erase("dump_pixels");
+  if (!gi::sceneHasLight(base, base.gi.mode))
+    throw Error(o.scene.string(), "lights",
+                "nothing lights this scene in albedo mode (scan colours are reflectances there, "
+                "and it has no lights, no environment and no emissive mesh): use --mode "
+                "radiance_cache, or add a light");
   const gi::ProjectionParameters params = gi::projectionParameters(base);
   if (!params.adaptive)
     throw Error(o.scene.string(), "gi.parameters.adaptive",
@@ -196,26 +201,53 @@ std::vector<LevelRow> runBenchProjectionLevels(const BenchProjectionOptions& o) 
                   x.box4);
     md += line;
   }
-  const LevelRow &adaptive = rows[size_t(levels) - 1], &every = rows.back();
-  const double share = every.gathered ? double(adaptive.gathered) / double(every.gathered) : 0.0,
-               time = every.passesMs > 0 ? adaptive.passesMs / every.passesMs : 0.0;
-  const bool met = adaptive.box4 <= 1.1 * every.box4 && share <= 0.35 && time <= 1.0 / 3.0;
-  std::snprintf(
-      line, sizeof line,
-      "\nTarget (Fig. 11): the converged adaptive image within 10%% of every pixel's box-4 "
-      "error (%.4f against %.4f), at <= 35%% of its pixels (%.1f%%) and <= 1/3 of its "
-      "levels' passes' time (%.2f): %s\n",
-      adaptive.box4, every.box4, 100.0 * share, time, met ? "met" : "missed");
+  // Fig. 11's question: how soon the refining image is as good as gathering every pixel. The
+  // first level within 10% of every pixel's box-4 error, its pixels and time against every
+  // pixel's; and the same for the last level (the converged adaptive image).
+  const LevelRow& every = rows.back();
+  auto shareOf = [&](const LevelRow& x) {
+    return every.gathered ? double(x.gathered) / double(every.gathered) : 0.0;
+  };
+  auto timeOf = [&](const LevelRow& x) {
+    return every.passesMs > 0 ? x.passesMs / every.passesMs : 0.0;
+  };
+  const LevelRow* first = nullptr;
+  for (int k = 0; k < levels && !first; ++k)
+    if (rows[size_t(k)].box4 <= 1.1 * every.box4) first = &rows[size_t(k)];
+  const LevelRow& adaptive = rows[size_t(levels) - 1];
+  const bool met = first && shareOf(*first) <= 0.35 && timeOf(*first) <= 1.0 / 3.0;
+  if (first)
+    std::snprintf(line, sizeof line,
+                  "\nTarget (Fig. 11): within 10%% of every pixel's box-4 error (%.4f) at <= 35%% "
+                  "of its pixels and <= 1/3 of its levels' time: %s at %s (box 4 %.4f, %.1f%% of "
+                  "the pixels, %.2f of the time)\n",
+                  every.box4, met ? "met" : "missed", first->configuration.c_str(), first->box4,
+                  100.0 * shareOf(*first), timeOf(*first));
+  else
+    std::snprintf(line, sizeof line,
+                  "\nTarget (Fig. 11): within 10%% of every pixel's box-4 error (%.4f): missed, no "
+                  "level reaches it (the last: %.4f)\n",
+                  every.box4, adaptive.box4);
+  md += line;
+  std::snprintf(line, sizeof line,
+                "The converged adaptive image (%s): box 4 %.4f (%.3f of every pixel's), %.1f%% of "
+                "the pixels, %.2f of the time\n",
+                adaptive.configuration.c_str(), adaptive.box4,
+                every.box4 > 0 ? adaptive.box4 / every.box4 : 0.0, 100.0 * shareOf(adaptive),
+                timeOf(adaptive));
   md += line;
   std::snprintf(line, sizeof line,
                 "\nFig. 8, indirect light alone (the frame less raster's direct light) against the "
                 "reference's: rel L2 %.4f, box 4 %.4f (indirect_*.png, the difference at 2x)\n",
                 indirectL2, indirectBox4);
   md += line;
-  report["target"] = {{"box4_ratio", every.box4 > 0 ? adaptive.box4 / every.box4 : 0.0},
-                      {"pixel_share", share},
-                      {"time_ratio", time},
-                      {"met", met}};
+  report["target"] = {{"first_within_10_percent", first ? first->configuration : ""},
+                      {"pixel_share", first ? shareOf(*first) : 0.0},
+                      {"time_ratio", first ? timeOf(*first) : 0.0},
+                      {"met", met},
+                      {"converged_box4_ratio", every.box4 > 0 ? adaptive.box4 / every.box4 : 0.0},
+                      {"converged_pixel_share", shareOf(adaptive)},
+                      {"converged_time_ratio", timeOf(adaptive)}};
   std::printf("\n%s", md.c_str());
   std::ofstream(out / "bench_projection_levels.md") << md;
   std::ofstream(out / "bench_projection_levels.json") << report.dump(1) << "\n";

@@ -65,8 +65,9 @@ namespace nestlight::bench {
 // as each level completes) and with every pixel gathered (adaptive false), each against the
 // path-traced reference: the share of receiver pixels gathered, the frame's time and the levels'
 // passes' (wall times, each pass finished before the next), relative L2 and box 4 (of
-// 4 x 4 block means). Target (the issue's): the adaptive image within 10% of every-pixel's box-4
-// error at <= 35% of its pixels and <= 1/3 of its passes' time. Fig. 8: the indirect light alone
+// 4 x 4 block means). Target (the issue's): the refining image within 10% of every pixel's box-4
+// error at <= 35% of its pixels and <= 1/3 of its levels' time (the first level that gets there
+// is named; the converged adaptive image's figures follow). Fig. 8: the indirect light alone
 // (the frame less `raster`'s direct light) against the reference's (the same difference), as
 // PNGs with their difference at 2x. Writes bench_projection_levels.md and .json.
 struct LevelRow {
