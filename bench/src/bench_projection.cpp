@@ -12,6 +12,7 @@
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/projection/hemi_octahedral.h"
+#include "nestlight/gi/projection/projection_method.h"
 #include "nestlight/gi/scene.h"
 #include "nestlight/gi/tone_map.h"
 #include "nestlight/gl/context.h"
@@ -119,9 +120,7 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
     gi::createMethod(s, {true, true})->render(s.camera);
     std::vector<std::array<int, 2>> found;
     for (const json& p : grid)
-      if (fs::exists(out / "probe" /
-                     ("projection_" + std::to_string(p[0].get<int>()) + "_" +
-                      std::to_string(p[1].get<int>()) + ".exr")))
+      if (fs::exists(out / "probe" / gi::microBufferFileName(p[0].get<int>(), p[1].get<int>())))
         found.push_back({p[0].get<int>(), p[1].get<int>()});
     fs::remove_all(out / "probe");
     const size_t n = std::min<size_t>(5, found.size());
@@ -176,8 +175,7 @@ std::vector<MicroBufferComparison> runBenchProjection(const BenchProjectionOptio
     r.configuration = c.name;
     std::vector<double> rmsOf, holesOf, spillOf, rmsEOf, irrOf;
     for (const auto& p : pixels) {
-      const std::string name =
-          "projection_" + std::to_string(p[0]) + "_" + std::to_string(p[1]) + ".exr";
+      const std::string name = gi::microBufferFileName(p[0], p[1]);
       MicroBuffer b, v;
       if (!readMicroBuffer(out / "brute" / name, b)) continue;  // no receiver there
       if (b.truncated) {  // no reference there (llvmpipe's loop limit)

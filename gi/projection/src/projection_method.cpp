@@ -913,9 +913,7 @@ class ProjectionExtension : public FrameExtension {
         holes += v[3] <= 0.5f;
       }
       const std::string path =
-          (std::filesystem::path(params_.dumpFolder) /
-           ("projection_" + std::to_string(px[0]) + "_" + std::to_string(px[1]) + ".exr"))
-              .string();
+          (std::filesystem::path(params_.dumpFolder) / microBufferFileName(px[0], px[1])).string();
       writeExr(path, img,
                {{"nestlight:pixel", std::to_string(px[0]) + " " + std::to_string(px[1])},
                 {"nestlight:micro_buffer", std::to_string(M)},

@@ -130,6 +130,10 @@ ProjectionParameters projectionParameters(const Scene& scene) {
   return p;
 }
 
+std::string microBufferFileName(int x, int y) {
+  return "projection_" + std::to_string(x) + "_" + std::to_string(y) + ".exr";
+}
+
 MethodInfo projectionMethodInfo() {
   MethodInfo m;
   m.name = "projection";

@@ -70,6 +70,9 @@ MethodInfo projectionMethodInfo();
 // From scene.gi.parameters; throws nestlight::Error naming scene.gi.parameters.<key>.
 ProjectionParameters projectionParameters(const Scene& scene);
 
+// The file a dumped micro-buffer of image pixel (x, y) is written to in dump_folder.
+std::string microBufferFileName(int x, int y);
+
 std::unique_ptr<Method> createProjectionMethod(const Scene& scene, const MethodContext& ctx);
 
 }  // namespace nestlight::gi
