@@ -10,6 +10,13 @@
 using namespace nestlight;
 using json = nlohmann::json;
 
+// A 32 x 24 cornell room of 20k points in dir/room (GL children: no leak checks).
+bool makeRoom(const test::TempDir& dir, std::string& out) {
+  test::noLeakChecksInGlChildren();
+  return test::runCli("make-scene cornell -q -n 20k --width 32 --height 24 -o " + dir.file("room"),
+                      &out) == 0;
+}
+
 // A small cornell room in the albedo mode: every configuration writes the two receivers'
 // micro-buffers, brute force's row is zero against itself, the others' are not (sampled maps
 // differ from the reference somewhere), the shares lie in [0, 1], and a pixel outside the image
@@ -17,11 +24,7 @@ using json = nlohmann::json;
 TEST(ProjectionBench, EveryConfigurationIsComparedWithBruteForce) {
   test::TempDir dir;
   std::string out;
-  test::noLeakChecksInGlChildren();
-  ASSERT_EQ(test::runCli(
-                "make-scene cornell -q -n 20k --width 32 --height 24 -o " + dir.file("room"), &out),
-            0)
-      << out;
+  ASSERT_TRUE(makeRoom(dir, out)) << out;
   ASSERT_EQ(test::runCli("bench projection " + dir.file("room/scene.json") +
                              " --mode albedo --pixel 16,12 --pixel 8,14 -o " + dir.file("b"),
                          &out),
@@ -60,11 +63,7 @@ TEST(ProjectionBench, EveryConfigurationIsComparedWithBruteForce) {
 TEST(ProjectionBench, LevelsGatherMoreEachAndEveryPixelAll) {
   test::TempDir dir;
   std::string out;
-  test::noLeakChecksInGlChildren();
-  ASSERT_EQ(test::runCli(
-                "make-scene cornell -q -n 20k --width 32 --height 24 -o " + dir.file("room"), &out),
-            0)
-      << out;
+  ASSERT_TRUE(makeRoom(dir, out)) << out;
   ASSERT_EQ(
       test::runCli("bench projection " + dir.file("room/scene.json") +
                        " --levels --mode albedo --runs 1 --reference-spp 8 -o " + dir.file("b"),

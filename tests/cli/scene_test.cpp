@@ -119,17 +119,20 @@ TEST(SceneCli, BenchGiWritesTableAndPlot) {
   // renders the same image), pbgi (X-PBGI) at 8 x 8 micro-buffers and in its 5 variants
   // (classic, mip, no pruning, conservative, no meshes); ibl skipped (no environment); diffrender
   // (the sphere is an inserted mesh) at 8 samples, and its em, vct, low and high variants;
-  // projection at 1 importance sample per cluster and its random, splat 1 and splat 3 variants.
-  EXPECT_EQ(rows, 23 + 4);  // and the 4 skipped, each with its reason
+  // projection at 1 importance sample per cluster and its random, splat 1, 2 and 3, every pixel,
+  // grid and no glossy-to-glossy variants (1 bounce skipped: the radiance-cache mode).
+  EXPECT_EQ(rows, 27 + 5);  // and the 5 skipped, each with its reason
   auto j = nlohmann::json::parse(test::readFile(dir.file("b/bench_gi.json")));
-  ASSERT_EQ(j["rows"].size(), 23u);
+  ASSERT_EQ(j["rows"].size(), 27u);
   EXPECT_EQ(j["rows"][19]["method"], "projection");
   EXPECT_EQ(j["rows"][20]["variant"], "random");
   EXPECT_TRUE(j["rows"][19]["gpu_pass_ms"].contains("projection_gather_1")) << j["rows"][19].dump();
   EXPECT_EQ(j["rows"][14]["method"], "diffrender");
   EXPECT_EQ(j["rows"][15]["variant"], "em");
   EXPECT_TRUE(j["rows"][14]["gpu_pass_ms"].contains("diffrender_shade")) << j["rows"][14].dump();
-  ASSERT_EQ(j["skipped"].size(), 4u) << j["skipped"].dump();
+  ASSERT_EQ(j["skipped"].size(), 5u) << j["skipped"].dump();
+  EXPECT_EQ(j["skipped"][4]["method"], "projection");
+  EXPECT_EQ(j["skipped"][4]["variant"], "1 bounce");
   EXPECT_EQ(j["skipped"][0]["variant"], "1 bounce");
   EXPECT_NE(j["skipped"][0]["reason"].get<std::string>().find("radiance-cache"), std::string::npos);
   EXPECT_EQ(j["skipped"][3]["method"], "ibl");

@@ -59,8 +59,10 @@ shared uint sKey[M * M];
 shared uint sSample[PROJECTION_SAMPLES];
 shared uint sTexelPoint[M * M];  // brute force: the point each texel shows; else the fill's copy
 shared float sWeight[PROJECTION_K];
-shared int sCount[PROJECTION_K];
-shared int sBase[PROJECTION_K];
+// Each cluster's sample count from the allocation, then (in place) its first sample slot, with
+// the end after the last: one array, as llvmpipe gives a workgroup 32 KiB of shared memory and
+// 4,096 samples with 512 clusters need all but 2 KiB of it.
+shared int sBase[PROJECTION_K + 1];
 shared float sTotal;
 shared bool sWeighted;
 shared vec3 sSum[64], sRest[64];
@@ -76,8 +78,8 @@ void truncatedUnless(bool ranToTheEnd) {
 }
 
 float allocateWeight(int k) { return sWeight[k]; }
-void allocateStore(int k, int n) { sCount[k] = n; }
-int allocateLoad(int k) { return sCount[k]; }
+void allocateStore(int k, int n) { sBase[k] = n; }
+int allocateLoad(int k) { return sBase[k]; }
 #include "projection_allocate.glsl"
 
 uint hashU(uint v) {
@@ -333,14 +335,18 @@ void main() {
       for (int k = 0; k < K; ++k) sum += sWeight[k];
       sTotal = sum;
       int base = K * nRnd;
-      for (int k = 0; k < K; ++k) sBase[k] = base, base += sCount[k];
+      for (int k = 0; k < K; ++k) {
+        int count = sBase[k];
+        sBase[k] = base, base += count;
+      }
+      sBase[K] = base;
       if (!sWeighted && !uDump) atomicAdd(stats[1], 1u);
     }
     barrier();
     float ns = float(K * uSamplesPerCluster);
     for (k = int(lid); k < K; k += 64) {
       uint first = clusterFirst[k], size = clusterFirst[k + 1] - first;
-      int n = sCount[k];
+      int n = sBase[k + 1] - sBase[k];
       if (size == 0u || n == 0) continue;
       // N_s p_k: the samples this cluster expects (uniform pdf: N_s / K).
       float expected = sWeighted ? ns * sWeight[k] / sTotal : ns / float(K);

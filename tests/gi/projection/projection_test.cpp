@@ -42,6 +42,15 @@ Scene projectionScene(const nestlight::test::TempDir& t, double rho, const json&
   return s;
 }
 
+// From above and aside the box's top face and its side face under the upper half sphere of
+// emitters, meeting at a crease; a size x size image.
+void lookAtTheCrease(Scene& s, int size) {
+  s.camera.eye = glm::dvec3(-0.9, 0.1, 0.7);
+  s.camera.target = glm::dvec3(-0.2, 0.0, 0.2);
+  s.camera.fovYDegrees = 40;
+  s.camera.width = s.camera.height = size;
+}
+
 double coverage(const MethodFrame& f) {
   return std::stod(f.attributes.at("nestlight:projection_coverage"));
 }
@@ -170,10 +179,7 @@ TEST(ProjectionAdaptive, CreaseIsGatheredAndNoWeightCrossesIt) {
   buildSphereScan(t, 30000, 2.0f, 150, 0.0f);
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
   Scene s = projectionScene(t, rho, {{"clusters", 64}});
-  s.camera.eye = glm::dvec3(-0.9, 0.1, 0.7);
-  s.camera.target = glm::dvec3(-0.2, 0.0, 0.2);
-  s.camera.fovYDegrees = 40;
-  s.camera.width = s.camera.height = 48;
+  lookAtTheCrease(s, 48);
   MethodFrame f = createMethod(s, {true, false})->render(s.camera);
   int top = 0, side = 0, between = 0;
   for (int y = 0; y < 48; ++y)
@@ -284,10 +290,7 @@ TEST(ProjectionProgressive, RestingViewRefinesToTheFullFrameAndMovingRestarts) {
   buildSphereScan(t, 30000, 2.0f, 150, 0.0f);
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
   Scene s = projectionScene(t, rho, {{"clusters", 64}, {"progressive_ms", 0.001}});
-  s.camera.eye = glm::dvec3(-0.9, 0.1, 0.7);
-  s.camera.target = glm::dvec3(-0.2, 0.0, 0.2);
-  s.camera.fovYDegrees = 40;
-  s.camera.width = s.camera.height = 48;
+  lookAtTheCrease(s, 48);
   std::unique_ptr<Method> a = createMethod(s, {true, false});
   MethodFrame st;
   std::vector<uint8_t> progressive;
@@ -350,10 +353,7 @@ TEST(ProjectionAdaptive, SupersampledStillIsTheBoxFilterOfTwiceTheSize) {
   buildSphereScan(t, 30000, 2.0f, 150, 0.0f);
   const double L = srgbDecode(150.0f / 255.0f), rho = 0.5;
   Scene s = projectionScene(t, rho, {{"clusters", 64}, {"supersample", 2}});
-  s.camera.eye = glm::dvec3(-0.9, 0.1, 0.7);
-  s.camera.target = glm::dvec3(-0.2, 0.0, 0.2);
-  s.camera.fovYDegrees = 40;
-  s.camera.width = s.camera.height = 24;
+  lookAtTheCrease(s, 24);
   MethodFrame f = createMethod(s, {true, false})->render(s.camera);
   ASSERT_EQ(f.image.width, 24);
   EXPECT_NE(f.summary.find("2x2 subpixels"), std::string::npos) << f.summary;
