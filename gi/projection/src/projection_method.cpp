@@ -662,6 +662,7 @@ class ProjectionExtension : public FrameExtension {
     glUniform1i(gather_.uniform("uFillPasses"), params_.fillPasses);
     glUniform1i(gather_.uniform("uPointReceivers"), 0);
     glUniform1i(gather_.uniform("uDump"), 0);
+    glUniform1i(gather_.uniform("uHasLobes"), lobeSlots_ > 0 ? 1 : 0);
     glUniform1ui(gather_.uniform("uListOffset"), 0u);
     glUniform1ui(gather_.uniform("uListEnd"), UINT32_MAX);
   }

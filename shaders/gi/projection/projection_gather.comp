@@ -54,6 +54,7 @@ uniform uint uRowItems;          // list entries per row of workgroups (the disp
 uniform uint uListOffset;        // the list entries this dispatch gathers: [offset, end)
 uniform uint uListEnd;
 uniform bool uPointReceivers;    // the list holds points of S (further bounces), not pixels
+uniform bool uHasLobes;          // S holds glossy surfels with lobes (glossy_to_glossy)
 
 shared uint sKey[M * M];
 shared uint sSample[PROJECTION_SAMPLES];
@@ -403,9 +404,12 @@ void main() {
       if ((s & PROJECTION_BACK_FACING) != 0u) {
         L = vec3(0.0);
       } else {
-        ProjectionPoint P = points[at];
         L = radiance[at].rgb;
-        if (P.source.y != 0u) L += lobesToward(P, normalize(gR.x - P.positionArea.xyz));
+        // The point's record only where S has glossy surfels: this loop runs for every texel.
+        if (uHasLobes) {
+          ProjectionPoint P = points[at];
+          if (P.source.y != 0u) L += lobesToward(P, normalize(gR.x - P.positionArea.xyz));
+        }
       }
     }
     if (uDump)  // alpha: 1 covered, 0 a hole
