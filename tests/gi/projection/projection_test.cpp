@@ -222,9 +222,9 @@ TEST(ProjectionAdaptive, CreaseIsGatheredAndNoWeightCrossesIt) {
 // light's mirror image through the panel's plane lies where the face looks at the panel, so its
 // lobe sends the face far more than a diffuse panel would. The path tracer (512 samples per
 // pixel) is the judge: with lobes the face reads its mean within 10% (measured 1%; a 0.3 m panel,
-// six texels of the 32 x 32 micro-buffer across, read 8% bright: its outline's texels count
-// whole, docs/PROJECTION.md's known limit); with glossy_to_glossy false the panel reflects its
-// directional albedo diffusely and the face reads 0.60 of it.
+// six texels of the 32 x 32 micro-buffer across, read 8% bright, likely its outline's texels
+// counting whole, docs/PROJECTION.md's known limit); with glossy_to_glossy false the panel reflects
+// its directional albedo diffusely and the face reads 0.60 of it.
 TEST(ProjectionGlossy, LobesReflectTheLightsAsThePathTracerDoes) {
   nestlight::test::TempDir t;
   buildSphereScan(t, 3000, 2.0f, 0);
