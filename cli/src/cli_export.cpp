@@ -7,6 +7,8 @@
 #include "cli.h"
 #include "nestlight/converters/export.h"
 #include "nestlight/converters/potree_export.h"
+#include "nestlight/converters/progress.h"
+#include "nestlight/octree/clip_volume.h"
 #include "nestlight/octree/error.h"
 
 namespace nestlight::cli {
@@ -59,7 +61,13 @@ void addExport(CLI::App& app, int& exitCode) {
       ->required();
   cmd->add_option("--format", *format, "las, laz, ply or potree (default: from -o)")
       ->check(CLI::IsMember({"las", "laz", "ply", "potree"}));
+  auto clip = std::make_shared<std::string>();
   cmd->add_option("--level", *level, "las/laz/ply: only the nodes of this level (0 = root)");
+  cmd->add_option("--clip", *clip,
+                  "las/laz/ply: only the points that clipping volumes keep, from every level: a "
+                  "JSON file with a\n\"clipping\" array of boxes, polygons and corridors, or a "
+                  "view state saved by the viewer\n(docs/VIEWER.md). Streams node by node; nodes "
+                  "outside are never read");
   cmd->add_flag(
       "--force", *force,
       "potree: write into a non-empty directory: its Potree files are replaced by a dataset built "
@@ -72,7 +80,7 @@ void addExport(CLI::App& app, int& exitCode) {
                   "potree: dataset name (default: the octree folder's name)");
   cmd->add_option("--threads", potree->threads, "potree: nodes decoded in parallel (0: all cores)")
       ->capture_default_str();
-  cmd->add_option("--progress", *progress, "potree: auto, terminal, json or quiet")
+  cmd->add_option("--progress", *progress, "auto, terminal, json or quiet")
       ->check(CLI::IsMember({"auto", "terminal", "json", "quiet"}))
       ->capture_default_str();
   cmd->callback([=, &exitCode]() {
@@ -82,6 +90,10 @@ void addExport(CLI::App& app, int& exitCode) {
       if (*level >= 0)
         throw Error(
             "--level does not apply to --format potree: a Potree dataset holds every level");
+      if (!clip->empty())
+        throw Error(
+            "--clip does not apply to --format potree (a clipped Potree dataset needs a new "
+            "octree: export --clip to LAS and convert that)");
       PotreeExportOptions o = *potree;
       o.overwrite = *force;
       o.progress = parseProgress(*progress);
@@ -109,10 +121,22 @@ void addExport(CLI::App& app, int& exitCode) {
                    [](unsigned char c) { return std::tolower(c); });
     if (lower != "." + f)
       throw Error(*out, "", "--format " + f + " needs an output file ending in ." + f);
-    std::optional<uint32_t> l;
-    if (*level >= 0) l = static_cast<uint32_t>(*level);
-    uint64_t n = exportOctree(*dir, *out, l);
-    std::printf("wrote %llu points to %s\n", (unsigned long long)n, out->c_str());
+    ExportOptions o;
+    if (*level >= 0) o.level = static_cast<uint32_t>(*level);
+    std::optional<ClipSet> clipSet;
+    if (!clip->empty()) {
+      clipSet = ClipSet::load(*clip);
+      o.clip = &*clipSet;
+    }
+    Progress bar(parseProgress(*progress));
+    o.progress = &bar;
+    const ExportReport r = exportOctree(*dir, *out, o);
+    std::printf("wrote %llu points to %s\n", (unsigned long long)r.points, out->c_str());
+    if (clipSet)
+      std::printf("  clipped by %s: %llu nodes tested point by point, %llu inside whole, %llu "
+                  "outside (never read)\n",
+                  clip->c_str(), (unsigned long long)(r.nodes - r.nodesWhole),
+                  (unsigned long long)r.nodesWhole, (unsigned long long)r.nodesSkipped);
     exitCode = 0;
   });
 }

@@ -4,7 +4,10 @@
 #include <vector>
 
 #include "cli.h"
+#include "nestlight/converters/export.h"
 #include "nestlight/converters/verify.h"
+#include "nestlight/octree/clip_volume.h"
+#include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/octree/spacing.h"
 
@@ -16,13 +19,35 @@ void addInfo(CLI::App& app, int& exitCode) {
   auto dir = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("octree", *dir, "Octree folder")->required();
+  auto clip = std::make_shared<std::string>();
+  auto level = std::make_shared<int>(-1);
   cmd->add_flag("--json", *json, "Print the metadata as JSON");
+  cmd->add_option("--clip", *clip,
+                  "Count the points that clipping volumes keep: a JSON file with a \"clipping\" "
+                  "array (or a view state; docs/VIEWER.md). Nodes wholly inside are counted from "
+                  "the hierarchy, the others read and tested point by point");
+  cmd->add_option("--level", *level, "With --clip: only the nodes of this level (0 = root)");
   cmd->callback([=, &exitCode]() {
     requireOctreeFolder(*dir, "info");
     OctreeReader r(*dir);
     const Metadata& m = r.metadata();
+    std::optional<ClipSet> clipSet;
+    nlohmann::json clipJson;
+    if (*level >= 0 && clip->empty()) throw Error("--level needs --clip");
+    if (!clip->empty()) {
+      clipSet = ClipSet::load(*clip);
+      ExportOptions o;
+      o.clip = &*clipSet;
+      if (*level >= 0) o.level = uint32_t(*level);
+      const ExportReport c = countOctree(*dir, o);
+      clipJson = {{"file", *clip},          {"points", c.points},
+                  {"nodes_read", c.nodes - c.nodesWhole}, {"nodes_whole", c.nodesWhole},
+                  {"nodes_skipped", c.nodesSkipped},      {"points_tested", c.pointsTested}};
+    }
     if (*json) {
-      std::printf("%s\n", m.toJson().dump(2).c_str());
+      nlohmann::json j = m.toJson();
+      if (clipSet) j["clip"] = clipJson;
+      std::printf("%s\n", j.dump(2).c_str());
       exitCode = 0;
       return;
     }
@@ -102,6 +127,15 @@ void addInfo(CLI::App& app, int& exitCode) {
       std::printf("normals    estimated (%s)\n", m.normalEstimation.dump().c_str());
     if (!m.crs.is_null())
       std::printf("crs        %s\n", m.crs.contains("wkt") ? "WKT" : "GeoTIFF keys");
+    if (clipSet)
+      std::printf(
+          "clip       %s: %llu points kept%s (%llu nodes tested point by point, %llu inside whole, "
+          "%llu outside)\n",
+          clip->c_str(), (unsigned long long)clipJson["points"].get<uint64_t>(),
+          *level >= 0 ? (" at level " + std::to_string(*level)).c_str() : "",
+          (unsigned long long)clipJson["nodes_read"].get<uint64_t>(),
+          (unsigned long long)clipJson["nodes_whole"].get<uint64_t>(),
+          (unsigned long long)clipJson["nodes_skipped"].get<uint64_t>());
     for (const auto& s : m.sources) {
       std::printf("source     %s (%s, %llu points)\n", s.path.c_str(), s.format.c_str(),
                   (unsigned long long)s.points);
