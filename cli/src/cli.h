@@ -50,6 +50,7 @@ void addConvert(CLI::App& app, int& exitCode);
 void addInfo(CLI::App& app, int& exitCode);
 void addVerify(CLI::App& app, int& exitCode);
 void addExport(CLI::App& app, int& exitCode);
+void addProfile(CLI::App& app, int& exitCode);
 void addGenerate(CLI::App& app, int& exitCode);
 void addDemo(CLI::App& app, int& exitCode);
 void addBench(CLI::App& app, int& exitCode);

@@ -133,10 +133,11 @@ void addExport(CLI::App& app, int& exitCode) {
     const ExportReport r = exportOctree(*dir, *out, o);
     std::printf("wrote %llu points to %s\n", (unsigned long long)r.points, out->c_str());
     if (clipSet)
-      std::printf("  clipped by %s: %llu nodes tested point by point, %llu inside whole, %llu "
-                  "outside (never read)\n",
-                  clip->c_str(), (unsigned long long)(r.nodes - r.nodesWhole),
-                  (unsigned long long)r.nodesWhole, (unsigned long long)r.nodesSkipped);
+      std::printf(
+          "  clipped by %s: %llu nodes tested point by point, %llu inside whole, %llu "
+          "outside (never read)\n",
+          clip->c_str(), (unsigned long long)(r.nodes - r.nodesWhole),
+          (unsigned long long)r.nodesWhole, (unsigned long long)r.nodesSkipped);
     exitCode = 0;
   });
 }

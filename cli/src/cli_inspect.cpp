@@ -40,9 +40,12 @@ void addInfo(CLI::App& app, int& exitCode) {
       o.clip = &*clipSet;
       if (*level >= 0) o.level = uint32_t(*level);
       const ExportReport c = countOctree(*dir, o);
-      clipJson = {{"file", *clip},          {"points", c.points},
-                  {"nodes_read", c.nodes - c.nodesWhole}, {"nodes_whole", c.nodesWhole},
-                  {"nodes_skipped", c.nodesSkipped},      {"points_tested", c.pointsTested}};
+      clipJson = {{"file", *clip},
+                  {"points", c.points},
+                  {"nodes_read", c.nodes - c.nodesWhole},
+                  {"nodes_whole", c.nodesWhole},
+                  {"nodes_skipped", c.nodesSkipped},
+                  {"points_tested", c.pointsTested}};
     }
     if (*json) {
       nlohmann::json j = m.toJson();

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addInfo(app, code);
   nestlight::cli::addVerify(app, code);
   nestlight::cli::addExport(app, code);
+  nestlight::cli::addProfile(app, code);
   nestlight::cli::addGenerate(app, code);
   nestlight::cli::addDemo(app, code);
   nestlight::cli::addBench(app, code);

@@ -11,8 +11,12 @@ namespace {
 
 using P2 = std::array<double, 2>;
 
-double dot(const Vec3d& a, const Vec3d& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Vec3d sub(const Vec3d& a, const Vec3d& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+double dot(const Vec3d& a, const Vec3d& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+Vec3d sub(const Vec3d& a, const Vec3d& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
 
 double cross(const P2& o, const P2& a, const P2& b) {
   return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
@@ -72,8 +76,7 @@ bool polygonContains(const std::vector<P2>& poly, double x, double y) {
   bool in = false;
   for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
     const P2 &a = poly[i], &b = poly[j];
-    if ((a[1] > y) != (b[1] > y) && x < (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) + a[0])
-      in = !in;
+    if ((a[1] > y) != (b[1] > y) && x < (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) + a[0]) in = !in;
   }
   return in;
 }
@@ -152,7 +155,8 @@ ClipVolume ClipVolume::corridor(std::vector<P2> points, double width, double zMi
 
 void ClipVolume::validate(const std::string& file, const std::string& what) const {
   auto fail = [&](const std::string& why) { throw Error(file, what, why); };
-  if (!(zMin <= zMax)) fail("z range is empty (" + std::to_string(zMin) + " > " + std::to_string(zMax) + ")");
+  if (!(zMin <= zMax))
+    fail("z range is empty (" + std::to_string(zMin) + " > " + std::to_string(zMax) + ")");
   switch (kind) {
     case Kind::Box:
       for (int a = 0; a < 3; ++a)
@@ -179,8 +183,8 @@ void ClipVolume::validate(const std::string& file, const std::string& what) cons
               fail("the polygon crosses itself: edges " + edgeName(i, n) + " and " +
                    edgeName(j, n) + " fold back along each other");
           } else if (segmentsMeet(a, b, c, d)) {
-            fail("the polygon crosses itself: edges " + edgeName(i, n) + " and " +
-                 edgeName(j, n) + " meet");
+            fail("the polygon crosses itself: edges " + edgeName(i, n) + " and " + edgeName(j, n) +
+                 " meet");
           }
         }
       double area2 = 0;
@@ -289,7 +293,12 @@ double ClipVolume::length() const {
 }
 
 double ClipVolume::along(const Vec3d& p) const {
-  double best = INFINITY, result = 0, start = 0;
+  return alongAcross(p)[0];
+}
+
+std::array<double, 2> ClipVolume::alongAcross(const Vec3d& p) const {
+  double best = INFINITY, start = 0;
+  std::array<double, 2> result{0, 0};
   const size_t segments = points.size() < 2 ? 0 : points.size() - 1;
   for (size_t i = 0; i < segments; ++i) {
     const P2 &a = points[i], &b = points[i + 1];
@@ -301,7 +310,8 @@ double ClipVolume::along(const Vec3d& p) const {
       // Clamped between segments; open at the line's two ends.
       if (i > 0) t = std::max(t, 0.0);
       if (i + 1 < segments) t = std::min(t, 1.0);
-      result = start + t * len;
+      const double side = cross(a, b, {p.x, p.y});
+      result = {start + t * len, side < 0 ? -std::sqrt(d2) : std::sqrt(d2)};
     }
     start += len;
   }
@@ -340,7 +350,8 @@ ClipVolume ClipVolume::fromJson(const JsonField& f) {
     zRange(v);
     v.validate(f.file(), pf.path());
   }
-  if (f.has("mode")) v.mode = f.at("mode").choice({"inside", "outside"}) == "inside" ? Mode::Inside : Mode::Outside;
+  if (f.has("mode"))
+    v.mode = f.at("mode").choice({"inside", "outside"}) == "inside" ? Mode::Inside : Mode::Outside;
   return v;
 }
 

@@ -38,9 +38,8 @@ std::vector<Selected> selectNodes(OctreeReader& reader, const ExportOptions& o,
         // A parent outside never got its children listed as kept; breadth first, it is known.
         if (it != overlaps.end()) parent = it->second;
       }
-      ov = parent == Overlap::Partial
-               ? o.clip->keeps(m.nodeBounds(key.level, key.x, key.y, key.z))
-               : parent;
+      ov = parent == Overlap::Partial ? o.clip->keeps(m.nodeBounds(key.level, key.x, key.y, key.z))
+                                      : parent;
       overlaps[key] = ov;
     }
     if (o.level && key.level != *o.level) continue;
@@ -73,63 +72,66 @@ ExportReport walkClipped(const std::filesystem::path& dir, const ExportOptions& 
     layers.push_back(std::make_unique<ColourLayerReader>(dir, m, l.name));
   const size_t in = m.layout.stride(), out = in + 12 * layers.size();
 
-  const unsigned threads = o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads =
+      o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   size_t next = 0;
   std::atomic<uint64_t> tested{0};
   tbb::parallel_pipeline(
-      threads * 2,
-      tbb::make_filter<void, std::shared_ptr<ClippedNode>>(
-          tbb::filter_mode::serial_in_order,
-          [&](tbb::flow_control& fc) -> std::shared_ptr<ClippedNode> {
-            if (next == nodes.size()) {
-              fc.stop();
-              return nullptr;
-            }
-            auto n = std::make_shared<ClippedNode>();
-            n->key = nodes[next].key;
-            n->entry = nodes[next].entry;
-            n->whole = nodes[next].overlap == Overlap::All;
-            ++next;
-            return n;
-          }) &
-          tbb::make_filter<std::shared_ptr<ClippedNode>, std::shared_ptr<ClippedNode>>(
-              tbb::filter_mode::parallel,
-              [&](std::shared_ptr<ClippedNode> n) {
-                const bool whole = n->whole;
-                PointBuffer pts = reader.readNode(n->key);
-                std::vector<std::vector<float>> rgb;
-                for (auto& l : layers) rgb.push_back(l->readNode(n->key, n->entry.numPoints));
-                PointBatch& b = n->batch;
-                b.xyz.reserve(pts.size() * 3);
-                b.attrs.reserve(pts.size() * out);
-                uint64_t t = 0;
-                for (size_t i = 0; i < pts.size(); ++i) {
-                  const Vec3d w{m.world(0, pts.pos[3 * i]), m.world(1, pts.pos[3 * i + 1]),
-                                m.world(2, pts.pos[3 * i + 2])};
-                  if (!whole) {
-                    ++t;
-                    if (!o.clip->keeps(w)) continue;
-                  }
-                  b.xyz.insert(b.xyz.end(), {w.x, w.y, w.z});
-                  const size_t at = b.attrs.size();
-                  b.attrs.resize(at + out);
-                  std::memcpy(&b.attrs[at], pts.attrsOf(i), in);
-                  for (size_t li = 0; li < rgb.size(); ++li)
-                    std::memcpy(&b.attrs[at + in + 12 * li], &rgb[li][3 * i], 12);
-                }
-                tested += t;
-                if (parallel) parallel(*n);
-                return n;
-              }) &
-          tbb::make_filter<std::shared_ptr<ClippedNode>, void>(
-              tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedNode> n) {
-                ++report.nodes;
-                report.pointsRead += n->entry.numPoints;
-                report.points += n->batch.size();
-                serial(*n);
-                if (o.progress) o.progress->advance(n->entry.numPoints, n->entry.numPoints);
-              }));
+      threads * 2, tbb::make_filter<void, std::shared_ptr<ClippedNode>>(
+                       tbb::filter_mode::serial_in_order,
+                       [&](tbb::flow_control& fc) -> std::shared_ptr<ClippedNode> {
+                         if (next == nodes.size()) {
+                           fc.stop();
+                           return nullptr;
+                         }
+                         auto n = std::make_shared<ClippedNode>();
+                         n->key = nodes[next].key;
+                         n->entry = nodes[next].entry;
+                         n->whole = nodes[next].overlap == Overlap::All;
+                         ++next;
+                         return n;
+                       }) &
+                       tbb::make_filter<std::shared_ptr<ClippedNode>, std::shared_ptr<ClippedNode>>(
+                           tbb::filter_mode::parallel,
+                           [&](std::shared_ptr<ClippedNode> n) {
+                             const bool whole = n->whole;
+                             PointBuffer pts = reader.readNode(n->key);
+                             std::vector<std::vector<float>> rgb;
+                             for (auto& l : layers)
+                               rgb.push_back(l->readNode(n->key, n->entry.numPoints));
+                             PointBatch& b = n->batch;
+                             b.xyz.reserve(pts.size() * 3);
+                             b.attrs.reserve(pts.size() * out);
+                             uint64_t t = 0;
+                             for (size_t i = 0; i < pts.size(); ++i) {
+                               const Vec3d w{m.world(0, pts.pos[3 * i]),
+                                             m.world(1, pts.pos[3 * i + 1]),
+                                             m.world(2, pts.pos[3 * i + 2])};
+                               if (!whole) {
+                                 ++t;
+                                 if (!o.clip->keeps(w)) continue;
+                               }
+                               b.xyz.insert(b.xyz.end(), {w.x, w.y, w.z});
+                               const size_t at = b.attrs.size();
+                               b.attrs.resize(at + out);
+                               std::memcpy(&b.attrs[at], pts.attrsOf(i), in);
+                               for (size_t li = 0; li < rgb.size(); ++li)
+                                 std::memcpy(&b.attrs[at + in + 12 * li], &rgb[li][3 * i], 12);
+                             }
+                             tested += t;
+                             if (parallel) parallel(*n);
+                             return n;
+                           }) &
+                       tbb::make_filter<std::shared_ptr<ClippedNode>, void>(
+                           tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedNode> n) {
+                             ++report.nodes;
+                             report.pointsRead += n->entry.numPoints;
+                             report.points += n->batch.size();
+                             serial(*n);
+                             if (o.progress)
+                               o.progress->advance(n->entry.numPoints, n->entry.numPoints);
+                           }));
   report.pointsTested = tested;
   for (const Selected& s : nodes) report.nodesWhole += s.overlap == Overlap::All;
   if (o.progress) o.progress->end();
@@ -190,7 +192,8 @@ ExportReport countOctree(const std::filesystem::path& dir, const ExportOptions& 
       partial.push_back(&s);
     }
   }
-  const unsigned threads = o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads =
+      o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   std::atomic<uint64_t> kept{0}, read{0};
   std::atomic<size_t> next{0};

@@ -53,7 +53,7 @@ struct ClippedNode {
   HierarchyEntry entry;
   bool whole = false;  // inside the clipping volumes whole: no point was tested
   PointBatch batch;
-  std::vector<float> extra;  // for the consumer's own per-point values
+  std::vector<double> extra;  // for the consumer's own per-point values
 };
 ExportReport walkClipped(const std::filesystem::path& dir, const ExportOptions& options,
                          const std::function<void(ClippedNode&)>& parallel,

@@ -60,6 +60,9 @@ struct ClipVolume {
   // Corridor: distance along the polyline of the point's nearest position on it (before the
   // first vertex negative, beyond the last past the length), and the polyline's length.
   double along(const Vec3d& p) const;
+  // The same and the signed plan distance from the nearest segment (positive left of the line's
+  // direction), in one search: {along, across}.
+  std::array<double, 2> alongAcross(const Vec3d& p) const;
   double length() const;
 
   static ClipVolume box(const Vec3d& center, const Vec3d& size,
