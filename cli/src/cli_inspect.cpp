@@ -7,6 +7,7 @@
 #include "nestlight/converters/export.h"
 #include "nestlight/converters/verify.h"
 #include "nestlight/octree/clip_volume.h"
+#include "nestlight/octree/crs.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/octree/spacing.h"
@@ -128,8 +129,7 @@ void addInfo(CLI::App& app, int& exitCode) {
     }
     if (m.normalsEstimated)
       std::printf("normals    estimated (%s)\n", m.normalEstimation.dump().c_str());
-    if (!m.crs.is_null())
-      std::printf("crs        %s\n", m.crs.contains("wkt") ? "WKT" : "GeoTIFF keys");
+    std::printf("crs        %s\n", describeCrs(m.crs).summary().c_str());
     if (clipSet)
       std::printf(
           "clip       %s: %llu points kept%s (%llu nodes tested point by point, %llu inside whole, "

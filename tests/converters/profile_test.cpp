@@ -29,6 +29,8 @@ void writeWall(const std::string& path) {
   h.scale = Vec3d{0.001, 0.001, 0.001};
   h.offset = Vec3d{kEast, kNorth, 0};
   h.layout.add({"intensity", ScalarType::U16, 1, ""});
+  // Its unit labels the plot's axes.
+  h.crs = {{"wkt", R"(PROJCS["test grid",UNIT["metre",1]])"}};
   auto w = createWriter(path, h);
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(0, 1);

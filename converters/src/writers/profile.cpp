@@ -11,6 +11,7 @@
 
 #include "nestlight/converters/point_writer.h"
 #include "nestlight/converters/progress.h"
+#include "nestlight/octree/crs.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 
@@ -111,9 +112,9 @@ void writeSvg(const fs::path& file, const Plot& plot, const std::vector<uint8_t>
          "\" text-anchor=\"end\">" + fmt(z) + "</text>\n";
   }
   s += "<text x=\"" + std::to_string(left + plot.w / 2) + "\" y=\"" + std::to_string(H - 12) +
-       "\" text-anchor=\"middle\">distance along the line (" + o.unit + ")</text>\n";
+       "\" text-anchor=\"middle\">distance along the line (" + r.unit + ")</text>\n";
   s += "<text transform=\"translate(16," + std::to_string(top + plot.h / 2) +
-       ") rotate(-90)\" text-anchor=\"middle\">height (" + o.unit + ")" +
+       ") rotate(-90)\" text-anchor=\"middle\">height (" + r.unit + ")" +
        (o.exaggeration != 1 ? ", exaggerated " + fmt(o.exaggeration) + "x" : std::string()) +
        "</text>\n";
   if (r.points == 0)
@@ -159,6 +160,7 @@ ProfileReport profileOctree(const fs::path& dir, const ProfileOptions& o) {
   }
   ProfileReport r;
   r.length = corridor.length();
+  r.unit = o.unit.empty() ? describeCrs(m.crs).unitSymbol() : o.unit;
   const int rgbIndex = m.layout.find("rgb"), intensityIndex = m.layout.find("intensity");
   r.colour = o.colour;
   if (r.colour == "auto") r.colour = rgbIndex >= 0 ? "rgb" : "elevation";
@@ -297,8 +299,8 @@ ProfileReport profileOctree(const fs::path& dir, const ProfileOptions& o) {
     fs::rename(tmp, p);
   }
   const std::string title = dir.filename().string() + ": " + std::to_string(r.points) +
-                            " points within " + fmt(o.width / 2) + " " + o.unit + " of a " +
-                            fmt(r.length) + " " + o.unit + " line";
+                            " points within " + fmt(o.width / 2) + " " + r.unit + " of a " +
+                            fmt(r.length) + " " + r.unit + " line";
   for (const fs::path& p : svgFiles) writeSvg(p, plot, png, r, o, title);
   return r;
 }

@@ -25,7 +25,7 @@ struct ProfileOptions {
   int imageWidth = 1600;        // plot pixels along the line
   double exaggeration = 1;      // vertical scale against horizontal
   std::string colour = "auto";  // rgb, elevation, intensity; auto: rgb when the scan has it
-  std::string unit = "m";       // axis labels
+  std::string unit;             // axis labels; empty: the octree's CRS unit ("units" if none)
   Progress* progress = nullptr;
   unsigned threads = 0;
 };
@@ -36,6 +36,7 @@ struct ProfileReport {
   double zMin = 0, zMax = 0, alongMin = 0, alongMax = 0;  // of the points kept (0 when none)
   int imageWidth = 0, imageHeight = 0;
   std::string colour;  // what the plot was coloured by
+  std::string unit;    // what its axes are labelled in
   ExportReport walk;   // the first pass's
 };
 
