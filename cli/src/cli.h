@@ -72,6 +72,7 @@ void addBenchHdr(CLI::App& app, int& exitCode);         // after addBench: a sub
 void addBenchIbl(CLI::App& app, int& exitCode);         // after addBench: a sub-command of `bench`
 void addBenchDiffrender(CLI::App& app, int& exitCode);  // after addBench: a sub-command of `bench`
 void addBenchLaz(CLI::App& app, int& exitCode);         // after addBench: a sub-command of `bench`
+void addBenchClip(CLI::App& app, int& exitCode);        // after addBench: a sub-command of `bench`
 void addGlInfo(CLI::App& app, int& exitCode);
 
 // "5M" = 5,000,000, "800k", "1.5G", "1B" (a billion), plain numbers: point counts are decimal.

@@ -67,6 +67,7 @@ int main(int argc, char** argv) {
   nestlight::cli::addBenchIbl(app, code);
   nestlight::cli::addBenchDiffrender(app, code);
   nestlight::cli::addBenchLaz(app, code);
+  nestlight::cli::addBenchClip(app, code);
   nestlight::cli::addGlInfo(app, code);
   // Parse errors and user errors exit 1, failed checks 2, failures of the program or the
   // system 3 (cli.h: ExitCode); --help and --version 0.

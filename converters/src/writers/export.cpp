@@ -127,6 +127,7 @@ ExportReport walkClipped(const std::filesystem::path& dir, const ExportOptions& 
                            tbb::filter_mode::serial_in_order, [&](std::shared_ptr<ClippedNode> n) {
                              ++report.nodes;
                              report.pointsRead += n->entry.numPoints;
+                             report.payloadBytes += n->entry.byteSize;
                              report.points += n->batch.size();
                              serial(*n);
                              if (o.progress)
@@ -173,6 +174,18 @@ uint64_t exportOctree(const std::filesystem::path& dir, const std::filesystem::p
   return exportOctree(dir, file, o).points;
 }
 
+ExportReport selectOctree(const std::filesystem::path& dir, const ExportOptions& o) {
+  OctreeReader reader(dir);
+  ExportReport report;
+  for (const Selected& s : selectNodes(reader, o, report)) {
+    ++report.nodes;
+    report.nodesWhole += s.overlap == Overlap::All;
+    report.pointsRead += s.entry.numPoints;
+    report.payloadBytes += s.entry.byteSize;
+  }
+  return report;
+}
+
 ExportReport countOctree(const std::filesystem::path& dir, const ExportOptions& o) {
   OctreeReader reader(dir);
   const Metadata& m = reader.metadata();
@@ -195,7 +208,7 @@ ExportReport countOctree(const std::filesystem::path& dir, const ExportOptions& 
   const unsigned threads =
       o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-  std::atomic<uint64_t> kept{0}, read{0};
+  std::atomic<uint64_t> kept{0}, read{0}, bytes{0};
   std::atomic<size_t> next{0};
   std::vector<std::thread> pool;
   std::exception_ptr failure;
@@ -212,6 +225,7 @@ ExportReport countOctree(const std::filesystem::path& dir, const ExportOptions& 
                                      m.world(2, pts.pos[3 * p + 2])});
           kept += k;
           read += pts.size();
+          bytes += s.entry.byteSize;
           if (o.progress) o.progress->advance(pts.size(), pts.size());
         }
       } catch (...) {
@@ -225,6 +239,7 @@ ExportReport countOctree(const std::filesystem::path& dir, const ExportOptions& 
   if (o.progress) o.progress->end();
   report.points += kept;
   report.pointsRead = report.pointsTested = read;
+  report.payloadBytes = bytes;
   return report;
 }
 

@@ -30,6 +30,7 @@ struct ExportReport {
   uint64_t nodesSkipped = 0;  // nodes outside the clipping volumes, never read
   uint64_t pointsTested = 0;  // points tested one by one
   uint64_t pointsRead = 0;    // points decoded
+  uint64_t payloadBytes = 0;  // compressed node payloads read
 };
 
 // Positions are offset + integer * scale, so a LAS file written with the octree's scale and
@@ -43,6 +44,10 @@ uint64_t exportOctree(const std::filesystem::path& dir, const std::filesystem::p
 // The points `options` selects, counted: nodes the volumes keep whole are counted from the
 // hierarchy without reading them.
 ExportReport countOctree(const std::filesystem::path& dir, const ExportOptions& options);
+
+// What a walk with `options` would read, from the hierarchy alone (no payload read): nodes,
+// nodesWhole, nodesSkipped, pointsRead (the points in the nodes read) and payloadBytes.
+ExportReport selectOctree(const std::filesystem::path& dir, const ExportOptions& options);
 
 // The walk behind both, for other consumers (profiles). Each selected node is read and clipped
 // on a worker thread: its points' world coordinates (xyz) and attributes go into `batch`, kept
