@@ -101,9 +101,10 @@ ExportReport walkClipped(const std::filesystem::path& dir, const ExportOptions& 
                              for (auto& l : layers)
                                rgb.push_back(l->readNode(n->key, n->entry.numPoints));
                              PointBatch& b = n->batch;
-                             b.xyz.reserve(pts.size() * 3);
-                             b.attrs.reserve(pts.size() * out);
+                             b.xyz.resize(pts.size() * 3);
+                             b.attrs.resize(pts.size() * out);
                              uint64_t t = 0;
+                             size_t k = 0;  // points kept so far
                              for (size_t i = 0; i < pts.size(); ++i) {
                                const Vec3d w{m.world(0, pts.pos[3 * i]),
                                              m.world(1, pts.pos[3 * i + 1]),
@@ -112,13 +113,15 @@ ExportReport walkClipped(const std::filesystem::path& dir, const ExportOptions& 
                                  ++t;
                                  if (!o.clip->keeps(w)) continue;
                                }
-                               b.xyz.insert(b.xyz.end(), {w.x, w.y, w.z});
-                               const size_t at = b.attrs.size();
-                               b.attrs.resize(at + out);
-                               std::memcpy(&b.attrs[at], pts.attrsOf(i), in);
+                               b.xyz[3 * k] = w.x, b.xyz[3 * k + 1] = w.y, b.xyz[3 * k + 2] = w.z;
+                               uint8_t* a = b.attrs.data() + k * out;
+                               std::memcpy(a, pts.attrsOf(i), in);
                                for (size_t li = 0; li < rgb.size(); ++li)
-                                 std::memcpy(&b.attrs[at + in + 12 * li], &rgb[li][3 * i], 12);
+                                 std::memcpy(a + in + 12 * li, &rgb[li][3 * i], 12);
+                               ++k;
                              }
+                             b.xyz.resize(3 * k);
+                             b.attrs.resize(k * out);
                              tested += t;
                              if (parallel) parallel(*n);
                              return n;

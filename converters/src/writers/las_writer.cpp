@@ -8,15 +8,19 @@
 // are known: a killed export leaves no file that looks complete (DESIGN.md). LAZ output is
 // compressed while the points arrive (laz::ChunkWriter), so an export needs the disk space of
 // its .laz file, never that of the uncompressed LAS.
+#include <tbb/parallel_for.h>
+
 #include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "laz/points.h"
 #include "laz/writer.h"
@@ -303,25 +307,55 @@ class LasWriter final : public PointWriter {
         }
     }
     buffer_.resize(n * plan_.recordLength);
-    for (size_t i = 0; i < n; ++i) {
-      int32_t q[3];
-      for (int a = 0; a < 3; ++a) {
-        const double v = batch.xyz[3 * i + a];
-        const double s = std::nearbyint((v - offset_[a]) / scale_[a]);
-        if (!(s >= std::numeric_limits<int32_t>::min() && s <= std::numeric_limits<int32_t>::max()))
-          throw Error(path_, "point " + std::to_string(count_ + i),
-                      std::string(1, "xyz"[a]) + " = " + std::to_string(v) +
-                          " cannot be stored in LAS with scale " + std::to_string(scale_[a]) +
-                          " and offset " + std::to_string(offset_[a]) +
-                          " (not finite, or outside the 32-bit integer range)");
-        q[a] = static_cast<int32_t>(s);
-        qmin_[a] = std::min<int64_t>(qmin_[a], q[a]);
-        qmax_[a] = std::max<int64_t>(qmax_[a], q[a]);
+    // Records are independent: large batches are encoded in blocks on every core (an export's
+    // writer is otherwise the one serial stage), each block with its own bounds and return
+    // counts, merged after. A failure reports the first failing point, as a serial loop would.
+    constexpr size_t kBlock = 8192;
+    const size_t blocks = (n + kBlock - 1) / kBlock;
+    struct Stats {
+      std::array<int64_t, 3> qmin{INT64_MAX, INT64_MAX, INT64_MAX},
+          qmax{INT64_MIN, INT64_MIN, INT64_MIN};
+      std::array<uint64_t, 15> byReturn{};
+      std::exception_ptr failure;
+    };
+    std::vector<Stats> stats(blocks);
+    auto encodeBlock = [&](size_t b) {
+      Stats& st = stats[b];
+      try {
+        for (size_t i = b * kBlock, end = std::min(n, (b + 1) * kBlock); i < end; ++i) {
+          int32_t q[3];
+          for (int a = 0; a < 3; ++a) {
+            const double v = batch.xyz[3 * i + a];
+            const double s = std::nearbyint((v - offset_[a]) / scale_[a]);
+            if (!(s >= std::numeric_limits<int32_t>::min() &&
+                  s <= std::numeric_limits<int32_t>::max()))
+              throw Error(path_, "point " + std::to_string(count_ + i),
+                          std::string(1, "xyz"[a]) + " = " + std::to_string(v) +
+                              " cannot be stored in LAS with scale " + std::to_string(scale_[a]) +
+                              " and offset " + std::to_string(offset_[a]) +
+                              " (not finite, or outside the 32-bit integer range)");
+            q[a] = static_cast<int32_t>(s);
+            st.qmin[a] = std::min<int64_t>(st.qmin[a], q[a]);
+            st.qmax[a] = std::max<int64_t>(st.qmax[a], q[a]);
+          }
+          const uint8_t* attrs = batch.attrs.data() + i * stride;
+          encodeRecord(plan_, q, attrs, buffer_.data() + i * plan_.recordLength, path_, count_ + i);
+          const uint8_t ret = field<uint8_t>(plan_, kFReturnNumber, attrs, 1);
+          if (ret >= 1 && ret <= 15) ++st.byReturn[ret - 1];
+        }
+      } catch (...) {
+        st.failure = std::current_exception();
       }
-      const uint8_t* attrs = batch.attrs.data() + i * stride;
-      encodeRecord(plan_, q, attrs, buffer_.data() + i * plan_.recordLength, path_, count_ + i);
-      const uint8_t ret = field<uint8_t>(plan_, kFReturnNumber, attrs, 1);
-      if (ret >= 1 && ret <= 15) ++byReturn_[ret - 1];
+    };
+    if (blocks > 1)
+      tbb::parallel_for(size_t(0), blocks, encodeBlock);
+    else
+      encodeBlock(0);
+    for (const Stats& st : stats) {
+      if (st.failure) std::rethrow_exception(st.failure);
+      for (int a = 0; a < 3; ++a)
+        qmin_[a] = std::min(qmin_[a], st.qmin[a]), qmax_[a] = std::max(qmax_[a], st.qmax[a]);
+      for (int r = 0; r < 15; ++r) byReturn_[r] += st.byReturn[r];
     }
     if (chunks_)
       chunks_->add(buffer_.data(), n);
