@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -26,10 +27,16 @@ struct RenderOptionText {
   std::string camera, view = "35,30", rasteriser = "points", splatting = "hqs", colour;
   std::string pointBudget = "5M", gpuBudget = "512M", uploadBudget = "32M";
   CLI::Option* edl = nullptr;  // --colour hdr turns eye-dome lighting off unless --edl is given
+  std::string state, clip;     // --state view.json, --clip volumes.json
 };
 void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
                       std::shared_ptr<RenderOptionText> text);
 void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text);
+// --state and --clip, after applyRenderOptions: the view state's camera, colouring, budgets,
+// splatting and clipping where the command line (`given`) does not say otherwise, and --clip's
+// volumes over the state's. Warns when the state was saved from an octree elsewhere.
+void applyViewStateOptions(viewer::RenderJob& job, const RenderOptionText& text,
+                           const std::function<bool(const char*)>& given);
 
 // The options of scene files that choose and set the GI method, shared by `render` and `view`
 // (cli_scene_options.cpp). addSceneMethodOptions: --method, --mode, the flags the methods declare

@@ -7,9 +7,13 @@
 #include <sstream>
 
 #include "cli.h"
+#include "nestlight/frame/gpu_clip.h"
+#include "nestlight/frame/view_state.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/render_scene.h"
+#include "nestlight/octree/crs.h"
 #include "nestlight/octree/error.h"
+#include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/headless.h"
 
 namespace nestlight::cli {
@@ -61,9 +65,9 @@ void applySceneScanOptions(const CLI::App& cmd, const std::string& file,
                            gi::SceneRenderOverrides& sc) {
   auto given = [&](const char* o) { return cmd.count(o) > 0; };
   std::vector<std::string> notForScenes;
-  for (const char* o :
-       {"--camera", "--view", "--colour", "--layer", "--fixed-point-size", "--edl",
-        "--upload-budget", "--spacing-pixels", "--loaders", "--path", "--stats", "--wait-complete"})
+  for (const char* o : {"--camera", "--view", "--colour", "--layer", "--fixed-point-size", "--edl",
+                        "--upload-budget", "--spacing-pixels", "--loaders", "--path", "--stats",
+                        "--wait-complete", "--state", "--pick"})
     if (given(o)) notForScenes.push_back(o);
   if (!notForScenes.empty()) {
     std::string names;
@@ -171,6 +175,54 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
                   "Refine until a node's point spacing projects to at most this many pixels")
       ->capture_default_str();
   cmd->add_option("--loaders", job.budgets.loaderThreads, "Loader threads")->capture_default_str();
+  cmd->add_option("--state", text->state,
+                  "View state JSON saved by the viewer (docs/VIEWER.md, \"View states\"): its "
+                  "camera, colouring, budgets, splatting and clipping volumes; options given "
+                  "here win over it");
+  cmd->add_option("--clip", text->clip,
+                  "Clipping volumes JSON (boxes, polygons, corridors; the file `export --clip` "
+                  "reads): what they remove is hidden on the GPU and never loaded");
+}
+
+void applyViewStateOptions(viewer::RenderJob& job, const RenderOptionText& text,
+                           const std::function<bool(const char*)>& given) {
+  if (!text.state.empty()) {
+    requireExists(text.state);
+    const frame::ViewState st = frame::ViewState::load(text.state);
+    const std::string warning = st.boundsWarning(OctreeReader(job.octree).metadata().bounds);
+    if (!warning.empty())
+      std::fprintf(stderr, "%s: warning: %s\n", text.state.c_str(), warning.c_str());
+    if (st.camera && !given("--camera")) {
+      job.camera = *st.camera;
+      if (given("--fov")) job.camera->fovYDegrees = job.fovYDegrees;
+    }
+    if (st.colour && !given("--colour")) job.colour = *st.colour;
+    if (!given("--layer")) job.colourLayer = st.colourLayer;
+    const streaming::Budgets& b = st.budgets;
+    if (!given("--point-budget")) job.budgets.points = b.points;
+    if (!given("--gpu-budget")) job.budgets.gpuBytes = b.gpuBytes;
+    if (!given("--upload-budget")) job.budgets.uploadBytesPerFrame = b.uploadBytesPerFrame;
+    if (!given("--loaders")) job.budgets.loaderThreads = b.loaderThreads;
+    if (!given("--spacing-pixels")) job.budgets.spacingPixels = b.spacingPixels;
+    const frame::RenderSettings& r = st.settings;
+    frame::RenderSettings& o = job.settings;
+    if (!given("--rasteriser")) o.rasteriser = r.rasteriser;
+    if (!given("--splatting")) o.splatting = r.splatting;
+    if (!given("--point-size")) o.sizeScale = r.sizeScale;
+    if (!given("--fixed-point-size") && !given("--rasteriser")) o.fixedPointSize = r.fixedPointSize;
+    if (!given("--edl")) o.edlStrength = r.edlStrength;
+    if (!given("--exposure")) o.exposureStops = r.exposureStops;
+    o.minPointSize = r.minPointSize, o.maxPointSize = r.maxPointSize;
+    o.roundPoints = r.roundPoints, o.edlRadius = r.edlRadius, o.background = r.background;
+    if (!st.clipping.empty()) o.clip = std::make_shared<const ClipSet>(st.clipping);
+    job.annotations = st.annotations;
+  }
+  if (!text.clip.empty()) {
+    requireExists(text.clip);
+    job.settings.clip = std::make_shared<const ClipSet>(ClipSet::load(text.clip));
+  }
+  // What the GPU draws at most: refused here, before any work, rather than clipped wrongly.
+  if (job.settings.clip) frame::encodeClipBlock(*job.settings.clip, Vec3d{});
 }
 
 void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
@@ -257,6 +309,15 @@ void addRender(CLI::App& app, int& exitCode) {
                 "Render each frame only once its cut is fully loaded (deterministic images)");
   cmd->add_option("--timeout", job->timeoutSeconds, "Seconds to wait for a complete cut")
       ->capture_default_str();
+  auto picks = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--pick", *picks,
+                  "Print the scan point under pixel X,Y of the still (column, row from the "
+                  "top-left): its coordinates in the scan's system to the scan's precision, its "
+                  "node and attributes; repeatable. The nearest point to the pixel's centre on "
+                  "the front surface within --pick-radius pixels; nothing over background");
+  cmd->add_option("--pick-radius", job->pickRadius, "Picking's search window, pixels each side")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 64));
   addRenderOptions(cmd, *job, text);
   cmd->get_option("--width")->description(
       "Image width in pixels, up to 16384 (large octree images render in tiles)");
@@ -320,8 +381,38 @@ void addRender(CLI::App& app, int& exitCode) {
     makeOutputFolder(job->output);
     job->octree = *octree;
     applyRenderOptions(*job, *text);
+    applyViewStateOptions(*job, *text, [cmd](const char* o) { return cmd->count(o) > 0; });
     if (!path->empty()) job->path = gi::loadCameraPath(*path);
+    if (!picks->empty() && job->path) throw Error("--pick: picks in a still, not with --path");
+    for (const std::string& p : *picks) {
+      const std::vector<double> v = parseNumbers(p, 2, "--pick");
+      if (v[0] < 0 || v[1] < 0 || v[0] >= job->width || v[1] >= job->height)
+        throw Error("--pick " + p + ": the pixel lies outside the " + std::to_string(job->width) +
+                    "x" + std::to_string(job->height) + " image");
+      job->picks.push_back({v[0], v[1]});
+    }
     auto frames = viewer::renderHeadless(*job);
+    if (!frames.empty() && !job->picks.empty()) {
+      const Metadata& meta = OctreeReader(job->octree).metadata();
+      const CrsInfo crs = describeCrs(meta.crs);
+      const std::string unit = " " + crs.unitSymbol();
+      if (crs.known) std::printf("pick: coordinates in %s\n", crs.summary().c_str());
+      for (size_t i = 0; i < job->picks.size(); ++i) {
+        const auto& pick = frames.front().picks[i];
+        std::printf("pick %s: ", (*picks)[i].c_str());
+        if (!pick) {
+          std::printf("nothing (background within %d px)\n", job->pickRadius);
+          continue;
+        }
+        std::printf("%s%s  (node %s, point %u; %.2f px from the pixel's centre, %.6g%s away)\n",
+                    pick->coordinates(meta.scale).c_str(), unit.c_str(), pick->node.name().c_str(),
+                    pick->index, pick->pixelDistance, pick->depth, unit.c_str());
+        std::string attrs;
+        for (const auto& [k, v] : pick->attributes.items())
+          attrs += (attrs.empty() ? "" : ", ") + k + " " + v.dump();
+        if (!attrs.empty()) std::printf("  %s\n", attrs.c_str());
+      }
+    }
     bool complete = true;
     for (auto& f : frames) complete = complete && f.complete;
     if (!complete && !job->waitComplete)

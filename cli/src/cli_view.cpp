@@ -133,6 +133,12 @@ void addView(CLI::App& app, int& exitCode) {
       requireOctreeFolder(*input, "view");
     job->octree = *input;
     applyRenderOptions(*job, *text);
+    if (std::filesystem::path(*input).extension() == ".json") {
+      if (!text->state.empty() || !text->clip.empty())
+        throw Error("--state and --clip apply to octrees; a scene file's view comes from the file");
+    } else {
+      applyViewStateOptions(*job, *text, [cmd](const char* o) { return cmd->count(o) > 0; });
+    }
     opt->octree = job->octree;
     opt->width = job->width;
     opt->height = job->height;
@@ -143,6 +149,8 @@ void addView(CLI::App& app, int& exitCode) {
     opt->budgets = job->budgets;
     opt->colour = job->colour;
     opt->colourLayer = job->colourLayer;
+    opt->annotations = job->annotations;
+    opt->stateFile = text->state;
     opt->startWithPoints = *show == "points";
     applySceneMethodOptions(*methodText, *sc);
     if (std::filesystem::path(*input).extension() == ".json") {

@@ -178,13 +178,15 @@ void PointView::splatPoints(const PassContext& ctx, const TileView& v) {
     glProgramUniform1f(p, prog.uniform("uFixedSize"), s.fixedPointSize);
     glProgramUniform1i(p, prog.uniform("uHdrColour"), store.hdrColour());
     const GLint offLoc = prog.uniform("uNodeOffset"), idxLoc = prog.uniform("uNodeIndex"),
-                sizeLoc = prog.uniform("uNodeSize"), nLoc = prog.uniform("uNumPoints");
+                sizeLoc = prog.uniform("uNodeSize"), nLoc = prog.uniform("uNumPoints"),
+                clipLoc = prog.uniform("uClipTest");
     drawTree_.bind();
     for (size_t k = 0; k < nodes.size(); ++k) {
       const auto& n = nodes[k];
       if (!n.numPoints) continue;
       const glm::vec3 off = nodeOffset(n);
       glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
+      glProgramUniform1i(p, clipLoc, clipTest_[k]);
       glProgramUniform1i(p, idxLoc, GLint(k));
       glProgramUniform1f(p, sizeLoc, float(n.worldBounds.max.x - n.worldBounds.min.x));
       glProgramUniform1ui(p, nLoc, n.numPoints);
@@ -230,11 +232,14 @@ void PointView::computePoints(const TileView& v) {
     setMat4(p, "uViewFromCamRel", v.viewFromCamRel);
     glProgramUniform2i(p, pass.uniform("uViewport"), v.w, v.h);
     glProgramUniform1i(p, pass.uniform("uHdrColour"), store.hdrColour());
-    const GLint offLoc = pass.uniform("uNodeOffset"), nLoc = pass.uniform("uNumPoints");
-    for (const auto& n : nodes) {
+    const GLint offLoc = pass.uniform("uNodeOffset"), nLoc = pass.uniform("uNumPoints"),
+                clipLoc = pass.uniform("uClipTest");
+    for (size_t k = 0; k < nodes.size(); ++k) {
+      const auto& n = nodes[k];
       if (!n.numPoints) continue;
       const glm::vec3 off = nodeOffset(n);
       glProgramUniform3f(p, offLoc, off.x, off.y, off.z);
+      glProgramUniform1i(p, clipLoc, clipTest_[k]);
       glProgramUniform1ui(p, nLoc, n.numPoints);
       glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, store.buffer(n.handle), 0,
                         GLsizeiptr(n.numPoints) * GLsizeiptr(kGpuPointBytes));
@@ -259,7 +264,22 @@ void PointView::begin(const std::vector<streaming::DrawNode>& nodes, const GlNod
   camera_ = camera;
   settings_ = s;
   timings_ = t;
-  drawTree_.upload(nodes);
+  clipTest_.assign(nodes.size(), 0);
+  if (s.clip && !s.clip->empty()) {
+    // Nodes the volumes remove whole are not drawn (nor in the draw tree, so that splats keep
+    // their size), nodes they keep whole skip the per-point test.
+    clippedNodes_.clear();
+    clipTest_.clear();
+    for (const auto& n : nodes) {
+      const Overlap o = s.clip->keeps(n.worldBounds);
+      if (o == Overlap::None) continue;
+      clippedNodes_.push_back(n);
+      clipTest_.push_back(o == Overlap::Partial ? 1 : 0);
+    }
+    nodes_ = &clippedNodes_;
+    clip_.bind(*s.clip, Vec3d{camera.eye.x, camera.eye.y, camera.eye.z});
+  }
+  drawTree_.upload(*nodes_);
 }
 
 GLuint PointView::outputFramebuffer() {
@@ -273,6 +293,7 @@ GLuint PointView::renderToTexture(const std::vector<streaming::DrawNode>& nodes,
   const auto t0 = std::chrono::steady_clock::now();
   begin(nodes, store, camera, s, t);
   graph_.executeToTarget(width, height);
+  lastWidth_ = width, lastHeight_ = height;
   if (t) {
     glFinish();
     t->msDraw +=
@@ -298,10 +319,44 @@ Image PointView::render(const std::vector<streaming::DrawNode>& nodes, const GlN
   img.width = width, img.height = height;
   img.linear = s.linearOutput;
   img.rgba = graph_.execute(width, height, tile);
+  const bool oneTile = width <= tile && height <= tile;  // as FrameGraph::execute tiles
+  lastWidth_ = oneTile ? width : 0, lastHeight_ = oneTile ? height : 0;
   if (t)
     t->msDraw +=
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return img;
+}
+
+std::optional<DepthWindow> PointView::depthWindow(double x, double y, int radius) {
+  if (lastWidth_ <= 0)
+    throw Error("picking: the last frame was drawn in tiles; pick in an image of at most " +
+                std::to_string(settings_.maxTile) + " pixels a side");
+  const int cx = int(std::floor(x)), cy = int(std::floor(y));
+  DepthWindow dw;
+  dw.x0 = std::max(0, cx - radius), dw.y0 = std::max(0, cy - radius);
+  const int x1 = std::min(lastWidth_ - 1, cx + radius), y1 = std::min(lastHeight_ - 1, cy + radius);
+  if (dw.x0 > x1 || dw.y0 > y1) return std::nullopt;  // the window lies off the image
+  dw.width = x1 - dw.x0 + 1, dw.height = y1 - dw.y0 + 1;
+  std::vector<float> d(size_t(dw.width) * dw.height);
+  // GL rows go up: image rows [y0, y1] are GL rows [H - 1 - y1, H - 1 - y0].
+  glGetTextureSubImage(graph_.target("depth").id(), 0, dw.x0, lastHeight_ - 1 - y1, 0, dw.width,
+                       dw.height, 1, GL_DEPTH_COMPONENT, GL_FLOAT,
+                       GLsizei(d.size() * sizeof(float)), d.data());
+  // The window depth back to the linear depth of glm::perspective's projection.
+  const double n = camera_.nearPlane, f = camera_.farPlane;
+  dw.depth.resize(d.size());
+  bool any = false;
+  for (int row = 0; row < dw.height; ++row)
+    for (int col = 0; col < dw.width; ++col) {
+      const float v = d[size_t(dw.height - 1 - row) * dw.width + col];  // GL row order flipped
+      const double z = 2.0 * v - 1.0;
+      const bool drawn = v < 1.0f;
+      any = any || drawn;
+      dw.depth[size_t(row) * dw.width + col] =
+          drawn ? 2.0 * n * f / (f + n - z * (f - n)) : INFINITY;
+    }
+  if (!any) return std::nullopt;
+  return dw;
 }
 
 }  // namespace nestlight::frame

@@ -8,6 +8,7 @@
 // Uniform blocks.
 #define NL_UBO_FRAME 0           // FrameBlock, every pass of the frame
 #define NL_UBO_PASS 1            // a pass's own block
+#define NL_UBO_CLIP 2            // ClipBlock: the clipping volumes (common/clip_volumes.glsl)
 
 // Shader storage. Each resident node's layers bind at NL_SSBO_NODE_POINTS + layer.
 #define NL_SSBO_NODE_POINTS 0    // the node's points (NL_POINT_WORDS words each)
@@ -100,3 +101,23 @@ NL_STRUCT(MaterialRecord) {
   vec4 params2;         // sheen, sheen tint, clearcoat, clearcoat gloss
   vec4 emission;        // rgb emitted radiance, w: unused
 };
+
+// Clipping volumes (nestlight/octree/clip_volume.h) in the frame the shader's positions are in
+// (the point view: relative to the eye; the GI frame: the scene's local frame), encoded by
+// nestlight/frame/gpu_clip.h and tested by shaders/common/clip_volumes.glsl.
+#define NL_MAX_CLIP_VOLUMES 16
+#define NL_MAX_CLIP_VERTICES 1024  // every polygon's and corridor's vertices together
+#define NL_CLIP_BOX 0
+#define NL_CLIP_POLYGON 1
+#define NL_CLIP_CORRIDOR 2
+NL_STRUCT(ClipVolumeRecord) {
+  mat4 boxFromFrame;    // box: frame position -> the box's own coordinates, inside in [-1, 1]^3
+  ivec4 shape;          // x: NL_CLIP_*, y: 1 outside (removes what it contains), z: first vertex, w: vertices
+  vec4 range;           // x, y: z range kept (polygon, corridor; frame), z: corridor half width, w: unused
+};
+NL_UNIFORM_BLOCK(NL_UBO_CLIP, ClipBlock) {
+  ivec4 clipCounts;     // x: volumes, y: 1 when any volume is an inside one, z, w: unused
+  ClipVolumeRecord clipVolumes[NL_MAX_CLIP_VOLUMES];
+  vec4 clipVertices[NL_MAX_CLIP_VERTICES / 2];  // plan-view vertices (frame), two per vec4: xy, zw
+}
+NL_END_BLOCK(clipSet)

@@ -9,6 +9,7 @@
 //                   for the lights' shadow maps.
 #include "splat_frame.glsl"
 #include "../common/point_data.glsl"
+#include "../common/clip_volumes.glsl"
 #include "splat_size.glsl"
 
 uniform float uPixelsPerUnit;    // pixels of one world unit at distance 1 (perspective) or anywhere (ortho)
@@ -31,6 +32,11 @@ void main() {
   uint i = uint(gl_VertexID);
   vec3 local = pointLocal(i);
   vec3 world = uNodeOrigin + local;
+  if (!clipKeeps(world)) {  // outside GL's clip volume: the point is dropped
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+    gl_PointSize = 1.0;
+    return;
+  }
   gl_Position = uClipFromWorld * vec4(world, 1.0);
   float depth = uOrthographic ? 1.0 : max(-(uViewFromWorld * vec4(world, 1.0)).z, 1e-6);
   gl_PointSize = clamp(finestSpacing(local) * uSizeScale * uPixelsPerUnit / depth, uSizeRange.x, uSizeRange.y);
@@ -52,6 +58,11 @@ flat out float vRadius;          // the drawn splat's radius in world units at i
 void main() {
   uint i = uint(gl_VertexID);
   vec3 local = pointLocal(i);
+  if (!clipKeeps(uNodeOffset + local)) {  // outside GL's clip volume: the point is dropped
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+    gl_PointSize = 1.0;
+    return;
+  }
   vec4 view = uViewFromCamRel * vec4(uNodeOffset + local, 1.0);
   gl_Position = uClipFromView * view;
   float depth = max(-view.z, 1e-6);

@@ -7,6 +7,7 @@
 #extension GL_NV_shader_atomic_int64 : require
 
 #include "../common/point_data.glsl"
+#include "../common/clip_volumes.glsl"
 
 layout(local_size_x = 128) in;
 
@@ -17,7 +18,7 @@ uniform ivec2 uViewport;
 
 void main() {
   uint i = gl_GlobalInvocationID.x;
-  if (i >= uNumPoints) return;
+  if (i >= uNumPoints || !clipKeeps(pointCamRel(i))) return;
   vec4 view = uViewFromCamRel * vec4(pointCamRel(i), 1.0);
   vec4 clip = uClipFromView * view;
   if (clip.w <= 0.0) return;

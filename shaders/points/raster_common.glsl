@@ -8,6 +8,7 @@
 //   NL_SCENE_FRAME 1 the GI frame: positions in the scene's local frame; pass 2 also keeps a
 //                   point's splat radius (for shadow offsets).
 #include "../common/point_data.glsl"
+#include "../common/clip_volumes.glsl"
 
 // As splat_frame.glsl, kept here so that the passes' include tree stays the points' own.
 #ifndef NL_SCENE_FRAME
@@ -38,6 +39,7 @@ uniform mat4 uViewFromWorld;
 
 bool projectPoint(uint i, out uint pixel, out float linearDepth) {
   vec3 world = uNodeOrigin + pointLocal(i);
+  if (!clipKeeps(world)) return false;
   vec4 clip = uClipFromWorld * vec4(world, 1.0);
   if (clip.w <= 0.0) return false;
   vec3 ndc = clip.xyz / clip.w;
@@ -50,6 +52,7 @@ bool projectPoint(uint i, out uint pixel, out float linearDepth) {
 #else
 // The pixel and linear depth of point i; false when it is off screen or behind the eye.
 bool projectPoint(uint i, out uint pixel, out float linearDepth) {
+  if (!clipKeeps(pointCamRel(i))) return false;
   vec4 view = uViewFromCamRel * vec4(pointCamRel(i), 1.0);
   vec4 clip = uClipFromView * view;
   if (clip.w <= 0.0) return false;

@@ -32,6 +32,14 @@ inline Weighed weigh(const Node& n, const View& view) {
   const double d = std::max(std::sqrt(dx * dx + dy * dy + dz * dz) - n.radius, 0.0);
   return {view.projectedPixels(n.radius, d), d};
 }
+// False when the view's clipping volumes remove the node's cube whole (and so its subtree).
+inline bool clipKeeps(const Node& n, const View& view) {
+  if (!view.clip || view.clip->empty()) return true;
+  Box3d cube;
+  cube.min = {n.center[0] - n.half[0], n.center[1] - n.half[1], n.center[2] - n.half[2]};
+  cube.max = {n.center[0] + n.half[0], n.center[1] + n.half[1], n.center[2] + n.half[2]};
+  return view.clip->keeps(cube) != Overlap::None;
+}
 inline void clearCut(CutResult& out) {
   out.nodes.clear();
   out.points = out.bytes = 0;
@@ -82,6 +90,7 @@ bool CutSelector::selectAll(NodeTable& table, const View& view, const Frustum& f
     if (n.residency == Residency::Bad) continue;  // and its subtree: it can never be drawn
     uint8_t planes = c.planes;
     if (planes && !boxInFrustum(frustum, n.center, n.half, planes)) continue;
+    if (!clipKeeps(n, view)) continue;
     out.points += n.numPoints;
     out.bytes += bytesOf(n, bytesPerPoint);
     if (out.points > budgets.points || out.bytes > budgets.gpuBytes) {
@@ -109,6 +118,7 @@ void CutSelector::selectByPriority(NodeTable& table, const View& view, const Fru
   auto consider = [&](uint32_t idx, uint8_t planes) {
     const Node& n = table[idx];
     if (planes && !boxInFrustum(frustum, n.center, n.half, planes)) return;
+    if (!clipKeeps(n, view)) return;
     const Weighed w = weigh(n, view);
     work_.push_back({w.weight, w.distance, idx, planes});
     std::push_heap(work_.begin(), work_.end(), lower);

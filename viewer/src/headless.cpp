@@ -11,6 +11,7 @@
 #include "nestlight/gl/context.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/viewer/annotations.h"
 #include "nestlight/viewer/image.h"
 
 namespace nestlight::viewer {
@@ -84,7 +85,8 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
           cam = frame::Camera::framing(meta.bounds, job.fovYDegrees, double(job.width) / job.height,
                                        job.azimuth, job.elevation);
         cam.fitClipPlanes(meta.bounds);
-        const streaming::View view = cam.view(job.width, job.height);
+        streaming::View view = cam.view(job.width, job.height);
+        view.clip = settings.clip.get();  // nodes the volumes remove whole are never loaded
         streaming::FrameStats st = streamer.update(view);
         if (job.waitComplete) {
           const auto t0 = std::chrono::steady_clock::now();
@@ -108,6 +110,21 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
         Image img = renderer.render(streamer.drawList(), store, cam, job.width, job.height,
                                     settings, &timings);
         RenderedFrame rf;
+        if (!job.path)
+          for (const auto& [px, py] : job.picks) {
+            const double x = px + 0.5, y = py + 0.5;
+            const std::optional<frame::DepthWindow> depths =
+                renderer.depthWindow(x, y, job.pickRadius);
+            frame::PickOptions po;
+            po.windowRadius = job.pickRadius;
+            po.sizeScale = settings.sizeScale, po.minPointSize = settings.minPointSize;
+            po.maxPointSize = settings.maxPointSize, po.fixedPointSize = settings.fixedPointSize;
+            po.clip = settings.clip.get();
+            rf.picks.push_back(depths ? frame::pickPoint(reader, streamer.drawList(), cam,
+                                                         job.width, job.height, x, y, *depths, po)
+                                      : std::nullopt);
+          }
+        drawAnnotations(img, cam, job.annotations);
         rf.file = job.path ? frameFile(job.output, f) : job.output;
         rf.stats = st;
         rf.msDraw = timings.msDraw;

@@ -486,7 +486,11 @@ bool Viewer::step() {
   const gi::SceneCamera sceneCam =
       sceneCamera(cam, fbw, fbh, std::chrono::duration<double>(now - opened_).count());
   streaming::FrameStats st{};
-  if (streamer_) st = streamer_->update(cam.view(fbw, fbh));
+  if (streamer_) {
+    streaming::View view = cam.view(fbw, fbh);
+    view.clip = settings_.clip.get();  // what the volumes remove whole is never loaded
+    st = streamer_->update(view);
+  }
   DrawTimings timings;
   if (methods_) methods_->setShown(showMethod_);
   if (methods_ && showMethod_) {

@@ -17,9 +17,16 @@ using mat4 = glm::mat4;
 using FrameBlock = glsl::FrameBlock;
 using LightRecord = glsl::LightRecord;
 using MaterialRecord = glsl::MaterialRecord;
+using ClipVolumeRecord = glsl::ClipVolumeRecord;
+using ClipBlock = glsl::ClipBlock;
 static_assert(sizeof(FrameBlock) == 4 * 64 + 4 * 16, "FrameBlock must keep std140's layout");
 static_assert(sizeof(LightRecord) == 5 * 16, "LightRecord must keep std430's layout");
 static_assert(sizeof(MaterialRecord) == 4 * 16, "MaterialRecord must keep std430's layout");
+static_assert(sizeof(ClipVolumeRecord) == 64 + 2 * 16,
+              "ClipVolumeRecord must keep std140's layout");
+static_assert(sizeof(ClipBlock) == 16 + NL_MAX_CLIP_VOLUMES * sizeof(ClipVolumeRecord) +
+                                       NL_MAX_CLIP_VERTICES / 2 * 16,
+              "ClipBlock must keep std140's layout");
 
 inline constexpr size_t kGpuPointBytes = NL_POINT_WORDS * 4;
 

@@ -11,6 +11,7 @@
 
 #include <glm/glm.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,9 @@
 #include "nestlight/frame/draw_tree.h"
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
+#include "nestlight/frame/gpu_clip.h"
 #include "nestlight/frame/image.h"
+#include "nestlight/frame/picking.h"
 #include "nestlight/frame/point_splatting.h"
 #include "nestlight/gl/program.h"
 #include "nestlight/streaming/streamer.h"
@@ -64,6 +67,9 @@ struct RenderSettings {
   bool linearOutput = false;
   int maxTile = 2048;         // larger images render in tiles (SSBO and FBO limits)
   bool allowAtomic64 = true;  // compute path: one 64-bit pass where the GPU has 64-bit atomics
+  // Clipping volumes (world coordinates): hidden on the GPU in every rasteriser; null or empty:
+  // none. Shared, not copied, as settings travel by value every frame.
+  std::shared_ptr<const ClipSet> clip;
 };
 
 struct DrawTimings {
@@ -89,6 +95,11 @@ class PointView {
                          const RenderSettings& settings, DrawTimings* timings = nullptr);
   // A framebuffer with the output texture attached (the window blits from it).
   GLuint outputFramebuffer();
+  // The depths drawn (world units along the view) within `radius` pixels of pixel (x, y)
+  // (top-left origin) of the last frame, read back from its depth buffer; none when the window
+  // shows only background. The last frame must have been one tile (renderToTexture, or render()
+  // of an image no larger than settings.maxTile): throws otherwise. Picking starts here.
+  std::optional<DepthWindow> depthWindow(double x, double y, int radius);
   // "one-pass 64-bit" where GL_NV_shader_atomic_int64 compiled, else "two-pass 32-bit".
   const char* computeVariant() const {
     return splatting_.hasAtomic64() ? "one-pass 64-bit" : "two-pass 32-bit";
@@ -117,6 +128,12 @@ class PointView {
   Camera camera_;
   RenderSettings settings_;
   DrawTimings* timings_ = nullptr;
+  // With clipping volumes: the nodes they keep (nodes_ points here) and, per node, whether its
+  // points are tested (1) or its cube is kept whole (0).
+  std::vector<streaming::DrawNode> clippedNodes_;
+  std::vector<int> clipTest_;
+  GpuClip clip_;
+  int lastWidth_ = 0, lastHeight_ = 0;  // the last frame, when it was one tile (frontDepth)
 };
 
 }  // namespace nestlight::frame

@@ -6,6 +6,7 @@
 #include <array>
 #include <glm/glm.hpp>
 
+#include "nestlight/octree/clip_volume.h"
 #include "nestlight/octree/geometry.h"
 
 namespace nestlight::streaming {
@@ -19,6 +20,9 @@ struct View {
   // heightPx / (2 tan(fovY / 2)). For an orthographic camera, pixels per world unit.
   double pixelsPerUnit = 1.0;
   bool orthographic = false;
+  // Clipping volumes: nodes whose cube they remove whole are left out of the cut (and so never
+  // loaded); the renderer clips the rest point by point. Not owned; null or empty: no clipping.
+  const ClipSet* clip = nullptr;
 
   // Projected size in pixels of a length `worldLength` at `distance` from the eye.
   double projectedPixels(double worldLength, double distance) const {

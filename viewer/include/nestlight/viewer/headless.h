@@ -1,6 +1,7 @@
 // `nestlight render`: streams an octree headless and writes images, one still or a camera path.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -8,7 +9,9 @@
 
 #include "nestlight/frame/camera.h"
 #include "nestlight/frame/gl_node_store.h"
+#include "nestlight/frame/picking.h"
 #include "nestlight/frame/point_view.h"
+#include "nestlight/frame/view_state.h"
 #include "nestlight/gi/camera_path.h"
 #include "nestlight/streaming/streamer.h"
 
@@ -31,6 +34,11 @@ struct RenderJob {
   std::optional<frame::ColourMode> colour;         // none: rgb when the scan has it, else elevation
   std::string colourLayer = frame::kHdrLayerName;  // the colour layer ColourMode::Hdr draws
   bool quiet = false;
+  // Pixels to pick in the still (column, row from the top-left; the pixel's centre), each
+  // answered in RenderedFrame::picks: the scan point under it (frame/picking.h).
+  std::vector<std::array<double, 2>> picks;
+  int pickRadius = 4;                          // the search window, pixels each side
+  std::vector<frame::Annotation> annotations;  // drawn over the image (a view state's)
 };
 
 struct RenderedFrame {
@@ -38,6 +46,8 @@ struct RenderedFrame {
   streaming::FrameStats stats;
   double msDraw = 0;
   bool complete = false;
+  std::vector<std::optional<frame::PickedPoint>>
+      picks;  // one per RenderJob::picks; none: background
 };
 
 // Opens the octree first (a bad or unknown-version octree fails before any GL work), then a

@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "nestlight/gi/scene.h"
 #include "nestlight/viewer/headless.h"
@@ -33,6 +34,10 @@ struct ViewerOptions {
   int frames = 0;
   double orbitDegreesPerFrame = 0;
   std::string screenshot;
+  // A view state's annotations (drawn as labels), and the file it came from (the panel's "Save
+  // view" writes there by default; else view.json beside the octree).
+  std::vector<frame::Annotation> annotations;
+  std::string stateFile;
 };
 
 // Returns the process exit code. Throws nestlight::Error when no window can be opened.

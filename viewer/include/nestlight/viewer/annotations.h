@@ -1,0 +1,24 @@
+// Annotations over a rendered image: each label's marker at its point and its title beside it,
+// as the viewer draws them, for `render` (a view state's annotations reach stills and paths).
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "nestlight/frame/camera.h"
+#include "nestlight/frame/image.h"
+#include "nestlight/frame/view_state.h"
+
+namespace nestlight::viewer {
+
+// Where `world` lands in a width x height image seen by `camera` (pixels, top-left origin); none
+// behind the eye or outside the image.
+std::optional<glm::dvec2> projectToImage(const frame::Camera& camera, int width, int height,
+                                         const Vec3d& world);
+
+// Draws the annotations that lie in front of the camera and inside the frame; returns how many.
+// Text is drawn with stb_easy_font (Debian's libstb), scaled with the image's height.
+int drawAnnotations(frame::Image& image, const frame::Camera& camera,
+                    const std::vector<frame::Annotation>& annotations);
+
+}  // namespace nestlight::viewer
