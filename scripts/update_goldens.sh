@@ -6,5 +6,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 ninja -C "$BUILD_DIR" viewer_tests
-NESTLIGHT_UPDATE_GOLDENS=1 "$BUILD_DIR/tests/viewer_tests" --gtest_filter="RenderGolden.*${1:-}*"
+NESTLIGHT_UPDATE_GOLDENS=1 "$BUILD_DIR/tests/viewer_tests" --gtest_filter="RenderGolden.*${1:-}*:WindowTools.*${1:-}*"
 git status --short tests/goldens

@@ -216,6 +216,7 @@ void applyViewStateOptions(viewer::RenderJob& job, const RenderOptionText& text,
     o.roundPoints = r.roundPoints, o.edlRadius = r.edlRadius, o.background = r.background;
     if (!st.clipping.empty()) o.clip = std::make_shared<const ClipSet>(st.clipping);
     job.annotations = st.annotations;
+    job.measurements = st.measurements;
   }
   if (!text.clip.empty()) {
     requireExists(text.clip);

@@ -1,4 +1,5 @@
 // `nestlight view`: the interactive viewer.
+#include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -115,6 +116,17 @@ void addView(CLI::App& app, int& exitCode) {
       ->check(CLI::IsMember({"gi", "points"}))
       ->capture_default_str();
   addRenderOptions(cmd, *job, text);
+  cmd->add_option("--tool", opt->tool,
+                  "The tool a click uses: pick, distance, polyline, area, height, angle, "
+                  "annotate, clip-polygon (the panel's \"tools\" section chooses it too)");
+  auto clicks = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--click", *clicks,
+                  "Scripted click at pixel X,Y with --tool, once the view's cut is loaded; "
+                  "repeatable, one per frame (tests and reproducible figures; with --frames)");
+  cmd->add_option("--save-state", opt->saveState,
+                  "Save the view state (camera, colouring, budgets, splatting, clipping, "
+                  "measurements, annotations) to this JSON after the last frame, as Ctrl+S and the "
+                  "panel's button do");
   // The method and its settings, as `render` takes them (the panel changes them live).
   auto sc = std::make_shared<gi::SceneRenderOverrides>();
   auto methodText = std::make_shared<SceneMethodText>();
@@ -150,6 +162,19 @@ void addView(CLI::App& app, int& exitCode) {
     opt->colour = job->colour;
     opt->colourLayer = job->colourLayer;
     opt->annotations = job->annotations;
+    opt->measurements = job->measurements;
+    for (const std::string& c : *clicks) {
+      const std::vector<double> v = parseNumberList(c, "--click");
+      if (v.size() != 2 || v[0] < 0 || v[1] < 0 || v[0] >= job->width || v[1] >= job->height)
+        throw Error("--click " + c + ": expected X,Y, a pixel of the " +
+                    std::to_string(job->width) + "x" + std::to_string(job->height) + " window");
+      opt->clicks.push_back({v[0], v[1]});
+    }
+    if (!opt->tool.empty()) {
+      const auto names = viewer::toolNames();
+      if (std::find(names.begin(), names.end(), opt->tool) == names.end())
+        throw Error("--tool: unknown tool '" + opt->tool + "'");
+    }
     opt->stateFile = text->state;
     opt->startWithPoints = *show == "points";
     applySceneMethodOptions(*methodText, *sc);

@@ -132,4 +132,43 @@ std::optional<PickedPoint> pickPoint(OctreeReader& reader,
   return out;
 }
 
+std::optional<PickedPoint> nearestPoint(OctreeReader& reader,
+                                        const std::vector<streaming::DrawNode>& nodes,
+                                        const Vec3d& target, double maxDistance,
+                                        const ClipSet* clip, std::vector<NodeKey>* skip) {
+  const Metadata& meta = reader.metadata();
+  std::optional<PickedPoint> best;
+  double bestD2 = maxDistance * maxDistance;
+  for (const streaming::DrawNode& n : nodes) {
+    if (skip && std::find(skip->begin(), skip->end(), n.key) != skip->end()) continue;
+    const Box3d& b = n.worldBounds;
+    double d2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double c = target[a];
+      const double e = c < b.min[a] ? b.min[a] - c : (c > b.max[a] ? c - b.max[a] : 0.0);
+      d2 += e * e;
+    }
+    if (d2 > bestD2) continue;
+    if (skip) skip->push_back(n.key);
+    const PointBuffer buf = reader.readNode(n.key);
+    for (size_t i = 0; i < buf.size(); ++i) {
+      const Vec3d p{meta.world(0, buf.pos[3 * i]), meta.world(1, buf.pos[3 * i + 1]),
+                    meta.world(2, buf.pos[3 * i + 2])};
+      const double dx = p.x - target.x, dy = p.y - target.y, dz = p.z - target.z;
+      const double e2 = dx * dx + dy * dy + dz * dz;
+      if (e2 > bestD2 || (best && e2 == bestD2 && !(n.key < best->node))) continue;
+      if (clip && !clip->keeps(p)) continue;
+      bestD2 = e2;
+      PickedPoint q;
+      q.position = p;
+      q.node = n.key;
+      q.index = uint32_t(i);
+      q.depth = std::sqrt(e2);  // here: the distance from the target
+      q.attributes = pointAttributes(meta.layout, buf, i);
+      best = std::move(q);
+    }
+  }
+  return best;
+}
+
 }  // namespace nestlight::frame

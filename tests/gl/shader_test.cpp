@@ -94,8 +94,9 @@ TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
   EXPECT_EQ(s.text.rfind("#version 450 core\n", 0), 0u);
   EXPECT_NE(s.text.find("#define TEST_DEFINE 3\n"), std::string::npos);
   // raster_depth includes raster_common, which includes point_data, which includes the frame
-  // interface, octahedral and the colour word's decoders (which include the sRGB curve).
-  ASSERT_EQ(s.files.size(), 7u);
+  // interface, octahedral and the colour word's decoders (which include the sRGB curve), then the
+  // clipping volumes' test (whose include of the frame interface adds nothing).
+  ASSERT_EQ(s.files.size(), 8u);
   EXPECT_EQ(s.files[0], "points/raster_depth.comp");
   EXPECT_EQ(s.files[1], "points/raster_common.glsl");
   EXPECT_EQ(s.files[2], "common/point_data.glsl");
@@ -103,6 +104,7 @@ TEST(Shaders, IncludesExpandOnceWithLineDirectives) {
   EXPECT_EQ(s.files[4], "common/colour_word.glsl");
   EXPECT_EQ(s.files[5], "common/srgb.glsl");
   EXPECT_EQ(s.files[6], "common/octahedral.glsl");
+  EXPECT_EQ(s.files[7], "common/clip_volumes.glsl");
   // The octahedral decoder appears once although two files could pull it in.
   size_t first = s.text.find("vec3 decodeNormal(");
   ASSERT_NE(first, std::string::npos);

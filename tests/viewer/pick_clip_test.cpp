@@ -154,6 +154,10 @@ struct RasteriserCase {
   frame::Splatting splatting;
 };
 
+void PrintTo(const RasteriserCase& c, std::ostream* os) {
+  *os << c.name;
+}
+
 class ClipRasterisers : public ::testing::TestWithParam<RasteriserCase> {};
 
 // A box keeping the front wall's left half (x < 5 m) and nothing of the back wall: the right half

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <regex>
 
+#include "golden.h"
 #include "nestlight/converters/builder.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/converters/synthetic.h"
@@ -22,10 +23,7 @@ using namespace nestlight::frame;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path goldenDir() {
-  return ::nestlight::test::sourceDir() / "tests" / "goldens";
-}
+using nestlight::test::expectMatchesGolden;
 
 void convert(std::vector<std::unique_ptr<PointReader>> readers, const fs::path& out) {
   BuildOptions o;
@@ -66,33 +64,6 @@ RenderJob smallJob(const fs::path& octree, const std::string& output) {
   j.timeoutSeconds = 60;
   j.quiet = true;
   return j;
-}
-
-// Compares `file` with the golden `name`: a pixel differs when a channel is off by more than
-// `channelTol`; at most `maxFraction` of pixels may differ.
-void expectMatchesGolden(const std::string& file, const std::string& name, float channelTol,
-                         double maxFraction) {
-  const fs::path golden = goldenDir() / (name + ".png");
-  const char* update = std::getenv("NESTLIGHT_UPDATE_GOLDENS");
-  if (update && std::string(update) == "1") {
-    fs::copy_file(file, golden, fs::copy_options::overwrite_existing);
-    GTEST_SKIP() << "golden " << golden << " updated";
-  }
-  ASSERT_TRUE(fs::exists(golden)) << "no golden " << golden << "; run scripts/update_goldens.sh";
-  Image got = readImage(file), want = readImage(golden.string());
-  ImageDiff d = compareImages(got, want, channelTol);
-  // Always said, pass or fail: scripts/gpu-run.sh reports how far a GPU's image is from llvmpipe's.
-  std::printf(
-      "golden %s: %zu of %zu pixels differ by more than %.4f (%.3f%%), max channel error %.4f\n",
-      name.c_str(), size_t(d.differing), size_t(got.width) * size_t(got.height), channelTol,
-      100.0 * d.fraction, double(d.maxChannel));
-  if (d.fraction > maxFraction) {
-    fs::copy_file(file, "render-" + name + ".png", fs::copy_options::overwrite_existing);
-    writeImage(d.diff, "render-" + name + "-diff.png");
-  }
-  EXPECT_LE(d.fraction, maxFraction)
-      << name << ": " << d.differing << " pixels differ (max channel error " << d.maxChannel
-      << "); see render-" << name << "-diff.png in " << fs::current_path();
 }
 
 double coverage(const Image& img, const glm::vec3& background) {

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "nestlight/gl/context.h"
+#include "nestlight/octree/crs.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/annotations.h"
@@ -54,6 +55,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
     layer = std::make_shared<const ColourLayerReader>(job.octree, meta, job.colourLayer);
     settings.linearOutput = true;
   }
+  const std::string unit = describeCrs(meta.crs).unitSymbol();  // measurements' labels
   auto context = gl::createHeadlessContext();
   if (!job.quiet) std::printf("render: %s\n", context->description().c_str());
   {
@@ -124,6 +126,7 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
                                                          job.width, job.height, x, y, *depths, po)
                                       : std::nullopt);
           }
+        drawMeasurements(img, cam, job.measurements, unit);
         drawAnnotations(img, cam, job.annotations);
         rf.file = job.path ? frameFile(job.output, f) : job.output;
         rf.stats = st;

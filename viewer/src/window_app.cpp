@@ -25,6 +25,7 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
 #include "nestlight/viewer/image.h"
+#include "tools.h"
 
 namespace nestlight::viewer {
 
@@ -300,6 +301,8 @@ class Viewer {
       store_ = std::make_unique<frame::GlNodeStore>(reader->metadata(), in.colours.mode,
                                                     in.colours.hdrLayer);
       streamer_ = std::make_unique<streaming::Streamer>(*reader, *store_, budgets_);
+      tools_ = std::make_unique<HeritageTools>(opt, *reader);
+      if (!opt.tool.empty()) tools_->setTool(opt.tool);
     }
     int w = opt.width, h = opt.height;
     glfwGetFramebufferSize(ctx.window(), &w, &h);
@@ -324,7 +327,12 @@ class Viewer {
   bool step();
 
  private:
-  void panel(const streaming::FrameStats& st, const DrawTimings& timings, bool& shot);
+  void panel(const streaming::FrameStats& st, const DrawTimings& timings, const Camera& cam,
+             bool& shot);
+  // Clicks with the tools (the mouse, or the scripted ones), Enter and Ctrl+S, after the points
+  // were drawn (picking reads their depth).
+  void useTools(const Camera& cam, int fbw, int fbh, const streaming::FrameStats& st);
+  void saveView(const Camera& cam, const std::string& file);
   void viewChoice();
   // While a method builds: the last frame and the panel with what it is doing, at most 20 times
   // a second (each costs a frame's swap).
@@ -342,6 +350,9 @@ class Viewer {
   std::unique_ptr<streaming::Streamer> streamer_;
   PointView renderer_;
   std::unique_ptr<MethodView> methods_;
+  std::unique_ptr<HeritageTools> tools_;
+  size_t nextClick_ = 0;                // the scripted clicks done
+  double pressX_ = NAN, pressY_ = NAN;  // where the left button went down
   bool showMethod_ = false;
   CameraController cc_;
   std::string status_;
@@ -412,7 +423,45 @@ void Viewer::viewChoice() {
   if (showMethod_) methods_->select(chosen);
 }
 
-void Viewer::panel(const streaming::FrameStats& st, const DrawTimings& timings, bool& shot) {
+void Viewer::saveView(const Camera& cam, const std::string& file) {
+  tools_->save(file, tools_->state(cam, in_.colours.mode, budgets_, settings_));
+}
+
+void Viewer::useTools(const Camera& cam, int fbw, int fbh, const streaming::FrameStats& st) {
+  GLFWwindow* w = ctx_.window();
+  const ImGuiIO& io = ImGui::GetIO();
+  tools_->refine(streamer_->drawList(), settings_);
+  // A click is a press and a release within 3 pixels (a drag turns the camera instead).
+  double x = 0, y = 0;
+  glfwGetCursorPos(w, &x, &y);
+  const bool down = glfwGetMouseButton(w, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+  if (down && std::isnan(pressX_) && !io.WantCaptureMouse) pressX_ = x, pressY_ = y;
+  if (!down && !std::isnan(pressX_)) {
+    if (std::hypot(x - pressX_, y - pressY_) <= 3 && x >= 0 && y >= 0 && x < fbw && y < fbh)
+      tools_->click(renderer_, streamer_->drawList(), cam, fbw, fbh, x, y, settings_);
+    pressX_ = pressY_ = NAN;
+  }
+  if (nextClick_ < opt_.clicks.size() && st.complete) {
+    const auto& c = opt_.clicks[nextClick_++];
+    const bool hit = tools_->click(renderer_, streamer_->drawList(), cam, fbw, fbh, c[0] + 0.5,
+                                   c[1] + 0.5, settings_);
+    std::printf("view: click %g,%g: %s\n", c[0], c[1], hit ? tools_->status.c_str() : "nothing");
+    std::fflush(stdout);
+    if (nextClick_ == opt_.clicks.size()) tools_->finish(settings_);
+  }
+  if (!io.WantCaptureKeyboard) {
+    if (glfwGetKey(w, GLFW_KEY_ENTER) == GLFW_PRESS) tools_->finish(settings_);
+    const bool ctrl = glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+                      glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+    static bool saveHeld = false;
+    const bool save = ctrl && glfwGetKey(w, GLFW_KEY_S) == GLFW_PRESS;
+    if (save && !saveHeld) saveView(cam, tools_->stateFile());
+    saveHeld = save;
+  }
+}
+
+void Viewer::panel(const streaming::FrameStats& st, const DrawTimings& timings, const Camera& cam,
+                   bool& shot) {
   int fbw = 0, fbh = 0;
   glfwGetFramebufferSize(ctx_.window(), &fbw, &fbh);
   ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
@@ -437,8 +486,14 @@ void Viewer::panel(const streaming::FrameStats& st, const DrawTimings& timings, 
   ImGui::Separator();
   if (method)
     methods_->panel();
-  else if (in_.reader)
+  else if (in_.reader) {
     pointsPanel(settings_, in_.colours, *in_.reader, *store_, streamer_, budgets_, st, timings);
+    ImGui::Separator();
+    tools_->panel(settings_, cam, in_.extent);
+    if (ImGui::Button("save view (Ctrl+S)")) saveView(cam, tools_->stateFile());
+    ImGui::SameLine();
+    ImGui::TextDisabled("%s", tools_->stateFile().c_str());
+  }
   ImGui::PopItemWidth();
   ImGui::End();
 }
@@ -450,6 +505,7 @@ void Viewer::screenshot(const std::string& file, const gi::SceneCamera& sceneCam
     what = methods_->screenshot(file, sceneCam);
   } else {
     Image img = renderer_.render(streamer_->drawList(), *store_, cam, fbw, fbh, settings_);
+    tools_->drawInto(img, cam);  // the measurements and labels, as the window shows them
     writeImage(img, file);
     what = std::to_string(fbw) + "x" + std::to_string(fbh) + ", " + std::to_string(drawPoints) +
            " points drawn";
@@ -504,7 +560,12 @@ bool Viewer::step() {
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   bool shot = false;
-  panel(st, timings, shot);
+  const bool points = tools_ && !(methods_ && showMethod_);
+  if (points) {
+    useTools(cam, fbw, fbh, st);
+    tools_->drawOverlay(cam, fbw, fbh);
+  }
+  panel(st, timings, cam, shot);
   // A method to be made: the frame as it is now (the panel not yet drawn) stays on screen.
   const bool build = methods_ && showMethod_ && methods_->buildPending();
   if (build) keepLastFrame(fbw, fbh);
@@ -522,12 +583,17 @@ bool Viewer::step() {
     screenshot(lastFrame && !opt_.screenshot.empty() ? opt_.screenshot : timedScreenshotName(),
                sceneCam, cam, fbw, fbh, st.drawPoints);
   }
+  if (lastFrame && !opt_.saveState.empty() && tools_) saveView(cam, opt_.saveState);
   glfwSwapBuffers(w);
   if (build) methods_->build();
   return !lastFrame;
 }
 
 }  // namespace
+
+std::vector<std::string> toolNames() {
+  return HeritageTools::toolNames();
+}
 
 int runViewer(const ViewerOptions& opt) {
   ViewInput in = openViewInput(opt);

@@ -222,14 +222,17 @@ SceneOctree parseOctree(Field o, const std::filesystem::path& file) {
   if (o.value().is_string()) {
     t.path = resolvePath(o, file);
   } else {
-    o.expectObject(
-        {"path", "max_level", "memory_budget", "radius_scale", "colour_scale", "colour"});
+    o.expectObject({"path", "max_level", "memory_budget", "radius_scale", "colour_scale", "colour",
+                    "clipping"});
     if (!o.has("path")) o.fail("missing \"path\"");
     t.path = resolvePath(o.at("path"), file);
     if (o.has("max_level")) t.maxLevel = int(o.at("max_level").integer(0, 30));
     if (o.has("memory_budget")) t.memoryBudget = o.at("memory_budget").bytes();
     if (o.has("radius_scale")) t.radiusScale = float(o.at("radius_scale").number(0, 100));
     if (o.has("colour_scale")) t.colourScale = float(o.at("colour_scale").number(0, 1e9));
+    if (o.has("clipping"))
+      t.clipping = ClipSet::fromJson(nlohmann::json{{"clipping", o.at("clipping").value()}},
+                                     file.string() + ": " + o.path());
     if (o.has("colour")) {
       Field c = o.at("colour");
       if (!c.value().is_string() || c.value().get<std::string>().empty())

@@ -22,6 +22,7 @@
 #include "nestlight/frame/draw_tree.h"
 #include "nestlight/frame/frame_graph.h"
 #include "nestlight/frame/gl_node_store.h"
+#include "nestlight/frame/gpu_clip.h"
 #include "nestlight/frame/interface.h"
 #include "nestlight/frame/point_splatting.h"
 #include "nestlight/gi/environment_map.h"
@@ -79,6 +80,10 @@ struct GpuScan {
   float colourScale = 1;
   std::shared_ptr<const ScanColours>
       colours;  // the scene's octrees[].colour (a layer: drawn as HDR)
+  // The scene's octrees[].clipping: nodes it removes whole stay out of both cuts, the rest are
+  // clipped point by point on the GPU (shaders/common/clip_volumes.glsl), in the scene's frame.
+  std::shared_ptr<const ClipSet> clip;
+  std::unique_ptr<frame::GpuClip> gpuClip;
 };
 
 class RasterMethod : public Method, public SceneFrame {

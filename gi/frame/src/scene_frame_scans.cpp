@@ -45,6 +45,12 @@ void RasterMethod::loadScans() {
     sb.points = std::max<uint64_t>(params_.pointBudget / 2, 1);
     sb.gpuBytes = std::max<uint64_t>(params_.gpuBytes / 2, 1 << 20);
     s.shadowStreamer = std::make_unique<streaming::Streamer>(*s.reader, *s.store, sb);
+    if (!o.clipping.empty()) {
+      frame::encodeClipBlock(o.clipping, {});  // more than the GPU holds: said before any frame
+      s.clip = std::make_shared<const ClipSet>(o.clipping);
+      s.gpuClip = std::make_unique<frame::GpuClip>();
+      s.shadowView.clip = s.clip.get();
+    }
     LocalBox scan;
     for (int c = 0; c < 8; ++c)
       scan.add(scene_.local({(c & 1) ? meta.bounds.max.x : meta.bounds.min.x,
@@ -93,8 +99,9 @@ uint64_t RasterMethod::stream(const SceneCamera& camera, bool complete) {
   const auto tStream = Clock::now();
   uint64_t drawPoints = 0;
   for (auto& s : scans_) {
-    const streaming::View view = streaming::perspectiveView(
-        camera.eye, camera.target, camera.up, fovY, W, H, double(nearZ), double(farZ));
+    streaming::View view = streaming::perspectiveView(camera.eye, camera.target, camera.up, fovY, W,
+                                                      H, double(nearZ), double(farZ));
+    view.clip = s.clip.get();
     streaming::FrameStats st = s.streamer->update(view);
     while (complete && !st.complete) {
       if (secondsSince(tStream) > params_.streamTimeoutSeconds)
@@ -222,9 +229,10 @@ void RasterMethod::forEachNode(const gl::ShaderProgram& program,
               nodeIndex = program.uniform("uNodeIndex"), nodeSize = program.uniform("uNodeSize"),
               numPoints = program.uniform("uNumPoints"),
               colourScale = program.uniform("uColourScale"),
-              hdrColour = program.uniform("uHdrColour");
+              hdrColour = program.uniform("uHdrColour"), clipTest = program.uniform("uClipTest");
   for (auto& s : scans_) {
     (lightsCut ? s.shadowTree : s.tree).bind();
+    if (s.clip) s.gpuClip->bind(*s.clip, Vec3d{scene_.origin.x, scene_.origin.y, scene_.origin.z});
     glUniform1f(colourScale, s.colourScale);
     glUniform1i(hdrColour, s.store->hdrColour());
     const auto& nodes = (lightsCut ? s.shadowStreamer : s.streamer)->drawList();
@@ -239,6 +247,7 @@ void RasterMethod::forEachNode(const gl::ShaderProgram& program,
       glUniform1i(nodeIndex, int(k));
       glUniform1f(nodeSize, float(n.worldBounds.max.x - n.worldBounds.min.x));
       glUniform1ui(numPoints, n.numPoints);
+      glUniform1i(clipTest, s.clip && s.clip->keeps(n.worldBounds) == Overlap::Partial ? 1 : 0);
       draw(n);
     }
   }

@@ -63,6 +63,15 @@ std::optional<PickedPoint> pickPoint(OctreeReader& reader,
                                      double y, const DepthWindow& depths,
                                      const PickOptions& options = {});
 
+// The point of `nodes` nearest `target` in 3D within `maxDistance` (kept by `clip` when given):
+// what a measurement's vertex snaps to, again as finer nodes arrive. `skip` lists nodes already
+// searched for this target (their points cannot be nearer than what was found); the nodes searched
+// now are appended to it. None when no point lies that close.
+std::optional<PickedPoint> nearestPoint(OctreeReader& reader,
+                                        const std::vector<streaming::DrawNode>& nodes,
+                                        const Vec3d& target, double maxDistance,
+                                        const ClipSet* clip, std::vector<NodeKey>* skip = nullptr);
+
 // The attributes of point `i` of `buffer` as JSON (the layout's names; rgb as 3 numbers).
 nlohmann::json pointAttributes(const PointLayout& layout, const PointBuffer& buffer, size_t i);
 

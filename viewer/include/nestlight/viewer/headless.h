@@ -39,6 +39,7 @@ struct RenderJob {
   std::vector<std::array<double, 2>> picks;
   int pickRadius = 4;                          // the search window, pixels each side
   std::vector<frame::Annotation> annotations;  // drawn over the image (a view state's)
+  std::vector<Measurement> measurements;       // likewise, with their values
 };
 
 struct RenderedFrame {

@@ -37,8 +37,18 @@ struct ViewerOptions {
   // A view state's annotations (drawn as labels), and the file it came from (the panel's "Save
   // view" writes there by default; else view.json beside the octree).
   std::vector<frame::Annotation> annotations;
+  std::vector<Measurement> measurements;
   std::string stateFile;
+  // Scripted use of the tools (tests, reproducible figures): the tool the clicks use ("distance",
+  // "annotate", ...; HeritageTools), clicks at pixels (one per frame once the cut is complete),
+  // and the view state saved after the last frame, as the panel's button saves it.
+  std::string tool;
+  std::vector<std::array<double, 2>> clicks;
+  std::string saveState;
 };
+
+// The names --tool takes.
+std::vector<std::string> toolNames();
 
 // Returns the process exit code. Throws nestlight::Error when no window can be opened.
 int runViewer(const ViewerOptions& options);

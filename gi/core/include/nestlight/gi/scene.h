@@ -21,6 +21,7 @@
 #include "nestlight/gi/material.h"
 #include "nestlight/gi/mesh.h"
 #include "nestlight/gi/sampling.h"
+#include "nestlight/octree/clip_volume.h"
 
 namespace nestlight::gi {
 
@@ -33,6 +34,10 @@ struct SceneOctree {
   // Where its colour comes from: "rgb" (recorded, sRGB decoded) or a colour layer ("hdr": the
   // HDR colour nestlight expand-hdr writes; nestlight/gi/scan_colour.h).
   std::string colour = "rgb";
+  // Clipping volumes in the scan's own world coordinates (the array `export --clip` and view
+  // states hold): what they remove is not part of the scene, for every method (the GL methods'
+  // frame clips on the GPU and never loads nodes removed whole; the path tracer skips the points).
+  ClipSet clipping;
 };
 
 struct SceneMesh {
