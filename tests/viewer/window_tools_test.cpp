@@ -4,6 +4,7 @@
 // it) reloads into the same picture, which is compared with a golden and with `render --state`.
 #include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <regex>
 
 #include "golden.h"
 #include "nestlight/viewer/image.h"
@@ -107,6 +108,57 @@ TEST(WindowTools, MeasureAnnotateClipSaveAndReload) {
   // The window fits its near plane closer than the renderer (depth precision differs at splat
   // edges): a few pixels may differ, not the picture.
   EXPECT_LT(nestlight::viewer::compareImages(a, b, 3.f / 255).fraction, 0.03);
+}
+
+// The profile tool: two clicks cut a section of the resident cut, shown in its panel; every point
+// of it lies in the section `nestlight profile` cuts from the whole octree along the same line.
+TEST(WindowTools, ProfileOfTheResidentCutIsPartOfTheWholeSection) {
+  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "xvfb-run is not installed";
+  TempDir tmp;
+  std::string out;
+  ASSERT_EQ(
+      runCli("generate -n 60k --size 20 --origin 512000,5412000,300 -o " + tmp.file("scan.las"),
+             &out),
+      0)
+      << out;
+  ASSERT_EQ(runCli("convert " + tmp.file("scan.las") + " -o " + tmp.file("scan.octree") +
+                       " --progress quiet",
+                   &out),
+            0)
+      << out;
+  const std::string oct = tmp.file("scan.octree");
+  ASSERT_EQ(run(xvfb(tmp) + "view " + oct + kView +
+                    " --tool profile --click 140,150 --click 200,120 --frames 40",
+                tmp, &out),
+            0)
+      << out;
+  auto numbersAfter = [&](const std::string& key) {
+    const size_t at = out.find(key);
+    EXPECT_NE(at, std::string::npos) << key << "\n" << out;
+    double x = 0, y = 0;
+    if (at != std::string::npos) std::sscanf(out.c_str() + at + key.size(), "%lf %lf", &x, &y);
+    return std::array<double, 2>{x, y};
+  };
+  const auto a = numbersAfter("profile from "), b = numbersAfter("profile to ");
+  size_t shown = 0;
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(out, match, std::regex(": ([0-9]+) points of the resident cut")))
+      << out;
+  shown = std::stoul(match[1]);
+  EXPECT_GT(shown, 20u) << out;
+  // The viewer's default width is 1% of the octree's cube (a few decimetres here): the CLI's
+  // section along the same line, 1 m wide, from every level, holds at least as many points.
+  char line[256];
+  std::snprintf(line, sizeof line, "%.3f,%.3f,%.3f,%.3f", a[0], a[1], b[0], b[1]);
+  ASSERT_EQ(
+      runCli("profile " + oct + " --line " + line + " --width 1 -o " + tmp.file("s.las"), &out), 0)
+      << out;
+  size_t whole = 0;
+  const size_t p = out.find("profile: ");
+  ASSERT_NE(p, std::string::npos) << out;
+  std::sscanf(out.c_str() + p + 9, "%zu", &whole);
+  EXPECT_GE(whole, shown) << out;
 }
 
 }  // namespace window_tools_test

@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 
+#include "nestlight/frame/gl_node_store.h"
+#include "nestlight/octree/attribute.h"
 #include "nestlight/octree/crs.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/viewer/annotations.h"
@@ -30,6 +33,7 @@ const ToolName kTools[] = {
     {HeritageTools::Tool::Angle, "angle", "angle"},
     {HeritageTools::Tool::Annotate, "annotate", "annotate"},
     {HeritageTools::Tool::ClipPolygon, "clip-polygon", "clipping polygon"},
+    {HeritageTools::Tool::Profile, "profile", "profile (two clicks)"},
 };
 
 std::optional<Measurement::Kind> kindOf(HeritageTools::Tool t) {
@@ -70,6 +74,7 @@ HeritageTools::HeritageTools(const ViewerOptions& opt, OctreeReader& reader)
       clipping_(),
       stateFile_(opt.stateFile.empty() ? "view.json" : opt.stateFile) {
   unit_ = describeCrs(reader.metadata().crs).unitSymbol();
+  profileWidth_ = std::max(reader.metadata().cubeWorldSize() * 0.01, 1e-3);
   if (opt.settings.clip) clipping_ = *opt.settings.clip;
   measurements_ = opt.measurements;
   // Loaded vertices are where they were saved: nothing to refine towards.
@@ -126,7 +131,82 @@ bool HeritageTools::click(frame::PointView& view, const std::vector<streaming::D
   const glm::dvec3 w = camera.eye + glm::transpose(glm::dmat3(camera.viewRotation())) * v;
   frame::RenderSettings s = settings;
   place(*p, Vec3d{w.x, w.y, w.z}, s);
+  if (profilePending_) {
+    profilePending_ = false;
+    computeProfile(nodes, settings.clip.get());
+  }
   return true;
+}
+
+void HeritageTools::computeProfile(const std::vector<streaming::DrawNode>& nodes,
+                                   const ClipSet* clip) {
+  profile_.clear();
+  if (profileLine_.size() != 2 || profileLine_[0] == profileLine_[1]) return;
+  const ClipVolume corridor = ClipVolume::corridor(profileLine_, profileWidth_);
+  const Metadata& meta = reader_.metadata();
+  const int rgb = meta.layout.find(attr::kRgb);
+  const double zLo = meta.bounds.min.z, zSpan = std::max(meta.bounds.max.z - zLo, 1e-9);
+  for (const streaming::DrawNode& n : nodes) {
+    if (corridor.overlap(n.worldBounds) == Overlap::None) continue;
+    const PointBuffer buf = reader_.readNode(n.key);
+    for (size_t i = 0; i < buf.size(); ++i) {
+      const Vec3d p{meta.world(0, buf.pos[3 * i]), meta.world(1, buf.pos[3 * i + 1]),
+                    meta.world(2, buf.pos[3 * i + 2])};
+      if (!corridor.contains(p) || (clip && !clip->keeps(p))) continue;
+      uint32_t colour;
+      if (rgb >= 0) {
+        uint16_t c[3];
+        std::memcpy(c, buf.attrs.data() + i * buf.stride + meta.layout.offset(size_t(rgb)), 6);
+        colour = IM_COL32(c[0] >> 8, c[1] >> 8, c[2] >> 8, 255);
+      } else {
+        colour = ImU32(frame::elevationRamp((p.z - zLo) / zSpan));
+      }
+      profile_.push_back({float(corridor.along(p)), float(p.z), colour});
+    }
+  }
+  char b[160];
+  std::snprintf(b, sizeof b, ": %zu points of the resident cut, %.3f %s long", profile_.size(),
+                corridor.length(), unit_.c_str());
+  status += b;
+}
+
+// The section in its own window: distance along the line against height at true scale.
+void HeritageTools::profilePanel() {
+  if (profileLine_.size() != 2) return;
+  ImGui::SetNextWindowSize(ImVec2(520, 260), ImGuiCond_FirstUseEver);
+  ImGui::Begin("profile");
+  const double len =
+      std::hypot(profileLine_[1][0] - profileLine_[0][0], profileLine_[1][1] - profileLine_[0][1]);
+  float zLo = INFINITY, zHi = -INFINITY;
+  for (const ProfilePoint& p : profile_) zLo = std::min(zLo, p.z), zHi = std::max(zHi, p.z);
+  ImGui::Text("%zu points, %.3f %s along, heights %.3f to %.3f", profile_.size(), len,
+              unit_.c_str(), profile_.empty() ? 0.0 : double(zLo),
+              profile_.empty() ? 0.0 : double(zHi));
+  const ImVec2 at = ImGui::GetCursorScreenPos();
+  const ImVec2 avail = ImGui::GetContentRegionAvail();
+  const float w = std::max(avail.x, 50.0f),
+              h = std::max(avail.y - ImGui::GetFrameHeight() * 2, 40.0f);
+  ImDrawList* d = ImGui::GetWindowDrawList();
+  d->AddRectFilled(at, ImVec2(at.x + w, at.y + h), IM_COL32(20, 20, 26, 255));
+  if (!profile_.empty() && len > 0) {
+    // One scale for both axes (true shape), fitted to the region.
+    const double span = std::max(double(zHi - zLo), 1e-9);
+    const double scale = std::min(w / len, h / span);
+    for (const ProfilePoint& p : profile_) {
+      const float x = at.x + float(p.along * scale), y = at.y + h - float((p.z - zLo) * scale);
+      d->AddRectFilled(ImVec2(x, y), ImVec2(x + 2, y + 2), p.colour);
+    }
+  }
+  ImGui::Dummy(ImVec2(w, h));
+  // Every point of the corridor, from the whole octree, is the command line's.
+  char cmd[512];
+  std::snprintf(cmd, sizeof cmd,
+                "nestlight profile %s --line %.3f,%.3f,%.3f,%.3f --width %.3f -o section.las "
+                "-o section.svg",
+                opt_.octree.string().c_str(), profileLine_[0][0], profileLine_[0][1],
+                profileLine_[1][0], profileLine_[1][1], profileWidth_);
+  ImGui::InputText("every point", cmd, sizeof cmd, ImGuiInputTextFlags_ReadOnly);
+  ImGui::End();
 }
 
 void HeritageTools::place(const frame::PickedPoint& p, const Vec3d& target,
@@ -140,6 +220,13 @@ void HeritageTools::place(const frame::PickedPoint& p, const Vec3d& target,
   if (tool_ == Tool::Annotate) {
     annotations_.push_back({p.position, title_[0] ? title_ : "note", ""});
     status = "annotation at " + coords;
+    return;
+  }
+  if (tool_ == Tool::Profile) {
+    if (profileLine_.size() == 2) profileLine_.clear();
+    profileLine_.push_back({p.position.x, p.position.y});
+    profilePending_ = profileLine_.size() == 2;
+    status = profileLine_.size() == 1 ? "profile from " + coords : "profile to " + coords;
     return;
   }
   if (tool_ == Tool::ClipPolygon) {
@@ -225,10 +312,16 @@ void HeritageTools::panel(frame::RenderSettings& settings, const frame::Camera& 
     tool_ = kTools[current].tool;
   }
   if (tool_ == Tool::Annotate) ImGui::InputText("title", title_, sizeof title_);
+  if (tool_ == Tool::Profile) {
+    ImGui::DragScalar("profile width", ImGuiDataType_Double, &profileWidth_,
+                      float(std::max(extent * 0.0005, 1e-5)));
+    profileWidth_ = std::max(profileWidth_, 1e-6);
+  }
   if (tool_ == Tool::Polyline || tool_ == Tool::Area || tool_ == Tool::ClipPolygon) {
     if (ImGui::Button("finish (Enter)")) finish(settings);
   }
   if (!status.empty()) ImGui::TextWrapped("%s", status.c_str());
+  profilePanel();
   if (lastPick_) {
     ImGui::TextUnformatted(
         (lastPick_->coordinates(reader_.metadata().scale) + " " + unit_).c_str());
@@ -348,6 +441,13 @@ void HeritageTools::drawOverlay(const frame::Camera& camera, int width, int heig
     if (!a.text.empty() && mouse.x >= t.x && mouse.x <= t.x + size.x + 6 && mouse.y >= t.y &&
         mouse.y <= t.y + size.y + 4)
       ImGui::SetTooltip("%s", a.text.c_str());
+  }
+  if (profileLine_.size() == 2) {
+    const auto a = projectToImage(camera, width, height,
+                                  Vec3d{profileLine_[0][0], profileLine_[0][1], camera.target.z});
+    const auto b = projectToImage(camera, width, height,
+                                  Vec3d{profileLine_[1][0], profileLine_[1][1], camera.target.z});
+    if (a && b) d->AddLine(toImVec(*a), toImVec(*b), IM_COL32(255, 80, 200, 255), 2.0f);
   }
   for (size_t i = 0; i + 1 < clipPolygon_.size(); ++i) {
     const auto a = projectToImage(camera, width, height,

@@ -22,7 +22,18 @@ namespace nestlight::viewer {
 
 class HeritageTools {
  public:
-  enum class Tool { None, Pick, Distance, Polyline, Area, Height, Angle, Annotate, ClipPolygon };
+  enum class Tool {
+    None,
+    Pick,
+    Distance,
+    Polyline,
+    Area,
+    Height,
+    Angle,
+    Annotate,
+    ClipPolygon,
+    Profile
+  };
 
   HeritageTools(const ViewerOptions& opt, OctreeReader& reader);
 
@@ -57,6 +68,7 @@ class HeritageTools {
   std::string status;  // the last action, for the panel
 
   const std::vector<Measurement>& measurements() const { return measurements_; }
+  size_t profilePoints() const { return profile_.size(); }
 
  private:
   struct Vertex {
@@ -65,6 +77,18 @@ class HeritageTools {
     std::vector<NodeKey> searched;  // nodes already searched for it
   };
   void place(const frame::PickedPoint& p, const Vec3d& target, frame::RenderSettings& settings);
+  // The section along profileLine_ from the drawn nodes (the resident cut), for the panel's plot.
+  void computeProfile(const std::vector<streaming::DrawNode>& nodes, const ClipSet* clip);
+  void profilePanel();
+
+  struct ProfilePoint {
+    float along, z;
+    uint32_t colour;  // ImU32
+  };
+  std::vector<std::array<double, 2>> profileLine_;  // 0, 1 or 2 plan points
+  double profileWidth_ = 0;
+  std::vector<ProfilePoint> profile_;
+  bool profilePending_ = false;
 
   const ViewerOptions& opt_;
   OctreeReader& reader_;
