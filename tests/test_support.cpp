@@ -111,6 +111,22 @@ void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::
   buildOctree(std::move(src), b);
 }
 
+std::string generatedOctree(const TempDir& dir, const std::string& points, double size,
+                            const std::string& origin) {
+  std::string out;
+  EXPECT_EQ(runCli("generate -n " + points + " --size " + std::to_string(size) + " --origin " +
+                       origin + " -o " + dir.file("scan.las"),
+                   &out),
+            0)
+      << out;
+  EXPECT_EQ(runCli("convert " + dir.file("scan.las") + " -o " + dir.file("scan.octree") +
+                       " --progress quiet",
+                   &out),
+            0)
+      << out;
+  return dir.file("scan.octree");
+}
+
 void writeColourLayer(const std::filesystem::path& dir, const std::string& name,
                       const std::function<std::array<float, 3>(const NodeKey&, size_t)>& colour,
                       double scale) {

@@ -54,6 +54,11 @@ std::string readFile(const std::string& path);
 void buildOctreeFrom(const std::filesystem::path& input, const std::filesystem::path& output,
                      uint32_t maxNodePoints = 0);
 
+// `nestlight generate -n POINTS --size SIZE --origin ORIGIN` written into `dir` and converted to
+// `dir`/scan.octree by the CLI, as a user would; returns the octree's path.
+std::string generatedOctree(const TempDir& dir, const std::string& points, double size,
+                            const std::string& origin);
+
 // Writes colour layer `name` into the octree at `dir`: `colour(key, i)` for point i of each node
 // (linear RGB), stored divided by `scale` (nestlight/octree/colour_layer.h).
 void writeColourLayer(const std::filesystem::path& dir, const std::string& name,

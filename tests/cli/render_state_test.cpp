@@ -16,18 +16,7 @@ using nestlight::test::TempDir;
 
 // A small generated building in national-grid coordinates, converted.
 std::string makeOctree(const TempDir& dir) {
-  std::string out;
-  EXPECT_EQ(
-      runCli("generate -n 30k --size 20 --origin 512000,5412000,300 -o " + dir.file("scan.las"),
-             &out),
-      0)
-      << out;
-  EXPECT_EQ(runCli("convert " + dir.file("scan.las") + " -o " + dir.file("scan.octree") +
-                       " --progress quiet",
-                   &out),
-            0)
-      << out;
-  return dir.file("scan.octree");
+  return nestlight::test::generatedOctree(dir, "30k", 20, "512000,5412000,300");
 }
 
 const char* kSmall = " --width 96 --height 64 --wait-complete";

@@ -34,17 +34,7 @@ TEST(WindowTools, MeasureAnnotateClipSaveAndReload) {
     GTEST_SKIP() << "xvfb-run is not installed";
   TempDir tmp;
   std::string out;
-  ASSERT_EQ(
-      runCli("generate -n 60k --size 20 --origin 512000,5412000,300 -o " + tmp.file("scan.las"),
-             &out),
-      0)
-      << out;
-  ASSERT_EQ(runCli("convert " + tmp.file("scan.las") + " -o " + tmp.file("scan.octree") +
-                       " --progress quiet",
-                   &out),
-            0)
-      << out;
-  const std::string oct = tmp.file("scan.octree");
+  const std::string oct = nestlight::test::generatedOctree(tmp, "60k", 20, "512000,5412000,300");
   // 1. A distance between two clicks, saved at the end.
   ASSERT_EQ(run(xvfb(tmp) + "view " + oct + kView +
                     " --tool distance --click 140,150 --click 200,120 --frames 60 --save-state " +
@@ -117,17 +107,7 @@ TEST(WindowTools, ProfileOfTheResidentCutIsPartOfTheWholeSection) {
     GTEST_SKIP() << "xvfb-run is not installed";
   TempDir tmp;
   std::string out;
-  ASSERT_EQ(
-      runCli("generate -n 60k --size 20 --origin 512000,5412000,300 -o " + tmp.file("scan.las"),
-             &out),
-      0)
-      << out;
-  ASSERT_EQ(runCli("convert " + tmp.file("scan.las") + " -o " + tmp.file("scan.octree") +
-                       " --progress quiet",
-                   &out),
-            0)
-      << out;
-  const std::string oct = tmp.file("scan.octree");
+  const std::string oct = nestlight::test::generatedOctree(tmp, "60k", 20, "512000,5412000,300");
   ASSERT_EQ(run(xvfb(tmp) + "view " + oct + kView +
                     " --tool profile --click 140,150 --click 200,120 --frames 40",
                 tmp, &out),

@@ -96,7 +96,7 @@ void drawLabel(frame::Image& img, double x, double y, double s, const std::strin
   x = std::clamp(x, 0.0, std::max(0.0, img.width - tw - 6 * s));
   y = std::clamp(y, 0.0, std::max(0.0, img.height - th - 4 * s));
   fillRect(img, x, y, x + tw + 6 * s, y + th + 4 * s, box, 0.75f);
-  static thread_local char quads[64 * 1024];
+  alignas(16) static thread_local char quads[64 * 1024];
   const int n = stb_easy_font_print(0, 0, text.data(), nullptr, quads, sizeof quads);
   // Each quad: 4 vertices of x, y, z (floats) and a colour (4 bytes); axis-aligned rectangles.
   for (int q = 0; q < n; ++q) {
