@@ -124,6 +124,56 @@ TEST(Picking, NationalGridCoordinatesToTheMillimetre) {
   expectPicksExact({512345.0, 5412345.0, 310.0});
 }
 
+// The snap of a measurement's vertex (frame::nearestPoint): the point of the given nodes nearest a
+// target in 3D, exactly as a brute force over the source finds it; nothing beyond the distance
+// asked; nodes already searched are skipped (a vertex refines only with new nodes); clipped
+// points are never snapped to.
+TEST(Picking, NearestPointSnapsExactlyAndOnlyToNewNodes) {
+  const Vec3d o{512345.0, 5412345.0, 310.0};
+  test::TempDir tmp;
+  const Walls w = makeWalls(tmp, o, 3000);
+  OctreeReader reader(w.octree);
+  std::vector<streaming::DrawNode> nodes;
+  for (const auto& [key, e] : reader.allNodes()) {
+    streaming::DrawNode n;
+    n.key = key;
+    n.numPoints = e.numPoints;
+    n.worldBounds = reader.metadata().nodeBounds(key.level, key.x, key.y, key.z);
+    nodes.push_back(n);
+  }
+  const Vec3d target{o.x + 3.2104, o.y + 0.05, o.z + 1.7771};
+  double best = INFINITY;
+  std::array<int64_t, 3> want{};
+  for (const auto& p : w.front) {
+    const double d =
+        std::hypot(p[0] / 1000.0 - 3.2104, p[1] / 1000.0 - 0.05, p[2] / 1000.0 - 1.7771);
+    if (d < best) best = d, want = p;
+  }
+  std::vector<NodeKey> searched;
+  const auto got = frame::nearestPoint(reader, nodes, target, 1.0, nullptr, &searched);
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(std::llround((got->position.x - o.x) * 1000), want[0]);
+  EXPECT_EQ(std::llround((got->position.z - o.z) * 1000), want[2]);
+  EXPECT_NEAR(got->depth, best, 1e-9);
+  EXPECT_FALSE(searched.empty());
+  EXPECT_LT(searched.size(), nodes.size()) << "every node was read for a 1 m search";
+  // Refining (within the current snap distance, searched nodes skipped) finds nothing nearer.
+  const size_t searchedBefore = searched.size();
+  EXPECT_FALSE(
+      frame::nearestPoint(reader, nodes, target, got->depth, nullptr, &searched).has_value());
+  EXPECT_EQ(searched.size(), searchedBefore) << "a node was searched twice or needlessly";
+  // Nothing within a distance shorter than the nearest point's.
+  EXPECT_FALSE(frame::nearestPoint(reader, nodes, target, 0.5 * best, nullptr).has_value());
+  // A box hiding the nearest point: the next one is found, farther.
+  ClipSet hide;
+  ClipVolume box = ClipVolume::box(got->position, {1e-3, 1e-3, 1e-3});
+  box.mode = ClipVolume::Mode::Outside;
+  hide.volumes.push_back(box);
+  const auto next = frame::nearestPoint(reader, nodes, target, 1.0, &hide);
+  ASSERT_TRUE(next.has_value());
+  EXPECT_GT(next->depth, got->depth);
+}
+
 // Coverage of the columns [x0, x1) of an image: pixels not of the background colour.
 size_t covered(const Image& img, int x0, int x1) {
   size_t n = 0;
