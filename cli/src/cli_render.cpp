@@ -176,9 +176,10 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
       ->capture_default_str();
   cmd->add_option("--loaders", job.budgets.loaderThreads, "Loader threads")->capture_default_str();
   cmd->add_option("--state", text->state,
-                  "View state JSON saved by the viewer (docs/VIEWER.md, \"View states\"): its "
-                  "camera, colouring, budgets, splatting and clipping volumes; options given "
-                  "here win over it");
+                  "View state JSON saved by the viewer (docs/VIEWER.md, \"Measurements and view "
+                  "states\"): its camera, colouring, budgets, splatting, clipping volumes, "
+                  "measurements and annotations (drawn over the image); options given here win "
+                  "over it");
   cmd->add_option("--clip", text->clip,
                   "Clipping volumes JSON (boxes, polygons, corridors; the file `export --clip` "
                   "reads): what they remove is hidden on the GPU and never loaded");

@@ -118,7 +118,7 @@ void addView(CLI::App& app, int& exitCode) {
   addRenderOptions(cmd, *job, text);
   cmd->add_option("--tool", opt->tool,
                   "The tool a click uses: pick, distance, polyline, area, height, angle, "
-                  "annotate, clip-polygon (the panel's \"tools\" section chooses it too)");
+                  "annotate, clip-polygon, profile (the panel's \"tools\" section chooses it too)");
   auto clicks = std::make_shared<std::vector<std::string>>();
   cmd->add_option("--click", *clicks,
                   "Scripted click at pixel X,Y with --tool, once the view's cut is loaded; "
