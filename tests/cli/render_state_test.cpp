@@ -22,6 +22,7 @@ std::string makeOctree(const TempDir& dir) {
 const char* kSmall = " --width 96 --height 64 --wait-complete";
 
 TEST(RenderState, StateRendersWhatItsFieldsSay) {
+  nestlight::test::noLeakChecksInGlChildren();  // the renders run GL (llvmpipe)
   TempDir dir;
   const std::string oct = makeOctree(dir);
   nlohmann::json state = {{"version", 1},
@@ -76,6 +77,7 @@ TEST(RenderState, StateRendersWhatItsFieldsSay) {
 }
 
 TEST(RenderState, AnnotationsAreDrawnAtTheirPoints) {
+  nestlight::test::noLeakChecksInGlChildren();  // the renders run GL (llvmpipe)
   TempDir dir;
   const std::string oct = makeOctree(dir);
   nlohmann::json state = {
@@ -111,6 +113,7 @@ TEST(RenderState, AnnotationsAreDrawnAtTheirPoints) {
 }
 
 TEST(RenderState, StateFromElsewhereWarnsAndBadFieldsAreNamed) {
+  nestlight::test::noLeakChecksInGlChildren();  // the renders run GL (llvmpipe)
   TempDir dir;
   const std::string oct = makeOctree(dir);
   nestlight::test::writeFile(dir.file("far.json"),
@@ -141,6 +144,7 @@ TEST(RenderState, StateFromElsewhereWarnsAndBadFieldsAreNamed) {
 }
 
 TEST(RenderPick, PrintsThePointInTheScansCoordinates) {
+  nestlight::test::noLeakChecksInGlChildren();  // the renders run GL (llvmpipe)
   TempDir dir;
   const std::string oct = makeOctree(dir);
   std::string out;
