@@ -395,7 +395,8 @@ void addRender(CLI::App& app, int& exitCode) {
     }
     auto frames = viewer::renderHeadless(*job);
     if (!frames.empty() && !job->picks.empty()) {
-      const Metadata& meta = OctreeReader(job->octree).metadata();
+      const OctreeReader reader(job->octree);  // alive while `meta` is read
+      const Metadata& meta = reader.metadata();
       const CrsInfo crs = describeCrs(meta.crs);
       const std::string unit = " " + crs.unitSymbol();
       if (crs.known) std::printf("pick: coordinates in %s\n", crs.summary().c_str());

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 
 #if defined(__GNUC__)
 #pragma GCC diagnostic push
@@ -44,8 +45,24 @@ void fillRect(frame::Image& img, double x0, double y0, double x1, double y1, con
     for (int x = int(std::floor(x0)); x < int(std::ceil(x1)); ++x) blend(img, x, y, rgb, alpha);
 }
 
-// A line `width` pixels wide from a to b (image pixels), clipped to the image.
+// A line `width` pixels wide from a to b (image pixels), clipped to the image first
+// (Liang-Barsky): a segment that passes close to the eye projects to enormous coordinates.
 void drawLine(frame::Image& img, glm::dvec2 a, glm::dvec2 b, double width, const float rgb[3]) {
+  const glm::dvec2 lo(-width, -width), hi(img.width + width, img.height + width), d = b - a;
+  double t0 = 0, t1 = 1;
+  for (int k = 0; k < 2; ++k) {
+    for (const auto& [p, q] : {std::pair{-d[k], a[k] - lo[k]}, std::pair{d[k], hi[k] - a[k]}}) {
+      if (p == 0) {
+        if (q < 0) return;  // parallel to this edge and outside it
+      } else if (p < 0) {
+        t0 = std::max(t0, q / p);
+      } else {
+        t1 = std::min(t1, q / p);
+      }
+    }
+  }
+  if (!(t0 <= t1)) return;
+  b = a + d * t1, a = a + d * t0;
   const double len = glm::length(b - a);
   const int steps = int(std::ceil(len * 2)) + 1;
   for (int i = 0; i <= steps; ++i) {
