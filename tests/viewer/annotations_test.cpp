@@ -1,9 +1,9 @@
 // Overlays drawn into images (render and screenshots): measurement lines clipped to the image even
 // when a vertex projects to enormous coordinates, labels inside the frame, text that stb_easy_font
 // cannot draw replaced rather than read out of its glyph table, labels in the scan's unit.
-#include <gtest/gtest.h>
-
 #include "nestlight/viewer/annotations.h"
+
+#include <gtest/gtest.h>
 
 namespace annotations_test {
 
