@@ -7,11 +7,13 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "nestlight/bench/harness.h"
 #include "nestlight/converters/progress.h"
+#include "nestlight/frame/view_state.h"
 
 namespace nestlight::viewer {
 struct RenderJob;
@@ -37,6 +39,18 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text);
 // volumes over the state's. Warns when the state was saved from an octree elsewhere.
 void applyViewStateOptions(viewer::RenderJob& job, const RenderOptionText& text,
                            const std::function<bool(const char*)>& given);
+// A loaded state's part of applyViewStateOptions (no file read, no warning).
+void applyViewState(viewer::RenderJob& job, const frame::ViewState& state,
+                    const std::function<bool(const char*)>& given);
+// The same for a scene file (`render`/`view` scene.json --state/--clip): the state's camera, GI
+// method and parameters (when the method is the one rendered) and clipping volumes go into `sc`,
+// --clip's volumes too (added to every scan's); options given win. Its colouring, budgets and
+// splatting are the points view's: `view` takes them through applyViewStateOptions. Returns the
+// state (none without --state) for its annotations and measurements.
+std::optional<frame::ViewState> applyViewStateToScene(const std::string& sceneFile,
+                                                      const RenderOptionText& text,
+                                                      const std::function<bool(const char*)>& given,
+                                                      gi::SceneRenderOverrides& sc);
 
 // The options of scene files that choose and set the GI method, shared by `render` and `view`
 // (cli_scene_options.cpp). addSceneMethodOptions: --method, --mode, the flags the methods declare

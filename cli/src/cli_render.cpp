@@ -8,13 +8,16 @@
 
 #include "cli.h"
 #include "nestlight/frame/gpu_clip.h"
+#include "nestlight/frame/picking.h"
 #include "nestlight/frame/view_state.h"
 #include "nestlight/gi/methods.h"
 #include "nestlight/gi/render_scene.h"
 #include "nestlight/octree/crs.h"
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/octree_reader.h"
+#include "nestlight/viewer/annotations.h"
 #include "nestlight/viewer/headless.h"
+#include "nestlight/viewer/image.h"
 
 namespace nestlight::cli {
 
@@ -67,7 +70,7 @@ void applySceneScanOptions(const CLI::App& cmd, const std::string& file,
   std::vector<std::string> notForScenes;
   for (const char* o : {"--camera", "--view", "--colour", "--layer", "--fixed-point-size", "--edl",
                         "--upload-budget", "--spacing-pixels", "--loaders", "--path", "--stats",
-                        "--wait-complete", "--state", "--pick"})
+                        "--wait-complete", "--pick"})
     if (given(o)) notForScenes.push_back(o);
   if (!notForScenes.empty()) {
     std::string names;
@@ -179,10 +182,41 @@ void addRenderOptions(CLI::App* cmd, viewer::RenderJob& job,
                   "View state JSON saved by the viewer (docs/VIEWER.md, \"Measurements and view "
                   "states\"): its camera, colouring, budgets, splatting, clipping volumes, "
                   "measurements and annotations (drawn over the image); options given here win "
-                  "over it");
+                  "over it. For a scene file: its camera, GI method and parameters, clipping "
+                  "volumes (added to every scan's), annotations and measurements");
   cmd->add_option("--clip", text->clip,
                   "Clipping volumes JSON (boxes, polygons, corridors; the file `export --clip` "
-                  "reads): what they remove is hidden on the GPU and never loaded");
+                  "reads): what they remove is hidden on the GPU and never loaded (a scene file: "
+                  "added to every scan's octrees[].clipping)");
+}
+
+void applyViewState(viewer::RenderJob& job, const frame::ViewState& st,
+                    const std::function<bool(const char*)>& given) {
+  if (st.camera && !given("--camera")) {
+    job.camera = *st.camera;
+    if (given("--fov")) job.camera->fovYDegrees = job.fovYDegrees;
+  }
+  if (st.colour && !given("--colour")) job.colour = *st.colour;
+  if (!given("--layer")) job.colourLayer = st.colourLayer;
+  const streaming::Budgets& b = st.budgets;
+  if (!given("--point-budget")) job.budgets.points = b.points;
+  if (!given("--gpu-budget")) job.budgets.gpuBytes = b.gpuBytes;
+  if (!given("--upload-budget")) job.budgets.uploadBytesPerFrame = b.uploadBytesPerFrame;
+  if (!given("--loaders")) job.budgets.loaderThreads = b.loaderThreads;
+  if (!given("--spacing-pixels")) job.budgets.spacingPixels = b.spacingPixels;
+  const frame::RenderSettings& r = st.settings;
+  frame::RenderSettings& o = job.settings;
+  if (!given("--rasteriser")) o.rasteriser = r.rasteriser;
+  if (!given("--splatting")) o.splatting = r.splatting;
+  if (!given("--point-size")) o.sizeScale = r.sizeScale;
+  if (!given("--fixed-point-size") && !given("--rasteriser")) o.fixedPointSize = r.fixedPointSize;
+  if (!given("--edl")) o.edlStrength = r.edlStrength;
+  if (!given("--exposure")) o.exposureStops = r.exposureStops;
+  o.minPointSize = r.minPointSize, o.maxPointSize = r.maxPointSize;
+  o.roundPoints = r.roundPoints, o.edlRadius = r.edlRadius, o.background = r.background;
+  if (!st.clipping.empty()) o.clip = std::make_shared<const ClipSet>(st.clipping);
+  job.annotations = st.annotations;
+  job.measurements = st.measurements;
 }
 
 void applyViewStateOptions(viewer::RenderJob& job, const RenderOptionText& text,
@@ -193,31 +227,7 @@ void applyViewStateOptions(viewer::RenderJob& job, const RenderOptionText& text,
     const std::string warning = st.boundsWarning(OctreeReader(job.octree).metadata().bounds);
     if (!warning.empty())
       std::fprintf(stderr, "%s: warning: %s\n", text.state.c_str(), warning.c_str());
-    if (st.camera && !given("--camera")) {
-      job.camera = *st.camera;
-      if (given("--fov")) job.camera->fovYDegrees = job.fovYDegrees;
-    }
-    if (st.colour && !given("--colour")) job.colour = *st.colour;
-    if (!given("--layer")) job.colourLayer = st.colourLayer;
-    const streaming::Budgets& b = st.budgets;
-    if (!given("--point-budget")) job.budgets.points = b.points;
-    if (!given("--gpu-budget")) job.budgets.gpuBytes = b.gpuBytes;
-    if (!given("--upload-budget")) job.budgets.uploadBytesPerFrame = b.uploadBytesPerFrame;
-    if (!given("--loaders")) job.budgets.loaderThreads = b.loaderThreads;
-    if (!given("--spacing-pixels")) job.budgets.spacingPixels = b.spacingPixels;
-    const frame::RenderSettings& r = st.settings;
-    frame::RenderSettings& o = job.settings;
-    if (!given("--rasteriser")) o.rasteriser = r.rasteriser;
-    if (!given("--splatting")) o.splatting = r.splatting;
-    if (!given("--point-size")) o.sizeScale = r.sizeScale;
-    if (!given("--fixed-point-size") && !given("--rasteriser")) o.fixedPointSize = r.fixedPointSize;
-    if (!given("--edl")) o.edlStrength = r.edlStrength;
-    if (!given("--exposure")) o.exposureStops = r.exposureStops;
-    o.minPointSize = r.minPointSize, o.maxPointSize = r.maxPointSize;
-    o.roundPoints = r.roundPoints, o.edlRadius = r.edlRadius, o.background = r.background;
-    if (!st.clipping.empty()) o.clip = std::make_shared<const ClipSet>(st.clipping);
-    job.annotations = st.annotations;
-    job.measurements = st.measurements;
+    applyViewState(job, st, given);
   }
   if (!text.clip.empty()) {
     requireExists(text.clip);
@@ -225,6 +235,46 @@ void applyViewStateOptions(viewer::RenderJob& job, const RenderOptionText& text,
   }
   // What the GPU draws at most: refused here, before any work, rather than clipped wrongly.
   if (job.settings.clip) frame::encodeClipBlock(*job.settings.clip, Vec3d{});
+}
+
+std::optional<frame::ViewState> applyViewStateToScene(const std::string& sceneFile,
+                                                      const RenderOptionText& text,
+                                                      const std::function<bool(const char*)>& given,
+                                                      gi::SceneRenderOverrides& sc) {
+  std::optional<frame::ViewState> state;
+  if (!text.state.empty()) {
+    requireExists(text.state);
+    state = frame::ViewState::load(text.state);
+    const frame::ViewState& st = *state;
+    Box3d bounds;
+    for (const gi::SceneOctree& o : gi::loadScene(sceneFile).octrees)
+      bounds.extend(OctreeReader(o.path).metadata().bounds);
+    const std::string warning = bounds.empty() ? "" : st.boundsWarning(bounds);
+    if (!warning.empty())
+      std::fprintf(stderr, "%s: warning: %s\n", text.state.c_str(), warning.c_str());
+    if (st.camera) {
+      sc.camera = gi::SceneRenderOverrides::Pose{st.camera->eye, st.camera->target, st.camera->up};
+      if (!given("--fov")) sc.fov = st.camera->fovYDegrees;
+    }
+    if (st.gi.is_object() && st.gi.contains("method")) {
+      const std::string method = st.gi["method"].get<std::string>();
+      if (!gi::findMethod(method))
+        throw Error(text.state, "gi.method", "unknown method '" + method + "'");
+      if (!sc.method) sc.method = method;
+      // Its parameters are that method's: another one given on the command line leaves them.
+      if (*sc.method == method && st.gi.contains("parameters"))
+        for (const auto& [k, v] : st.gi["parameters"].items())
+          if (!sc.parameters.contains(k)) sc.parameters[k] = v;
+    }
+    sc.clipping.volumes.insert(sc.clipping.volumes.end(), st.clipping.volumes.begin(),
+                               st.clipping.volumes.end());
+  }
+  if (!text.clip.empty()) {
+    requireExists(text.clip);
+    const ClipSet c = ClipSet::load(text.clip);
+    sc.clipping.volumes.insert(sc.clipping.volumes.end(), c.volumes.begin(), c.volumes.end());
+  }
+  return state;
 }
 
 void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
@@ -251,6 +301,34 @@ void applyRenderOptions(viewer::RenderJob& job, const RenderOptionText& text) {
 }
 
 namespace {
+
+// A view state's annotations and measurements over a scene's still PNG (the EXR stays the
+// method's radiance alone), projected through the scene's camera; units from its first scan.
+void overlaySceneImage(const gi::SceneRenderReport& rep, const frame::ViewState& st) {
+  if (st.annotations.empty() && st.measurements.empty()) return;
+  const fs::path png = rep.scene.output.png;
+  if (rep.frames != 1 || png.empty() || !fs::exists(png)) {
+    std::fprintf(stderr,
+                 "render: the state's annotations and measurements are drawn over a still's PNG "
+                 "only (the scene writes %s)\n",
+                 png.empty() ? "no PNG" : "one per frame");
+    return;
+  }
+  frame::Camera camera;
+  camera.eye = rep.scene.camera.eye;
+  camera.target = rep.scene.camera.target;
+  camera.up = rep.scene.camera.up;
+  camera.fovYDegrees = rep.scene.camera.fovYDegrees;
+  std::string unit = "m";
+  if (!rep.scene.octrees.empty()) {
+    const OctreeReader reader(rep.scene.octrees.front().path);
+    unit = describeCrs(reader.metadata().crs).unitSymbol();
+  }
+  viewer::Image image = viewer::readImage(png.string());
+  viewer::drawMeasurements(image, camera, st.measurements, unit);
+  viewer::drawAnnotations(image, camera, st.annotations);
+  viewer::writeImage(image, png.string());
+}
 
 // `render --help`: every registered method, with the choices of the flags it declares, from the
 // registry (gi/methods), so that the list cannot fall behind it.
@@ -356,6 +434,8 @@ void addRender(CLI::App& app, int& exitCode) {
       }
       applySceneMethodOptions(*methodText, *sc);
       applySceneScanOptions(*cmd, *octree, *job, *text, *sc);
+      const std::optional<frame::ViewState> state = applyViewStateToScene(
+          *octree, *text, [cmd](const char* o) { return cmd->count(o) > 0; }, *sc);
       makeOutputFolder(job->output);
       sc->output = job->output;
       // An explicit --time-limit wins over the scene's sample cap: without --spp the cap is
@@ -363,6 +443,7 @@ void addRender(CLI::App& app, int& exitCode) {
       const bool capLifted = sc->timeLimit && *sc->timeLimit > 0 && !sc->spp;  // 0: no limit
       if (capLifted) sc->spp = 1 << 24;
       const gi::SceneRenderReport rep = gi::renderSceneFile(*octree, *sc);
+      if (state) overlaySceneImage(rep, *state);
       // Say when a limit given on the command line did not decide.
       const bool timeLimit = sc->timeLimit && *sc->timeLimit > 0;
       if (rep.result.stopReason == "samples" &&
@@ -410,9 +491,7 @@ void addRender(CLI::App& app, int& exitCode) {
         std::printf("%s%s  (node %s, point %u; %.2f px from the pixel's centre, %.6g%s away)\n",
                     pick->coordinates(meta.scale).c_str(), unit.c_str(), pick->node.name().c_str(),
                     pick->index, pick->pixelDistance, pick->depth, unit.c_str());
-        std::string attrs;
-        for (const auto& [k, v] : pick->attributes.items())
-          attrs += (attrs.empty() ? "" : ", ") + k + " " + v.dump();
+        const std::string attrs = frame::describeAttributes(pick->attributes);
         if (!attrs.empty()) std::printf("  %s\n", attrs.c_str());
       }
     }

@@ -36,6 +36,9 @@ void applyScene(const std::filesystem::path& file, viewer::ViewerOptions& opt,
     opt.octree.clear();
   } else {
     opt.octree = scene.octrees.front().path;
+    // Its points view hides what the GI frame does not see (the scene's and --clip's volumes).
+    if (!scene.octrees.front().clipping.empty())
+      opt.settings.clip = std::make_shared<const ClipSet>(scene.octrees.front().clipping);
   }
   if (scene.cameraSet && !given("--camera")) {
     frame::Camera c;
@@ -125,8 +128,9 @@ void addView(CLI::App& app, int& exitCode) {
                   "repeatable, one per frame (tests and reproducible figures; with --frames)");
   cmd->add_option("--save-state", opt->saveState,
                   "Save the view state (camera, colouring, budgets, splatting, clipping, "
-                  "measurements, annotations) to this JSON after the last frame, as Ctrl+S and the "
-                  "panel's button do");
+                  "measurements, annotations; for a scene file the GI method and parameters the "
+                  "panel shows) to this JSON after the last frame, as Ctrl+S and the panel's "
+                  "button do");
   // The method and its settings, as `render` takes them (the panel changes them live).
   auto sc = std::make_shared<gi::SceneRenderOverrides>();
   auto methodText = std::make_shared<SceneMethodText>();
@@ -145,11 +149,16 @@ void addView(CLI::App& app, int& exitCode) {
       requireOctreeFolder(*input, "view");
     job->octree = *input;
     applyRenderOptions(*job, *text);
+    const auto given = [cmd](const char* o) { return cmd->count(o) > 0; };
     if (std::filesystem::path(*input).extension() == ".json") {
-      if (!text->state.empty() || !text->clip.empty())
-        throw Error("--state and --clip apply to octrees; a scene file's view comes from the file");
+      // The state's camera, method, parameters and clipping go into the scene; its colouring,
+      // budgets, splatting, annotations and measurements into the points view of its first scan.
+      applySceneMethodOptions(*methodText, *sc);
+      const std::optional<frame::ViewState> state =
+          applyViewStateToScene(*input, *text, given, *sc);
+      if (state) applyViewState(*job, *state, given);
     } else {
-      applyViewStateOptions(*job, *text, [cmd](const char* o) { return cmd->count(o) > 0; });
+      applyViewStateOptions(*job, *text, given);
     }
     opt->octree = job->octree;
     opt->width = job->width;
@@ -177,10 +186,8 @@ void addView(CLI::App& app, int& exitCode) {
     }
     opt->stateFile = text->state;
     opt->startWithPoints = *show == "points";
-    applySceneMethodOptions(*methodText, *sc);
     if (std::filesystem::path(*input).extension() == ".json") {
-      applyScene(
-          *input, *opt, [cmd](const char* name) { return cmd->count(name) > 0; }, *sc);
+      applyScene(*input, *opt, given, *sc);
     } else {
       for (const CLI::Option* o : cmd->get_options())
         if (o->get_group() == group && o->count() > 0)

@@ -102,8 +102,7 @@ std::optional<PickedPoint> pickPoint(OctreeReader& reader,
     if (misses) continue;
     const PointBuffer buf = reader.readNode(n.key);
     for (size_t i = 0; i < buf.size(); ++i) {
-      const Vec3d p{meta.world(0, buf.pos[3 * i]), meta.world(1, buf.pos[3 * i + 1]),
-                    meta.world(2, buf.pos[3 * i + 2])};
+      const Vec3d p = meta.worldPoint(&buf.pos[3 * i]);
       const glm::dvec3 v = glm::dmat3(viewRot) * (glm::dvec3(p.x, p.y, p.z) - camera.eye);
       const double depth = -v.z;
       if (!(depth > 0)) continue;
@@ -152,8 +151,7 @@ std::optional<PickedPoint> nearestPoint(OctreeReader& reader,
     if (skip) skip->push_back(n.key);
     const PointBuffer buf = reader.readNode(n.key);
     for (size_t i = 0; i < buf.size(); ++i) {
-      const Vec3d p{meta.world(0, buf.pos[3 * i]), meta.world(1, buf.pos[3 * i + 1]),
-                    meta.world(2, buf.pos[3 * i + 2])};
+      const Vec3d p = meta.worldPoint(&buf.pos[3 * i]);
       const double dx = p.x - target.x, dy = p.y - target.y, dz = p.z - target.z;
       const double e2 = dx * dx + dy * dy + dz * dz;
       if (e2 > bestD2 || (best && e2 == bestD2 && !(n.key < best->node))) continue;
@@ -169,6 +167,12 @@ std::optional<PickedPoint> nearestPoint(OctreeReader& reader,
     }
   }
   return best;
+}
+
+std::string describeAttributes(const nlohmann::json& attributes) {
+  std::string s;
+  for (const auto& [k, v] : attributes.items()) s += (s.empty() ? "" : ", ") + k + " " + v.dump();
+  return s;
 }
 
 }  // namespace nestlight::frame

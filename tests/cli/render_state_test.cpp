@@ -126,21 +126,21 @@ TEST(RenderState, StateFromElsewhereWarnsAndBadFieldsAreNamed) {
             0)
       << out;
   EXPECT_NE(out.find("warning"), std::string::npos) << out;
-  nestlight::test::writeFile(dir.file("bad.json"),
-                             R"({"camera": {"eye": [1, "two", 3], "target": [0, 0, 0]}})");
-  EXPECT_EQ(runCli("render " + oct + kSmall + " --state " + dir.file("bad.json") + " -o " +
-                       dir.file("bad.png"),
-                   &out),
-            1);
-  EXPECT_NE(out.find("camera.eye"), std::string::npos) << out;
-  nestlight::test::writeFile(
-      dir.file("cross.json"),
-      R"({"clipping": [{"type": "polygon", "points": [[0, 0], [1, 1], [1, 0], [0, 1]]}]})");
-  EXPECT_EQ(runCli("render " + oct + kSmall + " --clip " + dir.file("cross.json") + " -o " +
-                       dir.file("cross.png"),
-                   &out),
-            1);
-  EXPECT_NE(out.find("cross"), std::string::npos) << out;
+  // A bad file: refused, naming what is wrong.
+  auto refused = [&](const std::string& name, const std::string& option, const std::string& text,
+                     const std::string& named) {
+    nestlight::test::writeFile(dir.file(name + ".json"), text);
+    EXPECT_EQ(runCli("render " + oct + kSmall + " " + option + " " + dir.file(name + ".json") +
+                         " -o " + dir.file(name + ".png"),
+                     &out),
+              1);
+    EXPECT_NE(out.find(named), std::string::npos) << out;
+  };
+  refused("bad", "--state", R"({"camera": {"eye": [1, "two", 3], "target": [0, 0, 0]}})",
+          "camera.eye");
+  refused("cross", "--clip",
+          R"({"clipping": [{"type": "polygon", "points": [[0, 0], [1, 1], [1, 0], [0, 1]]}]})",
+          "cross");
 }
 
 TEST(RenderPick, PrintsThePointInTheScansCoordinates) {

@@ -1,7 +1,8 @@
 // The viewer's heritage tools under a virtual X server, driven by scripted clicks: a distance
 // measured on a national-grid scan snaps to the very points `render --pick` finds at the same
 // pixels; an annotation and a clipping polygon are added; the view state saved (as Ctrl+S saves
-// it) reloads into the same picture, which is compared with a golden and with `render --state`.
+// it) reloads into the same picture, which is compared with a golden and with `render --state`. A
+// scene's view saves its GI method and parameters.
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -29,12 +30,23 @@ int run(const std::string& cmd, const TempDir& tmp, std::string* out) {
 
 const char* kView = " --width 320 --height 240 --camera 512030,5411975,325,512010,5412010,303";
 
-TEST(WindowTools, MeasureAnnotateClipSaveAndReload) {
-  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
-    GTEST_SKIP() << "xvfb-run is not installed";
+// Each test: a virtual X server (skipped without xvfb-run), a folder and a log.
+class WindowTools : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+      GTEST_SKIP() << "xvfb-run is not installed";
+  }
+  // A small generated building in national-grid coordinates, converted.
+  std::string building() {
+    return nestlight::test::generatedOctree(tmp, "60k", 20, "512000,5412000,300");
+  }
   TempDir tmp;
   std::string out;
-  const std::string oct = nestlight::test::generatedOctree(tmp, "60k", 20, "512000,5412000,300");
+};
+
+TEST_F(WindowTools, MeasureAnnotateClipSaveAndReload) {
+  const std::string oct = building();
   // 1. A distance between two clicks, saved at the end.
   ASSERT_EQ(run(xvfb(tmp) + "view " + oct + kView +
                     " --tool distance --click 140,150 --click 200,120 --frames 60 --save-state " +
@@ -102,12 +114,8 @@ TEST(WindowTools, MeasureAnnotateClipSaveAndReload) {
 
 // The profile tool: two clicks cut a section of the resident cut, shown in its panel; every point
 // of it lies in the section `nestlight profile` cuts from the whole octree along the same line.
-TEST(WindowTools, ProfileOfTheResidentCutIsPartOfTheWholeSection) {
-  if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
-    GTEST_SKIP() << "xvfb-run is not installed";
-  TempDir tmp;
-  std::string out;
-  const std::string oct = nestlight::test::generatedOctree(tmp, "60k", 20, "512000,5412000,300");
+TEST_F(WindowTools, ProfileOfTheResidentCutIsPartOfTheWholeSection) {
+  const std::string oct = building();
   ASSERT_EQ(run(xvfb(tmp) + "view " + oct + kView +
                     " --tool profile --click 140,150 --click 200,120 --frames 40",
                 tmp, &out),
@@ -139,6 +147,31 @@ TEST(WindowTools, ProfileOfTheResidentCutIsPartOfTheWholeSection) {
   ASSERT_NE(p, std::string::npos) << out;
   std::sscanf(out.c_str() + p + 9, "%zu", &whole);
   EXPECT_GE(whole, shown) << out;
+}
+
+// A scene's view saves the GI method and parameters the panel shows with its camera; the state
+// reopens the scene with them.
+TEST_F(WindowTools, SceneViewSavesItsMethodAndReloads) {
+  ASSERT_EQ(runCli("make-scene cornell -q -n 20k --width 64 --height 48 -o " + tmp.file("c"), &out),
+            0)
+      << out;
+  const std::string scene = tmp.file("c/scene.json");
+  ASSERT_EQ(run(xvfb(tmp) + "view " + scene +
+                    " --width 160 --height 120 --method raster --param splat_scale=1.5 "
+                    "--frames 4 --save-state " +
+                    tmp.file("s.json"),
+                tmp, &out),
+            0)
+      << out;
+  const nlohmann::json s = nlohmann::json::parse(nestlight::test::readFile(tmp.file("s.json")));
+  EXPECT_EQ(s["gi"]["method"], "raster") << s.dump(1);
+  EXPECT_EQ(s["gi"]["parameters"]["splat_scale"], 1.5) << s.dump(1);
+  ASSERT_TRUE(s.contains("camera")) << s.dump(1);
+  // The scene file says reference; the state's method and parameter win.
+  ASSERT_EQ(runCli("view " + scene + " --state " + tmp.file("s.json") + " --dry-run", &out), 0)
+      << out;
+  EXPECT_NE(out.find("method raster"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"splat_scale\":1.5"), std::string::npos) << out;
 }
 
 }  // namespace window_tools_test

@@ -117,14 +117,11 @@ std::vector<RenderedFrame> renderHeadless(const RenderJob& job) {
             const double x = px + 0.5, y = py + 0.5;
             const std::optional<frame::DepthWindow> depths =
                 renderer.depthWindow(x, y, job.pickRadius);
-            frame::PickOptions po;
-            po.windowRadius = job.pickRadius;
-            po.sizeScale = settings.sizeScale, po.minPointSize = settings.minPointSize;
-            po.maxPointSize = settings.maxPointSize, po.fixedPointSize = settings.fixedPointSize;
-            po.clip = settings.clip.get();
-            rf.picks.push_back(depths ? frame::pickPoint(reader, streamer.drawList(), cam,
-                                                         job.width, job.height, x, y, *depths, po)
-                                      : std::nullopt);
+            rf.picks.push_back(depths
+                                   ? frame::pickPoint(reader, streamer.drawList(), cam, job.width,
+                                                      job.height, x, y, *depths,
+                                                      frame::pickOptions(settings, job.pickRadius))
+                                   : std::nullopt);
           }
         drawMeasurements(img, cam, job.measurements, unit);
         drawAnnotations(img, cam, job.annotations);

@@ -34,6 +34,8 @@ class MethodView {
   void build();
   bool buildPending() const { return pending_; }
   const std::string& methodName() const { return settings_.method; }
+  // The chosen method's settings (its parameters as the panel set them).
+  const gi::GiSettings& settings() const { return settings_; }
   bool progressive() const { return progressive_ != nullptr; }
   // Whether the window shows the method: a progressive view shown no more stops sampling.
   void setShown(bool shown) {

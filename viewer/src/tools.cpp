@@ -108,13 +108,9 @@ bool HeritageTools::click(frame::PointView& view, const std::vector<streaming::D
                           const frame::RenderSettings& settings) {
   const int radius = 4;
   const std::optional<frame::DepthWindow> depths = view.depthWindow(x, y, radius);
-  frame::PickOptions po;
-  po.windowRadius = radius;
-  po.sizeScale = settings.sizeScale, po.minPointSize = settings.minPointSize;
-  po.maxPointSize = settings.maxPointSize, po.fixedPointSize = settings.fixedPointSize;
-  po.clip = settings.clip.get();
   const std::optional<frame::PickedPoint> p =
-      depths ? frame::pickPoint(reader_, nodes, camera, width, height, x, y, *depths, po)
+      depths ? frame::pickPoint(reader_, nodes, camera, width, height, x, y, *depths,
+                                frame::pickOptions(settings, radius))
              : std::nullopt;
   if (!p) {
     status = "nothing under the cursor";
@@ -129,8 +125,7 @@ bool HeritageTools::click(frame::PointView& view, const std::vector<streaming::D
   const glm::dvec3 v((2 * x / width - 1) * tanY * width / height * depth,
                      (1 - 2 * y / height) * tanY * depth, -depth);
   const glm::dvec3 w = camera.eye + glm::transpose(glm::dmat3(camera.viewRotation())) * v;
-  frame::RenderSettings s = settings;
-  place(*p, Vec3d{w.x, w.y, w.z}, s);
+  place(*p, Vec3d{w.x, w.y, w.z});
   if (profilePending_) {
     profilePending_ = false;
     computeProfile(nodes, settings.clip.get());
@@ -150,8 +145,7 @@ void HeritageTools::computeProfile(const std::vector<streaming::DrawNode>& nodes
     if (corridor.overlap(n.worldBounds) == Overlap::None) continue;
     const PointBuffer buf = reader_.readNode(n.key);
     for (size_t i = 0; i < buf.size(); ++i) {
-      const Vec3d p{meta.world(0, buf.pos[3 * i]), meta.world(1, buf.pos[3 * i + 1]),
-                    meta.world(2, buf.pos[3 * i + 2])};
+      const Vec3d p = meta.worldPoint(&buf.pos[3 * i]);
       if (!corridor.contains(p) || (clip && !clip->keeps(p))) continue;
       uint32_t colour;
       if (rgb >= 0) {
@@ -209,9 +203,7 @@ void HeritageTools::profilePanel() {
   ImGui::End();
 }
 
-void HeritageTools::place(const frame::PickedPoint& p, const Vec3d& target,
-                          frame::RenderSettings& settings) {
-  (void)settings;
+void HeritageTools::place(const frame::PickedPoint& p, const Vec3d& target) {
   const std::string coords = p.coordinates(reader_.metadata().scale) + " " + unit_;
   if (tool_ == Tool::Pick || tool_ == Tool::None) {
     status = "picked " + coords;
@@ -259,7 +251,7 @@ void HeritageTools::place(const frame::PickedPoint& p, const Vec3d& target,
 void HeritageTools::refine(const std::vector<streaming::DrawNode>& nodes,
                            const frame::RenderSettings& settings) {
   size_t sig = nodes.size();
-  for (const auto& n : nodes) sig = sig * 1000003u ^ std::hash<std::string>()(n.key.name());
+  for (const auto& n : nodes) sig = sig * 1000003u ^ NodeKeyHash {}(n.key);
   if (sig == drawnSignature_) return;
   drawnSignature_ = sig;
   for (size_t m = 0; m < measurements_.size(); ++m)
@@ -325,10 +317,7 @@ void HeritageTools::panel(frame::RenderSettings& settings, const frame::Camera& 
   if (lastPick_) {
     ImGui::TextUnformatted(
         (lastPick_->coordinates(reader_.metadata().scale) + " " + unit_).c_str());
-    std::string attrs;
-    for (const auto& [k, v] : lastPick_->attributes.items())
-      attrs += (attrs.empty() ? "" : ", ") + k + " " + v.dump();
-    ImGui::TextDisabled("%s", attrs.c_str());
+    ImGui::TextDisabled("%s", frame::describeAttributes(lastPick_->attributes).c_str());
   }
   // Measurements, each with its value and a delete button.
   for (size_t i = 0; i < measurements_.size(); ++i) {

@@ -76,7 +76,7 @@ class HeritageTools {
     double snapDistance = 0;        // from target to the snapped point
     std::vector<NodeKey> searched;  // nodes already searched for it
   };
-  void place(const frame::PickedPoint& p, const Vec3d& target, frame::RenderSettings& settings);
+  void place(const frame::PickedPoint& p, const Vec3d& target);
   // The section along profileLine_ from the drawn nodes (the resident cut), for the panel's plot.
   void computeProfile(const std::vector<streaming::DrawNode>& nodes, const ClipSet* clip);
   void profilePanel();

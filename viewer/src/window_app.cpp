@@ -352,6 +352,7 @@ class Viewer {
   std::unique_ptr<MethodView> methods_;
   std::unique_ptr<HeritageTools> tools_;
   size_t nextClick_ = 0;                // the scripted clicks done
+  bool saveHeld_ = false;               // Ctrl+S was down last frame (one save per press)
   double pressX_ = NAN, pressY_ = NAN;  // where the left button went down
   bool showMethod_ = false;
   CameraController cc_;
@@ -424,7 +425,14 @@ void Viewer::viewChoice() {
 }
 
 void Viewer::saveView(const Camera& cam, const std::string& file) {
-  tools_->save(file, tools_->state(cam, in_.colours.mode, budgets_, settings_));
+  frame::ViewState state = tools_->state(cam, in_.colours.mode, budgets_, settings_);
+  // A scene's view: the method and parameters the panel shows (render --state renders them).
+  if (methods_) {
+    state.gi = {{"method", methods_->methodName()}};
+    const nlohmann::json& p = methods_->settings().parameters;
+    if (p.is_object() && !p.empty()) state.gi["parameters"] = p;
+  }
+  tools_->save(file, state);
 }
 
 void Viewer::useTools(const Camera& cam, int fbw, int fbh, const streaming::FrameStats& st) {
@@ -453,10 +461,9 @@ void Viewer::useTools(const Camera& cam, int fbw, int fbh, const streaming::Fram
     if (glfwGetKey(w, GLFW_KEY_ENTER) == GLFW_PRESS) tools_->finish(settings_);
     const bool ctrl = glfwGetKey(w, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
                       glfwGetKey(w, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
-    static bool saveHeld = false;
     const bool save = ctrl && glfwGetKey(w, GLFW_KEY_S) == GLFW_PRESS;
-    if (save && !saveHeld) saveView(cam, tools_->stateFile());
-    saveHeld = save;
+    if (save && !saveHeld_) saveView(cam, tools_->stateFile());
+    saveHeld_ = save;
   }
 }
 
@@ -560,11 +567,10 @@ bool Viewer::step() {
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   bool shot = false;
-  const bool points = tools_ && !(methods_ && showMethod_);
-  if (points) {
-    useTools(cam, fbw, fbh, st);
-    tools_->drawOverlay(cam, fbw, fbh);
-  }
+  // Clicks pick from the points' depth; the measurements and labels are drawn over either view
+  // (a GI method's frame is rendered from the same camera).
+  if (tools_ && !(methods_ && showMethod_)) useTools(cam, fbw, fbh, st);
+  if (tools_) tools_->drawOverlay(cam, fbw, fbh);
   panel(st, timings, cam, shot);
   // A method to be made: the frame as it is now (the panel not yet drawn) stays on screen.
   const bool build = methods_ && showMethod_ && methods_->buildPending();

@@ -106,9 +106,7 @@ ExportReport walkClipped(const std::filesystem::path& dir, const ExportOptions& 
                              uint64_t t = 0;
                              size_t k = 0;  // points kept so far
                              for (size_t i = 0; i < pts.size(); ++i) {
-                               const Vec3d w{m.world(0, pts.pos[3 * i]),
-                                             m.world(1, pts.pos[3 * i + 1]),
-                                             m.world(2, pts.pos[3 * i + 2])};
+                               const Vec3d w = m.worldPoint(&pts.pos[3 * i]);
                                if (!whole) {
                                  ++t;
                                  if (!o.clip->keeps(w)) continue;
@@ -223,9 +221,7 @@ ExportReport countOctree(const std::filesystem::path& dir, const ExportOptions& 
           const Selected& s = *partial[i];
           PointBuffer pts = reader.readNode(s.key);
           uint64_t k = 0;
-          for (size_t p = 0; p < pts.size(); ++p)
-            k += o.clip->keeps(Vec3d{m.world(0, pts.pos[3 * p]), m.world(1, pts.pos[3 * p + 1]),
-                                     m.world(2, pts.pos[3 * p + 2])});
+          for (size_t p = 0; p < pts.size(); ++p) k += o.clip->keeps(m.worldPoint(&pts.pos[3 * p]));
           kept += k;
           read += pts.size();
           bytes += s.entry.byteSize;

@@ -168,11 +168,12 @@ class DiffrenderExtension : public FrameExtension {
       // The scan's hierarchies, unpruned (every leaf a point's disc, as wide as the reference's:
       // exactDiscRadii), built per node by the loader threads and joined under a top tree when
       // the cut changes (beforeFrame).
-      layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> c) {
+      layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> c,
+                                 std::shared_ptr<const ClipSet> clip) {
         BshOptions o;
         o.prune = false;
         o.discRadii = exactDiscRadii;
-        return std::make_shared<BshLayer>(meta, o, std::move(c));
+        return std::make_shared<BshLayer>(meta, o, std::move(c), std::move(clip));
       });
       buildCapturedMeshBvh(f);
     }

@@ -122,6 +122,7 @@ class RasterMethod : public Method, public SceneFrame {
   uint64_t viewGeneration() const override { return viewGeneration_; }
   bool still() const override { return still_; }
   void bindLightsCutTree(int scan) const override { scans_.at(size_t(scan)).shadowTree.bind(); }
+  void bindScanClip(int scan) const override;
   size_t addNodeLayer(const NodeLayerFactory& make) override;
   unsigned layerBuffer(const CutNode& n, size_t layer) const override {
     return scans_.at(size_t(n.scan)).store->layerBuffer(n.handle, layer);

@@ -67,7 +67,7 @@ void RasterMethod::loadScans() {
 size_t RasterMethod::addNodeLayer(const NodeLayerFactory& make) {
   NL_CHECK_MSG(frameNumber_ == 0, "node layers are added before the first frame streams");
   size_t index = 0;
-  for (auto& s : scans_) index = s.store->addLayer(make(s.reader->metadata(), s.colours));
+  for (auto& s : scans_) index = s.store->addLayer(make(s.reader->metadata(), s.colours, s.clip));
   return index;
 }
 
@@ -178,6 +178,7 @@ void RasterMethod::updateLightsCut() {
       c.spacing = float(n.spacing);
       c.colourScale = s.colourScale;
       c.hdrColour = s.store->hdrColour();
+      c.clipTest = s.clip && s.clip->keeps(n.worldBounds) == Overlap::Partial;
       if (n.key.level > 0) {
         auto it = index.find(n.key.parent());
         if (it != index.end()) c.parent = it->second;
@@ -194,6 +195,11 @@ void RasterMethod::updateLightsCut() {
     lightsCut_ = std::move(cut);
     ++cutGeneration_;
   }
+}
+
+void RasterMethod::bindScanClip(int scan) const {
+  const auto& s = scans_.at(size_t(scan));
+  if (s.clip) s.gpuClip->bind(*s.clip, Vec3d{scene_.origin.x, scene_.origin.y, scene_.origin.z});
 }
 
 // Draws every scan's drawn nodes with `program` (shaders/points/points.vert, NL_SCENE_FRAME 1).
@@ -230,9 +236,10 @@ void RasterMethod::forEachNode(const gl::ShaderProgram& program,
               numPoints = program.uniform("uNumPoints"),
               colourScale = program.uniform("uColourScale"),
               hdrColour = program.uniform("uHdrColour"), clipTest = program.uniform("uClipTest");
-  for (auto& s : scans_) {
+  for (size_t si = 0; si < scans_.size(); ++si) {
+    auto& s = scans_[si];
     (lightsCut ? s.shadowTree : s.tree).bind();
-    if (s.clip) s.gpuClip->bind(*s.clip, Vec3d{scene_.origin.x, scene_.origin.y, scene_.origin.z});
+    bindScanClip(int(si));
     glUniform1f(colourScale, s.colourScale);
     glUniform1i(hdrColour, s.store->hdrColour());
     const auto& nodes = (lightsCut ? s.shadowStreamer : s.streamer)->drawList();

@@ -99,8 +99,9 @@ int smcBridges(const EnvironmentMap& previous, const EnvironmentMap& current, in
 // points, which shadowed curved scans (see setUp).
 class SlabBshLayer : public frame::NodeLayer {
  public:
-  SlabBshLayer(const Metadata& meta, std::shared_ptr<const ScanColours> colours)
-      : inner_(meta, unpruned(), std::move(colours)) {}
+  SlabBshLayer(const Metadata& meta, std::shared_ptr<const ScanColours> colours,
+               std::shared_ptr<const ClipSet> clip)
+      : inner_(meta, unpruned(), std::move(colours), std::move(clip)) {}
   std::string name() const override { return "ibl_bsh"; }
   void prepare(const NodeKey& key, const PointBuffer& points, const std::vector<uint8_t>& gpuPoints,
                std::vector<uint8_t>& out) const override {
@@ -196,8 +197,9 @@ class IblExtension : public FrameExtension {
     // scanned sphere, 7% of a scanned 10 m dome's light (tests/gi/ibl/ibl_scan_test.cpp).
     // Pruned sub-trees' discs cost less than every point's; their slabs (SlabBshLayer) win that
     // time back exactly.
-    layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {
-      return std::make_shared<SlabBshLayer>(meta, std::move(colours));
+    layer_ = f.addNodeLayer([](const Metadata& meta, std::shared_ptr<const ScanColours> colours,
+                               std::shared_ptr<const ClipSet> clip) {
+      return std::make_shared<SlabBshLayer>(meta, std::move(colours), std::move(clip));
     });
     std::vector<glm::vec3> corners;
     const auto& meshes = f.meshes();

@@ -5,7 +5,16 @@ namespace nestlight::gi {
 void applySceneOverrides(Scene& scene, const SceneRenderOverrides& ov) {
   if (ov.width) scene.camera.width = *ov.width;
   if (ov.height) scene.camera.height = *ov.height;
+  if (ov.camera) {
+    scene.camera.eye = ov.camera->eye;
+    scene.camera.target = ov.camera->target;
+    scene.camera.up = ov.camera->up;
+    scene.cameraSet = true;
+  }
   if (ov.fov) scene.camera.fovYDegrees = *ov.fov;
+  for (SceneOctree& o : scene.octrees)
+    o.clipping.volumes.insert(o.clipping.volumes.end(), ov.clipping.volumes.begin(),
+                              ov.clipping.volumes.end());
   if (ov.method) scene.gi.method = *ov.method;
   if (ov.mode) scene.gi.mode = *ov.mode;
   if (ov.bounces) scene.gi.maxBounces = *ov.bounces;

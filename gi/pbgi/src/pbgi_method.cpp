@@ -91,12 +91,13 @@ class PbgiExtension : public FrameExtension {
     if (skyOwned_) f.setSkyInDirectLight(false);
     BshOptions options;
     options.prune = params_.prune;
-    layer_ = f.addNodeLayer(
-        [options, this](const Metadata& meta, std::shared_ptr<const ScanColours> colours) {
-          auto layer = std::make_shared<BshLayer>(meta, options, std::move(colours));
-          layers_.push_back(layer);
-          return layer;
-        });
+    layer_ = f.addNodeLayer([options, this](const Metadata& meta,
+                                            std::shared_ptr<const ScanColours> colours,
+                                            std::shared_ptr<const ClipSet> clip) {
+      auto layer = std::make_shared<BshLayer>(meta, options, std::move(colours), std::move(clip));
+      layers_.push_back(layer);
+      return layer;
+    });
     if (params_.meshes) meshTrees_ = buildMeshTrees(scene, f.meshes());
     // The coarsest meshes lift only the receivers in their own bounds (pbgi_common.glsl): a mesh
     // of few surfels has discs as wide as itself.

@@ -475,8 +475,11 @@ class ProjectionExtension : public FrameExtension {
     unsorted_.reserve(std::max<size_t>(total, 1) * sizeof(ProjectionPoint));
     unsorted_.bindBase(GL_SHADER_STORAGE_BUFFER, PROJECTION_SSBO_POINTS);
     pointsProgram_.use();
+    int boundScan = -1;
     for (size_t j = 0; j < nodes.size(); ++j) {
       const CutNode& c = cut[nodes[j]];
+      if (c.scan != boundScan) f.bindScanClip(boundScan = c.scan);
+      glUniform1i(pointsProgram_.uniform("uClipTest"), c.clipTest);
       glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, c.buffer, 0,
                         GLsizeiptr(size_t(c.numPoints) * frame::kGpuPointBytes));
       glUniform3f(pointsProgram_.uniform("uOrigin"), c.origin.x, c.origin.y, c.origin.z);
@@ -493,7 +496,10 @@ class ProjectionExtension : public FrameExtension {
     if (total)
       glGetNamedBufferSubData(unsorted_.id(), 0, GLsizeiptr(total * sizeof(ProjectionPoint)),
                               host_.data());
-    scanPoints_ = total;
+    // The points the clipping volumes removed (projection_points.comp marks them). The budget's
+    // stride counted them: how many a partly clipped node keeps is known only after the test.
+    std::erase_if(host_, [](const ProjectionPoint& p) { return p.positionArea.w < 0; });
+    scanPoints_ = host_.size();
     host_.insert(host_.end(), surfels_.begin(), surfels_.end());
     pointCount_ = host_.size();
     fallbackArea_ = std::isfinite(finest) ? finest * finest : (partial > 0 ? partial * partial : 0);

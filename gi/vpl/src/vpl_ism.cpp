@@ -122,7 +122,11 @@ void VplExtension::buildPool(SceneFrame& f) {
   int boundScan = -1;
   for (size_t j = 0; j < taken.size(); ++j) {
     const CutNode& c = cut[taken[j]];
-    if (c.scan != boundScan) f.bindLightsCutTree(boundScan = c.scan);
+    if (c.scan != boundScan) {
+      f.bindLightsCutTree(boundScan = c.scan);
+      f.bindScanClip(c.scan);
+    }
+    glUniform1i(gather_.uniform("uClipTest"), c.clipTest);
     glUniform1i(gather_.uniform("uNodeIndex"), c.indexInScan);
     glUniform1f(gather_.uniform("uNodeSize"), c.size);
     glBindBufferRange(GL_SHADER_STORAGE_BUFFER, NL_SSBO_NODE_POINTS, c.buffer, 0,

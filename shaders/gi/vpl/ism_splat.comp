@@ -23,6 +23,7 @@ void main() {
     uint start = hashU(uint(v) * 7919u + uint(k)) % stride;
     for (uint i = start + gl_LocalInvocationIndex * stride; i < uint(count); i += gl_WorkGroupSize.x * stride) {
       PoolPoint q = pool[first + int(i)];
+      if (q.position.w == VPL_POOL_CLIPPED) continue;
       vec3 d = q.position.xyz - x;
       float dist = length(d);
       if (!(dist > 1e-6)) continue;

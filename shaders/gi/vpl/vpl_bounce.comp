@@ -59,6 +59,7 @@ void main() {
     uint start = hashU(uint(uParentFirst + k) * 7919u + uint(n)) % stride;
     for (uint i = start + gl_LocalInvocationIndex * stride; i < uint(count); i += gl_WorkGroupSize.x * stride) {
       PoolPoint q = pool[first + int(i)];
+      if (q.position.w == VPL_POOL_CLIPPED) continue;
       vec3 d = q.position.xyz - x;
       float dist = length(d);
       // A point stands for the spacing where it lies: its level of detail's (half the wanted

@@ -41,9 +41,11 @@ NL_STRUCT(WarpSample) {
   vec4 where;      // xy: position in the texel [0,1)^2, z: probability of the texel, w: unused
 };
 
+#define VPL_POOL_CLIPPED (-1.0)
+
 // An ISM occluder: scene-local position and splat radius (world).
 NL_STRUCT(PoolPoint) {
-  vec4 position;   // xyz, w: radius
+  vec4 position;   // xyz, w: radius (VPL_POOL_CLIPPED: a point the clipping volumes remove)
   uvec4 surface;   // x: octahedral normal, y: colour rg (half2), z: colour b (half) | material << 16, w: area (float bits)
 };
 

@@ -74,5 +74,8 @@ std::optional<PickedPoint> nearestPoint(OctreeReader& reader,
 
 // The attributes of point `i` of `buffer` as JSON (the layout's names; rgb as 3 numbers).
 nlohmann::json pointAttributes(const PointLayout& layout, const PointBuffer& buffer, size_t i);
+// Those attributes as one line, "name value, ...", as the viewer's panel and `render --pick` print
+// them.
+std::string describeAttributes(const nlohmann::json& attributes);
 
 }  // namespace nestlight::frame

@@ -72,6 +72,17 @@ struct RenderSettings {
   std::shared_ptr<const ClipSet> clip;
 };
 
+// What picking needs of the settings a frame was drawn with (its splats' sizing and clipping),
+// with a search window `windowRadius` pixels each side of the cursor.
+inline PickOptions pickOptions(const RenderSettings& s, int windowRadius) {
+  PickOptions po;
+  po.windowRadius = windowRadius;
+  po.sizeScale = s.sizeScale, po.minPointSize = s.minPointSize;
+  po.maxPointSize = s.maxPointSize, po.fixedPointSize = s.fixedPointSize;
+  po.clip = s.clip.get();
+  return po;
+}
+
 struct DrawTimings {
   double msDraw = 0;    // CPU-side wall time of the frame's GL work, finished (glFinish)
   uint64_t points = 0;  // points submitted

@@ -446,10 +446,7 @@ DiscCloud loadDiscCloud(const SceneOctree& octree, const glm::dvec3& origin,
     for (size_t i = 0; i < pts.size(); ++i) {
       const uint32_t* p = &pts.pos[3 * i];
       // The scene's clipping volumes, tested in the scan's world coordinates (double).
-      if (!octree.clipping.empty() &&
-          !octree.clipping.keeps(
-              Vec3d{meta.world(0, p[0]), meta.world(1, p[1]), meta.world(2, p[2])}))
-        continue;
+      if (!octree.clipping.empty() && !octree.clipping.keeps(meta.worldPoint(p))) continue;
       glm::dvec3 local = base + glm::dvec3(p[0], p[1], p[2]) *
                                     glm::dvec3(meta.scale.x, meta.scale.y, meta.scale.z);
       cloud.discs.emplace_back(glm::vec3(local), 0.0f);

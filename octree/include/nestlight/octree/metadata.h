@@ -119,6 +119,10 @@ struct Metadata {
   double cubeWorldSize() const { return cubeSize * maxScale(); }
   // World position of integer coordinate `q` on axis `a`.
   double world(int a, double q) const { return offset[a] + q * scale[a]; }
+  // World position of the integer coordinates q[0..2] (a PointBuffer's pos + 3 * i).
+  Vec3d worldPoint(const uint32_t* q) const {
+    return {world(0, q[0]), world(1, q[1]), world(2, q[2])};
+  }
   // The nominal sample spacing of a level: the root's `spacing` halved per level.
   double levelSpacing(uint32_t level) const {
     return std::ldexp(spacing, -static_cast<int>(level));

@@ -22,7 +22,15 @@ struct SceneRenderOverrides {
   std::optional<uint64_t> seed;
   std::optional<double> exposure;  // the PNG's stops (--exposure): wins over the scene file's
   nlohmann::json parameters;       // merged into the scene's gi.parameters (method options)
-  std::filesystem::path output;    // .exr; empty: the scene's output
+  // A view state's camera (render/view --state): its eye, target and up replace the scene's
+  // camera's (a camera path still moves it; the field of view is `fov`'s).
+  struct Pose {
+    glm::dvec3 eye{0.0}, target{0, 0, -1}, up{0, 0, 1};
+  };
+  std::optional<Pose> camera;
+  // Added to every scan's octrees[].clipping (--clip, a view state's volumes).
+  ClipSet clipping;
+  std::filesystem::path output;  // .exr; empty: the scene's output
   bool quiet = false;
   bool still = false;  // ignore the scene's camera path: one image from its camera
 };

@@ -8,8 +8,9 @@
 
 namespace nestlight::gi {
 
-// Width, height, field of view, method, mode, bounces, samples, error target, time limit, seed,
-// and the parameters merged into scene.gi.parameters. The output fields are left to the caller.
+// Width, height, camera, field of view, method, mode, bounces, samples, error target, time limit,
+// seed, the parameters merged into scene.gi.parameters and the clipping volumes added to every
+// scan's. The output fields are left to the caller.
 void applySceneOverrides(Scene& scene, const SceneRenderOverrides& overrides);
 
 }  // namespace nestlight::gi

@@ -22,6 +22,7 @@
 #include "nestlight/gi/method.h"
 #include "nestlight/gi/scan_colour.h"
 #include "nestlight/gl/program.h"
+#include "nestlight/octree/clip_volume.h"
 #include "nestlight/octree/metadata.h"
 
 namespace nestlight::gi {
@@ -40,6 +41,10 @@ struct CutNode {
   int scan = 0;            // which scan (bindLightsCutTree)
   int indexInScan = 0;     // its entry in that scan's lights'-cut draw tree
   uint64_t handle = 0;     // its store handle (layerBuffer)
+  // Its scan's clipping volumes cut through its cube: a shader reading its points tests each
+  // (shaders/common/clip_volumes.glsl, uClipTest 1, after bindScanClip). Nodes they remove whole
+  // are not in the cut.
+  bool clipTest = false;
 };
 
 class SceneFrame {
@@ -106,13 +111,18 @@ class SceneFrame {
   // Binds scan `scan`'s lights'-cut draw tree (NL_SSBO_DRAW_TREE: points/splat_size.glsl's
   // finestSpacing() then works for that scan's CutNodes).
   virtual void bindLightsCutTree(int scan) const = 0;
+  // Binds scan `scan`'s clipping volumes (the scene's octrees[].clipping) at NL_UBO_CLIP in the
+  // scene's local frame, for shaders/common/clip_volumes.glsl; nothing when it has none (its
+  // CutNodes' clipTest is false then).
+  virtual void bindScanClip(int scan) const = 0;
   // Adds a per-node layer (a hierarchy over the node's points) to every scan's store, made for
-  // that scan's metadata and colour source (the scene's octrees[].colour): from then on loader
+  // that scan's metadata, colour source (the scene's octrees[].colour) and clipping volumes (none:
+  // null; a layer leaves out the points they remove, ClipSet::keeps): from then on loader
   // threads build it with each node, it is uploaded and freed with the node and counted in the
   // budgets. Call in setUp, before the first frame streams anything. Returns the layer's index (the
   // same for every scan).
   using NodeLayerFactory = std::function<std::shared_ptr<const frame::NodeLayer>(
-      const Metadata&, std::shared_ptr<const ScanColours>)>;
+      const Metadata&, std::shared_ptr<const ScanColours>, std::shared_ptr<const ClipSet>)>;
   virtual size_t addNodeLayer(const NodeLayerFactory& make) = 0;
   // A cut node's layer buffer (GL name; 0 when it has none) and its bytes.
   virtual unsigned layerBuffer(const CutNode& node, size_t layer) const = 0;
