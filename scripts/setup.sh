@@ -21,6 +21,10 @@ PACKAGES=(
   glslang-tools                          # checks the GPU-only shaders that llvmpipe cannot compile
   python3 binutils xz-utils              # the GPU bundle and run scripts (scripts/gpu-*.sh)
 )
+# convert --mpi (docs/DISTRIBUTED.md): optional; NESTLIGHT_MPI=OFF builds without it.
+if [ "${NESTLIGHT_MPI:-ON}" != "OFF" ]; then
+  PACKAGES+=(openmpi-bin libopenmpi-dev)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -36,7 +40,8 @@ fi
 
 BUILD_DIR=${BUILD_DIR:-build}
 # shellcheck disable=SC2086
-cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=${BUILD_TYPE:-Release} ${CMAKE_ARGS:-} >/dev/null
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=${BUILD_TYPE:-Release} \
+  -DNESTLIGHT_MPI=${NESTLIGHT_MPI:-ON} ${CMAKE_ARGS:-} >/dev/null
 # shellcheck disable=SC2086
 ninja -C "$BUILD_DIR" ${TARGETS:-}
 echo "setup: built $BUILD_DIR/nestlight"

@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "nestlight/converters/builder.h"
+#include "nestlight/converters/point_writer.h"
+#include "nestlight/converters/synthetic.h"
 #include "nestlight/octree/colour_layer.h"
 #include "nestlight/octree/octree_reader.h"
 
@@ -141,6 +143,61 @@ void writeColourLayer(const std::filesystem::path& dir, const std::string& name,
     w.writeNode(key, rgb.data(), e.numPoints);
   }
   w.finish({{"test", true}});
+}
+
+void writeLasWithBoundsInset(const SyntheticSpec& spec, const std::string& path, double inset) {
+  auto r = openSynthetic(spec);
+  {
+    auto w = createLasWriter(path, r->header());
+    PointBatch b;
+    while (r->read(b, 10000)) w->write(b);
+    w->close();
+  }
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  double v[6];  // max x, min x, max y, min y, max z, min z (LAS 1.2 header bytes 179..226)
+  f.seekg(179);
+  f.read(reinterpret_cast<char*>(v), sizeof v);
+  for (int a = 0; a < 3; ++a) {
+    v[2 * a] -= inset;
+    v[2 * a + 1] += inset;
+  }
+  f.seekp(179);
+  f.write(reinterpret_cast<const char*>(v), sizeof v);
+}
+
+void expectSameNodes(const std::filesystem::path& a, const std::filesystem::path& b) {
+  OctreeReader ra(a), rb(b);
+  const Metadata& ma = ra.metadata();
+  const Metadata& mb = rb.metadata();
+  EXPECT_EQ(ma.points, mb.points);
+  EXPECT_EQ(ma.nodes, mb.nodes);
+  EXPECT_EQ(ma.depth, mb.depth);
+  EXPECT_EQ(ma.payloadBytes, mb.payloadBytes);
+  EXPECT_EQ(ma.accounting.input, mb.accounting.input);
+  EXPECT_EQ(ma.accounting.kept, mb.accounting.kept);
+  EXPECT_EQ(ma.accounting.duplicatesMerged, mb.accounting.duplicatesMerged);
+  EXPECT_EQ(ma.accounting.rejected, mb.accounting.rejected);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(ma.offset[k], mb.offset[k]);
+    EXPECT_EQ(ma.scale[k], mb.scale[k]);
+    EXPECT_EQ(ma.bounds.min[k], mb.bounds.min[k]);
+    EXPECT_EQ(ma.bounds.max[k], mb.bounds.max[k]);
+  }
+  EXPECT_EQ(ma.cubeSize, mb.cubeSize);
+  auto na = ra.allNodes(), nb = rb.allNodes();
+  ASSERT_EQ(na.size(), nb.size());
+  auto byKey = [](const auto& x, const auto& y) { return x.first < y.first; };
+  std::sort(na.begin(), na.end(), byKey);
+  std::sort(nb.begin(), nb.end(), byKey);
+  size_t differing = 0;
+  for (size_t i = 0; i < na.size(); ++i) {
+    ASSERT_EQ(na[i].first, nb[i].first) << "node " << i;
+    const bool same = na[i].second.numPoints == nb[i].second.numPoints &&
+                      na[i].second.checksum == nb[i].second.checksum &&
+                      na[i].second.spacingCode == nb[i].second.spacingCode;
+    if (!same && differing++ < 5) ADD_FAILURE() << "node " << na[i].first.name() << " differs";
+  }
+  EXPECT_EQ(differing, 0u) << "nodes whose points differ";
 }
 
 }  // namespace nestlight::test

@@ -16,6 +16,10 @@
 #include "nestlight/octree/error.h"
 #include "nestlight/octree/node_key.h"
 
+namespace nestlight {
+struct SyntheticSpec;
+}
+
 namespace nestlight::test {
 
 // A fresh folder under the system temp dir, removed when the object dies.
@@ -107,6 +111,15 @@ Error errorOf(F f) {
 
 // Whether any string of `v` contains `s`.
 bool anyContains(const std::vector<std::string>& v, const std::string& s);
+
+// A LAS file of `spec`'s points whose header bounds are the true ones moved inward by `inset`
+// on every side (negative: outward), as files written by other tools have them.
+void writeLasWithBoundsInset(const SyntheticSpec& spec, const std::string& path, double inset);
+
+// Two octrees hold the same nodes, each with the same points in the same order (the payloads'
+// checksums: encoding is deterministic) and the same measured spacing, and the same accounting.
+// Payloads may lie in any order in the files (they are appended as nodes finish).
+void expectSameNodes(const std::filesystem::path& a, const std::filesystem::path& b);
 
 }  // namespace nestlight::test
 

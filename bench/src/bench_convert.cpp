@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -21,8 +22,115 @@ namespace nestlight::bench {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// The job's scaling: the same tiles converted by one process and by N ranks under mpirun.
+void runBenchConvertMpi(const BenchConvertOptions& o) {
+  if (std::system("command -v mpirun > /dev/null 2>&1") != 0)
+    throw Error(
+        "bench convert --mpi: mpirun is not installed (scripts/setup.sh installs Open MPI)");
+  // Root may run the job (servers and CI containers run as root); ranks may outnumber the cores.
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  nlohmann::json results = {{"device", cpuName()},
+                            {"cores", cores},
+                            {"memory_per_rank", o.memory},
+                            {"sampling", o.sampling},
+                            {"runs", nlohmann::json::array()}};
+  std::printf("%-8s %-6s %8s %10s %12s %8s %12s %12s  %s\n", "points", "ranks", "threads",
+              "seconds", "points/s", "speedup", "sent B/pt", "max rank RSS",
+              "phases (slowest rank)");
+  for (const auto& [sz, n] : o.sizes) {
+    // An archive of 8 tiles side by side, as national LiDAR archives come: the unit ranks are
+    // dealt.
+    std::vector<std::string> tiles;
+    for (int k = 0; k < 8; ++k) {
+      const std::string las =
+          (fs::path(o.dir) / ("tiles_" + sz + "_" + std::to_string(k) + ".las")).string();
+      if (!fs::exists(las)) {
+        SyntheticSpec spec;
+        spec.points = n / 8 + (uint64_t(k) < n % 8 ? 1 : 0);
+        spec.seed = 42 + uint64_t(k);
+        spec.origin = {100.0 * k, 0, 0};
+        spec.intensity = false;
+        std::fprintf(stderr, "bench: generating %s\n", las.c_str());
+        writeSynthetic(spec, las);
+      }
+      tiles.push_back(las);
+    }
+    double single = 0;
+    std::vector<int> counts{0};  // 0: one process without MPI, the baseline
+    counts.insert(counts.end(), o.mpiRanks.begin(), o.mpiRanks.end());
+    for (int ranks : counts) {
+      const unsigned threads = std::max(1u, cores / unsigned(std::max(ranks, 1)));
+      const std::string octree =
+          (fs::path(o.dir) / ("tiles_" + sz + "_mpi" + std::to_string(ranks) + ".octree")).string();
+      const std::string report = octree + ".report.json";
+      std::string cmd = (ranks ? "mpirun --oversubscribe -n " + std::to_string(ranks) + " " : "") +
+                        self + " convert";
+      for (const auto& t : tiles) cmd += " " + t;
+      cmd += " -o " + octree + " --overwrite --progress quiet --memory " + o.memory +
+             " --sampling " + o.sampling + " --threads " + std::to_string(threads) + " --report " +
+             report + (ranks ? " --mpi" : "") + " > " + octree + ".log 2>&1";
+      std::vector<double> secs;
+      nlohmann::json rep;
+      for (int r = 0; r < o.runs; ++r) {
+        const auto t = std::chrono::steady_clock::now();
+        if (std::system(cmd.c_str()) != 0)
+          throw Error(octree + ".log", "", "the conversion failed in the benchmark: " + cmd);
+        secs.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count());
+        std::ifstream in(report);
+        rep = nlohmann::json::parse(in);
+      }
+      const double s = median(secs);
+      if (ranks == 0) single = s;
+      uint64_t sent = 0, maxRss = rep.value("peak_rss_bytes", uint64_t(0));
+      std::map<std::string, double> slowest;
+      for (const auto& k : rep["ranks"]) {
+        sent += k["bytes_sent"].get<uint64_t>();
+        maxRss = std::max(maxRss, k["peak_rss_bytes"].get<uint64_t>());
+        for (const auto& [phase, t] : k["phases"].items())
+          slowest[phase] = std::max(slowest[phase], t.get<double>());
+      }
+      if (rep["ranks"].empty())
+        for (const auto& [phase, t] : rep["phases"].items()) slowest[phase] = t.get<double>();
+      std::string phases;
+      for (const auto& [phase, t] : slowest) {
+        char b[64];
+        std::snprintf(b, sizeof b, "%s%s %.2f", phases.empty() ? "" : ", ", phase.c_str(), t);
+        phases += b;
+      }
+      std::printf("%-8s %-6s %8u %10.2f %12s %8.2f %12.2f %12s  %s\n", sz.c_str(),
+                  ranks ? std::to_string(ranks).c_str() : "1 (no MPI)", threads, s,
+                  humanCount(double(n) / s).c_str(), single / s, double(sent) / double(n),
+                  humanBytes(double(maxRss)).c_str(), phases.c_str());
+      std::fflush(stdout);
+      results["runs"].push_back({{"points", n},
+                                 {"ranks", ranks},
+                                 {"mpi", ranks > 0},
+                                 {"threads_per_rank", threads},
+                                 {"seconds_median", s},
+                                 {"seconds", secs},
+                                 {"points_per_second", double(n) / s},
+                                 {"speedup", single / s},
+                                 {"bytes_sent", sent},
+                                 {"bytes_sent_per_point", double(sent) / double(n)},
+                                 {"max_rank_peak_rss_bytes", maxRss},
+                                 {"slowest_rank_phases", slowest},
+                                 {"report", rep}});
+    }
+  }
+  std::ofstream(o.out) << results.dump(2) << "\n";
+  std::printf("results written to %s\n", o.out.c_str());
+}
+
+}  // namespace
+
 void runBenchConvert(const BenchConvertOptions& o) {
   fs::create_directories(o.dir);
+  if (!o.mpiRanks.empty()) return runBenchConvertMpi(o);
   nlohmann::json results = {{"device", cpuName()},
                             {"cores", std::thread::hardware_concurrency()},
                             {"memory", o.memory},

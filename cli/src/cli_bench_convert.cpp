@@ -29,6 +29,12 @@ void addBench(CLI::App& app, int& exitCode) {
   cmd->add_option("--memory", o->memory, "--memory passed to convert")->capture_default_str();
   cmd->add_option("--sampling", o->sampling, "--sampling passed to convert")->capture_default_str();
   cmd->add_option("--json", o->out, "Where to write the results")->capture_default_str();
+  cmd->add_option("--mpi", o->mpiRanks,
+                  "Rank counts (e.g. 1,2,4): each size as 8 tiles converted by `mpirun -n N "
+                  "nestlight convert --mpi` and by one process without MPI; seconds, speed-up, "
+                  "bytes exchanged per point, each rank's peak memory and phases "
+                  "(docs/DISTRIBUTED.md)")
+      ->delimiter(',');
   cmd->callback([=, &exitCode]() {
     o->sizes.clear();
     for (const auto& sz : *sizes) o->sizes.emplace_back(sz, parseCount(sz, "--sizes"));

@@ -3,9 +3,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "cli.h"
 #include "nestlight/converters/builder.h"
+#ifdef NESTLIGHT_HAVE_MPI
+#include "nestlight/converters/mpi.h"
+#endif
 #include "nestlight/octree/error.h"
 
 namespace nestlight::cli {
@@ -112,7 +116,34 @@ void printBuildSummary(const BuildReport& r, const fs::path& out) {
   for (auto it = r.phases.begin(); it != r.phases.end(); ++it)
     std::printf(" %s %.2f s", it.key().c_str(), it.value().get<double>());
   std::printf("\n");
+  for (const auto& k : r.ranks) {
+    std::printf("  rank %-4d %s input, %s points indexed, %s sent, peak RSS %s;",
+                k["rank"].get<int>(), humanBytes(k["input_bytes"].get<double>()).c_str(),
+                humanCount(k["points_indexed"].get<double>()).c_str(),
+                humanBytes(k["bytes_sent"].get<double>()).c_str(),
+                humanBytes(k["peak_rss_bytes"].get<double>()).c_str());
+    for (const auto& [phase, sec] : k["phases"].items())
+      std::printf(" %s %.2f s", phase.c_str(), sec.get<double>());
+    std::printf("\n");
+  }
 }
+
+namespace {
+void writeBuildReport(const BuildReport& r, const std::string& file) {
+  const nlohmann::json j = {{"seconds", r.seconds},
+                            {"points_per_second", r.pointsPerSecond},
+                            {"peak_rss_bytes", r.peakRssBytes},
+                            {"chunks", r.chunks},
+                            {"points", r.metadata.points},
+                            {"input_points", r.metadata.accounting.input},
+                            {"payload_bytes", r.metadata.payloadBytes},
+                            {"phases", r.phases},
+                            {"ranks", r.ranks}};
+  std::ofstream out(file);
+  out << j.dump(2) << "\n";
+  if (!out) throw Error(file, "", "cannot write the report");
+}
+}  // namespace
 
 void addConvert(CLI::App& app, int& exitCode) {
   auto* cmd = app.add_subcommand("convert", "Build a nested octree from scans, in bounded memory");
@@ -190,6 +221,20 @@ void addConvert(CLI::App& app, int& exitCode) {
   cmd->add_option("--progress", *progress, "auto, terminal, json or quiet")
       ->check(CLI::IsMember({"auto", "terminal", "json", "quiet"}))
       ->capture_default_str();
+  cmd->add_option("--scratch", opt->scratch,
+                  "Folder for the temporary chunk files (a fast disk of this machine: with --mpi "
+                  "each rank's own, so that only the output is written to the shared file system); "
+                  "default: inside the output folder");
+  auto reportFile = std::make_shared<std::string>();
+  cmd->add_option("--report", *reportFile,
+                  "Write the conversion's figures as JSON: seconds, points/s, peak memory, chunks, "
+                  "phases and, with --mpi, each rank's (for logs and `bench convert --mpi`)");
+  auto mpi = std::make_shared<bool>(false);
+  cmd->add_flag("--mpi", *mpi,
+                "Convert as one rank of an MPI job: `mpirun -n N nestlight convert INPUTS -o OUT "
+                "--mpi` (every rank with the same inputs and options; --memory and --threads are "
+                "per rank). The octree holds the same points in the same nodes as one process "
+                "makes; docs/DISTRIBUTED.md");
   cmd->callback([=, &exitCode]() {
     BuildOptions o = *opt;
     o.output = *out;
@@ -203,10 +248,37 @@ void addConvert(CLI::App& app, int& exitCode) {
     std::vector<std::string> files = expandInputs(*inputs);
     o.commandLine = {
         {"inputs", files}, {"memory", *memory}, {"sampling", *sampling}, {"codec", *codec}};
-    std::vector<std::unique_ptr<PointReader>> readers;
-    for (const auto& f : files) readers.push_back(openReader(f, *read));
-    BuildReport r = buildOctree(std::move(readers), o);
-    printBuildSummary(r, o.output);
+    std::unique_ptr<Communicator> comm;
+    if (*mpi) {
+#ifdef NESTLIGHT_HAVE_MPI
+      comm = mpiWorld();
+      o.comm = comm.get();
+      o.commandLine["ranks"] = comm->size();
+      if (comm->rank() != 0) o.progress = ProgressMode::Quiet;  // rank 0 reports for the job
+#else
+      throw Error(
+          "--mpi: this nestlight was built without MPI (scripts/setup.sh installs Open MPI; "
+          "configure and build again)");
+#endif
+    }
+    try {
+      std::vector<std::unique_ptr<PointReader>> readers;
+      for (const auto& f : files) readers.push_back(openReader(f, *read));
+      BuildReport r = buildOctree(std::move(readers), o);
+      if (!comm || comm->rank() == 0) {
+        printBuildSummary(r, o.output);
+        if (!reportFile->empty()) writeBuildReport(r, *reportFile);
+      }
+    } catch (const std::exception& e) {
+      if (!comm || comm->size() == 1) throw;
+      // The other ranks may wait in a collective for this one: the whole job ends here, and the
+      // octree is not committed (a rerun removes what is left).
+      std::fprintf(stderr,
+                   "nestlight convert --mpi: rank %d of %d: %s\nnestlight convert --mpi: ending "
+                   "the job; no octree was committed to %s\n",
+                   comm->rank(), comm->size(), e.what(), o.output.c_str());
+      comm->abort(1);
+    }
     exitCode = 0;
   });
 }

@@ -86,16 +86,18 @@ void OctreeWriter::writeNode(const NodeKey& key, const PointBuffer& points, uint
                     (dir_ / "octree.bin.tmp").string());
 }
 
-void OctreeWriter::pruneEmptyLeaves() {
-  // Sampling can move every point of a sparse leaf up into its parent; such a node stays only
-  // if it has children. The root always stays.
+namespace {
+
+// Sampling can move every point of a sparse leaf up into its parent; such a node stays only if it
+// has children. The root always stays.
+std::vector<NodeRecord> pruneEmptyLeaves(std::vector<NodeRecord> nodes) {
   std::vector<NodeRecord> kept;
-  kept.reserve(nodes_.size());
-  std::sort(nodes_.begin(), nodes_.end(), [](const NodeRecord& a, const NodeRecord& b) {
+  kept.reserve(nodes.size());
+  std::sort(nodes.begin(), nodes.end(), [](const NodeRecord& a, const NodeRecord& b) {
     return b.key < a.key;
   });  // deepest first
   std::unordered_set<NodeKey, NodeKeyHash> keptKeys;
-  for (const auto& n : nodes_) {
+  for (const auto& n : nodes) {
     bool hasChild = false;
     for (int i = 0; i < 8 && !hasChild; ++i) hasChild = keptKeys.count(n.key.child(i)) > 0;
     if (n.numPoints == 0 && !hasChild && n.key.level > 0) continue;
@@ -103,30 +105,48 @@ void OctreeWriter::pruneEmptyLeaves() {
     kept.push_back(n);
   }
   std::reverse(kept.begin(), kept.end());
-  nodes_ = std::move(kept);
+  return kept;
 }
 
-void OctreeWriter::finish(Metadata& meta) {
-  NL_CHECK(!finished_);
-  pruneEmptyLeaves();
+// The payload (dir/octree.bin.tmp, synced and closed) renamed into place, then the hierarchy and
+// the metadata, each written atomically: metadata.json, last, makes the octree complete.
+void writeHierarchyAndMetadata(const fs::path& dir, Metadata& meta, std::vector<NodeRecord> nodes,
+                               uint64_t payloadBytes) {
+  nodes = pruneEmptyLeaves(std::move(nodes));
   meta.depth = 0;
-  for (const auto& n : nodes_) meta.depth = std::max(meta.depth, n.key.level);
-  HierarchyBlob h = buildHierarchy(nodes_, meta.hierarchyStep);
-  meta.payloadBytes = offset_;
-  meta.nodes = nodes_.size();
+  for (const auto& n : nodes) meta.depth = std::max(meta.depth, n.key.level);
+  HierarchyBlob h = buildHierarchy(nodes, meta.hierarchyStep);
+  meta.payloadBytes = payloadBytes;
+  meta.nodes = nodes.size();
   meta.hierarchyBytes = h.bytes.size();
   meta.rootChunkSize = h.rootChunkSize;
   meta.rootChunkChecksum = h.rootChunkChecksum;
+  fs::rename(dir / "octree.bin.tmp", dir / meta.payloadFile);
+  writeFileAtomic(dir / meta.hierarchyFile, h.bytes.data(), h.bytes.size());
+  std::string text = meta.toJson().dump(2) + "\n";
+  writeFileAtomic(dir / "metadata.json", text.data(), text.size());
+}
+
+}  // namespace
+
+void OctreeWriter::finish(Metadata& meta) {
+  writeHierarchyAndMetadata(dir_, meta, finishPart(), offset_);
+}
+
+std::vector<NodeRecord> OctreeWriter::finishPart() {
+  NL_CHECK(!finished_);
   if (::fsync(fd_) != 0)
     throw Error((dir_ / "octree.bin.tmp").string(), "",
                 std::string("fsync failed: ") + std::strerror(errno));
   ::close(fd_);
   fd_ = -1;
-  fs::rename(dir_ / "octree.bin.tmp", dir_ / meta.payloadFile);
-  writeFileAtomic(dir_ / meta.hierarchyFile, h.bytes.data(), h.bytes.size());
-  std::string text = meta.toJson().dump(2) + "\n";
-  writeFileAtomic(dir_ / "metadata.json", text.data(), text.size());
-  finished_ = true;
+  finished_ = true;  // the payload stays: renamed into place, or a part copied into the output
+  return std::move(nodes_);
+}
+
+void OctreeWriter::finishAssembled(const fs::path& dir, Metadata& meta,
+                                   std::vector<NodeRecord> nodes, uint64_t payloadBytes) {
+  writeHierarchyAndMetadata(dir, meta, std::move(nodes), payloadBytes);
 }
 
 }  // namespace nestlight

@@ -421,28 +421,6 @@ TEST(Builder, ChunkedEqualsInMemoryWhenDedupShrinksASubtree) {
 
 namespace {
 
-// A LAS file of `spec`'s points whose header bounds are the true ones moved inward by `inset`
-// on every side (negative: outward), as files written by other tools have them.
-void writeLasWithBoundsInset(const SyntheticSpec& spec, const std::string& path, double inset) {
-  auto r = openSynthetic(spec);
-  {
-    auto w = createLasWriter(path, r->header());
-    PointBatch b;
-    while (r->read(b, 10000)) w->write(b);
-    w->close();
-  }
-  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
-  double v[6];  // max x, min x, max y, min y, max z, min z (LAS 1.2 header bytes 179..226)
-  f.seekg(179);
-  f.read(reinterpret_cast<char*>(v), sizeof v);
-  for (int a = 0; a < 3; ++a) {
-    v[2 * a] -= inset;
-    v[2 * a + 1] += inset;
-  }
-  f.seekp(179);
-  f.write(reinterpret_cast<const char*>(v), sizeof v);
-}
-
 // Every stored point's world position in steps of 1 mm, sorted.
 std::vector<std::array<int64_t, 3>> worldSteps(const fs::path& dir) {
   OctreeReader r(dir);
@@ -477,9 +455,9 @@ TEST(Builder, HeaderBoundsAreAdvisoryEveryFinitePointIsKept) {
   SyntheticSpec spec;
   spec.points = 40000;
   spec.precision = 0.001;
-  writeLasWithBoundsInset(spec, tmp.file("true.las"), 0);
-  writeLasWithBoundsInset(spec, tmp.file("half.las"), 0.0005);
-  writeLasWithBoundsInset(spec, tmp.file("lying.las"), 7.5);
+  test::writeLasWithBoundsInset(spec, tmp.file("true.las"), 0);
+  test::writeLasWithBoundsInset(spec, tmp.file("half.las"), 0.0005);
+  test::writeLasWithBoundsInset(spec, tmp.file("lying.las"), 7.5);
   buildFile(tmp.file("true.las"), quietOptions(tmp.path() / "true"));
   const auto want = worldSteps(tmp.path() / "true");
   ASSERT_EQ(want.size(), 40000u);

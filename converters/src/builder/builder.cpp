@@ -49,21 +49,35 @@ BuildReport Builder::run() {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   threads_ = threads;
 
+  comm_ = opt_.comm;
+  if (distributed()) dealSources();
   // The phases with progress, and the share of the time each takes (measured: see
   // kPhaseShares), for an ETA across them; "bounds" runs only where a header declares none.
   progress_.plan(kPhaseShares);
   planLayout();
   planQuantisation(report);
   // Built beside the output and swapped in at the end: a failed, full-disk or killed run leaves
-  // an existing octree (and its layers) as it was.
+  // an existing octree (and its layers) as it was. In a job, rank 0 stages it and commits it once
+  // every rank has written its part.
   if (fs::exists(opt_.output / "metadata.json") && !opt_.overwrite)
     throw Error(opt_.output.string(), "",
                 "already holds an octree; pass --overwrite to replace it");
-  StagedDirectory staged(opt_.output, isOctreeFileName);
-  for (const fs::path& p : staged.staleRemoved())
-    report.warnings.push_back("removed " + p.string() + ", left by a conversion that was killed");
-  writer_ = std::make_unique<OctreeWriter>(staged.path(), layout_, opt_.codec, true);
-  tmp_ = staged.path() / "chunks.tmp";
+  std::optional<StagedDirectory> staged;
+  fs::path stagedPath;
+  if (rank() == 0) {
+    staged.emplace(opt_.output, isOctreeFileName);
+    for (const fs::path& p : staged->staleRemoved())
+      report.warnings.push_back("removed " + p.string() + ", left by a conversion that was killed");
+    stagedPath = staged->path();
+  }
+  if (distributed()) {
+    const std::string p = stagedPath.string();
+    const auto all = comm_->allgather(std::vector<uint8_t>(p.begin(), p.end()));
+    stagedPath = std::string(all[0].begin(), all[0].end());
+  }
+  tmp_ = scratchFolder(opt_, stagedPath, rank(), distributed());
+  std::error_code ec;
+  fs::remove_all(tmp_, ec);  // a killed run's, in a scratch folder outside the output
   fs::create_directories(tmp_);
   struct Cleanup {
     fs::path p;
@@ -72,14 +86,21 @@ BuildReport Builder::run() {
       fs::remove_all(p, ec);
     }
   } cleanup{tmp_};
+  // A rank writes its nodes into its own part, in its scratch folder, assembled at the end.
+  writer_ = std::make_unique<OctreeWriter>(distributed() ? tmp_ / "part" : stagedPath, layout_,
+                                           opt_.codec, true);
+  auto anyOutsideCube = [&] {
+    return distributed() ? comm_->any(outsideCube_.load()) : outsideCube_.load();
+  };
 
   auto t = Clock::now();
   countPass();
-  if (outsideCube_) throw OutsideCube{};
+  if (anyOutsideCube()) throw OutsideCube{};
+  if (distributed()) assignChunks();
   report.phases["count"] = seconds(t);
   t = Clock::now();
   distributePass();
-  if (outsideCube_) throw OutsideCube{};
+  if (anyOutsideCube()) throw OutsideCube{};
   report.phases["distribute"] = seconds(t);
   t = Clock::now();
   splitOversizedChunks();
@@ -89,21 +110,29 @@ BuildReport Builder::run() {
   mergeTop();
   report.phases["merge"] = seconds(t);
 
+  if (distributed()) reduceTotals();
   finishMetadata();
   t = Clock::now();
-  writer_->finish(meta_);
+  if (distributed()) {
+    assembleOutput(stagedPath);
+  } else {
+    writer_->finish(meta_);
+  }
   writer_.reset();
   fs::remove_all(tmp_);
-  staged.commit();
+  if (staged) staged->commit();
+  // The others return once the octree is in place: an exit code of 0 means it is there.
+  if (distributed()) comm_->barrier();
   report.phases["write"] = seconds(t);
   report.seconds = seconds(t0);
-  report.chunks = chunks_.size();
+  report.chunks = distributed() ? chunksTotal_ : chunks_.size();
   // Points read, not declared: a lenient conversion's unreadable points took no time.
   uint64_t read = 0;
   for (const auto& src : sources_) read += src.read;
   report.pointsPerSecond = report.seconds > 0 ? double(read) / report.seconds : 0;
   report.peakRssBytes = peakRssBytes();
   report.metadata = meta_;
+  if (distributed()) report.ranks = gatherRankReports(report);
   return report;
 }
 

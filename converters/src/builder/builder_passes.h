@@ -27,6 +27,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <thread>
 #include <unordered_set>
@@ -84,7 +85,8 @@ inline bool mortonLess(const uint32_t* p, const uint32_t* q) {
 struct Chunk {
   NodeKey key;
   uint64_t points = 0;
-  fs::path file;
+  fs::path file;  // another rank's chunk: this rank's outbox for that rank (distributed.cpp)
+  int owner = 0;  // the rank that indexes it
 };
 
 // Per-source mapping of attributes into the octree's layout.
@@ -102,6 +104,8 @@ struct SourceState {
   bool identity = false;  // the source's layout is the octree's: attributes copy as one block
   std::optional<Box3d> declared;  // valid declared bounds, if any
   double tolerance = 0;
+  bool owned = true;  // this rank reads it (a job of several ranks deals the inputs out)
+  std::optional<std::vector<std::string>> remoteWarnings;  // the reading rank's reader's warnings
   uint64_t read = 0;
   uint64_t unreadable = 0;       // declared points it could not decode (lenient), in the input
   uint64_t outsideDeclared = 0;  // points beyond the declared bounds (and tolerance), kept
@@ -116,6 +120,11 @@ inline bool validBox(const Box3d& b) {
   return !b.empty() && std::isfinite(b.min.x) && std::isfinite(b.min.y) && std::isfinite(b.min.z) &&
          std::isfinite(b.max.x) && std::isfinite(b.max.y) && std::isfinite(b.max.z);
 }
+
+// This process's folder for chunk files and the other temporary data: in --scratch (named after
+// the output, so that a rerun finds and removes what a killed one left), else inside the staging
+// folder `staged`.
+fs::path scratchFolder(const BuildOptions& o, const fs::path& staged, int rank, bool distributed);
 
 class Builder {
   using json = nlohmann::json;
@@ -289,6 +298,32 @@ class Builder {
                        uint64_t subtreePoints);
 
   void mergeTop();
+  // Merges `nodes` (each from its children's provisional samples, here), deepest level first.
+  void mergeNodes(const std::set<NodeKey>& nodes);
+  // Writes the root from its provisional sample (none: an empty root).
+  void writeRoot();
+
+  // ---- a job of several ranks (distributed.cpp) -------------------------------------------------
+
+  bool distributed() const { return comm_ && comm_->size() > 1; }
+  // Inputs dealt to ranks by size, largest first to the least loaded (ties: lower rank).
+  void dealSources();
+  // Chunks (in Morton order) cut into one contiguous range per rank with equal counted points.
+  void assignChunks();
+  // Every rank's outboxes to their chunks' owners, in rounds within the memory budget.
+  void exchangeRecords();
+  // The levels above the chunks: each rank merges the nodes whose chunks are all its own; rank 0
+  // the rest, from the other ranks' samples of the nodes just below them.
+  void mergeTopDistributed();
+  // Accounting, bounds and the sources' counts and warnings brought together on every rank.
+  void reduceTotals();
+  // Each rank's part of the payload copied into the output at offsets agreed from their sizes;
+  // rank 0 writes the hierarchy and metadata.
+  void assembleOutput(const fs::path& staged);
+  // Per rank: input bytes, points indexed, bytes sent, peak memory, phases (rank 0 gets all).
+  nlohmann::json gatherRankReports(const BuildReport& mine);
+  int rank() const { return comm_ ? comm_->rank() : 0; }
+  int ranks() const { return comm_ ? comm_->size() : 1; }
 
   // ---- metadata -------------------------------------------------------------------------------
 
@@ -320,6 +355,10 @@ class Builder {
   mutable std::atomic<bool> outsideCube_{false};  // a point beyond the planned cube was met
   std::vector<std::string>
       buildNotes_;  // facts of the build that `info` shows (metadata build.notes)
+  Communicator* comm_ = nullptr;
+  uint64_t bytesSent_ = 0;    // records sent to other ranks
+  uint64_t indexed_ = 0;      // points of this rank's chunks
+  uint64_t chunksTotal_ = 0;  // a job's chunks (each rank knows its own after splitting)
 };
 
 }  // namespace nestlight::build_passes

@@ -9,7 +9,8 @@ namespace nestlight::build_passes {
 template <class Work, class Collect>
 void Builder::readAll(const std::string& phase, Work work, Collect collect, size_t sampleStep) {
   uint64_t total = 0;
-  for (auto& s : sources_) total += s.reader->bytesTotal();
+  for (auto& s : sources_)
+    if (s.owned) total += s.reader->bytesTotal();
   progress_.begin(phase, total, "bytes");
   size_t current = 0;
   uint64_t consumedBefore = 0;
@@ -34,6 +35,10 @@ void Builder::readAll(const std::string& phase, Work work, Collect collect, size
             tbb::filter_mode::serial_in_order,
             [&](tbb::flow_control& fc) -> Item* {
               while (current < sources_.size()) {
+                if (!sources_[current].owned) {  // another rank reads it
+                  ++current;
+                  continue;
+                }
                 auto item = std::make_unique<Item>();
                 auto& r = *sources_[current].reader;
                 // Compressed sources leave decoding to the
@@ -131,6 +136,9 @@ void Builder::countPass() {
   std::vector<uint64_t> counts(cells);
   for (size_t i = 0; i < cells; ++i) counts[i] = shared[i].load(std::memory_order_relaxed);
   std::vector<std::atomic<uint64_t>>().swap(shared);
+  // Each rank counted its own inputs: the sum is the same grid on every rank, so every rank plans
+  // the same chunks.
+  if (distributed()) comm_->allreduceSum(counts);
 
   // Chunks: top-down, the largest nodes of the counting pyramid that fit the budget.
   std::vector<std::vector<uint64_t>> pyramid(gridLevel_ + 1);
@@ -152,7 +160,7 @@ void Builder::countPass() {
     // that receives no points costs nothing later.
     if (c <= maxChunkPoints_ || k.level == gridLevel_) {
       int id = static_cast<int>(chunks_.size());
-      chunks_.push_back({k, c, tmp_ / ("chunk-" + k.name() + ".bin")});
+      chunks_.push_back({k, c, tmp_ / ("chunk-" + k.name() + ".bin"), 0});
       const uint32_t s = gridLevel_ - k.level, n = 1u << s;
       for (uint32_t x = 0; x < n; ++x)
         for (uint32_t y = 0; y < n; ++y)
@@ -309,10 +317,13 @@ void Builder::distributePass() {
   }
   stopWriter();
   if (writeError) std::rethrow_exception(writeError);
+  if (distributed()) exchangeRecords();
   // Points a source declares but could not decode (damaged LAZ chunks read leniently) are
   // input that was rejected, so that the accounting still covers every declared point.
   for (auto& src : sources_)
-    if (const uint64_t lost = src.reader->pointsUnreadable()) {
+    if (!src.owned) {
+      continue;
+    } else if (const uint64_t lost = src.reader->pointsUnreadable()) {
       accounting_.input += lost;
       accounting_.rejected[reject::kUnreadable] += lost;
       src.unreadable = lost;
@@ -376,7 +387,8 @@ void Builder::splitOversizedChunks() {
     for (int ci = 0; ci < 8; ++ci) {
       if (!out[ci]) continue;
       std::fclose(out[ci]);
-      Chunk child{c.key.child(ci), counts[ci], tmp_ / ("chunk-" + c.key.child(ci).name() + ".bin")};
+      Chunk child{c.key.child(ci), counts[ci], tmp_ / ("chunk-" + c.key.child(ci).name() + ".bin"),
+                  c.owner};
       if (first) {
         chunks_[i] = child;
         first = false;

@@ -35,10 +35,19 @@ void Builder::saveProvisional(const NodeKey& key, const PointBuffer& pts,
 }
 
 void Builder::mergeTop() {
-  // Nodes above the chunks, deepest first; each level's nodes in parallel.
-  std::map<uint32_t, std::set<NodeKey>> byLevel;
+  if (distributed()) return mergeTopDistributed();
+  // Nodes above the chunks.
+  std::set<NodeKey> above;
   for (const NodeKey& k : pending_)
-    for (uint32_t l = 0; l < k.level; ++l) byLevel[l].insert(k.ancestor(l));
+    for (uint32_t l = 0; l < k.level; ++l) above.insert(k.ancestor(l));
+  mergeNodes(above);
+  writeRoot();
+}
+
+void Builder::mergeNodes(const std::set<NodeKey>& above) {
+  // Deepest first; each level's nodes in parallel.
+  std::map<uint32_t, std::set<NodeKey>> byLevel;
+  for (const NodeKey& k : above) byLevel[k.level].insert(k);
   progress_.begin("merge", byLevel.empty() ? 1 : byLevel.rbegin()->first + 1, "levels");
   for (auto it = byLevel.rbegin(); it != byLevel.rend(); ++it) {
     std::vector<NodeKey> nodes(it->second.begin(), it->second.end());
@@ -75,6 +84,9 @@ void Builder::mergeTop() {
     progress_.advance(1);
   }
   progress_.end();
+}
+
+void Builder::writeRoot() {
   // The root's current sample is final.
   fs::path rootFile = provisionalFile(NodeKey::root());
   PointBuffer root = loadRecords(rootFile);
@@ -114,7 +126,7 @@ void Builder::finishMetadata() {
     r.unreadable = s.unreadable;
     r.declaredPoints = h.declaredPoints;
     // Warnings are the source's own: a reader's "<file>: " in front would print the name twice.
-    for (std::string w : s.reader->warnings()) {
+    for (std::string w : s.remoteWarnings ? *s.remoteWarnings : s.reader->warnings()) {
       if (w.rfind(h.path + ": ", 0) == 0) w.erase(0, h.path.size() + 2);
       r.warnings.push_back(std::move(w));
     }
@@ -137,7 +149,7 @@ void Builder::finishMetadata() {
       {"max_node_points", opt_.maxNodePoints},
       {"memory_bytes", opt_.memoryBytes},
       {"dedup", opt_.dedup},
-      {"chunks", chunks_.size()},
+      {"chunks", distributed() ? chunksTotal_ : chunks_.size()},
       {"max_chunk_points", maxChunkPoints_ == UINT64_MAX ? json(nullptr) : json(maxChunkPoints_)},
       {"command_line", opt_.commandLine}};
   if (!buildNotes_.empty()) meta_.build["notes"] = buildNotes_;

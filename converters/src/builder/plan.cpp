@@ -126,8 +126,8 @@ void Builder::planQuantisation(BuildReport& report) {
     // the cube restarts the conversion with the bounds measured (OutsideCube).
     if (s.declared && !measureBounds_) {
       bounds.extend(*s.declared);
-    } else {
-      scan.push_back(i);
+    } else if (s.owned) {
+      scan.push_back(i);  // another rank measures the inputs it reads
     }
   }
   if (!scan.empty()) {
@@ -151,6 +151,13 @@ void Builder::planQuantisation(BuildReport& report) {
     }
     progress_.end();
     report.phases["bounds"] = seconds(t);
+  }
+  if (distributed()) {
+    std::vector<double> b{-bounds.min.x, -bounds.min.y, -bounds.min.z,
+                          bounds.max.x,  bounds.max.y,  bounds.max.z};
+    comm_->allreduceMax(b);
+    bounds.min = {-b[0], -b[1], -b[2]};
+    bounds.max = {b[3], b[4], b[5]};
   }
   if (bounds.empty()) {
     meta_.offset = {0, 0, 0};

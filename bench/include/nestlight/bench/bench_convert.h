@@ -20,6 +20,10 @@ struct BenchConvertOptions {
   std::string dir = "bench-data";
   std::string out = "bench-convert.json";
   std::string memory = "1G", sampling = "poisson";  // passed to convert
+  // --mpi 1,2,4: instead of the codec table, each size as 8 tiles (files) converted by
+  // `mpirun -n N nestlight convert --mpi` for each N (and by one process without MPI):
+  // seconds, points/s, speed-up, bytes exchanged per point, each rank's peak memory and phases.
+  std::vector<int> mpiRanks;
 };
 
 // Prints the table on stdout and writes the results as JSON in `out`. Throws nestlight::Error

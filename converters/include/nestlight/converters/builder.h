@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "nestlight/converters/communicator.h"
 #include "nestlight/converters/progress.h"
 #include "nestlight/converters/reader.h"
 #include "nestlight/octree/metadata.h"
@@ -43,6 +44,14 @@ struct BuildOptions {
   bool inMemory = false;           // one chunk: the reference the chunked build must equal
   ProgressMode progress = ProgressMode::Auto;
   nlohmann::json commandLine;  // recorded in metadata.build
+  // Where chunk files and other temporary data go (a node-local disk); empty: beside the output,
+  // in its staging folder. A conversion's own subfolder there is removed at the end, and a killed
+  // one's by the next run into the same output.
+  std::filesystem::path scratch;
+  // A conversion spread over the processes of a job (convert --mpi; nestlight/converters/
+  // communicator.h): every rank calls buildOctree with the same inputs and options. Null or a job
+  // of one: this process converts alone. See docs/DISTRIBUTED.md.
+  Communicator* comm = nullptr;
 };
 
 struct BuildReport {
@@ -53,6 +62,9 @@ struct BuildReport {
   uint64_t chunks = 0;
   nlohmann::json phases;              // seconds per phase
   std::vector<std::string> warnings;  // about the build itself (sources' warnings are in metadata)
+  // A job of several ranks: per rank (rank 0's report; the others hold their own entry only) its
+  // input bytes, points indexed, bytes sent to other ranks, peak memory and phases.
+  nlohmann::json ranks;
 };
 
 // Builds the octree of every point of `sources`. Throws nestlight::Error on bad input.

@@ -35,12 +35,18 @@ class OctreeWriter {
   // Writes the hierarchy and `meta` (payload, hierarchy and node fields are filled here).
   void finish(Metadata& meta);
 
+  // A part of an octree built by several processes (convert --mpi): closes the payload (left in
+  // dir/octree.bin.tmp, synced) and returns the nodes written, their offsets within it.
+  std::vector<NodeRecord> finishPart();
+  // The octree in `dir` whose payload the parts were assembled into (dir/octree.bin.tmp,
+  // `payloadBytes`, synced), with every part's nodes at their offsets there: as finish().
+  static void finishAssembled(const std::filesystem::path& dir, Metadata& meta,
+                              std::vector<NodeRecord> nodes, uint64_t payloadBytes);
+
   uint64_t bytesWritten() const { return offset_; }
   size_t nodeCount() const { return nodes_.size(); }
 
  private:
-  void pruneEmptyLeaves();
-
   std::filesystem::path dir_;
   PointLayout layout_;
   Codec codec_;
