@@ -33,6 +33,8 @@ void runBenchConvertMpi(const BenchConvertOptions& o) {
   ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
   ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   const std::string self = fs::read_symlink("/proc/self/exe").string();
+  // --bind-to none: Open MPI binds each of one or two ranks to one core by default, which would
+  // run a rank's threads on that core alone.
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   nlohmann::json results = {{"device", cpuName()},
                             {"cores", cores},
@@ -68,8 +70,9 @@ void runBenchConvertMpi(const BenchConvertOptions& o) {
       const std::string octree =
           (fs::path(o.dir) / ("tiles_" + sz + "_mpi" + std::to_string(ranks) + ".octree")).string();
       const std::string report = octree + ".report.json";
-      std::string cmd = (ranks ? "mpirun --oversubscribe -n " + std::to_string(ranks) + " " : "") +
-                        self + " convert";
+      std::string cmd =
+          (ranks ? "mpirun --oversubscribe --bind-to none -n " + std::to_string(ranks) + " " : "") +
+          self + " convert";
       for (const auto& t : tiles) cmd += " " + t;
       cmd += " -o " + octree + " --overwrite --progress quiet --memory " + o.memory +
              " --sampling " + o.sampling + " --threads " + std::to_string(threads) + " --report " +

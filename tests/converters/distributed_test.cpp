@@ -133,4 +133,43 @@ TEST(Distributed, ALyingHeaderRestartsEveryRank) {
             OctreeReader(tmp.path() / "one").metadata().sources.at(0).warnings);
 }
 
+// An uncompressed LAS file reads in parts (ranges of its records): the parts' points, in order,
+// are the whole file's, and a job deals a large file's parts to several ranks.
+TEST(Distributed, ALargeLasFileIsReadInPartsByEveryRank) {
+  test::TempDir tmp;
+  SyntheticSpec big, small;
+  big.points = 200000, small.points = 5000;
+  big.seed = 21, small.seed = 22;
+  test::writeLasWithBoundsInset(big, tmp.file("big.las"), 0);
+  test::writeLasWithBoundsInset(small, tmp.file("small.las"), 0);
+  {
+    auto whole = openReader(tmp.file("big.las"));
+    const uint64_t units = whole->splitUnits();
+    ASSERT_EQ(units, 200000u);
+    const auto all = test::readAll(*whole);
+    std::vector<double> parts;
+    for (uint64_t p = 0; p < 3; ++p) {
+      auto r = openReader(tmp.file("big.las"));
+      r->restrictTo(units * p / 3, units * (p + 1) / 3);
+      r->rewind();
+      const auto got = test::readAll(*r);
+      parts.insert(parts.end(), got.xyz.begin(), got.xyz.end());
+      EXPECT_EQ(r->bytesConsumed(), r->bytesTotal());
+    }
+    EXPECT_EQ(parts, all.xyz);
+  }
+  const Sources files = [&] {
+    std::vector<std::unique_ptr<PointReader>> r;
+    r.push_back(openReader(tmp.file("big.las")));
+    r.push_back(openReader(tmp.file("small.las")));
+    return r;
+  };
+  buildOctree(files(), options(tmp.path() / "one"));
+  const BuildReport three = buildWithRanks(3, files, tmp.path() / "three");
+  test::expectSameNodes(tmp.path() / "one", tmp.path() / "three");
+  ASSERT_EQ(three.ranks.size(), 3u);
+  for (const auto& k : three.ranks) EXPECT_GT(k["input_bytes"].get<uint64_t>(), 0u) << k.dump();
+  EXPECT_EQ(OctreeReader(tmp.path() / "three").metadata().sources.at(0).points, 200000u);
+}
+
 }  // namespace distributed_test

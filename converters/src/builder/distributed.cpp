@@ -87,21 +87,53 @@ fs::path scratchFolder(const BuildOptions& o, const fs::path& staged, int rank, 
 }
 
 void Builder::dealSources() {
-  // Largest first to the least loaded rank: a greedy deal within 4/3 of the best (Graham's
-  // bound); ties go to the lower rank and inputs of equal size in path order, so every rank
-  // computes the same deal.
-  std::vector<size_t> order(sources_.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    const uint64_t sa = sources_[a].reader->bytesTotal(), sb = sources_[b].reader->bytesTotal();
-    if (sa != sb) return sa > sb;
-    return sources_[a].reader->header().path < sources_[b].reader->header().path;
+  // Each input of more than a rank's share of the bytes is cut into parts, one per share, where
+  // its reader can be restricted to a range (an uncompressed LAS file's records); then the
+  // pieces go largest first to the least loaded rank (a greedy deal within 4/3 of the best,
+  // Graham's bound), the parts of one input to different ranks. Ties go to the lower rank and
+  // pieces of equal size in path order, so every rank computes the same deal.
+  struct Piece {
+    size_t source;
+    uint64_t part, parts, bytes;
+  };
+  const uint64_t n = uint64_t(ranks());
+  uint64_t total = 0;
+  for (const auto& s : sources_) {
+    // Whole again (a run started over keeps its readers): every rank deals the same sizes.
+    if (const uint64_t units = s.reader->splitUnits(); units > 1) s.reader->restrictTo(0, units);
+    total += s.reader->bytesTotal();
+  }
+  const uint64_t share = std::max<uint64_t>(total / n, 1);
+  std::vector<Piece> pieces;
+  for (size_t i = 0; i < sources_.size(); ++i) {
+    const uint64_t bytes = sources_[i].reader->bytesTotal(),
+                   units = sources_[i].reader->splitUnits();
+    const uint64_t parts = std::clamp<uint64_t>((bytes + share - 1) / share, 1, std::min(n, units));
+    for (uint64_t p = 0; p < parts; ++p) pieces.push_back({i, p, parts, bytes / parts});
+  }
+  std::stable_sort(pieces.begin(), pieces.end(), [&](const Piece& a, const Piece& b) {
+    if (a.bytes != b.bytes) return a.bytes > b.bytes;
+    const std::string &pa = sources_[a.source].reader->header().path,
+                      &pb = sources_[b.source].reader->header().path;
+    if (pa != pb) return pa < pb;
+    return a.source != b.source ? a.source < b.source : a.part < b.part;
   });
-  std::vector<uint64_t> load(static_cast<size_t>(ranks()), 0);
-  for (size_t i : order) {
-    const size_t r = size_t(std::min_element(load.begin(), load.end()) - load.begin());
-    load[r] += std::max<uint64_t>(sources_[i].reader->bytesTotal(), 1);
-    sources_[i].owned = int(r) == rank();
+  std::vector<uint64_t> load(n, 0);
+  std::vector<std::set<size_t>> holds(n);
+  for (auto& s : sources_) s.owned = false;
+  for (const Piece& pc : pieces) {
+    size_t r = SIZE_MAX;
+    for (size_t k = 0; k < n; ++k)
+      if (!holds[k].count(pc.source) && (r == SIZE_MAX || load[k] < load[r])) r = k;
+    load[r] += std::max<uint64_t>(pc.bytes, 1);
+    holds[r].insert(pc.source);
+    if (int(r) != rank()) continue;
+    SourceState& s = sources_[pc.source];
+    s.owned = true;
+    if (pc.parts > 1) {
+      const uint64_t units = s.reader->splitUnits();
+      s.reader->restrictTo(units * pc.part / pc.parts, units * (pc.part + 1) / pc.parts);
+    }
   }
 }
 
@@ -304,6 +336,12 @@ void Builder::reduceTotals() {
   for (const Chunk& c : chunks_) chunks += c.owner == rank();
   mine["chunks"] = chunks;
   const auto all = comm_->allgather(jsonBytes(mine));
+  // An input read in parts by several ranks: its counts add up, its warnings are merged.
+  for (SourceState& st : sources_) {
+    st.read = st.unreadable = st.outsideDeclared = 0;
+    st.outsideMax = 0;
+    st.remoteWarnings = std::vector<std::string>();
+  }
   accounting_ = Accounting{};
   uint64_t stored = 0;
   Box3d bounds;
@@ -324,11 +362,14 @@ void Builder::reduceTotals() {
     bounds.extend(r);
     for (const auto& s : j["sources"]) {
       SourceState& st = sources_.at(s["index"].get<size_t>());
-      st.read = s["read"];
-      st.unreadable = s["unreadable"];
-      st.outsideDeclared = s["outside"];
-      st.outsideMax = s["outside_max"];
-      st.remoteWarnings = s["warnings"].get<std::vector<std::string>>();
+      st.read += s["read"].get<uint64_t>();
+      st.unreadable += s["unreadable"].get<uint64_t>();
+      st.outsideDeclared += s["outside"].get<uint64_t>();
+      st.outsideMax = std::max(st.outsideMax, s["outside_max"].get<double>());
+      for (const std::string& w : s["warnings"].get<std::vector<std::string>>())
+        if (std::find(st.remoteWarnings->begin(), st.remoteWarnings->end(), w) ==
+            st.remoteWarnings->end())
+          st.remoteWarnings->push_back(w);
     }
   }
   stored_ = stored;

@@ -121,21 +121,32 @@ class LasReader final : public PointReader {
 
   const SourceHeader& header() const override { return header_; }
   std::vector<std::string> warnings() const override { return warnings_; }
-  uint64_t bytesTotal() const override { return src_->size(); }
+  uint64_t bytesTotal() const override {
+    return restricted_ ? (stop() - first_) * recordLength_ : src_->size();
+  }
   uint64_t bytesConsumed() const override {
     if (laz_) {
       const auto& chunks = laz_->chunks();
       return nextChunk_ >= chunks.size() ? src_->size() : chunks[nextChunk_].offset;
     }
+    if (restricted_) return (std::min(next_, stop()) - first_) * recordLength_;
     return next_ >= count_ ? src_->size() : pointStart_ + next_ * recordLength_;
+  }
+  // Records are fixed-size: any range of them is a part (LAZ files are read whole).
+  uint64_t splitUnits() const override { return laz_ ? 1 : count_; }
+  void restrictTo(uint64_t first, uint64_t end) override {
+    NL_CHECK(!laz_ && first <= end && end <= count_);
+    first_ = first, end_ = end;
+    restricted_ = !(first == 0 && end == count_);  // the whole file: as never restricted
+    rewind();
   }
   uint64_t pointsUnreadable() const override { return laz_ ? laz_->unreadable() : 0; }
 
   bool read(PointBatch& batch, size_t maxPoints) override {
     if (laz_) return readLaz(batch, maxPoints) != 0;
     batch.clear();
-    if (next_ >= count_ || maxPoints == 0) return false;
-    const size_t n = static_cast<size_t>(std::min<uint64_t>(maxPoints, count_ - next_));
+    if (next_ >= stop() || maxPoints == 0) return false;
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(maxPoints, stop() - next_));
     const size_t stride = header_.layout.stride();
     batch.xyz.resize(3 * n);
     batch.attrs.resize(n * stride);
@@ -160,8 +171,8 @@ class LasReader final : public PointReader {
     }
     batch.clear();
     if (step <= 1) return read(batch, maxPoints) ? 1 : 0;
-    if (next_ >= count_ || maxPoints == 0) return false;
-    const uint64_t left = (count_ - next_ + step - 1) / step;
+    if (next_ >= stop() || maxPoints == 0) return false;
+    const uint64_t left = (stop() - next_ + step - 1) / step;
     const size_t n = static_cast<size_t>(std::min<uint64_t>(maxPoints, left));
     const size_t stride = header_.layout.stride();
     batch.xyz.resize(3 * n);
@@ -169,7 +180,7 @@ class LasReader final : public PointReader {
     const uint8_t* rec = src_->data() + pointStart_ + next_ * recordLength_;
     kDecoders[pointFormat_](rec, n, recordLength_ * step, scale_, offset_, batch.xyz.data(),
                             batch.attrs.data(), stride, extraBytes_);
-    next_ = std::min<uint64_t>(count_, next_ + uint64_t(n) * step);
+    next_ = std::min<uint64_t>(stop(), next_ + uint64_t(n) * step);
     src_->releaseBefore(pointStart_ + next_ * recordLength_);
     return step;
   }
@@ -207,8 +218,8 @@ class LasReader final : public PointReader {
   }
 
   void rewind() override {
-    next_ = 0;
-    src_->releaseBefore(0);
+    next_ = first_;
+    src_->releaseBefore(restricted_ ? pointStart_ + first_ * recordLength_ : 0);
     if (laz_) {
       laz_->rewind();
       nextChunk_ = 0;
@@ -252,6 +263,10 @@ class LasReader final : public PointReader {
   size_t extraBytes_ = 0;
   uint64_t count_ = 0;
   uint64_t next_ = 0;
+  // restrictTo: the records [first_, end_) alone.
+  bool restricted_ = false;
+  uint64_t first_ = 0, end_ = 0;
+  uint64_t stop() const { return restricted_ ? end_ : count_; }
   Vec3d scale_, offset_;
 
   nlohmann::json geotiff_;

@@ -89,6 +89,13 @@ class PointReader {
   }
   // Starts again from the first point.
   virtual void rewind() = 0;
+  // A job of several ranks reads a large input in parts: into how many units the reader can be
+  // restricted (an uncompressed LAS file's records; 1: it cannot be split), and the restriction
+  // to units [first, end), after which reading and rewind() cover those alone (bytesTotal() and
+  // bytesConsumed() too; [0, splitUnits()) lifts it). Declared counts, bounds and warnings stay
+  // the whole file's.
+  virtual uint64_t splitUnits() const { return 1; }
+  virtual void restrictTo(uint64_t first, uint64_t end) { (void)first, (void)end; }
   // Header/data disagreements tolerated in lenient mode, and other notes for the metadata.
   virtual std::vector<std::string> warnings() const { return {}; }
   // Points the source declares but could not decode, counted by the builder as rejected: the
