@@ -145,4 +145,24 @@ TEST_F(ConvertMpi, ARankThatDiesOrFillsItsDiskCommitsNothingAndARerunIsClean) {
     EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
 }
 
+// `bench convert --mpi`: one process and each rank count, with the bytes each job sent and its
+// ranks' reports.
+TEST_F(ConvertMpi, BenchReportsEachRankCount) {
+  ASSERT_EQ(runCli("bench convert --sizes 80k --runs 1 --mpi 1,2 --memory 64M --dir " +
+                       tmp.file("b") + " --json " + tmp.file("b.json"),
+                   &out),
+            0)
+      << out;
+  const nlohmann::json j = nlohmann::json::parse(nestlight::test::readFile(tmp.file("b.json")));
+  ASSERT_EQ(j["runs"].size(), 3u) << j.dump(1);
+  EXPECT_EQ(j["runs"][0]["ranks"], 0);  // one process, without MPI
+  EXPECT_EQ(j["runs"][2]["ranks"], 2);
+  EXPECT_EQ(j["runs"][2]["report"]["ranks"].size(), 2u);
+  // Two ranks move about half the points as 30-byte records (the tiles are LAS format 2).
+  const double sent = j["runs"][2]["bytes_sent_per_point"].get<double>();
+  EXPECT_GT(sent, 5.0);
+  EXPECT_LT(sent, 40.0);
+  EXPECT_EQ(j["runs"][1]["bytes_sent_per_point"].get<double>(), 0.0);
+}
+
 }  // namespace convert_mpi_test

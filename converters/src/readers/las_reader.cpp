@@ -122,9 +122,12 @@ class LasReader final : public PointReader {
   const SourceHeader& header() const override { return header_; }
   std::vector<std::string> warnings() const override { return warnings_; }
   uint64_t bytesTotal() const override {
+    if (restricted_ && laz_) return chunkOffset(end_) - chunkOffset(first_);
     return restricted_ ? (stop() - first_) * recordLength_ : src_->size();
   }
   uint64_t bytesConsumed() const override {
+    if (restricted_ && laz_)
+      return chunkOffset(std::min<uint64_t>(nextChunk_, end_)) - chunkOffset(first_);
     if (laz_) {
       const auto& chunks = laz_->chunks();
       return nextChunk_ >= chunks.size() ? src_->size() : chunks[nextChunk_].offset;
@@ -132,12 +135,17 @@ class LasReader final : public PointReader {
     if (restricted_) return (std::min(next_, stop()) - first_) * recordLength_;
     return next_ >= count_ ? src_->size() : pointStart_ + next_ * recordLength_;
   }
-  // Records are fixed-size: any range of them is a part (LAZ files are read whole).
-  uint64_t splitUnits() const override { return laz_ ? 1 : count_; }
+  // Parts: ranges of an uncompressed file's fixed-size records, or of a LAZ file's chunks where
+  // its chunk table (or COPC hierarchy) says where each starts; a LAZ file without one is whole.
+  uint64_t splitUnits() const override {
+    if (laz_) return laz_->hasChunkTable() ? laz_->chunks().size() : 1;
+    return count_;
+  }
   void restrictTo(uint64_t first, uint64_t end) override {
-    NL_CHECK(!laz_ && first <= end && end <= count_);
+    const uint64_t units = splitUnits();
+    NL_CHECK(first <= end && end <= units && (units > 1 || (first == 0 && end == units)));
     first_ = first, end_ = end;
-    restricted_ = !(first == 0 && end == count_);  // the whole file: as never restricted
+    restricted_ = !(first == 0 && end == units);  // the whole file: as never restricted
     rewind();
   }
   uint64_t pointsUnreadable() const override { return laz_ ? laz_->unreadable() : 0; }
@@ -218,11 +226,11 @@ class LasReader final : public PointReader {
   }
 
   void rewind() override {
-    next_ = first_;
-    src_->releaseBefore(restricted_ ? pointStart_ + first_ * recordLength_ : 0);
+    next_ = laz_ ? 0 : first_;
+    src_->releaseBefore(restricted_ && !laz_ ? pointStart_ + first_ * recordLength_ : 0);
     if (laz_) {
       laz_->rewind();
-      nextChunk_ = 0;
+      nextChunk_ = restricted_ ? size_t(first_) : 0;
       cacheAt_ = cacheCount_ = 0;
     }
   }
@@ -267,6 +275,12 @@ class LasReader final : public PointReader {
   bool restricted_ = false;
   uint64_t first_ = 0, end_ = 0;
   uint64_t stop() const { return restricted_ ? end_ : count_; }
+  // LAZ: the chunk after the last one to read, and where chunk `c` starts (the end of the file
+  // for the last).
+  size_t chunkStop() const { return restricted_ ? size_t(end_) : laz_->chunks().size(); }
+  uint64_t chunkOffset(uint64_t c) const {
+    return c < laz_->chunks().size() ? laz_->chunks()[c].offset : src_->size();
+  }
   Vec3d scale_, offset_;
 
   nlohmann::json geotiff_;
@@ -737,24 +751,24 @@ std::vector<laz::Chunk> LasReader::copcChunks() {
 // Returns how many chunks each taken one stands for; 0 at the end.
 size_t LasReader::takeChunks(size_t maxPoints, size_t step, std::vector<size_t>& which) {
   const auto& chunks = laz_->chunks();
-  if (nextChunk_ >= chunks.size() || maxPoints == 0) return 0;
+  const size_t end = chunkStop(), first = restricted_ ? size_t(first_) : 0, count = end - first;
+  if (nextChunk_ >= end || maxPoints == 0) return 0;
   size_t chunkStep = 1;
-  if (step > 1)
-    chunkStep = chunks.size() >= 8 * step ? 4 * step : chunks.size() >= 2 * step ? step : 1;
+  if (step > 1) chunkStep = count >= 8 * step ? 4 * step : count >= 2 * step ? step : 1;
   uint64_t points = 0;
   size_t c = nextChunk_;
-  while (c < chunks.size() && (which.empty() || points + chunks[c].points <= maxPoints)) {
+  while (c < end && (which.empty() || points + chunks[c].points <= maxPoints)) {
     which.push_back(c);
     points += chunks[c].points;
     c += chunkStep;
   }
   // An even number of chunks while more follow: chunks decode two at a time on a thread.
-  if (which.size() > 2 && which.size() % 2 && c < chunks.size()) {
+  if (which.size() > 2 && which.size() % 2 && c < end) {
     c = which.back();
     which.pop_back();
   }
   src_->releaseBefore(chunks[nextChunk_].offset);
-  nextChunk_ = std::min(c, chunks.size());
+  nextChunk_ = std::min(c, end);
   return chunkStep;
 }
 
@@ -775,7 +789,8 @@ size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, bool decodeFields
   if (maxPoints == 0) return 0;
   while (cacheAt_ >= cacheCount_) {
     const auto& chunks = laz_->chunks();
-    if (nextChunk_ >= chunks.size()) {
+    const size_t end = laz_->hasChunkTable() ? chunkStop() : chunks.size();
+    if (nextChunk_ >= end) {
       cache_.release();  // up to 64 MiB per reader, and a conversion may have many inputs
       return 0;
     }
@@ -791,13 +806,13 @@ size_t LasReader::readLaz(PointBatch& batch, size_t maxPoints, bool decodeFields
     if (!laz_->hasChunkTable()) {
       which.push_back(c++);
     } else {
-      while (c < chunks.size() && (which.empty() || points + chunks[c].points <= target)) {
+      while (c < end && (which.empty() || points + chunks[c].points <= target)) {
         which.push_back(c);
         points += chunks[c].points;
         ++c;
       }
     }
-    nextChunk_ = std::min(c, chunks.size());
+    nextChunk_ = std::min(c, end);
     cacheCount_ = static_cast<size_t>(laz_->decode(which, cache_));
     cacheAt_ = 0;
     src_->releaseBefore(nextChunk_ < laz_->chunks().size() ? laz_->chunks()[nextChunk_].offset

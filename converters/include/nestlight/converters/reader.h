@@ -90,7 +90,8 @@ class PointReader {
   // Starts again from the first point.
   virtual void rewind() = 0;
   // A job of several ranks reads a large input in parts: into how many units the reader can be
-  // restricted (an uncompressed LAS file's records; 1: it cannot be split), and the restriction
+  // restricted (an uncompressed LAS file's records, a LAZ file's chunks where it has a chunk
+  // table or COPC hierarchy; 1: it cannot be split), and the restriction
   // to units [first, end), after which reading and rewind() cover those alone (bytesTotal() and
   // bytesConsumed() too; [0, splitUnits()) lifts it). Declared counts, bounds and warnings stay
   // the whole file's.
