@@ -85,7 +85,9 @@ TEST_F(ConvertMpi, OneToFourRanksBuildTheSingleProcessOctree) {
     SCOPED_TRACE(std::to_string(n) + " ranks");
     nestlight::test::expectSameNodes(tmp.file("one.octree"), dir);
     EXPECT_EQ(nestlight::OctreeReader(dir).metadata().build["command_line"]["ranks"], n);
-    if (n > 1) EXPECT_NE(out.find("rank " + std::to_string(n - 1)), std::string::npos) << out;
+    if (n > 1) {
+      EXPECT_NE(out.find("rank " + std::to_string(n - 1)), std::string::npos) << out;
+    }
     ASSERT_EQ(runCli("verify " + dir, &out), 0) << out;
   }
   // Nothing is left in the scratch folder.
