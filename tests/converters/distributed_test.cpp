@@ -97,11 +97,13 @@ TEST(Distributed, AnyNumberOfRanksBuildsTheSingleProcessOctree) {
 
 TEST(Distributed, NoPointAtAll) {
   test::TempDir tmp;
-  const Sources none = [] {
+  SyntheticSpec empty;
+  empty.points = 0;
+  writeSynthetic(empty, tmp.file("empty.las"));  // a LAS file of no record: nothing to split
+  const Sources none = [&] {
     std::vector<std::unique_ptr<PointReader>> r;
-    SyntheticSpec s;
-    s.points = 0;
-    r.push_back(openSynthetic(s));
+    r.push_back(openSynthetic(empty));
+    r.push_back(openReader(tmp.file("empty.las")));
     return r;
   };
   buildOctree(none(), options(tmp.path() / "one"));

@@ -108,7 +108,9 @@ void Builder::dealSources() {
   for (size_t i = 0; i < sources_.size(); ++i) {
     const uint64_t bytes = sources_[i].reader->bytesTotal(),
                    units = sources_[i].reader->splitUnits();
-    const uint64_t parts = std::clamp<uint64_t>((bytes + share - 1) / share, 1, std::min(n, units));
+    // At least one piece (an empty file has no unit to split), at most one per rank and unit.
+    const uint64_t parts = std::clamp<uint64_t>((bytes + share - 1) / share, 1,
+                                                std::max<uint64_t>(1, std::min(n, units)));
     for (uint64_t p = 0; p < parts; ++p) pieces.push_back({i, p, parts, bytes / parts});
   }
   std::stable_sort(pieces.begin(), pieces.end(), [&](const Piece& a, const Piece& b) {
