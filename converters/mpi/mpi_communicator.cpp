@@ -9,6 +9,7 @@
 #include <climits>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 #include "nestlight/converters/mpi.h"
 #include "nestlight/octree/error.h"
@@ -43,52 +44,32 @@ class MpiCommunicator final : public Communicator {
   }
   std::vector<std::vector<uint8_t>> allgather(const std::vector<uint8_t>& mine) override {
     NL_CHECK(mine.size() < size_t(INT_MAX));
-    const size_t ranks = size_t(size_);
-    std::vector<int> counts(ranks), displs(ranks);
+    std::vector<int> counts(static_cast<size_t>(size_));
     int n = int(mine.size());
     MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    size_t total = 0;
-    for (int r = 0; r < size_; ++r) {
-      NL_CHECK_MSG(total + size_t(counts[r]) < size_t(INT_MAX), "allgather of 2 GiB or more");
-      displs[r] = int(total);
-      total += size_t(counts[r]);
-    }
-    std::vector<uint8_t> all(std::max<size_t>(total, 1));
+    const std::vector<int> displs = offsets(counts, "allgather");
+    std::vector<uint8_t> all(std::max<size_t>(size_t(displs.back()), 1));
     MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE,
                    MPI_COMM_WORLD);
-    std::vector<std::vector<uint8_t>> out(ranks);
-    for (int r = 0; r < size_; ++r)
-      out[r].assign(all.begin() + displs[r], all.begin() + displs[r] + counts[r]);
-    return out;
+    return split(all, counts, displs);
   }
   std::vector<std::vector<uint8_t>> alltoallv(
       const std::vector<std::vector<uint8_t>>& send) override {
     NL_CHECK(send.size() == size_t(size_));
-    const size_t ranks = size_t(size_);
-    std::vector<int> sc(ranks), sd(ranks), rc(ranks), rd(ranks);
-    size_t st = 0;
+    std::vector<int> sc(static_cast<size_t>(size_)), rc(static_cast<size_t>(size_));
     for (int r = 0; r < size_; ++r) {
-      NL_CHECK_MSG(st + send[r].size() < size_t(INT_MAX), "alltoallv of 2 GiB or more");
+      NL_CHECK_MSG(send[r].size() < size_t(INT_MAX), "alltoallv of 2 GiB or more");
       sc[r] = int(send[r].size());
-      sd[r] = int(st);
-      st += send[r].size();
     }
-    std::vector<uint8_t> sbuf(std::max<size_t>(st, 1));
+    const std::vector<int> sd = offsets(sc, "alltoallv");
+    std::vector<uint8_t> sbuf(std::max<size_t>(size_t(sd.back()), 1));
     for (int r = 0; r < size_; ++r) std::copy(send[r].begin(), send[r].end(), sbuf.begin() + sd[r]);
     MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    size_t rt = 0;
-    for (int r = 0; r < size_; ++r) {
-      NL_CHECK_MSG(rt + size_t(rc[r]) < size_t(INT_MAX), "alltoallv of 2 GiB or more");
-      rd[r] = int(rt);
-      rt += size_t(rc[r]);
-    }
-    std::vector<uint8_t> rbuf(std::max<size_t>(rt, 1));
+    const std::vector<int> rd = offsets(rc, "alltoallv");
+    std::vector<uint8_t> rbuf(std::max<size_t>(size_t(rd.back()), 1));
     MPI_Alltoallv(sbuf.data(), sc.data(), sd.data(), MPI_BYTE, rbuf.data(), rc.data(), rd.data(),
                   MPI_BYTE, MPI_COMM_WORLD);
-    std::vector<std::vector<uint8_t>> out(ranks);
-    for (int r = 0; r < size_; ++r)
-      out[r].assign(rbuf.begin() + rd[r], rbuf.begin() + rd[r] + rc[r]);
-    return out;
+    return split(rbuf, rc, rd);
   }
   void barrier() override { MPI_Barrier(MPI_COMM_WORLD); }
   [[noreturn]] void abort(int code) override {
@@ -99,6 +80,28 @@ class MpiCommunicator final : public Communicator {
   }
 
  private:
+  // Each rank's offset in one buffer of `counts` bytes in rank order, and the total after them
+  // (MPI counts are int: a call moves less than 2 GiB).
+  static std::vector<int> offsets(const std::vector<int>& counts, const char* what) {
+    std::vector<int> at(counts.size() + 1, 0);
+    size_t total = 0;
+    for (size_t r = 0; r < counts.size(); ++r) {
+      at[r] = int(total);
+      total += size_t(counts[r]);
+      NL_CHECK_MSG(total < size_t(INT_MAX), std::string(what) + " of 2 GiB or more");
+    }
+    at.back() = int(total);
+    return at;
+  }
+  // One buffer back into each rank's bytes.
+  static std::vector<std::vector<uint8_t>> split(const std::vector<uint8_t>& all,
+                                                 const std::vector<int>& counts,
+                                                 const std::vector<int>& at) {
+    std::vector<std::vector<uint8_t>> out(counts.size());
+    for (size_t r = 0; r < counts.size(); ++r)
+      out[r].assign(all.begin() + at[r], all.begin() + at[r] + counts[r]);
+    return out;
+  }
   int rank_ = 0, size_ = 1;
 };
 
